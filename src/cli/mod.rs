@@ -1,0 +1,122 @@
+//! The `vstructc` command line. The binary in `src/bin/vstructc.rs` only calls [`main`];
+//! each subcommand lives in its own module and returns an exit status.
+//!
+//! Exit status: 0 success (warnings on stderr), 1 input errors (or warnings under
+//! `--deny-warnings`), 2 usage errors.
+
+use crate::diag::{Diagnostics, Severity};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+pub mod expr;
+pub mod info;
+
+/// Top-level command line.
+#[derive(Debug, Parser)]
+#[command(name = "vstructc", version, about = "Shader-network compiler: vstruct resolution, closure IR, previews")]
+pub struct Cli {
+    /// Options shared by every subcommand.
+    #[command(flatten)]
+    pub common: CommonOptions,
+    /// The subcommand.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Options shared by every subcommand.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct CommonOptions {
+    /// A definitions folder or file (`.args`, `.oso`); repeatable. Searched before
+    /// `VSTRUCTC_ARGS_PATH` and the embedded definitions.
+    #[arg(long = "args", value_name = "PATH", global = true)]
+    pub args: Vec<PathBuf>,
+    /// Which definition wins when a shader exists as both `.oso` and `.args`.
+    #[arg(long, value_enum, global = true, default_value_t = Prefer::Oso)]
+    pub prefer: Prefer,
+    /// Enable an opt-in extension by name (repeatable), or `all`.
+    #[arg(long = "ext", value_name = "NAME", global = true)]
+    pub ext: Vec<String>,
+    /// Treat warnings as errors (exit status 1 after printing every diagnostic).
+    #[arg(long, global = true)]
+    pub deny_warnings: bool,
+    /// Diagnostic output format.
+    #[arg(long, value_enum, global = true, default_value_t = DiagFormat::Human)]
+    pub diag_format: DiagFormat,
+    /// Also show `note` diagnostics.
+    #[arg(long, short, global = true)]
+    pub verbose: bool,
+}
+
+/// Definition priority when a shader id has both an `.oso` and an `.args` definition.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum Prefer {
+    /// Compiled OSL first (the reference's order).
+    #[default]
+    Oso,
+    /// `.args` first.
+    Args,
+}
+
+/// How diagnostics are printed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum DiagFormat {
+    /// `severity[CODE]: message` and `  --> file:line:col`.
+    #[default]
+    Human,
+    /// One JSON object per line.
+    Json,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Summarise one shader definition.
+    Info(info::InfoArgs),
+    /// Parse one conditional expression and print its desugared form or diagnostics.
+    Expr(expr::ExprArgs),
+}
+
+/// Parse the process arguments and run; the binary's whole `main`.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    run(cli)
+}
+
+/// Run a parsed command line.
+pub fn run(cli: Cli) -> ExitCode {
+    let common = &cli.common;
+    match &cli.command {
+        Command::Info(a) => info::run(a, common),
+        Command::Expr(a) => expr::run(a, common),
+    }
+}
+
+/// Print diagnostics to stderr according to the common options and return the exit status
+/// they imply: 1 if any error (or any warning under `--deny-warnings`), else 0.
+pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
+    for d in diags {
+        if d.severity == Severity::Note && !common.verbose {
+            continue;
+        }
+        match common.diag_format {
+            DiagFormat::Human => eprintln!("{}", d.render_human()),
+            DiagFormat::Json => eprintln!("{}", d.render_json()),
+        }
+    }
+    if diags.has_errors() || (common.deny_warnings && diags.has_warnings()) {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    }
+}

@@ -1,0 +1,2 @@
+//! The embedded CPU interpreter (spec closures.md §1, §3): BSDF leaves, eval, sample, albedo.
+//! (in progress)

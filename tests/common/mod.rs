@@ -1,0 +1,36 @@
+//! Shared helpers for integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The repository root (where Cargo.toml is).
+pub fn repo_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `../shared/fixtures`, if present.
+///
+/// When it is missing: under `CI=true` this panics (CI must have the fixtures); otherwise it
+/// prints a notice and returns `None`, and the caller skips the test.
+pub fn fixtures() -> Option<PathBuf> {
+    let dir = repo_dir().join("../shared/fixtures");
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if std::env::var("CI").map(|v| v == "true").unwrap_or(false) {
+        panic!("../shared/fixtures is missing (CI=true): fixture tests cannot run");
+    }
+    eprintln!("notice: ../shared/fixtures not found; skipping fixture test");
+    None
+}
+
+/// Skip the current test (return early) when the fixtures are missing.
+#[macro_export]
+macro_rules! fixtures_or_skip {
+    () => {
+        match common::fixtures() {
+            Some(dir) => dir,
+            None => return,
+        }
+    };
+}
