@@ -318,7 +318,12 @@ impl<'a> ArgsParser<'a> {
             })?;
             let offset = self.offset_of(&a.value).unwrap_or(start);
             let value = a.normalized_value(XmlVersion::Implicit1_0).map_err(|err| {
-                self.reject("AR001", format!("not well-formed XML: {err}"), offset)
+                let at = offset + escape_error_position(&err);
+                self.reject(
+                    "AR001",
+                    format!("not well-formed XML: {}", escape_message(&err)),
+                    at,
+                )
             })?;
             out.push(Attr {
                 key: a.key.as_ref().to_string(),
@@ -447,7 +452,7 @@ impl<'a> ArgsParser<'a> {
             Some(_) => {}
         }
         if !empty {
-            self.parse_container(false)?;
+            self.parse_container(false, pos)?;
         }
         if self.kind.is_none() {
             self.report(
@@ -462,25 +467,31 @@ impl<'a> ArgsParser<'a> {
 
     /// Body of `<args>` (`in_page == false`) or of a `<page>`: loops until the matching end
     /// tag.
-    fn parse_container(&mut self, in_page: bool) -> PResult<()> {
+    fn parse_container(&mut self, in_page: bool, start: usize) -> PResult<()> {
         loop {
             let (pos, ev) = self.next()?;
             match ev {
                 Event::Start(e) => self.body_element(pos, &e, false, in_page)?,
                 Event::Empty(e) => self.body_element(pos, &e, true, in_page)?,
                 Event::End(_) => return Ok(()),
-                Event::Eof => return Err(self.unexpected_eof()),
+                Event::Eof => {
+                    let element = if in_page { "page" } else { "args" };
+                    return Err(self.unexpected_eof(element, start));
+                }
                 _ => {}
             }
         }
     }
 
-    fn unexpected_eof(&self) -> Error {
-        self.reject(
+    /// AR001 at the end of the file, naming the innermost element left open.
+    fn unexpected_eof(&self, element: &str, start: usize) -> Error {
+        Diagnostic::error(
             "AR001",
-            "not well-formed XML: unexpected end of file (an element is not closed)",
-            self.text.len(),
+            format!("not well-formed XML: unexpected end of file: <{element}> is not closed"),
         )
+        .at(self.loc(self.text.len()))
+        .with_related(format!("<{element}> opened here"), self.loc(start))
+        .into()
     }
 
     fn body_element(
@@ -541,7 +552,7 @@ impl<'a> ArgsParser<'a> {
             return Ok(());
         }
         self.pages.push(name);
-        let r = self.parse_container(true);
+        let r = self.parse_container(true, pos);
         self.pages.pop();
         r
     }
@@ -570,7 +581,7 @@ impl<'a> ArgsParser<'a> {
                     Event::Start(c) => (c, false),
                     Event::Empty(c) => (c, true),
                     Event::End(_) => break,
-                    Event::Eof => return Err(self.unexpected_eof()),
+                    Event::Eof => return Err(self.unexpected_eof(element, pos)),
                     _ => continue,
                 };
                 let cname = c.name().as_ref().to_string();
@@ -635,7 +646,7 @@ impl<'a> ArgsParser<'a> {
         let children = if empty {
             PropertyChildren::default()
         } else {
-            self.parse_property_children(element)?
+            self.parse_property_children(element, pos)?
         };
         let Some(name_attr) = attr(&attrs, "name") else {
             return Err(self.reject(
@@ -748,7 +759,11 @@ impl<'a> ArgsParser<'a> {
         Ok(())
     }
 
-    fn parse_property_children(&mut self, element: &str) -> PResult<PropertyChildren> {
+    fn parse_property_children(
+        &mut self,
+        element: &str,
+        start: usize,
+    ) -> PResult<PropertyChildren> {
         let mut out = PropertyChildren::default();
         loop {
             let (pos, ev) = self.next()?;
@@ -756,7 +771,7 @@ impl<'a> ArgsParser<'a> {
                 Event::Start(c) => (c, false),
                 Event::Empty(c) => (c, true),
                 Event::End(_) => return Ok(out),
-                Event::Eof => return Err(self.unexpected_eof()),
+                Event::Eof => return Err(self.unexpected_eof(element, start)),
                 _ => continue,
             };
             let cname = c.name().as_ref().to_string();
@@ -767,7 +782,7 @@ impl<'a> ArgsParser<'a> {
                 }
                 "tags" => {
                     if !empty {
-                        self.parse_tags(&mut out.tags)?;
+                        self.parse_tags(&mut out.tags, pos)?;
                     }
                 }
                 "hintdict" | "hintlist" => self.parse_hint(pos, &c, empty, &cname, &mut out)?,
@@ -813,14 +828,14 @@ impl<'a> ArgsParser<'a> {
         }
     }
 
-    fn parse_tags(&mut self, tags: &mut Vec<String>) -> PResult<()> {
+    fn parse_tags(&mut self, tags: &mut Vec<String>, start: usize) -> PResult<()> {
         loop {
             let (pos, ev) = self.next()?;
             let (c, empty) = match ev {
                 Event::Start(c) => (c, false),
                 Event::Empty(c) => (c, true),
                 Event::End(_) => return Ok(()),
-                Event::Eof => return Err(self.unexpected_eof()),
+                Event::Eof => return Err(self.unexpected_eof("tags", start)),
                 _ => continue,
             };
             let cname = c.name().as_ref().to_string();
@@ -871,7 +886,7 @@ impl<'a> ArgsParser<'a> {
                 Event::Start(i) => (i, false),
                 Event::Empty(i) => (i, true),
                 Event::End(_) => return Ok(()),
-                Event::Eof => return Err(self.unexpected_eof()),
+                Event::Eof => return Err(self.unexpected_eof(element, pos)),
                 _ => continue,
             };
             let iattrs = self.attributes(cpos, &item)?;
@@ -1080,6 +1095,31 @@ impl<'a> ArgsParser<'a> {
             alias: alias.map(|(a, _)| a).filter(|a| !a.is_empty()),
             cond,
         });
+    }
+}
+
+/// Offset inside a raw attribute value of the `&` that starts a bad reference.
+fn escape_error_position(e: &quick_xml::Error) -> usize {
+    use quick_xml::escape::EscapeError as E;
+    match e {
+        quick_xml::Error::Escape(E::UnrecognizedEntity(r, _) | E::UnterminatedEntity(r)) => {
+            r.start.saturating_sub(1)
+        }
+        _ => 0,
+    }
+}
+
+/// A message for a bad reference in an attribute value, without quick-xml's byte ranges.
+fn escape_message(e: &quick_xml::Error) -> String {
+    use quick_xml::escape::EscapeError as E;
+    match e {
+        quick_xml::Error::Escape(E::UnrecognizedEntity(_, name)) => {
+            format!("unknown entity `&{name};` in an attribute value")
+        }
+        quick_xml::Error::Escape(E::UnterminatedEntity(_)) => {
+            "`&` without a closing `;` in an attribute value".to_string()
+        }
+        other => other.to_string(),
     }
 }
 
