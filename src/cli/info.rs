@@ -63,14 +63,19 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
     let text = if args.json {
         render_json(&def, &tables, &registry)
     } else {
-        render_human(&def, &tables, &registry)
+        render_human(&def, &tables, &registry, common.verbose)
     };
     print!("{text}");
     status
 }
 
-/// The human summary of `def`.
-pub fn render_human(def: &Definition, tables: &VstructTables, registry: &Registry) -> String {
+/// The human summary of `def`; `verbose` also lists the other files that define the id.
+pub fn render_human(
+    def: &Definition,
+    tables: &VstructTables,
+    registry: &Registry,
+    verbose: bool,
+) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "{}: {}", def.id, def.kind);
     let source = match def.source {
@@ -79,7 +84,7 @@ pub fn render_human(def: &Definition, tables: &VstructTables, registry: &Registr
     };
     let _ = writeln!(out, "  defined in {} ({source})", def.path);
     for (_, other) in registry.sources(&def.id) {
-        if other != def.path {
+        if verbose && other != def.path {
             let _ = writeln!(out, "  also found: {other} (not used)");
         }
     }
