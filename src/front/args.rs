@@ -28,6 +28,7 @@ use crate::types::{ArraySpec, BaseType, Type, Value};
 use quick_xml::XmlVersion;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::reader::Reader;
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -116,14 +117,14 @@ impl LineIndex {
 }
 
 /// One attribute of a start tag: key, decoded value, byte offset of the raw value in the file.
-struct Attr {
-    key: String,
-    value: String,
+struct Attr<'a> {
+    key: Cow<'a, str>,
+    value: Cow<'a, str>,
     offset: usize,
 }
 
 /// Finds an attribute by key.
-fn attr<'b>(attrs: &'b [Attr], key: &str) -> Option<&'b Attr> {
+fn attr<'b, 'a>(attrs: &'b [Attr<'a>], key: &str) -> Option<&'b Attr<'a>> {
     attrs.iter().find(|a| a.key == key)
 }
 
@@ -187,6 +188,8 @@ struct ArgsParser<'a> {
     def: Definition,
     diags: Vec<Diagnostic>,
     pages: Vec<String>,
+    /// `pages` joined with `:` (cached; `None` outside pages).
+    page_path: Option<String>,
     kind: Option<String>,
     uses_sdr_definition_name: bool,
     input_names: HashMap<String, Location>,
@@ -219,6 +222,7 @@ impl<'a> ArgsParser<'a> {
             file,
             diags: Vec::new(),
             pages: Vec::new(),
+            page_path: None,
             kind: None,
             uses_sdr_definition_name: false,
             input_names: HashMap::new(),
@@ -236,6 +240,12 @@ impl<'a> ArgsParser<'a> {
     fn loc(&self, offset: usize) -> Location {
         let (line, column) = self.lines.line_column(self.text, offset);
         Location::new(self.file.clone(), line, column)
+    }
+
+    /// The same text as `slice`, with the file's lifetime, if `slice` borrows from the file.
+    fn reborrow(&self, slice: &str) -> Option<&'a str> {
+        let start = self.offset_of(slice)?;
+        self.text.get(start..start + slice.len())
     }
 
     /// Byte offset of `slice` inside the file text, if it borrows from it.
@@ -305,7 +315,7 @@ impl<'a> ArgsParser<'a> {
     }
 
     /// Decoded attributes of a start tag at `start`, in document order.
-    fn attributes(&self, start: usize, e: &BytesStart<'_>) -> PResult<Vec<Attr>> {
+    fn attributes(&self, start: usize, e: &BytesStart<'_>) -> PResult<Vec<Attr<'a>>> {
         let mut out = Vec::new();
         for a in e.attributes() {
             let a = a.map_err(|err| {
@@ -325,9 +335,21 @@ impl<'a> ArgsParser<'a> {
                     at,
                 )
             })?;
+            // Borrow key and value from the file text when they are slices of it (always,
+            // for keys; for values that needed no normalisation), to avoid allocations.
+            let key = self.reborrow(a.key.as_ref()).map_or_else(
+                || Cow::Owned(a.key.as_ref().to_string()),
+                Cow::Borrowed,
+            );
+            let value = match value {
+                Cow::Borrowed(v) => self
+                    .reborrow(v)
+                    .map_or_else(|| Cow::Owned(v.to_string()), Cow::Borrowed),
+                Cow::Owned(v) => Cow::Owned(v),
+            };
             out.push(Attr {
-                key: a.key.as_ref().to_string(),
-                value: value.into_owned(),
+                key,
+                value,
                 offset,
             });
         }
@@ -501,8 +523,8 @@ impl<'a> ArgsParser<'a> {
         empty: bool,
         in_page: bool,
     ) -> PResult<()> {
-        let name = e.name().as_ref().to_string();
-        match name.as_str() {
+        let name = e.name().0;
+        match name {
             "param" => self.parse_property(pos, e, empty, Direction::In),
             "output" => self.parse_property(pos, e, empty, Direction::Out),
             "page" => self.parse_page(pos, e, empty),
@@ -527,7 +549,7 @@ impl<'a> ArgsParser<'a> {
             }
             n if RAW_NODE_ELEMENTS.contains(&n) => {
                 let raw = self.element_raw(pos, e, empty)?;
-                self.def.metadata.push((name, raw.to_string()));
+                self.def.metadata.push((name.to_string(), raw.to_string()));
                 Ok(())
             }
             _ => {
@@ -546,14 +568,16 @@ impl<'a> ArgsParser<'a> {
     fn parse_page(&mut self, pos: usize, e: &BytesStart<'a>, empty: bool) -> PResult<()> {
         let attrs = self.attributes(pos, e)?;
         let name = attr(&attrs, "name")
-            .map(|a| a.value.clone())
+            .map(|a| a.value.to_string())
             .unwrap_or_default();
         if empty {
             return Ok(());
         }
         self.pages.push(name);
+        let saved = self.page_path.replace(self.pages.join(":"));
         let r = self.parse_container(true, pos);
         self.pages.pop();
+        self.page_path = saved;
         r
     }
 
@@ -573,7 +597,7 @@ impl<'a> ArgsParser<'a> {
             );
         }
         let attrs = self.attributes(pos, e)?;
-        let mut found = attr(&attrs, "name").map(|a| (a.value.clone(), a.offset));
+        let mut found = attr(&attrs, "name").map(|a| (a.value.to_string(), a.offset));
         if !empty {
             loop {
                 let (cpos, ev) = self.next()?;
@@ -584,11 +608,11 @@ impl<'a> ArgsParser<'a> {
                     Event::Eof => return Err(self.unexpected_eof(element, pos)),
                     _ => continue,
                 };
-                let cname = c.name().as_ref().to_string();
+                let cname = c.name().0;
                 let cattrs = self.attributes(cpos, &c)?;
                 if cname == "tag" {
                     if found.is_none() {
-                        found = attr(&cattrs, "value").map(|a| (a.value.clone(), a.offset));
+                        found = attr(&cattrs, "value").map(|a| (a.value.to_string(), a.offset));
                     }
                 } else {
                     self.report(
@@ -665,21 +689,16 @@ impl<'a> ArgsParser<'a> {
             Type::scalar(BaseType::Unknown(String::new())),
             location,
         );
-        prop.metadata = attrs
-            .iter()
-            .map(|a| (a.key.clone(), a.value.clone()))
-            .collect();
-        prop.page = if self.pages.is_empty() {
-            attr(&attrs, "page").map(|a| a.value.clone())
-        } else {
-            Some(self.pages.join(":"))
+        prop.page = match &self.page_path {
+            Some(p) => Some(p.clone()),
+            None => attr(&attrs, "page").map(|a| a.value.to_string()),
         };
-        prop.label = attr(&attrs, "label").map(|a| a.value.clone());
-        prop.widget = attr(&attrs, "widget").map(|a| a.value.clone());
+        prop.label = attr(&attrs, "label").map(|a| a.value.to_string());
+        prop.widget = attr(&attrs, "widget").map(|a| a.value.to_string());
         prop.help = children
             .help
             .clone()
-            .or_else(|| attr(&attrs, "help").map(|a| a.value.clone()));
+            .or_else(|| attr(&attrs, "help").map(|a| a.value.to_string()));
         if attr(&attrs, "sdrDefinitionName").is_some() {
             self.uses_sdr_definition_name = true;
         }
@@ -696,7 +715,7 @@ impl<'a> ArgsParser<'a> {
         // Connection types: the deprecated `tag` attribute, then `<tags>` children.
         if let Some(a) = attr(&attrs, "tag") {
             let off = a.offset;
-            prop.connection_types.push(a.value.clone());
+            prop.connection_types.push(a.value.to_string());
             self.report(
                 Severity::Info,
                 "AR020",
@@ -720,8 +739,16 @@ impl<'a> ArgsParser<'a> {
             prop.connectable = true;
         }
 
-        prop.metadata.extend(children.raw_hints.iter().cloned());
         self.resolve_vstruct(&mut prop, &attrs, &children.child_meta);
+        // Metadata: every attribute in document order, then raw hints, then child metadata
+        // (extension) that `resolve_vstruct` accepted.
+        let accepted_child_meta = std::mem::take(&mut prop.metadata);
+        prop.metadata = attrs
+            .into_iter()
+            .map(|a| (a.key.into_owned(), a.value.into_owned()))
+            .chain(children.raw_hints)
+            .chain(accepted_child_meta)
+            .collect();
 
         match direction {
             Direction::In => self.def.inputs.push(prop),
@@ -774,8 +801,8 @@ impl<'a> ArgsParser<'a> {
                 Event::Eof => return Err(self.unexpected_eof(element, start)),
                 _ => continue,
             };
-            let cname = c.name().as_ref().to_string();
-            match cname.as_str() {
+            let cname = c.name().0;
+            match cname {
                 "help" => {
                     let raw = self.inner_raw(&c, empty)?;
                     out.help = Some(raw.trim().to_string());
@@ -789,14 +816,14 @@ impl<'a> ArgsParser<'a> {
                 "string" if self.options.child_meta => {
                     let attrs = self.attributes(pos, &c)?;
                     let key = attr(&attrs, "name")
-                        .map(|a| a.value.clone())
+                        .map(|a| a.value.to_string())
                         .unwrap_or_default();
                     if VSTRUCT_KEYS.contains(&key.as_str())
                         && let Some(v) = attr(&attrs, "value")
                     {
                         out.child_meta.push(ChildMeta {
                             key,
-                            value: v.value.clone(),
+                            value: v.value.to_string(),
                             offset: v.offset,
                         });
                     } else {
@@ -838,11 +865,11 @@ impl<'a> ArgsParser<'a> {
                 Event::Eof => return Err(self.unexpected_eof("tags", start)),
                 _ => continue,
             };
-            let cname = c.name().as_ref().to_string();
+            let cname = c.name().0;
             if cname == "tag" {
                 let attrs = self.attributes(pos, &c)?;
                 if let Some(v) = attr(&attrs, "value") {
-                    tags.push(v.value.clone());
+                    tags.push(v.value.to_string());
                 }
             } else {
                 self.report(
@@ -869,7 +896,7 @@ impl<'a> ArgsParser<'a> {
     ) -> PResult<()> {
         let attrs = self.attributes(pos, c)?;
         let name = attr(&attrs, "name")
-            .map(|a| a.value.clone())
+            .map(|a| a.value.to_string())
             .unwrap_or_default();
         if name != "options" {
             let raw = self.element_raw(pos, c, empty)?;
@@ -890,8 +917,8 @@ impl<'a> ArgsParser<'a> {
                 _ => continue,
             };
             let iattrs = self.attributes(cpos, &item)?;
-            let value = attr(&iattrs, "value").map(|a| a.value.clone());
-            let label = attr(&iattrs, "name").map(|a| a.value.clone());
+            let value = attr(&iattrs, "value").map(|a| a.value.to_string());
+            let label = attr(&iattrs, "name").map(|a| a.value.to_string());
             match (element, label, value) {
                 ("hintdict", Some(l), Some(v)) => out.options.push((l, v)),
                 ("hintlist", _, Some(v)) => out.options.push((v.clone(), v)),
@@ -909,7 +936,7 @@ impl<'a> ArgsParser<'a> {
     fn resolve_type(
         &mut self,
         prop: &mut Property,
-        attrs: &[Attr],
+        attrs: &[Attr<'_>],
         direction: Direction,
         pos: usize,
     ) {
@@ -926,7 +953,7 @@ impl<'a> ArgsParser<'a> {
             );
         }
         let (word, offset) = match type_attr {
-            Some(a) => (Some(a.value.clone()), a.offset),
+            Some(a) => (Some(a.value.to_string()), a.offset),
             None => (prop.connection_types.first().cloned(), pos),
         };
         let mut ty = match &word {
@@ -979,7 +1006,7 @@ impl<'a> ArgsParser<'a> {
     }
 
     /// Array shape from `arraySize` / `isDynamicArray`.
-    fn resolve_array(&mut self, ty: &Type, attrs: &[Attr]) -> ArraySpec {
+    fn resolve_array(&mut self, ty: &Type, attrs: &[Attr<'_>]) -> ArraySpec {
         let dynamic = attr(attrs, "isDynamicArray").is_some_and(|a| args_bool(&a.value, true));
         let mut shape = ty.array;
         if let Some(a) = attr(attrs, "arraySize") {
@@ -990,7 +1017,7 @@ impl<'a> ArgsParser<'a> {
                 Ok(-1) => Some(ArraySpec::Dynamic),
                 Ok(0) => Some(ArraySpec::None),
                 _ => {
-                    let v = a.value.clone();
+                    let v = a.value.to_string();
                     self.report(
                         Severity::Warning,
                         "AR013",
@@ -1029,7 +1056,7 @@ impl<'a> ArgsParser<'a> {
     /// Default value per formats.md §2.5; reports AR012.
     fn resolve_default(&mut self, ty: &Type, a: Option<&Attr>, pos: usize) -> Option<Value> {
         let (text, offset) = match a {
-            Some(a) => (Some(a.value.as_str()), a.offset),
+            Some(a) => (Some(a.value.as_ref()), a.offset),
             None => (None, pos),
         };
         let parsed = parse_default(ty, text);
@@ -1040,9 +1067,9 @@ impl<'a> ArgsParser<'a> {
     }
 
     /// vstruct member declaration per vstruct.md §2.2–§2.4 (and the child-meta extension).
-    fn resolve_vstruct(&mut self, prop: &mut Property, attrs: &[Attr], child_meta: &[ChildMeta]) {
+    fn resolve_vstruct(&mut self, prop: &mut Property, attrs: &[Attr<'_>], child_meta: &[ChildMeta]) {
         let mut get = |key: &str, me: &mut Self| -> Option<(String, usize)> {
-            let from_attr = attr(attrs, key).map(|a| (a.value.clone(), a.offset));
+            let from_attr = attr(attrs, key).map(|a| (a.value.to_string(), a.offset));
             let from_child = child_meta.iter().find(|c| c.key == key);
             match (from_attr, from_child) {
                 (Some(a), Some(c)) => {
