@@ -3,9 +3,9 @@
 mod common;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use vstructc::Diagnostics;
 use vstructc::front::args::parse_args;
-use std::sync::Arc;
 use vstructc::registry::{Definition, Registry, RegistryOptions, VstructTables};
 use vstructc::types::{ArraySpec, BaseType, Value};
 
@@ -82,7 +82,10 @@ fn pxr_layer_has_83_inputs_and_79_conditional_output_members() {
     assert_eq!(t.output_heads().collect::<Vec<_>>(), ["pxrMaterialOut"]);
     let members = t.members_out("pxrMaterialOut");
     assert_eq!(members.len(), 79);
-    assert!(members.iter().all(|m| m.cond.is_some()), "all 79 are conditional");
+    assert!(
+        members.iter().all(|m| m.cond.is_some()),
+        "all 79 are conditional"
+    );
     // Member names are the text after the head, found through the reverse table.
     for m in members {
         assert_eq!(m.names.len(), 1);
@@ -155,7 +158,13 @@ fn mixer_input_members_match_layer_output_members() {
             .collect(),
     );
     for h in ["baselayer", "layer1", "layer4"] {
-        let names = sorted(mixer.members_in(h).iter().map(|m| m.names[0].as_str()).collect());
+        let names = sorted(
+            mixer
+                .members_in(h)
+                .iter()
+                .map(|m| m.names[0].as_str())
+                .collect(),
+        );
         assert_eq!(names, layer_names, "{h}");
     }
     let mixer_out = sorted(
@@ -173,12 +182,18 @@ fn pages_nest_with_colons() {
     let dir = fixtures_or_skip!();
     let def = pixar(&dir, "PxrLayer");
     assert_eq!(def.input("enableDiffuseAlways").unwrap().page, None);
-    assert_eq!(def.input("diffuseGain").unwrap().page.as_deref(), Some("Diffuse"));
+    assert_eq!(
+        def.input("diffuseGain").unwrap().page.as_deref(),
+        Some("Diffuse")
+    );
     assert_eq!(
         def.input("diffuseBumpNormal").unwrap().page.as_deref(),
         Some("Diffuse:Diffuse Advanced")
     );
-    assert_eq!(def.input("enableSpecular").unwrap().page.as_deref(), Some("Primary Specular"));
+    assert_eq!(
+        def.input("enableSpecular").unwrap().page.as_deref(),
+        Some("Primary Specular")
+    );
 }
 
 #[test]
@@ -200,7 +215,10 @@ fn typed_fields_and_verbatim_metadata() {
     assert!(o.connectable);
     // Node-level raw elements.
     let (_, rfc) = def.metadata.iter().find(|(k, _)| k == "rfcdata").unwrap();
-    assert!(rfc.starts_with("<rfcdata") && rfc.contains("nodeid=\"1037674\""), "{rfc}");
+    assert!(
+        rfc.starts_with("<rfcdata") && rfc.contains("nodeid=\"1037674\""),
+        "{rfc}"
+    );
 }
 
 #[test]
@@ -225,13 +243,18 @@ fn laika_spaced_equals_comments_and_html_help() {
     assert!(!notes.connectable);
     let help = notes.help.as_deref().unwrap();
     assert!(
-        help.contains("<a href='http://dx.doi.org/10.1007/s00138-002-0089-7'>Koenderink-Pont asperity</a>"),
+        help.contains(
+            "<a href='http://dx.doi.org/10.1007/s00138-002-0089-7'>Koenderink-Pont asperity</a>"
+        ),
         "HTML inside <help> is kept as markup: {help}"
     );
     let gain = def.input("Gain").unwrap();
     assert_eq!(gain.default, Some(Value::Float(1.0)));
     assert_eq!(gain.meta("slidermax"), Some("4.0"));
-    assert_eq!(gain.help.as_deref(), Some("Adjusts the <b>Gain</b> of the response."));
+    assert_eq!(
+        gain.help.as_deref(),
+        Some("Adjusts the <b>Gain</b> of the response.")
+    );
 }
 
 #[test]
@@ -248,7 +271,14 @@ fn registry_over_all_fixture_args_has_no_errors() {
     let dir = fixtures_or_skip!();
     let reg = Registry::new(RegistryOptions::only([dir.join("args")]));
     let ids = reg.ids();
-    for id in ["PxrLayer", "PxrLayerMixer", "PxrOSL", "PxrShadedSide", "KPVelvet", "HGScatter"] {
+    for id in [
+        "PxrLayer",
+        "PxrLayerMixer",
+        "PxrOSL",
+        "PxrShadedSide",
+        "KPVelvet",
+        "HGScatter",
+    ] {
         assert!(ids.contains(&id), "{id} in {ids:?}");
     }
     reg.load_all();
@@ -272,7 +302,10 @@ fn every_oso_fixture_loads() {
     assert!(ids.contains(&"TestNodeOSL"), "{ids:?}");
     reg.load_all();
     let diags = reg.diagnostics();
-    if diags.iter().any(|d| d.code == "OS001" && d.message.contains("not implemented")) {
+    if diags
+        .iter()
+        .any(|d| d.code == "OS001" && d.message.contains("not implemented"))
+    {
         eprintln!("notice: the .oso reader has not landed yet; skipping the oso fixture checks");
         return;
     }

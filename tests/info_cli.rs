@@ -19,7 +19,12 @@ const PIXAR: &str = "../shared/fixtures/args/pixar";
 fn info_pxr_layer_mixer_human() {
     let _dir = fixtures_or_skip!();
     let out = vstructc(&["info", "PxrLayerMixer", "--args", PIXAR]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8(out.stdout).unwrap();
     insta::assert_snapshot!(stdout);
 }
@@ -37,7 +42,11 @@ fn info_pxr_layer_mixer_json() {
     let heads = doc["vstruct"]["inputHeads"].as_array().unwrap();
     let names: Vec<&str> = heads.iter().map(|h| h["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["baselayer", "layer1", "layer2", "layer3", "layer4"]);
-    assert!(heads.iter().all(|h| h["members"].as_array().unwrap().len() == 79));
+    assert!(
+        heads
+            .iter()
+            .all(|h| h["members"].as_array().unwrap().len() == 79)
+    );
     let outs = doc["vstruct"]["outputHeads"].as_array().unwrap();
     assert_eq!(outs.len(), 1);
     let members = outs[0]["members"].as_array().unwrap();
@@ -58,7 +67,10 @@ fn info_unknown_shader_is_a_usage_error() {
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("unknown shader `NoSuchShader`"), "{stderr}");
-    assert!(stderr.contains("PxrLayerMixer"), "lists the known ids: {stderr}");
+    assert!(
+        stderr.contains("PxrLayerMixer"),
+        "lists the known ids: {stderr}"
+    );
 }
 
 #[test]
@@ -70,7 +82,12 @@ fn info_missing_args_path_is_an_input_error() {
 
 #[test]
 fn info_shows_pages_heads_and_normalised_types() {
-    let out = vstructc(&["info", "aliases", "--args", "tests/data/args/tables/aliases.args"]);
+    let out = vstructc(&[
+        "info",
+        "aliases",
+        "--args",
+        "tests/data/args/tables/aliases.args",
+    ]);
     assert_eq!(out.status.code(), Some(0));
     let s = String::from_utf8(out.stdout).unwrap();
     assert!(s.starts_with("aliases: bxdf\n"), "{s}");

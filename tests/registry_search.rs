@@ -9,7 +9,9 @@ use vstructc::registry::{
 use vstructc::{Diagnostics, Severity};
 
 fn search(sub: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/args/search").join(sub)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/args/search")
+        .join(sub)
 }
 
 fn count(diags: &Diagnostics, code: &str) -> usize {
@@ -104,7 +106,14 @@ fn oso_shadows_args_by_default_with_rg002() {
     let rg002: Vec<_> = diags.with_code("RG002").collect();
     assert_eq!(rg002.len(), 1, "{diags:?}");
     assert_eq!(rg002[0].severity, Severity::Info);
-    assert!(rg002[0].location.as_ref().unwrap().file.ends_with("Dup.args"));
+    assert!(
+        rg002[0]
+            .location
+            .as_ref()
+            .unwrap()
+            .file
+            .ends_with("Dup.args")
+    );
 }
 
 #[test]
@@ -133,7 +142,9 @@ fn in_memory_definitions_come_first_and_replace_cached_ones() {
     let t = reg.tables("Dup").unwrap();
     assert_eq!(t.members_in("inputMaterial")[0].property, "gain");
     // Bad text is refused with its diagnostic and leaves the registry unchanged.
-    let err = reg.add_args_text("Other", "<args><param/></args>").unwrap_err();
+    let err = reg
+        .add_args_text("Other", "<args><param/></args>")
+        .unwrap_err();
     assert_eq!(err.code(), Some("AR003"));
     assert!(!reg.contains("Other"));
 }
@@ -146,7 +157,9 @@ fn embedded_definitions_load_without_errors() {
     for (rel, _) in embedded_files() {
         let stem = rel.rsplit('/').next().unwrap().trim_end_matches(".args");
         assert!(ids.contains(&stem), "{rel}");
-        let def = reg.definition(stem).unwrap_or_else(|| panic!("{rel}: {:?}", reg.diagnostics()));
+        let def = reg
+            .definition(stem)
+            .unwrap_or_else(|| panic!("{rel}: {:?}", reg.diagnostics()));
         assert_eq!(&*def.path, format!("<embedded>/{rel}"));
     }
     assert!(!reg.diagnostics().has_errors(), "{:?}", reg.diagnostics());
@@ -174,7 +187,11 @@ fn explicit_paths_shadow_embedded_ones_quietly() {
     let diags = reg.diagnostics();
     let rg001: Vec<_> = diags.with_code("RG001").collect();
     assert_eq!(rg001.len(), 1);
-    assert_eq!(rg001[0].severity, Severity::Note, "shadowing the fallback is not a warning");
+    assert_eq!(
+        rg001[0].severity,
+        Severity::Note,
+        "shadowing the fallback is not a warning"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -192,7 +209,10 @@ fn vstructc(args: &[&str], env: Option<&str>) -> std::process::Output {
 fn environment_path_comes_after_explicit_paths() {
     let a = "tests/data/args/search/a";
     let b = "tests/data/args/search/b";
-    let out = vstructc(&["info", "Dup"], Some(&format!("/nonexistent-vstructc::{b}")));
+    let out = vstructc(
+        &["info", "Dup"],
+        Some(&format!("/nonexistent-vstructc::{b}")),
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{stderr}");

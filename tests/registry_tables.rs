@@ -66,7 +66,10 @@ fn heads_are_normalised_to_vstruct_without_default() {
     // Encoding E1: a float param with a vstruct tag and a default.
     let head = def.input("in").unwrap();
     assert_eq!(head.ty.base, BaseType::Vstruct);
-    assert_eq!(head.declared_type, "float", "declared type kept for diagnostics");
+    assert_eq!(
+        head.declared_type, "float",
+        "declared type kept for diagnostics"
+    );
     assert_eq!(head.default, None);
     // A vstruct tag without members pointing at it is not a head.
     let lonely = def.input("lonely").unwrap();
@@ -117,9 +120,17 @@ fn head_with_input_and_output_members_is_vs005_and_split() {
 #[test]
 fn nested_head_is_vs008_and_not_flattened() {
     let (def, t, diags) = load("nested");
-    let outer: Vec<&str> = t.members_in("outer").iter().map(|m| m.property.as_str()).collect();
+    let outer: Vec<&str> = t
+        .members_in("outer")
+        .iter()
+        .map(|m| m.property.as_str())
+        .collect();
     assert_eq!(outer, ["inner", "outer_y"]);
-    assert_eq!(t.members_in("outer")[1].names, ["a.b.c"], "member names may contain dots");
+    assert_eq!(
+        t.members_in("outer")[1].names,
+        ["a.b.c"],
+        "member names may contain dots"
+    );
     assert_eq!(t.members_in("inner")[0].property, "inner_x");
     let vs008 = codes(&diags, "VS008");
     assert_eq!(vs008.len(), 1, "{diags:?}");
@@ -128,7 +139,10 @@ fn nested_head_is_vs008_and_not_flattened() {
     let inner = def.input("inner").unwrap();
     assert_eq!(inner.ty.base, BaseType::Vstruct);
     assert_eq!(inner.default, None);
-    assert!(codes(&diags, "VS007").is_empty(), "both heads exist: {diags:?}");
+    assert!(
+        codes(&diags, "VS007").is_empty(),
+        "both heads exist: {diags:?}"
+    );
 }
 
 #[test]
@@ -152,7 +166,10 @@ fn identical_conditionals_are_parsed_once() {
     let same = t.reverse_out("out", "same").unwrap().cond.as_ref().unwrap();
     assert!(Arc::ptr_eq(&ok.parsed, &same.parsed));
     assert_eq!(ok.source.text, "connect if enable == 1 ");
-    assert_eq!((ok.source.location.line, ok.source.location.column), (8, 35));
+    assert_eq!(
+        (ok.source.location.line, ok.source.location.column),
+        (8, 35)
+    );
 }
 
 #[test]
@@ -160,8 +177,16 @@ fn unparsable_conditionals_are_vs001_at_value_start_plus_offset() {
     let (_, t, diags) = load("conditionals");
     let bad = t.reverse_out("out", "bad").unwrap().cond.as_ref().unwrap();
     assert!(bad.parsed.is_err(), "`== ==` does not parse");
-    let blank = t.reverse_out("out", "blank").unwrap().cond.as_ref().unwrap();
-    assert!(blank.parsed.is_err(), "whitespace is not an empty conditional");
+    let blank = t
+        .reverse_out("out", "blank")
+        .unwrap()
+        .cond
+        .as_ref()
+        .unwrap();
+    assert!(
+        blank.parsed.is_err(),
+        "whitespace is not an empty conditional"
+    );
     let vs001: Vec<_> = codes(&diags, "VS001")
         .into_iter()
         .filter(|d| d.message.contains("out_bad") || d.message.contains("out_blank"))
@@ -182,7 +207,12 @@ fn unparsable_conditionals_are_vs001_at_value_start_plus_offset() {
 #[test]
 fn conditional_naming_an_unknown_parameter_is_vs009() {
     let (_, t, diags) = load("conditionals");
-    let c = t.reverse_out("out", "unknown").unwrap().cond.as_ref().unwrap();
+    let c = t
+        .reverse_out("out", "unknown")
+        .unwrap()
+        .cond
+        .as_ref()
+        .unwrap();
     let Some(stmt) = c.statement() else {
         eprintln!("notice: the conditional parser has not landed yet; VS009 not checked");
         return;

@@ -337,21 +337,16 @@ impl<'a> ArgsParser<'a> {
             })?;
             // Borrow key and value from the file text when they are slices of it (always,
             // for keys; for values that needed no normalisation), to avoid allocations.
-            let key = self.reborrow(a.key.as_ref()).map_or_else(
-                || Cow::Owned(a.key.as_ref().to_string()),
-                Cow::Borrowed,
-            );
+            let key = self
+                .reborrow(a.key.as_ref())
+                .map_or_else(|| Cow::Owned(a.key.as_ref().to_string()), Cow::Borrowed);
             let value = match value {
                 Cow::Borrowed(v) => self
                     .reborrow(v)
                     .map_or_else(|| Cow::Owned(v.to_string()), Cow::Borrowed),
                 Cow::Owned(v) => Cow::Owned(v),
             };
-            out.push(Attr {
-                key,
-                value,
-                offset,
-            });
+            out.push(Attr { key, value, offset });
         }
         Ok(out)
     }
@@ -536,7 +531,7 @@ impl<'a> ArgsParser<'a> {
                 Ok(())
             }
             "help" => self.inner_raw(e, empty).map(|_| ()),
-            "shaderType" | "typeTag" if !in_page => self.parse_shader_type(pos, e, empty, &name),
+            "shaderType" | "typeTag" if !in_page => self.parse_shader_type(pos, e, empty, name),
             "sdrGlobalConfig" if self.uses_sdr_definition_name => {
                 self.report(
                     Severity::Warning,
@@ -667,7 +662,13 @@ impl<'a> ArgsParser<'a> {
             "output"
         };
         let attrs = self.attributes(pos, e)?;
-        let children = if empty {
+        let PropertyChildren {
+            help,
+            tags,
+            options,
+            raw_hints,
+            child_meta,
+        } = if empty {
             PropertyChildren::default()
         } else {
             self.parse_property_children(element, pos)?
@@ -695,10 +696,7 @@ impl<'a> ArgsParser<'a> {
         };
         prop.label = attr(&attrs, "label").map(|a| a.value.to_string());
         prop.widget = attr(&attrs, "widget").map(|a| a.value.to_string());
-        prop.help = children
-            .help
-            .clone()
-            .or_else(|| attr(&attrs, "help").map(|a| a.value.to_string()));
+        prop.help = help.or_else(|| attr(&attrs, "help").map(|a| a.value.to_string()));
         if attr(&attrs, "sdrDefinitionName").is_some() {
             self.uses_sdr_definition_name = true;
         }
@@ -723,13 +721,13 @@ impl<'a> ArgsParser<'a> {
                 off,
             );
         }
-        prop.connection_types.extend(children.tags.iter().cloned());
+        prop.connection_types.extend(tags);
 
         // Options: the attribute, then hint children, in document order.
         if let Some(a) = attr(&attrs, "options") {
             prop.options.extend(parse_options_attr(&a.value));
         }
-        prop.options.extend(children.options.iter().cloned());
+        prop.options.extend(options);
 
         self.resolve_type(&mut prop, &attrs, direction, pos);
         if direction == Direction::In {
@@ -739,14 +737,14 @@ impl<'a> ArgsParser<'a> {
             prop.connectable = true;
         }
 
-        self.resolve_vstruct(&mut prop, &attrs, &children.child_meta);
+        self.resolve_vstruct(&mut prop, &attrs, &child_meta);
         // Metadata: every attribute in document order, then raw hints, then child metadata
         // (extension) that `resolve_vstruct` accepted.
         let accepted_child_meta = std::mem::take(&mut prop.metadata);
         prop.metadata = attrs
             .into_iter()
             .map(|a| (a.key.into_owned(), a.value.into_owned()))
-            .chain(children.raw_hints)
+            .chain(raw_hints)
             .chain(accepted_child_meta)
             .collect();
 
@@ -812,7 +810,7 @@ impl<'a> ArgsParser<'a> {
                         self.parse_tags(&mut out.tags, pos)?;
                     }
                 }
-                "hintdict" | "hintlist" => self.parse_hint(pos, &c, empty, &cname, &mut out)?,
+                "hintdict" | "hintlist" => self.parse_hint(pos, &c, empty, cname, &mut out)?,
                 "string" if self.options.child_meta => {
                     let attrs = self.attributes(pos, &c)?;
                     let key = attr(&attrs, "name")
@@ -1067,7 +1065,12 @@ impl<'a> ArgsParser<'a> {
     }
 
     /// vstruct member declaration per vstruct.md §2.2–§2.4 (and the child-meta extension).
-    fn resolve_vstruct(&mut self, prop: &mut Property, attrs: &[Attr<'_>], child_meta: &[ChildMeta]) {
+    fn resolve_vstruct(
+        &mut self,
+        prop: &mut Property,
+        attrs: &[Attr<'_>],
+        child_meta: &[ChildMeta],
+    ) {
         let mut get = |key: &str, me: &mut Self| -> Option<(String, usize)> {
             let from_attr = attr(attrs, key).map(|a| (a.value.to_string(), a.offset));
             let from_child = child_meta.iter().find(|c| c.key == key);
