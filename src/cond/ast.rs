@@ -614,7 +614,9 @@ fn dump_action(out: &mut String, depth: usize, role: &str, a: &Action) {
         ActionKind::Connect => "Connect".to_string(),
         ActionKind::Ignore => "Ignore".to_string(),
         ActionKind::Set { literal } => format!("Set {}", literal_text(literal)),
-        ActionKind::Copy { param } => format!("Copy {:?} {}", param.name, span_text(&param.span)),
+        ActionKind::Copy { param } => {
+            format!("Copy {:?} (name {})", param.name, span_text(&param.span))
+        }
     };
     line(out, depth, &format!("{role}: {body} {where_}"));
 }

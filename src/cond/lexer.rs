@@ -220,6 +220,7 @@ impl TokenKind<'_> {
             TokenKind::LParen => "'('".to_string(),
             TokenKind::RParen => "')'".to_string(),
             TokenKind::Cmp(op) => format!("'{op}'"),
+            TokenKind::Unrecognized('\'') => "\"'\"".to_string(),
             TokenKind::Unrecognized(c) => format!("'{}'", escape_char(*c)),
             TokenKind::Eof => "end of input".to_string(),
         }

@@ -464,7 +464,8 @@ fn implied(kind: ActionKind, at: usize) -> Action {
     Action::new(kind, at..at)
 }
 
-/// Hints for the likely mistake behind an error at token `t`.
+/// Hints for the likely mistake behind an error at token `t` (`previous` is the token
+/// before it, `wants` what the parser expected).
 fn hints(
     t: &Token<'_>,
     wants: &[Want],
@@ -472,42 +473,63 @@ fn hints(
     ext: &Extensions,
 ) -> Vec<String> {
     let mut notes = Vec::new();
+    let copy_slot = wants == [Want::Param];
+    let predicate_start = wants.contains(&Want::LParen) && wants.contains(&Want::Param);
+    let prev_kind = previous.map(|p| p.kind);
+    // Mistakes visible in the previous token.
+    if let Some(TokenKind::Param(p)) = prev_kind {
+        if let Some(k) = Keyword::from_text(&p.to_ascii_lowercase()).filter(|k| k.text() != p) {
+            notes.push(format!(
+                "keywords are case-sensitive: `{p}` is read as a parameter name; \
+                 did you mean `{}`?",
+                k.text()
+            ));
+        }
+        if p == "not" && wants.contains(&Want::Cmp) {
+            notes.push(
+                "there is no unary `not`; use `!=`, `is not connected` or `is not set`".into(),
+            );
+        }
+    }
     match t.kind {
         TokenKind::Unrecognized(c) => {
             notes.push(format!(
-                "'{}' is not a token of the conditional language",
-                super::lexer::escape_char(c)
+                "{} is not a token of the conditional language",
+                t.kind.describe()
             ));
             if let Some(h) = unrecognized_hint(c) {
                 notes.push(h.to_string());
             }
         }
         TokenKind::Param(p) => {
-            if let Some(k) = Keyword::from_text(&p.to_ascii_lowercase()) {
+            if let Some(k) = Keyword::from_text(&p.to_ascii_lowercase()).filter(|k| k.text() != p) {
                 notes.push(format!(
                     "keywords are case-sensitive: `{p}` is a parameter name; did you mean `{}`?",
                     k.text()
                 ));
             }
-            if p == "not" {
-                if matches!(previous.map(|t| t.kind), Some(TokenKind::Kw(Keyword::Is))) {
-                    notes.push("`is not` must be written with exactly one space".into());
+            if p == "not" && prev_kind == Some(TokenKind::Kw(Keyword::Is)) {
+                notes.push("`is not` must be written with exactly one space".into());
+            }
+            if wants.contains(&Want::Number) {
+                if prev_kind == Some(TokenKind::Kw(Keyword::Set)) {
+                    notes.push(format!(
+                        "`set` takes a NUMBER or STRING literal; to copy a parameter write \
+                         `copy {p}`"
+                    ));
+                } else if matches!(p, "true" | "false") {
+                    notes.push("there are no boolean literals; compare with 1 or 0".into());
                 } else {
                     notes.push(
-                        "there is no unary `not`; use `!=`, `is not connected` or `is not set`"
-                            .into(),
+                        "a parameter can only be compared with a NUMBER or STRING literal".into(),
                     );
                 }
             }
-            if wants.contains(&Want::Number) && matches!(p, "true" | "false") {
-                notes.push("there are no boolean literals; compare with 1 or 0".into());
-            } else if wants.contains(&Want::Number) && !wants.contains(&Want::Param) {
-                notes.push(
-                    "a parameter can only be compared with a NUMBER or STRING literal".into(),
-                );
-            }
         }
-        TokenKind::Number(_) | TokenKind::Str { .. } if wants.contains(&Want::Param) => {
+        TokenKind::Number(_) | TokenKind::Str { .. } if copy_slot => {
+            notes.push("`copy` takes a parameter name; to write a literal use `set`".into());
+        }
+        TokenKind::Number(_) | TokenKind::Str { .. } if predicate_start => {
             notes.push("the parameter name comes first: `x == 1`, not `1 == x`".into());
         }
         TokenKind::Kw(Keyword::If) if wants == [Want::End] => {
@@ -517,11 +539,17 @@ fn hints(
                     .into()
             } else {
                 "chained `else … if` is not part of the reference language; \
-                 enable it with `--ext else-if`"
+                 `--ext else-if` accepts chains that start with an action"
                     .into()
             });
         }
-        TokenKind::Kw(k) if wants.contains(&Want::Param) => {
+        TokenKind::Kw(k) if copy_slot => {
+            notes.push(format!(
+                "`copy` takes a PARAM; a parameter named like the keyword `{}` cannot be copied",
+                k.text()
+            ));
+        }
+        TokenKind::Kw(k) if predicate_start => {
             notes.push(format!(
                 "`{}` is a keyword here; a keyword names a parameter only when a comparison \
                  operator, `is [not] connected` or `is [not] set` follows it",
