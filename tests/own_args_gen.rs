@@ -680,7 +680,7 @@ fn help(name: &str) -> Option<String> {
             "Hidden switch: 1 makes the layer export its diffuse colour even when its diffuse lobe is off."
         }
         "bumpNormal" => {
-            "Shading normal for every lobe; connect a bump or normal-map pattern. A lobe's own bump normal wins over it."
+            "Shading normal for the whole material; connect a bump or normal-map pattern. A lobe's own bump normal, where there is one, wins over it."
         }
         "diffuseRoughness" => "0 is Lambertian; larger values give Oren-Nayar reflection.",
         "diffuseExponent" => "Falloff exponent of the Lambertian lobe (1 is plain Lambert).",
