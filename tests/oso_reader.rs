@@ -639,3 +639,14 @@ fn duplicate_property_is_os004() {
         ("OS004", 5, 13)
     );
 }
+
+#[test]
+fn a_very_long_line_is_read_quickly() {
+    // 20 000 hints on one line: column bookkeeping must not rescan the line per token.
+    let hints = "%read{2147483647,-1} ".repeat(20_000);
+    let text = format!("{HEAD}param float f 0 {hints}%meta{{string,label,\"end\"}}\n");
+    let start = std::time::Instant::now();
+    let (def, _) = load(&text);
+    assert_eq!(def.input("f").unwrap().label.as_deref(), Some("end"));
+    assert!(start.elapsed().as_secs_f64() < 2.0, "took {:?}", start.elapsed());
+}

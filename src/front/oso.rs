@@ -178,6 +178,8 @@ struct Lexer<'a> {
     line_start: usize,
     /// Set after `%preprocessed_source`: everything that follows is ignored.
     stopped: bool,
+    /// The last (offset, 0-based column) computed by [`Lexer::pos_at`].
+    column_cache: std::cell::Cell<(usize, usize)>,
 }
 
 fn is_ident_start(b: u8) -> bool {
@@ -201,14 +203,19 @@ impl<'a> Lexer<'a> {
             line: 1,
             line_start: 0,
             stopped: false,
+            column_cache: std::cell::Cell::new((0, 0)),
         }
     }
 
+    /// The position of `offset` on the current line. Columns are counted incrementally from
+    /// the last position asked for, so that long lines are not rescanned for every token.
     fn pos_at(&self, offset: usize) -> Pos {
-        let column = self
-            .src
-            .get(self.line_start..offset)
-            .map_or(0, |s| s.chars().count());
+        let (mut from, mut column) = self.column_cache.get();
+        if from < self.line_start || from > offset {
+            (from, column) = (self.line_start, 0);
+        }
+        column += self.src.get(from..offset).map_or(0, |s| s.chars().count());
+        self.column_cache.set((offset, column));
         Pos {
             line: self.line,
             column: column as u32 + 1,
