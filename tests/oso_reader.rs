@@ -648,5 +648,9 @@ fn a_very_long_line_is_read_quickly() {
     let start = std::time::Instant::now();
     let (def, _) = load(&text);
     assert_eq!(def.input("f").unwrap().label.as_deref(), Some("end"));
-    assert!(start.elapsed().as_secs_f64() < 2.0, "took {:?}", start.elapsed());
+    assert!(
+        start.elapsed().as_secs_f64() < 2.0,
+        "took {:?}",
+        start.elapsed()
+    );
 }
