@@ -654,3 +654,10 @@ fn a_very_long_line_is_read_quickly() {
         start.elapsed()
     );
 }
+
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let (def, diags) = load("\u{feff}OpenShadingLanguage 1.00\nshader T\n");
+    assert!(diags.is_empty());
+    assert_eq!(def.id, "T");
+}

@@ -13,6 +13,7 @@
 //! Choices where the spec is silent (documented here so they are visible to users):
 //!
 //! * Bytes that are not valid UTF-8 are decoded lossily (U+FFFD); `.oso` is ASCII in practice.
+//!   A leading UTF-8 byte-order mark is skipped.
 //! * Blank lines and comment lines may appear anywhere before the code section.
 //! * Spaces and tabs are accepted between the items of a hint (`%meta{int, x, 1}`).
 //! * A `%meta` entry that is not `TYPE,NAME,VALUE…`, whose values do not match TYPE, or whose
@@ -62,8 +63,10 @@ const VSTRUCT_KEYS: [&str; 3] = [
 /// their line and column.
 pub fn parse_oso(bytes: &[u8], path: &str, diags: &mut Diagnostics) -> Result<Definition, Error> {
     let text = String::from_utf8_lossy(bytes);
+    // A UTF-8 byte-order mark is not part of the header line.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     Reader {
-        lexer: Lexer::new(&text),
+        lexer: Lexer::new(text),
         path: Arc::from(path),
     }
     .read(diags)
