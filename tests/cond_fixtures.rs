@@ -137,3 +137,21 @@ fn xml_attribute_decoding() {
     let text = "<output vstructConditionalExpr = 'x &gt;= 1'/>\n<!-- <output vstructConditionalExpr=\"y == 1\"/> -->";
     assert_eq!(scan::args_exprs(text), ["x >= 1"]);
 }
+
+#[test]
+fn project_args_conditionals_parse() {
+    // The project's own definitions (args/*.args, bundled into the binary) must only carry
+    // expressions the parser accepts.
+    let dir = common::repo_dir().join("args");
+    let files = scan::files_with_ext(&dir, "args");
+    let mut total = 0;
+    for path in &files {
+        let text = std::fs::read_to_string(path).unwrap();
+        let exprs = scan::args_exprs(&text);
+        parse_all(&path.display().to_string(), &exprs);
+        total += exprs.len();
+    }
+    if files.iter().any(|p| p.ends_with("PxrLayer.args")) {
+        assert!(total >= 79, "{total}");
+    }
+}
