@@ -25,6 +25,7 @@
 
 pub mod model;
 pub mod tables;
+mod param_types;
 
 pub use model::{CondSource, Definition, Direction, MemberDecl, Property, SourceKind};
 pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, VstructTables};
