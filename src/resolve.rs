@@ -641,22 +641,27 @@ impl Resolver<'_> {
     }
 
     fn report_cycle(&mut self, cycle: &[Frame], head: &str, source: &HeadSource) {
-        let mut path = Vec::new();
-        for f in cycle {
-            let input = f.heads.get(f.next).map(String::as_str).unwrap_or(head);
-            path.push(self.plug(f.node, input));
-        }
-        let text = format!(
-            "{} ← {}",
-            path.join(" ← … ← "),
-            self.plug(source.upstream, &source.head)
-        );
+        // One hop per frame on the cycle: `node.head ← upstream.output`.
+        let hops: Vec<String> = cycle
+            .iter()
+            .map(|f| {
+                let input = f.heads.get(f.next).map(String::as_str).unwrap_or(head);
+                let from = self
+                    .net
+                    .connections(f.node, input)
+                    .first()
+                    .map(|l| self.link_text(l))
+                    .unwrap_or_default();
+                format!("{} ← {from}", self.plug(f.node, input))
+            })
+            .collect();
         let Some(last) = cycle.last() else { return };
         let d = Diagnostic::warning(
             "VS012",
             format!(
-                "cycle: {} is still being resolved and is used as it is now: {text}",
-                self.name(source.upstream)
+                "cycle: {} is still being resolved and is used as it is now: {}",
+                self.name(source.upstream),
+                hops.join(", ")
             ),
         );
         self.push(d, last.node, Some(head));
