@@ -3,7 +3,7 @@
 //! [`write_json`] writes every material of a network in the form [`crate::front::json`] reads:
 //! object keys sorted byte-wise, arrays in model order (connections in connection order,
 //! primvars as given), values in canonical `{ "type", "value" }` form, floats in the shortest
-//! text that reads back to the same `f32`, two-space indentation, `\n` line ends and a final
+//! text that reads back to the same `f32` (plain or exponent form, whichever is shorter), two-space indentation, `\n` line ends and a final
 //! newline. Arrays of scalars are written on one line (`[0.5, 1, 0]`).
 //!
 //! For a network read from RIB, materials are those of [`crate::front::rib::parse_rib`]: one
@@ -22,7 +22,7 @@
 //! * Non-finite floats (only possible in networks built in code) are written as `null`.
 
 use crate::network::{Link, Network, NodeId, Upstream};
-use crate::types::{BaseType, Value, format_f32};
+use crate::types::{Value, format_f32};
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// An output tree: objects are sorted maps, numbers are pre-formatted text.
@@ -222,12 +222,18 @@ fn canonical(v: &Value) -> Out {
     Out::Obj(o)
 }
 
+/// The shortest JSON text that reads back to `x`: the shorter of the plain decimal
+/// (`0.0000001`) and the exponent form (`1e-7`), plain on ties; `-0.0` keeps its sign.
 fn num(x: f32) -> Out {
-    if x.is_finite() {
-        Out::Raw(format_f32(x))
-    } else {
-        Out::Raw("null".into())
+    if !x.is_finite() {
+        return Out::Raw("null".into());
     }
+    if x == 0.0 && x.is_sign_negative() {
+        return Out::Raw("-0.0".into());
+    }
+    let plain = format_f32(x);
+    let exp = format!("{x:e}");
+    Out::Raw(if exp.len() < plain.len() { exp } else { plain })
 }
 
 fn json_value(v: &Value) -> Out {
@@ -246,6 +252,7 @@ fn json_value(v: &Value) -> Out {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::types::BaseType;
 
     fn text(o: Out) -> String {
         let mut s = String::new();

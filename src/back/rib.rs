@@ -266,12 +266,12 @@ impl Writer<'_> {
                 None => lines.pending.extend(trailing),
             }
         }
+        for c in &src.end_comments {
+            lines.pending.push(self.bytes(c)?.to_vec());
+        }
         for p in self.added_params(node) {
             let t = self.fresh_param_text(node, p)?;
             lines.param(t);
-        }
-        for c in &src.end_comments {
-            lines.pending.push(self.bytes(c)?.to_vec());
         }
         lines.finish(out)
     }
