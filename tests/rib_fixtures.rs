@@ -257,3 +257,57 @@ fn commented_out_parameters_are_comments() {
     let surface = net.find("PxrSurface1").unwrap();
     assert_eq!(net.connections(surface, "diffuseColor")[0].upstream_node(), Some(tex));
 }
+
+/// formats.md §3.5 / vstruct.md §12.1: the golden network with its member connections replaced
+/// by the three placeholders, written as RIB and read back.
+#[test]
+fn unresolved_golden_network_round_trip() {
+    let dir = fixtures_or_skip!();
+    let path = dir.join("rib/ldd/pxrLayerSurface.0001.rib");
+    let (bytes, mut net, _) = read(&path);
+    let types = network_common::Table::new()
+        .shader("PxrLayerSurface", &[("inputMaterial", "float")], &[])
+        .shader("PxrLayerMixer", &[("baselayer", "vstruct"), ("layer1", "vstruct")], &[])
+        .shader("PxrLayer", &[], &[("pxrMaterialOut", "vstruct")]);
+    let mixer = net.find("PxrLayerMixer1").unwrap();
+    let surface = net.find("PxrLayerSurface1").unwrap();
+    let layer1 = net.find("PxrLayer1").unwrap();
+    let layer2 = net.find("PxrLayer2").unwrap();
+    for node in [mixer, surface] {
+        for input in net.connected_inputs(node) {
+            let from_layers = net
+                .connections(node, &input)
+                .iter()
+                .all(|l| [layer1, layer2, mixer].map(Some).contains(&l.upstream_node()));
+            if from_layers {
+                net.remove_param(node, &input);
+            }
+        }
+    }
+    net.connect(surface, "inputMaterial", mixer, "pxrMaterialOut");
+    net.connect(mixer, "baselayer", layer1, "pxrMaterialOut");
+    net.connect(mixer, "layer1", layer2, "pxrMaterialOut");
+    let out = write_rib_to_vec(&bytes, &net, &types).unwrap();
+    let text = String::from_utf8(out.clone()).unwrap();
+    for line in [
+        "\t\t\t\"reference float inputMaterial\" [\"PxrLayerMixer1:pxrMaterialOut\"]\n",
+        "\t\t\t\"reference vstruct baselayer\" [\"PxrLayer1:pxrMaterialOut\"]\n",
+        "\t\t\t\"reference vstruct layer1\" [\"PxrLayer2:pxrMaterialOut\"]\n",
+    ] {
+        assert!(text.contains(line), "missing {line:?}");
+    }
+    let again = reparse(&out);
+    assert_eq!(summary(&again), summary(&net));
+    let m = again.find("PxrLayerMixer1").unwrap();
+    assert_eq!(again.connected_inputs(m), ["baselayer", "layer1", "layer1Mask"]);
+    let s = again.find("PxrLayerSurface1").unwrap();
+    assert_eq!(again.connected_inputs(s), ["inputMaterial"]);
+    // Everything outside the two edited requests is unchanged.
+    let (start, end) = {
+        let a = net[mixer].source().unwrap().span.start;
+        let b = net[surface].source().unwrap().span.end;
+        (a, b)
+    };
+    assert!(out.starts_with(&bytes[..start]));
+    assert!(out.ends_with(&bytes[end..]));
+}
