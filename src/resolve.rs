@@ -15,7 +15,7 @@ use crate::network::{Link, Network, NodeId};
 use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
 use crate::registry::{Definition, Registry};
 use crate::types::Value;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 /// Options of one resolution run.
@@ -132,6 +132,8 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         options,
         out: Resolution::default(),
         visited: HashSet::new(),
+        on_stack: HashSet::new(),
+        types: HashMap::new(),
     };
     r.run();
     r.remove_head_values();
@@ -161,23 +163,56 @@ struct Resolver<'a> {
     options: &'a ResolveOptions,
     out: Resolution,
     visited: HashSet<NodeId>,
+    /// Nodes of the frames on the work stack (step 1's "on stack"), for O(1) cycle checks.
+    on_stack: HashSet<NodeId>,
+    /// Per shader id: its definition and tables, looked up in the registry once per run.
+    types: HashMap<String, TypeInfo>,
+}
+
+#[derive(Clone)]
+struct TypeInfo {
+    def: Option<Arc<Definition>>,
+    tables: Option<Arc<VstructTables>>,
 }
 
 impl Resolver<'_> {
+    fn type_info(&mut self, shader: &str) -> TypeInfo {
+        if let Some(info) = self.types.get(shader) {
+            return info.clone();
+        }
+        let info = TypeInfo {
+            def: self.registry.definition(shader),
+            tables: self.registry.tables(shader),
+        };
+        self.types.insert(shader.to_string(), info.clone());
+        info
+    }
+
+    fn tables(&mut self, shader: &str) -> Option<Arc<VstructTables>> {
+        self.type_info(shader).tables
+    }
+
+    fn definition(&mut self, shader: &str) -> Option<Arc<Definition>> {
+        self.type_info(shader).def
+    }
+
     fn run(&mut self) {
         let mut stack: Vec<Frame> = Vec::new();
         for start in self.net.nodes_sorted() {
             if let Some(frame) = self.enter(start) {
+                self.on_stack.insert(frame.node);
                 stack.push(frame);
             }
             while let Some(top) = stack.len().checked_sub(1) {
                 if stack[top].next >= stack[top].heads.len() {
+                    self.on_stack.remove(&stack[top].node);
                     stack.pop();
                     continue;
                 }
                 if let Some(upstream) = self.step(&mut stack, top)
                     && let Some(frame) = self.enter(upstream)
                 {
+                    self.on_stack.insert(frame.node);
                     stack.push(frame);
                 }
             }
@@ -191,8 +226,8 @@ impl Resolver<'_> {
             return None;
         }
         let shader = self.net[node].shader().to_string();
-        let Some(tables) = self.registry.tables(&shader) else {
-            if self.registry.definition(&shader).is_none() {
+        let Some(tables) = self.tables(&shader) else {
+            if self.definition(&shader).is_none() {
                 self.unknown_type_info(node, &shader);
             }
             return None;
@@ -228,7 +263,11 @@ impl Resolver<'_> {
         };
         if !upstream_done {
             stack[top].upstream_done = true;
-            if let Some(pos) = stack.iter().position(|f| f.node == source.upstream) {
+            if self.on_stack.contains(&source.upstream) {
+                let pos = stack
+                    .iter()
+                    .position(|f| f.node == source.upstream)
+                    .unwrap_or(0);
                 self.report_cycle(&stack[pos..], &head, &source);
             } else if !self.visited.contains(&source.upstream) {
                 return Some(source.upstream);
@@ -256,7 +295,7 @@ impl Resolver<'_> {
             (Some(_), None) => "it is a whole-node reference (no output name)".to_string(),
             (Some(up), Some(out)) => {
                 let shader = self.net[*up].shader().to_string();
-                match self.registry.tables(&shader) {
+                match self.tables(&shader) {
                     None => {
                         if report {
                             self.unknown_type_warning(*up, &shader, node, head);
@@ -294,13 +333,13 @@ impl Resolver<'_> {
         let down_shader = self.net[node].shader().to_string();
         let up_shader = self.net[source.upstream].shader().to_string();
         let (Some(down_tables), Some(up_tables)) = (
-            self.registry.tables(&down_shader),
-            self.registry.tables(&up_shader),
+            self.tables(&down_shader),
+            self.tables(&up_shader),
         ) else {
             return;
         };
-        let down_def = self.registry.definition(&down_shader);
-        let up_def = self.registry.definition(&up_shader);
+        let down_def = self.definition(&down_shader);
+        let up_def = self.definition(&up_shader);
         self.net.clear_connections(node, head);
         for member in down_tables.members_in(head) {
             let ctx = MemberCtx {
@@ -484,7 +523,7 @@ impl Resolver<'_> {
     fn remove_head_values(&mut self) {
         for node in self.net.nodes_sorted() {
             let shader = self.net[node].shader().to_string();
-            let Some(tables) = self.registry.tables(&shader) else {
+            let Some(tables) = self.tables(&shader) else {
                 continue;
             };
             let heads: Vec<String> = tables.input_heads().map(str::to_string).collect();

@@ -16,12 +16,16 @@ const GOLDEN: &str = "rib/ldd/pxrLayerSurface.0001.rib";
 
 /// Registry with Pixar's PxrLayer/PxrLayerMixer and a PxrLayerSurface definition.
 fn registry(fixtures: &Path, surface_args: &Path) -> Registry {
-    Registry::new(RegistryOptions {
-        paths: vec![fixtures.join("args/pixar"), surface_args.to_path_buf()],
+    let mut reg = Registry::new(RegistryOptions {
+        paths: vec![fixtures.join("args/pixar")],
         use_env: false,
         use_embedded: false,
         ..RegistryOptions::default()
-    })
+    });
+    let text = std::fs::read_to_string(surface_args).expect("surface definition");
+    reg.add_args_text("PxrLayerSurface", &text)
+        .expect("surface definition parses");
+    reg
 }
 
 fn full_surface() -> PathBuf {
@@ -29,7 +33,7 @@ fn full_surface() -> PathBuf {
 }
 
 fn twelve_member_surface() -> PathBuf {
-    common::repo_dir().join("tests/data/args/PxrLayerSurface12/PxrLayerSurface.args")
+    common::repo_dir().join("tests/data/args/PxrLayerSurface12.args")
 }
 
 /// The connection set of a node as (input, upstream handle, output) triples.

@@ -459,7 +459,9 @@ fn chain_of_100k_nodes_resolves_without_recursion() {
         net.connect(ids[i], "h", ids[i + 1], "out");
     }
     net.set_param(ids[n - 1], "enable", Value::Int(0));
+    let t = std::time::Instant::now();
     let res = resolve(&mut net, &reg, &ResolveOptions::default());
+    eprintln!("resolve took {:?}", t.elapsed());
     assert_eq!(res.diagnostics.count("VS012"), 0);
     // `flag` propagates: the last node has enable 0 → its downstream gets h_flag 0 ... but
     // every other node has enable 1 (default), so h_flag = 1 from the second-to-last on.
