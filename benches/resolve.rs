@@ -24,16 +24,20 @@ fn bench(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
             b.iter(|| black_box(parse()))
         });
-        group.bench_with_input(BenchmarkId::new("resolve", materials), &materials, |b, _| {
-            b.iter_batched(
-                || parsed.clone(),
-                |mut net| {
-                    let res = resolve(&mut net, &reg, &ResolveOptions::default());
-                    black_box((net, res))
-                },
-                criterion::BatchSize::LargeInput,
-            )
-        });
+        group.bench_with_input(
+            BenchmarkId::new("resolve", materials),
+            &materials,
+            |b, _| {
+                b.iter_batched(
+                    || parsed.clone(),
+                    |mut net| {
+                        let res = resolve(&mut net, &reg, &ResolveOptions::default());
+                        black_box((net, res))
+                    },
+                    criterion::BatchSize::LargeInput,
+                )
+            },
+        );
         let mut resolved = parsed.clone();
         resolve(&mut resolved, &reg, &ResolveOptions::default());
         group.bench_with_input(BenchmarkId::new("write", materials), &materials, |b, _| {

@@ -13,7 +13,7 @@ use crate::cond::{
 use crate::diag::{Diagnostic, Diagnostics, Location};
 use crate::network::{Link, Network, NodeId};
 use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
-use crate::registry::{Definition, Registry};
+use crate::registry::{Definition, Property, Registry};
 use crate::types::Value;
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -134,6 +134,7 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         visited: HashSet::new(),
         on_stack: HashSet::new(),
         types: HashMap::new(),
+        memo: HashMap::new(),
     };
     r.run();
     r.remove_head_values();
@@ -167,12 +168,39 @@ struct Resolver<'a> {
     on_stack: HashSet<NodeId>,
     /// Per shader id: its definition and tables, looked up in the registry once per run.
     types: HashMap<String, TypeInfo>,
+    /// Results of the conditionals evaluated during the current head expansion, keyed by the
+    /// shared parse result: members with the same expression text share one evaluation, which
+    /// is exact because expanding D never changes U (unless D is U, when nothing is cached).
+    memo: HashMap<usize, (Action, Vec<ComparisonReport>)>,
 }
 
 #[derive(Clone)]
 struct TypeInfo {
-    def: Option<Arc<Definition>>,
+    def: Option<Arc<IndexedDef>>,
     tables: Option<Arc<VstructTables>>,
+}
+
+/// A definition with a name index over its inputs: definitions such as PxrLayerMixer declare
+/// hundreds of inputs, and conditionals look several of them up for every member.
+struct IndexedDef {
+    def: Arc<Definition>,
+    inputs: HashMap<String, usize>,
+}
+
+impl IndexedDef {
+    fn new(def: Arc<Definition>) -> Self {
+        let inputs = def
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.name.clone(), i))
+            .collect();
+        IndexedDef { def, inputs }
+    }
+
+    fn input(&self, name: &str) -> Option<&Property> {
+        self.inputs.get(name).map(|&i| &self.def.inputs[i])
+    }
 }
 
 impl Resolver<'_> {
@@ -181,7 +209,10 @@ impl Resolver<'_> {
             return info.clone();
         }
         let info = TypeInfo {
-            def: self.registry.definition(shader),
+            def: self
+                .registry
+                .definition(shader)
+                .map(|d| Arc::new(IndexedDef::new(d))),
             tables: self.registry.tables(shader),
         };
         self.types.insert(shader.to_string(), info.clone());
@@ -192,7 +223,7 @@ impl Resolver<'_> {
         self.type_info(shader).tables
     }
 
-    fn definition(&mut self, shader: &str) -> Option<Arc<Definition>> {
+    fn definition(&mut self, shader: &str) -> Option<Arc<IndexedDef>> {
         self.type_info(shader).def
     }
 
@@ -332,15 +363,15 @@ impl Resolver<'_> {
     fn expand(&mut self, node: NodeId, head: &str, source: &HeadSource) {
         let down_shader = self.net[node].shader().to_string();
         let up_shader = self.net[source.upstream].shader().to_string();
-        let (Some(down_tables), Some(up_tables)) = (
-            self.tables(&down_shader),
-            self.tables(&up_shader),
-        ) else {
+        let (Some(down_tables), Some(up_tables)) =
+            (self.tables(&down_shader), self.tables(&up_shader))
+        else {
             return;
         };
         let down_def = self.definition(&down_shader);
         let up_def = self.definition(&up_shader);
         self.net.clear_connections(node, head);
+        self.memo.clear();
         for member in down_tables.members_in(head) {
             let ctx = MemberCtx {
                 node,
@@ -403,20 +434,32 @@ impl Resolver<'_> {
         stmt: &Statement,
         event: &mut MemberEvent,
     ) {
+        let key = Arc::as_ptr(&entry.parsed) as usize;
+        let cacheable = ctx.node != ctx.source.upstream;
         let view = NodeView {
             net: self.net,
             node: ctx.source.upstream,
             def: ctx.up_def,
         };
-        let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
-        event.reads = stmt
-            .param_names()
-            .into_iter()
-            .map(|p| view.read(p))
-            .collect();
-        let action: Action = evaluation.action.clone();
-        event.action = Some(action.to_string());
-        let reports: Vec<ComparisonReport> = evaluation.reports;
+        let (action, reports) = match self.memo.get(&key).filter(|_| cacheable) {
+            Some(hit) => hit.clone(),
+            None => {
+                let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
+                let result = (evaluation.action.clone(), evaluation.reports);
+                if cacheable {
+                    self.memo.insert(key, result.clone());
+                }
+                result
+            }
+        };
+        if self.options.record_events {
+            event.reads = stmt
+                .param_names()
+                .into_iter()
+                .map(|p| view.read(p))
+                .collect();
+            event.action = Some(action.to_string());
+        }
         for report in &reports {
             self.comparison_warning(ctx, output, entry, report);
         }
@@ -427,7 +470,10 @@ impl Resolver<'_> {
             }
             ActionKind::Ignore => Outcome::Ignored,
             ActionKind::Set { literal } => {
-                let dest = ctx.down_def.and_then(|d| d.input(ctx.member)).map(|p| &p.ty);
+                let dest = ctx
+                    .down_def
+                    .and_then(|d| d.input(ctx.member))
+                    .map(|p| &p.ty);
                 match cond::set_value(literal, dest, &self.options.extensions) {
                     Ok(set) => {
                         if set.saturated {
@@ -455,7 +501,10 @@ impl Resolver<'_> {
             .value(up, param)
             .or_else(|| source_prop.and_then(|p| p.default.as_ref()))
             .cloned();
-        let dest = ctx.down_def.and_then(|d| d.input(ctx.member)).map(|p| &p.ty);
+        let dest = ctx
+            .down_def
+            .and_then(|d| d.input(ctx.member))
+            .map(|p| &p.ty);
         match cond::copy_value(
             value.as_ref(),
             source_prop.map(|p| &p.ty),
@@ -792,8 +841,8 @@ struct MemberCtx<'c> {
     head: &'c str,
     member: &'c str,
     source: &'c HeadSource,
-    down_def: Option<&'c Definition>,
-    up_def: Option<&'c Definition>,
+    down_def: Option<&'c IndexedDef>,
+    up_def: Option<&'c IndexedDef>,
 }
 
 /// True if every branch of the conditional connects (so `--no-conditions` changes nothing
@@ -816,7 +865,7 @@ fn always_connects(entry: &CondEntry) -> bool {
 struct NodeView<'v> {
     net: &'v Network,
     node: NodeId,
-    def: Option<&'v Definition>,
+    def: Option<&'v IndexedDef>,
 }
 
 impl NodeView<'_> {

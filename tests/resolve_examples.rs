@@ -14,8 +14,8 @@ fn resolve_example(name: &str) -> String {
     let bytes = std::fs::read(&path).expect("example exists");
     let reg = Registry::embedded();
     let mut diags = Diagnostics::new();
-    let mut net = parse_rib(&bytes, name, &reg, &RibOptions::default(), &mut diags)
-        .expect("example parses");
+    let mut net =
+        parse_rib(&bytes, name, &reg, &RibOptions::default(), &mut diags).expect("example parses");
     let res = resolve(&mut net, &reg, &ResolveOptions::default());
     diags.extend(res.diagnostics);
     assert!(
@@ -46,7 +46,8 @@ fn example_chain() {
 
 fn vstructc() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_vstructc"));
-    c.current_dir(common::repo_dir()).env_remove("VSTRUCTC_ARGS_PATH");
+    c.current_dir(common::repo_dir())
+        .env_remove("VSTRUCTC_ARGS_PATH");
     c
 }
 
@@ -58,7 +59,9 @@ fn cli_resolve_example_succeeds_and_rereads() {
         .unwrap();
     assert_eq!(out.status.code(), Some(0));
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.contains(r#""reference color diffuseColor" ["mixer:pxrMaterialOut_diffuseColor"]"#));
+    assert!(
+        text.contains(r#""reference color diffuseColor" ["mixer:pxrMaterialOut_diffuseColor"]"#)
+    );
     assert!(!text.contains("inputMaterial"));
     // Resolving the output again changes nothing.
     let dir = std::env::temp_dir().join(format!("vstructc-resolve-{}", std::process::id()));
@@ -91,7 +94,10 @@ fn cli_resolve_json_output_and_stdin() {
     assert_eq!(json["vstructcNetwork"], 1);
     // The VS019 info names the location in <stdin>.
     let err = String::from_utf8(out.stderr).unwrap();
-    assert!(err.contains("info[VS019]") && err.contains("<stdin>:"), "{err}");
+    assert!(
+        err.contains("info[VS019]") && err.contains("<stdin>:"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -100,7 +106,12 @@ fn cli_output_file_is_written_atomically_and_not_on_failure() {
     std::fs::create_dir_all(&dir).unwrap();
     let out_path = dir.join("out.rib");
     let ok = vstructc()
-        .args(["resolve", "examples/chain.rib", "-o", out_path.to_str().unwrap()])
+        .args([
+            "resolve",
+            "examples/chain.rib",
+            "-o",
+            out_path.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert_eq!(ok.status.code(), Some(0));
@@ -108,10 +119,19 @@ fn cli_output_file_is_written_atomically_and_not_on_failure() {
 
     // A broken input: exit 1, the previous output untouched, no temporary left behind.
     let bad = dir.join("bad.rib");
-    std::fs::write(&bad, "Pattern \"PxrLayer\" \"x\" \"float diffuseGain\" [1\n\"unterminated").unwrap();
+    std::fs::write(
+        &bad,
+        "Pattern \"PxrLayer\" \"x\" \"float diffuseGain\" [1\n\"unterminated",
+    )
+    .unwrap();
     let before = std::fs::read(&out_path).unwrap();
     let fail = vstructc()
-        .args(["resolve", bad.to_str().unwrap(), "-o", out_path.to_str().unwrap()])
+        .args([
+            "resolve",
+            bad.to_str().unwrap(),
+            "-o",
+            out_path.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert_eq!(fail.status.code(), Some(1));
@@ -127,11 +147,20 @@ fn cli_output_file_is_written_atomically_and_not_on_failure() {
     let same = dir.join("same.rib");
     std::fs::copy(common::repo_dir().join("examples/layered.rib"), &same).unwrap();
     let st = vstructc()
-        .args(["resolve", same.to_str().unwrap(), "-o", same.to_str().unwrap()])
+        .args([
+            "resolve",
+            same.to_str().unwrap(),
+            "-o",
+            same.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert_eq!(st.status.code(), Some(0));
-    assert!(std::fs::read_to_string(&same).unwrap().contains("pxrMaterialOut_diffuseColor"));
+    assert!(
+        std::fs::read_to_string(&same)
+            .unwrap()
+            .contains("pxrMaterialOut_diffuseColor")
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -158,7 +187,10 @@ fn cli_exit_codes() {
         "Bxdf \"PxrSurface\" \"s\" \"reference float inputMaterial\" [\"ghost:pxrMaterialOut\"]\n",
     )
     .unwrap();
-    let lenient = vstructc().args(["resolve", warn.to_str().unwrap()]).output().unwrap();
+    let lenient = vstructc()
+        .args(["resolve", warn.to_str().unwrap()])
+        .output()
+        .unwrap();
     assert_eq!(lenient.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&lenient.stderr).contains("warning[VS010]"));
     let strict = vstructc()
@@ -167,19 +199,35 @@ fn cli_exit_codes() {
         .unwrap();
     assert_eq!(strict.status.code(), Some(1));
     assert!(strict.stdout.is_empty());
+    // The unresolved placeholder is written unchanged, unless --drop-unresolved.
+    assert!(String::from_utf8_lossy(&lenient.stdout).contains("ghost:pxrMaterialOut"));
+    let dropped = vstructc()
+        .args(["resolve", "--drop-unresolved", warn.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(dropped.status.code(), Some(0));
+    assert!(!String::from_utf8_lossy(&dropped.stdout).contains("inputMaterial"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn cli_explain_tells_the_story() {
     let out = vstructc()
-        .args(["explain", "surface.clearcoatFaceColor", "examples/layered.rib"])
+        .args([
+            "explain",
+            "surface.clearcoatFaceColor",
+            "examples/layered.rib",
+        ])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(0));
     insta::assert_snapshot!(String::from_utf8(out.stdout).unwrap());
     let set = vstructc()
-        .args(["explain", "mixer.layer1_enableClearcoat", "examples/layered.rib"])
+        .args([
+            "explain",
+            "mixer.layer1_enableClearcoat",
+            "examples/layered.rib",
+        ])
         .output()
         .unwrap();
     insta::assert_snapshot!(String::from_utf8(set.stdout).unwrap());

@@ -90,7 +90,9 @@ fn unresolved(reg: &Registry, fixtures: &Path) -> (Network, Network) {
 }
 
 fn no_errors_of_concern(diags: &Diagnostics) {
-    for code in ["VS010", "VS011", "VS012", "VS013", "VS014", "VS001", "VS016"] {
+    for code in [
+        "VS010", "VS011", "VS012", "VS013", "VS014", "VS001", "VS016",
+    ] {
         assert_eq!(diags.count(code), 0, "unexpected {code}: {diags:#?}");
     }
 }
@@ -110,7 +112,10 @@ fn golden_network_resolves_like_the_exporter() {
         let got_surface = connections(&net, surface);
         assert_eq!(got_mixer.len(), 25, "{got_mixer:#?}");
         assert_eq!(got_surface.len(), 12, "{got_surface:#?}");
-        assert_eq!(got_mixer, connections(&original, original.find("PxrLayerMixer1").unwrap()));
+        assert_eq!(
+            got_mixer,
+            connections(&original, original.find("PxrLayerMixer1").unwrap())
+        );
         assert_eq!(
             got_surface,
             connections(&original, original.find("PxrLayerSurface1").unwrap())
@@ -192,7 +197,10 @@ fn golden_network_expanded_without_upstream_first_gets_only_diffuse_color() {
     net.clear_connections(mixer, "layer1");
     resolve(&mut net, &reg, &ResolveOptions::default());
     let surface = net.find("PxrLayerSurface1").unwrap();
-    let got: Vec<String> = connections(&net, surface).into_iter().map(|c| c.0).collect();
+    let got: Vec<String> = connections(&net, surface)
+        .into_iter()
+        .map(|c| c.0)
+        .collect();
     assert_eq!(got, ["diffuseColor"]);
 }
 
@@ -206,21 +214,35 @@ fn golden_network_round_trips_through_the_writer() {
     // The unresolved network written as RIB reads back with its placeholders.
     let unresolved_rib = write_rib_to_vec(&source, &unresolved_net, &reg).unwrap();
     let mut diags = Diagnostics::new();
-    let mut reread =
-        parse_rib(&unresolved_rib, "unresolved.rib", &reg, &RibOptions::default(), &mut diags)
-            .expect("unresolved RIB parses");
+    let mut reread = parse_rib(
+        &unresolved_rib,
+        "unresolved.rib",
+        &reg,
+        &RibOptions::default(),
+        &mut diags,
+    )
+    .expect("unresolved RIB parses");
     let mixer = reread.find("PxrLayerMixer1").unwrap();
     assert_eq!(
         reread.connections(mixer, "baselayer"),
-        &[Link::node(reread.find("PxrLayer1").unwrap(), Some("pxrMaterialOut"))]
+        &[Link::node(
+            reread.find("PxrLayer1").unwrap(),
+            Some("pxrMaterialOut")
+        )]
     );
 
     // Resolving the re-read network and writing it gives the §12.3 results after reading back.
     resolve(&mut unresolved_net, &reg, &ResolveOptions::default());
     resolve(&mut reread, &reg, &ResolveOptions::default());
     let resolved_rib = write_rib_to_vec(&unresolved_rib, &reread, &reg).unwrap();
-    let back = parse_rib(&resolved_rib, "resolved.rib", &reg, &RibOptions::default(), &mut diags)
-        .expect("resolved RIB parses");
+    let back = parse_rib(
+        &resolved_rib,
+        "resolved.rib",
+        &reg,
+        &RibOptions::default(),
+        &mut diags,
+    )
+    .expect("resolved RIB parses");
     for handle in ["PxrLayerMixer1", "PxrLayerSurface1"] {
         assert_eq!(
             connections(&back, back.find(handle).unwrap()),
@@ -231,6 +253,9 @@ fn golden_network_round_trips_through_the_writer() {
     let m = back.find("PxrLayerMixer1").unwrap();
     assert_eq!(
         enable_values(&back, m),
-        enable_values(&unresolved_net, unresolved_net.find("PxrLayerMixer1").unwrap())
+        enable_values(
+            &unresolved_net,
+            unresolved_net.find("PxrLayerMixer1").unwrap()
+        )
     );
 }

@@ -236,11 +236,7 @@ fn r13_and_e27_conditions_see_upstream_state_after_its_own_resolution() {
     // U0 -> U1.h: U1's member h_flag is set to 1 by U0's `set 1 if enable == 1 ...`, and
     // then D reads U1: `out.flag` = set 1 (h_flag == 1), `memconn`: h_flag is connected? no
     // (it was set, not connected) -> ignore; `headconn`: U1.h is not connected any more.
-    let reg = registry(&[
-        ("flag", "int"),
-        ("headconn", "float"),
-        ("memconn", "float"),
-    ]);
+    let reg = registry(&[("flag", "int"), ("headconn", "float"), ("memconn", "float")]);
     let mut net = Network::new();
     let u0 = net.add_node("U0", "Up");
     let u1 = net.add_node("U1", "Up");

@@ -85,7 +85,10 @@ pub fn render_event(net: &Network, e: &MemberEvent) -> String {
     );
     match &e.matched {
         Some((output, by)) => {
-            let _ = writeln!(s, "  matches upstream member output `{output}` (by name `{by}`)");
+            let _ = writeln!(
+                s,
+                "  matches upstream member output `{output}` (by name `{by}`)"
+            );
         }
         None if e.outcome == Outcome::DirectConnectionWins => {}
         None => {
@@ -102,7 +105,12 @@ pub fn render_event(net: &Network, e: &MemberEvent) -> String {
                 ReadSource::Undeclared => "not an input of the upstream type".to_string(),
             };
             let conn = if r.connected { ", connected" } else { "" };
-            let _ = writeln!(s, "    reads {}.{} = {value}{conn}", name(e.upstream), r.param);
+            let _ = writeln!(
+                s,
+                "    reads {}.{} = {value}{conn}",
+                name(e.upstream),
+                r.param
+            );
         }
         if let Some(a) = &e.action {
             let _ = writeln!(s, "  chosen action: {a}");

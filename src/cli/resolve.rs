@@ -6,6 +6,8 @@ use crate::back::json::write_json;
 use crate::back::rib::write_rib_to_vec;
 use crate::cond::Extensions;
 use crate::diag::{Diagnostics, Error};
+use crate::network::Network;
+use crate::registry::Registry;
 use crate::resolve::{ResolveOptions, resolve, unsupported_extensions};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -28,11 +30,18 @@ pub struct ResolveArgs {
     /// Single-quoted RIB strings are an error instead of an info (RB011).
     #[arg(long)]
     pub strict_rib: bool,
+    /// Delete placeholder connections that could not be resolved (VS010) instead of writing
+    /// them unchanged.
+    #[arg(long)]
+    pub drop_unresolved: bool,
 }
 
 /// Resolution options from the command line; unknown or unsupported extensions are usage
 /// errors.
-pub fn resolve_options(no_conditions: bool, common: &CommonOptions) -> Result<ResolveOptions, Error> {
+pub fn resolve_options(
+    no_conditions: bool,
+    common: &CommonOptions,
+) -> Result<ResolveOptions, Error> {
     let extensions =
         Extensions::from_names(&common.ext).map_err(|e| Error::Usage(e.to_string()))?;
     let missing = unsupported_extensions(&extensions);
@@ -48,6 +57,20 @@ pub fn resolve_options(no_conditions: bool, common: &CommonOptions) -> Result<Re
         verbose: common.verbose,
         record_events: false,
     })
+}
+
+/// Delete every connection still on an input head after resolution (the VS010 placeholders).
+pub fn drop_unresolved(net: &mut Network, registry: &Registry) {
+    for node in net.nodes_sorted() {
+        let Some(tables) = registry.tables(net[node].shader()) else {
+            continue;
+        };
+        for input in net.connected_inputs(node) {
+            if tables.is_input_head(&input) {
+                net.clear_connections(node, &input);
+            }
+        }
+    }
 }
 
 /// Run `vstructc resolve`.
@@ -69,8 +92,12 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
         }
     };
     let res = resolve(&mut loaded.network, &registry, &options);
+    if args.drop_unresolved {
+        drop_unresolved(&mut loaded.network, &registry);
+    }
     diags.extend(registry.diagnostics());
     diags.extend(res.diagnostics);
+    diags.sort();
     let status = super::report(&diags, common);
     if status != ExitCode::SUCCESS {
         return status;

@@ -275,14 +275,18 @@ fn read_args(
             }
             (TokKind::Open, None) => array = Some((tok, Vec::new(), None)),
             (TokKind::Open, Some(_)) => {
-                return Err(Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
-                    .at(lx.tok_loc(&tok))
-                    .into());
+                return Err(
+                    Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
+                        .at(lx.tok_loc(&tok))
+                        .into(),
+                );
             }
             (TokKind::Close, None) => {
-                return Err(Diagnostic::error("RB004", "unexpected `]` without a matching `[`")
-                    .at(lx.tok_loc(&tok))
-                    .into());
+                return Err(
+                    Diagnostic::error("RB004", "unexpected `]` without a matching `[`")
+                        .at(lx.tok_loc(&tok))
+                        .into(),
+                );
             }
             (TokKind::Close, Some(_)) => {
                 if let Some((open, items, _)) = array.take() {
@@ -300,9 +304,12 @@ fn read_args(
 }
 
 fn unterminated_array(lx: &Lexer<'_>, open: &Token) -> Error {
-    Diagnostic::error("RB004", "unterminated array: missing `]` before the end of input")
-        .at(lx.tok_loc(open))
-        .into()
+    Diagnostic::error(
+        "RB004",
+        "unterminated array: missing `]` before the end of input",
+    )
+    .at(lx.tok_loc(open))
+    .into()
 }
 
 /// True if a top-level string argument is a decl containing the word `reference`.
@@ -422,7 +429,10 @@ impl<'a> Assembler<'a, '_> {
                 }
                 Some(p) => Err(Diagnostic::error(
                     "RB004",
-                    format!("unexpected {} after `{kind}`: expected the {what} string", piece_name(p)),
+                    format!(
+                        "unexpected {} after `{kind}`: expected the {what} string",
+                        piece_name(p)
+                    ),
                 )
                 .at(lx.tok_loc(p.first()))
                 .into()),
@@ -452,7 +462,10 @@ impl<'a> Assembler<'a, '_> {
                 other => {
                     return Err(Diagnostic::error(
                         "RB004",
-                        format!("unexpected {}: expected a parameter declaration string", piece_name(other)),
+                        format!(
+                            "unexpected {}: expected a parameter declaration string",
+                            piece_name(other)
+                        ),
                     )
                     .at(lx.tok_loc(other.first()))
                     .into());
@@ -494,7 +507,10 @@ impl<'a> Assembler<'a, '_> {
                 diags.push(
                     Diagnostic::warning(
                         "RB015",
-                        format!("duplicate parameter `{}` on `{handle}`; the later one wins", param.name),
+                        format!(
+                            "duplicate parameter `{}` on `{handle}`; the later one wins",
+                            param.name
+                        ),
                     )
                     .at(param.location.clone()),
                 );
@@ -532,7 +548,15 @@ impl<'a> Assembler<'a, '_> {
         // Comments after the last parameter lie outside the span (they are passed through);
         // only comments inside the header of a request without parameters remain.
         pending.retain(|c| c.end <= end);
-        self.add_node(kind, &handle, &shader, kw.start..end, location, read, pending);
+        self.add_node(
+            kind,
+            &handle,
+            &shader,
+            kw.start..end,
+            location,
+            read,
+            pending,
+        );
         Ok(())
     }
 
@@ -628,7 +652,10 @@ impl<'a> Assembler<'a, '_> {
             diags.push(
                 Diagnostic::warning(
                     "RB013",
-                    format!("unknown word(s) `{}` in the declaration of `{name}`", words.extra.join(" ")),
+                    format!(
+                        "unknown word(s) `{}` in the declaration of `{name}`",
+                        words.extra.join(" ")
+                    ),
                 )
                 .at(location.clone()),
             );
@@ -664,7 +691,13 @@ impl<'a> Assembler<'a, '_> {
                     .at(param.location.clone()),
                 );
             }
-            param.value = Some(convert_value(&ty, &elems, &param.name, &param.location, diags));
+            param.value = Some(convert_value(
+                &ty,
+                &elems,
+                &param.name,
+                &param.location,
+                diags,
+            ));
         }
         Ok(param)
     }
@@ -684,8 +717,11 @@ impl<'a> Assembler<'a, '_> {
                 Err(_) => {
                     let word = format!("{}[{n}]", words.type_word.unwrap_or(""));
                     diags.push(
-                        Diagnostic::warning("RB013", format!("unknown type `{word}` of `{}`", words.name))
-                            .at(location.clone()),
+                        Diagnostic::warning(
+                            "RB013",
+                            format!("unknown type `{word}` of `{}`", words.name),
+                        )
+                        .at(location.clone()),
                     );
                     return Ok((Type::scalar(BaseType::Unknown(word)), true));
                 }
@@ -706,7 +742,10 @@ impl<'a> Assembler<'a, '_> {
             diags.push(
                 Diagnostic::warning(
                     "RB012",
-                    format!("parameter `{}` has no inline type; using `{ty}` from `{shader}`", words.name),
+                    format!(
+                        "parameter `{}` has no inline type; using `{ty}` from `{shader}`",
+                        words.name
+                    ),
                 )
                 .at(location.clone()),
             );
@@ -717,8 +756,11 @@ impl<'a> Assembler<'a, '_> {
         };
         let Some(mut ty) = rib_base_type(word) else {
             diags.push(
-                Diagnostic::warning("RB013", format!("unknown type `{word}` of `{}`", words.name))
-                    .at(location.clone()),
+                Diagnostic::warning(
+                    "RB013",
+                    format!("unknown type `{word}` of `{}`", words.name),
+                )
+                .at(location.clone()),
             );
             return Ok((Type::scalar(BaseType::Unknown(word.to_string())), true));
         };
@@ -726,8 +768,11 @@ impl<'a> Assembler<'a, '_> {
             if ty.is_array() {
                 let word = format!("{word}[{n}]");
                 diags.push(
-                    Diagnostic::warning("RB013", format!("unknown type `{word}` of `{}`", words.name))
-                        .at(location.clone()),
+                    Diagnostic::warning(
+                        "RB013",
+                        format!("unknown type `{word}` of `{}`", words.name),
+                    )
+                    .at(location.clone()),
                 );
                 return Ok((Type::scalar(BaseType::Unknown(word)), true));
             }
@@ -748,7 +793,11 @@ impl<'a> Assembler<'a, '_> {
             return;
         };
         if !types_compatible(&p.decl.ty, &def) {
-            let what = if p.decl.reference { "connection" } else { "value" };
+            let what = if p.decl.reference {
+                "connection"
+            } else {
+                "value"
+            };
             diags.push(
                 Diagnostic::warning(
                     "RB016",
@@ -873,8 +922,11 @@ fn convert_value(
 ) -> Value {
     let warn = |diags: &mut Diagnostics, why: String| {
         diags.push(
-            Diagnostic::warning("RB014", format!("value of `{name}` does not match its type `{ty}`: {why}"))
-                .at(location.clone()),
+            Diagnostic::warning(
+                "RB014",
+                format!("value of `{name}` does not match its type `{ty}`: {why}"),
+            )
+            .at(location.clone()),
         );
     };
     if let BaseType::Unknown(_) = ty.base {
@@ -898,7 +950,10 @@ fn convert_value(
         ArraySpec::Dynamic => elems.len() / comps,
     };
     if elems.len() != comps * count {
-        warn(diags, format!("{} element(s), expected {}", elems.len(), comps * count));
+        warn(
+            diags,
+            format!("{} element(s), expected {}", elems.len(), comps * count),
+        );
         return flat(&ty.base, elems, &mut |_| {});
     }
     let mut problems: Vec<String> = Vec::new();
@@ -1051,7 +1106,10 @@ mod tests {
         let d = split_decl("float[2] PixelFilterWidth").unwrap();
         assert_eq!((d.type_word, d.array), (Some("float"), Some("2")));
         let d = split_decl("uniform float [3]  x").unwrap();
-        assert_eq!((d.class, d.type_word, d.array), (Some("uniform"), Some("float"), Some("3")));
+        assert_eq!(
+            (d.class, d.type_word, d.array),
+            (Some("uniform"), Some("float"), Some("3"))
+        );
         let d = split_decl("diffuseGain").unwrap();
         assert_eq!((d.type_word, d.name), (None, "diffuseGain"));
         let d = split_decl("reference x").unwrap();

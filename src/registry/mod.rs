@@ -24,8 +24,8 @@
 //!   entry is AR005 as a warning.
 
 pub mod model;
-pub mod tables;
 mod param_types;
+pub mod tables;
 
 pub use model::{CondSource, Definition, Direction, MemberDecl, Property, SourceKind};
 pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, VstructTables};

@@ -30,6 +30,7 @@ impl ParamTypes for Registry {
     }
 
     fn is_output_head(&self, shader: &str, output: &str) -> bool {
-        self.tables(shader).is_some_and(|t| t.is_output_head(output))
+        self.tables(shader)
+            .is_some_and(|t| t.is_output_head(output))
     }
 }

@@ -54,7 +54,9 @@ pub struct Table {
 
 impl Table {
     pub fn new() -> Self {
-        Table { shaders: Vec::new() }
+        Table {
+            shaders: Vec::new(),
+        }
     }
     pub fn shader(mut self, id: &str, inputs: &[(&str, &str)], outputs: &[(&str, &str)]) -> Self {
         let conv = |list: &[(&str, &str)]| {
@@ -62,7 +64,8 @@ impl Table {
                 .map(|(n, t)| (n.to_string(), parse_type(t)))
                 .collect::<Vec<_>>()
         };
-        self.shaders.push((id.to_string(), conv(inputs), conv(outputs)));
+        self.shaders
+            .push((id.to_string(), conv(inputs), conv(outputs)));
         self
     }
     fn find(&self, id: &str) -> Option<&(String, Vec<(String, Type)>, Vec<(String, Type)>)> {
@@ -97,7 +100,9 @@ impl ParamTypes for Table {
     }
     fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
         let s = self.find(shader)?;
-        s.2.iter().find(|(n, _)| n == output).map(|(_, t)| t.clone())
+        s.2.iter()
+            .find(|(n, _)| n == output)
+            .map(|(_, t)| t.clone())
     }
     fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
         let s = self.find(shader)?;
