@@ -24,6 +24,7 @@
 //!   entry is AR005 as a warning.
 
 pub mod model;
+mod param_types;
 pub mod tables;
 
 pub use model::{CondSource, Definition, Direction, MemberDecl, Property, SourceKind};
