@@ -78,17 +78,29 @@ fn the_spec_example() {
     assert_eq!(net.value(layer, "enableDiffuse"), Some(&Value::Int(1)));
     assert_eq!(
         net.value(layer, "diffuseColor"),
-        Some(&Value::Triple(BaseType::Color, [0.00967447, 0.179702, 0.0572573]))
+        Some(&Value::Triple(
+            BaseType::Color,
+            [0.00967447, 0.179702, 0.0572573]
+        ))
     );
-    assert_eq!(net.connections(mixer, "baselayer"), &[Link::node(layer, Some("pxrMaterialOut"))]);
-    assert_eq!(net.connections(mixer, "layer1Mask"), &[Link::missing("PxrThreshold1", Some("resultR"))]);
+    assert_eq!(
+        net.connections(mixer, "baselayer"),
+        &[Link::node(layer, Some("pxrMaterialOut"))]
+    );
+    assert_eq!(
+        net.connections(mixer, "layer1Mask"),
+        &[Link::missing("PxrThreshold1", Some("resultR"))]
+    );
     assert_eq!(net[surface].kind(), RequestKind::Bxdf);
     assert_eq!(net[layer].kind(), RequestKind::Pattern);
     let m = &net.materials()[0];
     assert_eq!(m.name, "PxrLayerSurface1SG");
     assert_eq!(m.terminals[0].name, "surface");
     assert_eq!(m.terminals[0].link, Link::node(surface, None));
-    assert_eq!(m.nodes, MaterialNodes::Explicit(vec![layer, mixer, surface]));
+    assert_eq!(
+        m.nodes,
+        MaterialNodes::Explicit(vec![layer, mixer, surface])
+    );
     assert_eq!(
         net[mixer].location().unwrap().pointer.as_deref(),
         Some("/materials/PxrLayerSurface1SG/nodes/PxrLayerMixer1")
@@ -107,14 +119,19 @@ fn same_node_name_in_two_materials_gives_two_nodes() {
     let n1 = net.by_key("n#1").unwrap();
     assert_eq!((net[n0].shader(), net[n1].shader()), ("X", "Y"));
     // Connections bind within their material.
-    assert_eq!(net.connections(net.by_key("s#1").unwrap(), "i")[0].upstream_node(), Some(n1));
-    assert_eq!(net.connections(net.by_key("s#0").unwrap(), "i")[0].upstream_node(), Some(n0));
+    assert_eq!(
+        net.connections(net.by_key("s#1").unwrap(), "i")[0].upstream_node(),
+        Some(n1)
+    );
+    assert_eq!(
+        net.connections(net.by_key("s#0").unwrap(), "i")[0].upstream_node(),
+        Some(n0)
+    );
 }
 
 #[test]
 fn every_value_type() {
-    let text = doc(
-        r#""n": {"nodeTypeId": "X", "parameters": {
+    let text = doc(r#""n": {"nodeTypeId": "X", "parameters": {
           "i": {"type": "int", "value": -3},
           "f": {"type": "float", "value": 0.1},
           "s": {"type": "string", "value": "a\"b"},
@@ -128,8 +145,7 @@ fn every_value_type() {
           "b": {"type": "bool", "value": true},
           "fa": {"type": "float[2]", "value": [1, 2.5]},
           "ca": {"type": "color[]", "value": [[1, 0, 0], [0, 1, 0]]}
-        }}"#,
-    );
+        }}"#);
     let (net, d) = read(&text);
     assert!(d.is_empty());
     let n = net.find("n").unwrap();
@@ -145,7 +161,10 @@ fn every_value_type() {
     assert_eq!(v("t"), Value::Token("tok".into()));
     assert_eq!(v("a"), Value::Asset("@x.tex@".into()));
     assert_eq!(v("b"), Value::Bool(true));
-    assert_eq!(v("fa"), Value::Array(BaseType::Float, vec![Value::Float(1.0), Value::Float(2.5)]));
+    assert_eq!(
+        v("fa"),
+        Value::Array(BaseType::Float, vec![Value::Float(1.0), Value::Float(2.5)])
+    );
     assert_eq!(
         v("ca"),
         Value::Array(
@@ -160,14 +179,27 @@ fn every_value_type() {
 
 #[test]
 fn shorthand_values_use_the_declared_type() {
-    let types = Table::new().shader("PxrSurface", &[("diffuseGain", "float"), ("diffuseColor", "color"), ("on", "int")], &[]);
-    let text = doc(r#""s": {"nodeTypeId": "PxrSurface", "parameters": {"diffuseGain": 1, "diffuseColor": [1, 0.5, 0], "on": 1}}"#);
+    let types = Table::new().shader(
+        "PxrSurface",
+        &[
+            ("diffuseGain", "float"),
+            ("diffuseColor", "color"),
+            ("on", "int"),
+        ],
+        &[],
+    );
+    let text = doc(
+        r#""s": {"nodeTypeId": "PxrSurface", "parameters": {"diffuseGain": 1, "diffuseColor": [1, 0.5, 0], "on": 1}}"#,
+    );
     let (r, d) = read_with(&text, &types);
     let net = r.unwrap();
     assert!(d.is_empty());
     let s = net.find("s").unwrap();
     assert_eq!(net.value(s, "diffuseGain"), Some(&Value::Float(1.0)));
-    assert_eq!(net.value(s, "diffuseColor"), Some(&Value::Triple(BaseType::Color, [1.0, 0.5, 0.0])));
+    assert_eq!(
+        net.value(s, "diffuseColor"),
+        Some(&Value::Triple(BaseType::Color, [1.0, 0.5, 0.0]))
+    );
     assert_eq!(net.value(s, "on"), Some(&Value::Int(1)));
     // Shorthand that does not fit the declared type: JS004.
     let bad = doc(r#""s": {"nodeTypeId": "PxrSurface", "parameters": {"diffuseColor": 0.5}}"#);
@@ -181,24 +213,98 @@ fn error_cases() -> Vec<(String, &'static str, &'static str)> {
         ("{\"vstructcNetwork\": 1,, }".into(), "JS001", ""),
         ("[1, 2]".into(), "JS002", ""),
         (r#"{"materials": {}}"#.into(), "JS002", ""),
-        (r#"{"vstructcNetwork": "1", "materials": {}}"#.into(), "JS002", "/vstructcNetwork"),
+        (
+            r#"{"vstructcNetwork": "1", "materials": {}}"#.into(),
+            "JS002",
+            "/vstructcNetwork",
+        ),
         (r#"{"vstructcNetwork": 1}"#.into(), "JS002", ""),
-        (r#"{"vstructcNetwork": 1, "materials": []}"#.into(), "JS002", "/materials"),
-        (r#"{"vstructcNetwork": 1, "materials": {"M": {}}}"#.into(), "JS002", "/materials/M"),
-        (doc(r#""n": {"parameters": {}}"#), "JS002", "/materials/M/nodes/n"),
-        (doc(r#""n": {"nodeTypeId": 3}"#), "JS002", "/materials/M/nodes/n/nodeTypeId"),
-        (doc(r#""n": {"nodeTypeId": "X", "nodeTypeId": "Y"}"#), "JS002", "/materials/M/nodes/n/nodeTypeId"),
-        (doc(r#""n": {"nodeTypeId": "X"}, "n": {"nodeTypeId": "X"}"#), "JS002", "/materials/M/nodes/n"),
-        (doc(r#""n": {"nodeTypeId": "X", "inputConnections": {"i": {}}}"#), "JS002", "/materials/M/nodes/n/inputConnections/i"),
-        (doc(r#""n": {"nodeTypeId": "X", "inputConnections": {"i": [{"upstreamNode": "n"}]}}"#), "JS002", "/materials/M/nodes/n/inputConnections/i/0"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "vstruct", "value": 1}}}"#), "JS002", "/materials/M/nodes/n/parameters/p/type"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"value": 1}}}"#), "JS002", "/materials/M/nodes/n/parameters/p"),
-        (r#"{"vstructcNetwork": 2, "materials": {}}"#.into(), "JS003", "/vstructcNetwork"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "int", "value": 1.5}}}"#), "JS004", "/materials/M/nodes/n/parameters/p/value"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "color", "value": [1, 2]}}}"#), "JS004", "/materials/M/nodes/n/parameters/p/value"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "float[3]", "value": [1, 2]}}}"#), "JS004", "/materials/M/nodes/n/parameters/p/value"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "string", "value": 1}}}"#), "JS004", "/materials/M/nodes/n/parameters/p/value"),
-        (doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": 0.5}}"#), "JS006", "/materials/M/nodes/n/parameters/p"),
+        (
+            r#"{"vstructcNetwork": 1, "materials": []}"#.into(),
+            "JS002",
+            "/materials",
+        ),
+        (
+            r#"{"vstructcNetwork": 1, "materials": {"M": {}}}"#.into(),
+            "JS002",
+            "/materials/M",
+        ),
+        (
+            doc(r#""n": {"parameters": {}}"#),
+            "JS002",
+            "/materials/M/nodes/n",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": 3}"#),
+            "JS002",
+            "/materials/M/nodes/n/nodeTypeId",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "nodeTypeId": "Y"}"#),
+            "JS002",
+            "/materials/M/nodes/n/nodeTypeId",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X"}, "n": {"nodeTypeId": "X"}"#),
+            "JS002",
+            "/materials/M/nodes/n",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "inputConnections": {"i": {}}}"#),
+            "JS002",
+            "/materials/M/nodes/n/inputConnections/i",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "inputConnections": {"i": [{"upstreamNode": "n"}]}}"#),
+            "JS002",
+            "/materials/M/nodes/n/inputConnections/i/0",
+        ),
+        (
+            doc(
+                r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "vstruct", "value": 1}}}"#,
+            ),
+            "JS002",
+            "/materials/M/nodes/n/parameters/p/type",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"value": 1}}}"#),
+            "JS002",
+            "/materials/M/nodes/n/parameters/p",
+        ),
+        (
+            r#"{"vstructcNetwork": 2, "materials": {}}"#.into(),
+            "JS003",
+            "/vstructcNetwork",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "int", "value": 1.5}}}"#),
+            "JS004",
+            "/materials/M/nodes/n/parameters/p/value",
+        ),
+        (
+            doc(
+                r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "color", "value": [1, 2]}}}"#,
+            ),
+            "JS004",
+            "/materials/M/nodes/n/parameters/p/value",
+        ),
+        (
+            doc(
+                r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "float[3]", "value": [1, 2]}}}"#,
+            ),
+            "JS004",
+            "/materials/M/nodes/n/parameters/p/value",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": {"type": "string", "value": 1}}}"#),
+            "JS004",
+            "/materials/M/nodes/n/parameters/p/value",
+        ),
+        (
+            doc(r#""n": {"nodeTypeId": "X", "parameters": {"p": 0.5}}"#),
+            "JS006",
+            "/materials/M/nodes/n/parameters/p",
+        ),
     ]
 }
 
@@ -241,7 +347,12 @@ fn warnings_js010_js011() {
     let (net, d) = read(text);
     let got: Vec<(&str, Option<&str>)> = d
         .iter()
-        .map(|x| (x.code, x.location.as_ref().and_then(|l| l.pointer.as_deref())))
+        .map(|x| {
+            (
+                x.code,
+                x.location.as_ref().and_then(|l| l.pointer.as_deref()),
+            )
+        })
         .collect();
     assert_eq!(
         got,
@@ -262,15 +373,20 @@ fn warnings_js010_js011() {
 
 #[test]
 fn whole_node_references_and_connection_order() {
-    let text = doc(
-        r#""a": {"nodeTypeId": "A"}, "b": {"nodeTypeId": "B"},
+    let text = doc(r#""a": {"nodeTypeId": "A"}, "b": {"nodeTypeId": "B"},
            "m": {"nodeTypeId": "M", "parameters": {"x": {"type": "float", "value": 2}},
                  "inputConnections": {"x": [{"upstreamNode": "b", "upstreamOutputName": "o"},
-                                            {"upstreamNode": "a", "upstreamOutputName": ""}]}}"#,
-    );
+                                            {"upstreamNode": "a", "upstreamOutputName": ""}]}}"#);
     let (net, _) = read(&text);
-    let (a, b, m) = (net.find("a").unwrap(), net.find("b").unwrap(), net.find("m").unwrap());
-    assert_eq!(net.connections(m, "x"), &[Link::node(b, Some("o")), Link::node(a, None)]);
+    let (a, b, m) = (
+        net.find("a").unwrap(),
+        net.find("b").unwrap(),
+        net.find("m").unwrap(),
+    );
+    assert_eq!(
+        net.connections(m, "x"),
+        &[Link::node(b, Some("o")), Link::node(a, None)]
+    );
     // Value and connection on the same input are both kept (formats.md §5.3).
     assert_eq!(net.value(m, "x"), Some(&Value::Float(2.0)));
 }

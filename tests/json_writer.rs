@@ -14,12 +14,20 @@ use vstructc::{Diagnostics, Value};
 
 fn json(text: &str) -> Network {
     let mut d = Diagnostics::new();
-    parse_json(text.as_bytes(), "n.json", &NoDefinitions, &mut d).unwrap_or_else(|e| panic!("{e}\n{text}"))
+    parse_json(text.as_bytes(), "n.json", &NoDefinitions, &mut d)
+        .unwrap_or_else(|e| panic!("{e}\n{text}"))
 }
 
 fn rib(text: &[u8]) -> Network {
     let mut d = Diagnostics::new();
-    parse_rib(text, "n.rib", &NoDefinitions, &RibOptions::default(), &mut d).unwrap_or_else(|e| panic!("{e}"))
+    parse_rib(
+        text,
+        "n.rib",
+        &NoDefinitions,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 const INPUT: &str = r#"{
@@ -63,7 +71,16 @@ fn canonical_output() {
 fn floats_read_back_exactly() {
     let mut net = Network::new();
     let n = net.add_node("n", "X");
-    let values = [0.1f32, 1.0 / 3.0, 1e-7, 3.402_823_5e38, -0.0, 0.600000024, 16_777_217.0, 1.0];
+    let values = [
+        0.1f32,
+        1.0 / 3.0,
+        1e-7,
+        3.402_823_5e38,
+        -0.0,
+        0.6,
+        16_777_217.0,
+        1.0,
+    ];
     for (i, x) in values.iter().enumerate() {
         net.set_param(n, &format!("f{i}"), Value::Float(*x));
     }
@@ -74,13 +91,27 @@ fn floats_read_back_exactly() {
     let n2 = again.find("n").unwrap();
     for (i, x) in values.iter().enumerate() {
         assert_eq!(
-            again.value(n2, &format!("f{i}")).map(|v| v.numbers()[0].to_bits()),
+            again
+                .value(n2, &format!("f{i}"))
+                .map(|v| v.numbers()[0].to_bits()),
             Some(x.to_bits()),
             "{x}"
         );
     }
-    for text in ["0.1", "0.33333334", "1e-7", "3.4028235e38", "-0.0", "0.6", "16777216", "1"] {
-        assert!(out.contains(&format!("\"value\": {text}\n")), "{text} not in {out}");
+    for text in [
+        "0.1",
+        "0.33333334",
+        "1e-7",
+        "3.4028235e38",
+        "-0.0",
+        "0.6",
+        "16777216",
+        "1",
+    ] {
+        assert!(
+            out.contains(&format!("\"value\": {text}\n")),
+            "{text} not in {out}"
+        );
     }
 }
 
@@ -133,7 +164,10 @@ fn golden_fixture_to_json() {
     // Materials come back in key order.
     assert_eq!(names, ["PxrEnvDayLightShape", "PxrLayerSurface1SG"]);
     let m = &back.materials()[1];
-    assert_eq!(m.terminals[0].link.upstream_node(), back.find("PxrLayerSurface1"));
+    assert_eq!(
+        m.terminals[0].link.upstream_node(),
+        back.find("PxrLayerSurface1")
+    );
     // Same nodes, values and connections as the RIB network (the light included).
     assert_eq!(summary(&back), summary(&net));
     let mixer = back.find("PxrLayerMixer1").unwrap();

@@ -19,7 +19,11 @@ fn layered() -> Network {
     let mixer = net.add_node("PxrLayerMixer1", "PxrLayerMixer");
     let surface = net.add_node_of_kind("PxrLayerSurface1", "PxrLayerSurface", RequestKind::Bxdf);
     net.set_param(base, "enableDiffuse", Value::Int(1));
-    net.set_param(base, "diffuseColor", Value::Triple(BaseType::Color, [0.00967447, 0.179702, 0.0572573]));
+    net.set_param(
+        base,
+        "diffuseColor",
+        Value::Triple(BaseType::Color, [0.00967447, 0.179702, 0.0572573]),
+    );
     net.set_param(top, "enableSpecular", Value::Int(1));
     net.set_param(mixer, "layer1Mask", Value::Float(0.5));
     net.connect(mixer, "baselayer", base, "pxrMaterialOut");
@@ -35,7 +39,14 @@ fn build_write_and_read_back() {
     let net = layered();
     let rib = write_rib_to_vec(b"", &net, &NoDefinitions).unwrap();
     let mut d = Diagnostics::new();
-    let from_rib = parse_rib(&rib, "bridge.rib", &NoDefinitions, &RibOptions::default(), &mut d).unwrap();
+    let from_rib = parse_rib(
+        &rib,
+        "bridge.rib",
+        &NoDefinitions,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap();
     assert!(d.is_empty());
     let json = write_json(&net);
     let from_json = parse_json(json.as_bytes(), "bridge.json", &NoDefinitions, &mut d).unwrap();
@@ -60,7 +71,14 @@ Pattern "PxrLayerMixer" "PxrLayerMixer1"
     "float baselayer" [0]
 "#;
     let mut d = Diagnostics::new();
-    let mut net = parse_rib(src, "in.rib", &NoDefinitions, &RibOptions::default(), &mut d).unwrap();
+    let mut net = parse_rib(
+        src,
+        "in.rib",
+        &NoDefinitions,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap();
     let layer = net.find("PxrLayer1").unwrap();
     let mixer = net.find("PxrLayerMixer1").unwrap();
     // RB015: the reference and the value on `baselayer` are one parameter; the later wins.
@@ -82,11 +100,20 @@ Pattern "PxrLayerMixer" "PxrLayerMixer1"
     net.set_param(mixer, "baselayer_enableClearcoat", Value::Int(0));
 
     assert_eq!(net.param_change(mixer, "baselayer"), ParamChange::Removed);
-    assert_eq!(net.param_change(mixer, "baselayer_diffuseGain"), ParamChange::Connected);
-    assert_eq!(net.param_change(mixer, "baselayer_enableClearcoat"), ParamChange::Added);
+    assert_eq!(
+        net.param_change(mixer, "baselayer_diffuseGain"),
+        ParamChange::Connected
+    );
+    assert_eq!(
+        net.param_change(mixer, "baselayer_enableClearcoat"),
+        ParamChange::Added
+    );
     assert_eq!(net.connected_inputs(mixer), ["baselayer_diffuseGain"]);
     // `connect` keeps the old value next to the connection; the writer emits the connection.
-    assert_eq!(net.value(mixer, "baselayer_diffuseGain"), Some(&Value::Float(0.25)));
+    assert_eq!(
+        net.value(mixer, "baselayer_diffuseGain"),
+        Some(&Value::Float(0.25))
+    );
     assert!(!net.is_modified(layer));
 
     let out = String::from_utf8(write_rib_to_vec(src, &net, &NoDefinitions).unwrap()).unwrap();
@@ -106,12 +133,28 @@ fn graph_view_matches_links() {
     assert_eq!(g.node_count(), 4);
     assert_eq!(g.edge_count(), 3);
     let mixer = net.find("PxrLayerMixer1").unwrap();
-    let ups: Vec<&str> = net.upstream_nodes(mixer).iter().map(|&u| net[u].handle()).collect();
+    let ups: Vec<&str> = net
+        .upstream_nodes(mixer)
+        .iter()
+        .map(|&u| net[u].handle())
+        .collect();
     assert_eq!(ups, ["PxrLayer1", "PxrLayer2"]);
     // petgraph algorithms work on the graph directly.
     assert!(!petgraph::algo::is_cyclic_directed(g));
-    let sorted: Vec<&str> = net.nodes_sorted().iter().map(|&i| net[i].handle()).collect();
-    assert_eq!(sorted, ["PxrLayer1", "PxrLayer2", "PxrLayerMixer1", "PxrLayerSurface1"]);
+    let sorted: Vec<&str> = net
+        .nodes_sorted()
+        .iter()
+        .map(|&i| net[i].handle())
+        .collect();
+    assert_eq!(
+        sorted,
+        [
+            "PxrLayer1",
+            "PxrLayer2",
+            "PxrLayerMixer1",
+            "PxrLayerSurface1"
+        ]
+    );
     let closure = net.material_nodes(0);
     assert_eq!(closure.len(), 4);
 }

@@ -1,4 +1,6 @@
 //! The RIB reader and writer on the real public RIB files of `../shared/fixtures/rib`.
+// Float literals are written exactly as they appear in the fixture files.
+#![allow(clippy::excessive_precision)]
 
 mod common;
 mod network_common;
@@ -44,8 +46,19 @@ fn read(path: &Path) -> (Vec<u8>, Network, Diagnostics) {
 
 fn reparse(bytes: &[u8]) -> Network {
     let mut d = Diagnostics::new();
-    parse_rib(bytes, "rewritten.rib", &NoDefinitions, &RibOptions::default(), &mut d)
-        .unwrap_or_else(|e| panic!("rewritten RIB does not parse: {e}\n{}", String::from_utf8_lossy(bytes)))
+    parse_rib(
+        bytes,
+        "rewritten.rib",
+        &NoDefinitions,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap_or_else(|e| {
+        panic!(
+            "rewritten RIB does not parse: {e}\n{}",
+            String::from_utf8_lossy(bytes)
+        )
+    })
 }
 
 #[test]
@@ -54,7 +67,11 @@ fn unmodified_write_is_byte_identical() {
     for path in ribs(&dir) {
         let (bytes, net, _) = read(&path);
         let out = write_rib_to_vec(&bytes, &net, &NoDefinitions).unwrap();
-        assert!(out == bytes, "{} changed on an unmodified write", path.display());
+        assert!(
+            out == bytes,
+            "{} changed on an unmodified write",
+            path.display()
+        );
     }
 }
 
@@ -71,7 +88,13 @@ fn full_reserialisation_is_lossless() {
         for id in &ids {
             let params: Vec<(String, Option<Value>, Vec<Link>)> = net[*id]
                 .params()
-                .map(|p| (p.name().to_string(), p.value().cloned(), p.connections().to_vec()))
+                .map(|p| {
+                    (
+                        p.name().to_string(),
+                        p.value().cloned(),
+                        p.connections().to_vec(),
+                    )
+                })
                 .collect();
             for (name, value, links) in params {
                 if let Some(v) = value {
@@ -92,13 +115,23 @@ fn full_reserialisation_is_lossless() {
         let out = write_rib_to_vec(&bytes, &net, &NoDefinitions).unwrap();
         assert_ne!(out, bytes);
         let again = reparse(&out);
-        assert_eq!(summary(&again), before, "{} lost information", path.display());
+        assert_eq!(
+            summary(&again),
+            before,
+            "{} lost information",
+            path.display()
+        );
         // Pass-through bytes are untouched: the rewritten file keeps every non-shading line.
         let text = String::from_utf8_lossy(&out);
         for line in String::from_utf8_lossy(&bytes).lines() {
             let t = line.trim();
-            if t.starts_with("Option") || t.starts_with("Attribute ") || t.starts_with("Transform") {
-                assert!(text.contains(line), "{}: lost line {line:?}", path.display());
+            if t.starts_with("Option") || t.starts_with("Attribute ") || t.starts_with("Transform")
+            {
+                assert!(
+                    text.contains(line),
+                    "{}: lost line {line:?}",
+                    path.display()
+                );
             }
         }
     }
@@ -144,7 +177,10 @@ fn golden_network_parse() {
         &[Link::node(layer2, Some("pxrMaterialOut_diffuseColor"))]
     );
     // Values of every form.
-    assert_eq!(net.value(mixer, "layer1_enableClearcoat"), Some(&Value::Int(0)));
+    assert_eq!(
+        net.value(mixer, "layer1_enableClearcoat"),
+        Some(&Value::Int(0))
+    );
     assert_eq!(
         net.value(surface, "roughSpecularRoughness"),
         Some(&Value::Float(0.600000024))
@@ -155,7 +191,10 @@ fn golden_network_parse() {
     );
     assert_eq!(
         net.value(surface, "subsurfaceColor"),
-        Some(&Value::Triple(BaseType::Color, [0.829999983, 0.791000009, 0.753000021]))
+        Some(&Value::Triple(
+            BaseType::Color,
+            [0.829999983, 0.791000009, 0.753000021]
+        ))
     );
     // Material: the Bxdf, named by its __materialid, with the upstream closure as node set.
     let m = net
@@ -163,14 +202,29 @@ fn golden_network_parse() {
         .iter()
         .position(|m| m.name == "PxrLayerSurface1SG")
         .unwrap();
-    let mut names: Vec<&str> = net.material_nodes(m).iter().map(|&i| net[i].handle()).collect();
+    let mut names: Vec<&str> = net
+        .material_nodes(m)
+        .iter()
+        .map(|&i| net[i].handle())
+        .collect();
     names.sort();
     assert_eq!(
         names,
-        ["PxrFractal1", "PxrLayer1", "PxrLayer2", "PxrLayerMixer1", "PxrLayerSurface1", "PxrThreshold1"]
+        [
+            "PxrFractal1",
+            "PxrLayer1",
+            "PxrLayer2",
+            "PxrLayerMixer1",
+            "PxrLayerSurface1",
+            "PxrThreshold1"
+        ]
     );
     // The light is its own material with a `light` terminal.
-    assert!(net.materials().iter().any(|m| m.name == "PxrEnvDayLightShape" && m.terminals[0].name == "light"));
+    assert!(
+        net.materials()
+            .iter()
+            .any(|m| m.name == "PxrEnvDayLightShape" && m.terminals[0].name == "light")
+    );
     assert!(!diags.has_warnings(), "{:?}", codes(&diags));
 }
 
@@ -199,10 +253,19 @@ fn hand_edited_network_versions_and_quotes() {
     assert_eq!(net[c1].shader(), "PxrDirt");
     let cc0 = net.by_key("ConstantCurvature#0").unwrap();
     let cc1 = net.by_key("ConstantCurvature#1").unwrap();
-    assert_eq!(net.connections(cc0, "emitColor")[0].upstream, Upstream::Node(c0));
+    assert_eq!(
+        net.connections(cc0, "emitColor")[0].upstream,
+        Upstream::Node(c0)
+    );
     let color_correct = net.by_key("PxrColorCorrect1#0").unwrap();
-    assert_eq!(net.connections(cc1, "emitColor")[0].upstream, Upstream::Node(color_correct));
-    assert_eq!(net.connections(color_correct, "inputRGB")[0].upstream, Upstream::Node(c1));
+    assert_eq!(
+        net.connections(cc1, "emitColor")[0].upstream,
+        Upstream::Node(color_correct)
+    );
+    assert_eq!(
+        net.connections(color_correct, "inputRGB")[0].upstream,
+        Upstream::Node(c1)
+    );
     // The commented-out parameter is not a parameter.
     assert_eq!(net[cc0].params().count(), 2);
     // Handles with spaces.
@@ -214,14 +277,23 @@ fn hand_edited_network_versions_and_quotes() {
     // Single-quoted strings: accepted with an info each.
     assert_eq!(diags.count("RB011"), 4);
     let curv = net.by_key("PxrCurvature1#0").unwrap();
-    assert_eq!(net.value(curv, "traceSet"), Some(&Value::Str(String::new())));
-    assert_eq!(net.value(c1, "biasDirectionCoordsys"), Some(&Value::Str("object".into())));
+    assert_eq!(
+        net.value(curv, "traceSet"),
+        Some(&Value::Str(String::new()))
+    );
+    assert_eq!(
+        net.value(c1, "biasDirectionCoordsys"),
+        Some(&Value::Str("object".into()))
+    );
     // Trailing comment after a value is attached to that parameter.
     let src = net[solid].source().unwrap();
     let ior = src
         .items
         .iter()
-        .find(|it| it.param.is_some_and(|k| net[solid].all_params()[k as usize].name() == "specularIor"))
+        .find(|it| {
+            it.param
+                .is_some_and(|k| net[solid].all_params()[k as usize].name() == "specularIor")
+        })
         .unwrap();
     assert!(ior.trailing_comment.is_some());
     // Materials: one per Bxdf version; the second version of a name gets a suffix.
@@ -255,7 +327,10 @@ fn commented_out_parameters_are_comments() {
     assert_eq!(names, ["filename", "invertT", "linearize"]);
     assert!(diags.is_empty(), "{:?}", codes(&diags));
     let surface = net.find("PxrSurface1").unwrap();
-    assert_eq!(net.connections(surface, "diffuseColor")[0].upstream_node(), Some(tex));
+    assert_eq!(
+        net.connections(surface, "diffuseColor")[0].upstream_node(),
+        Some(tex)
+    );
 }
 
 /// formats.md §3.5 / vstruct.md §12.1: the golden network with its member connections replaced
@@ -267,7 +342,11 @@ fn unresolved_golden_network_round_trip() {
     let (bytes, mut net, _) = read(&path);
     let types = network_common::Table::new()
         .shader("PxrLayerSurface", &[("inputMaterial", "float")], &[])
-        .shader("PxrLayerMixer", &[("baselayer", "vstruct"), ("layer1", "vstruct")], &[])
+        .shader(
+            "PxrLayerMixer",
+            &[("baselayer", "vstruct"), ("layer1", "vstruct")],
+            &[],
+        )
         .shader("PxrLayer", &[], &[("pxrMaterialOut", "vstruct")]);
     let mixer = net.find("PxrLayerMixer1").unwrap();
     let surface = net.find("PxrLayerSurface1").unwrap();
@@ -275,10 +354,11 @@ fn unresolved_golden_network_round_trip() {
     let layer2 = net.find("PxrLayer2").unwrap();
     for node in [mixer, surface] {
         for input in net.connected_inputs(node) {
-            let from_layers = net
-                .connections(node, &input)
-                .iter()
-                .all(|l| [layer1, layer2, mixer].map(Some).contains(&l.upstream_node()));
+            let from_layers = net.connections(node, &input).iter().all(|l| {
+                [layer1, layer2, mixer]
+                    .map(Some)
+                    .contains(&l.upstream_node())
+            });
             if from_layers {
                 net.remove_param(node, &input);
             }
@@ -299,7 +379,10 @@ fn unresolved_golden_network_round_trip() {
     let again = reparse(&out);
     assert_eq!(summary(&again), summary(&net));
     let m = again.find("PxrLayerMixer1").unwrap();
-    assert_eq!(again.connected_inputs(m), ["baselayer", "layer1", "layer1Mask"]);
+    assert_eq!(
+        again.connected_inputs(m),
+        ["baselayer", "layer1", "layer1Mask"]
+    );
     let s = again.find("PxrLayerSurface1").unwrap();
     assert_eq!(again.connected_inputs(s), ["inputMaterial"]);
     // Everything outside the two edited requests is unchanged.

@@ -25,7 +25,9 @@ fn defs() -> Table {
 }
 
 fn data(name: &str) -> Vec<u8> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/rib").join(name);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/rib")
+        .join(name);
     std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
@@ -44,22 +46,92 @@ fn parse(src: &str) -> (Network, Diagnostics) {
 const CASES: &[(&str, &str, Severity, u32, u32, bool)] = &[
     ("rb001_gzip.rib", "RB001", Severity::Error, 1, 1, false),
     ("rb002_binary.rib", "RB002", Severity::Error, 4, 3, false),
-    ("rb003_unterminated.rib", "RB003", Severity::Error, 2, 19, false),
-    ("rb004_unexpected.rib", "RB004", Severity::Error, 2, 21, false),
+    (
+        "rb003_unterminated.rib",
+        "RB003",
+        Severity::Error,
+        2,
+        19,
+        false,
+    ),
+    (
+        "rb004_unexpected.rib",
+        "RB004",
+        Severity::Error,
+        2,
+        21,
+        false,
+    ),
     ("rb005_mixed.rib", "RB005", Severity::Error, 2, 24, false),
     ("rb006_no_type.rib", "RB006", Severity::Error, 2, 3, false),
     ("rb007_no_value.rib", "RB007", Severity::Error, 3, 3, false),
-    ("rb008_empty_output.rib", "RB008", Severity::Error, 3, 3, false),
+    (
+        "rb008_empty_output.rib",
+        "RB008",
+        Severity::Error,
+        3,
+        3,
+        false,
+    ),
     ("rb010_escape.rib", "RB010", Severity::Info, 2, 25, false),
-    ("rb011_single_quote.rib", "RB011", Severity::Info, 2, 22, false),
-    ("rb012_type_from_definition.rib", "RB012", Severity::Warning, 2, 3, true),
-    ("rb013_unknown_type.rib", "RB013", Severity::Warning, 2, 3, false),
+    (
+        "rb011_single_quote.rib",
+        "RB011",
+        Severity::Info,
+        2,
+        22,
+        false,
+    ),
+    (
+        "rb012_type_from_definition.rib",
+        "RB012",
+        Severity::Warning,
+        2,
+        3,
+        true,
+    ),
+    (
+        "rb013_unknown_type.rib",
+        "RB013",
+        Severity::Warning,
+        2,
+        3,
+        false,
+    ),
     ("rb014_count.rib", "RB014", Severity::Warning, 2, 3, false),
-    ("rb015_duplicate.rib", "RB015", Severity::Warning, 3, 3, false),
-    ("rb016_type_mismatch.rib", "RB016", Severity::Warning, 2, 3, true),
-    ("rb017_redefined.rib", "RB017", Severity::Warning, 2, 1, false),
+    (
+        "rb015_duplicate.rib",
+        "RB015",
+        Severity::Warning,
+        3,
+        3,
+        false,
+    ),
+    (
+        "rb016_type_mismatch.rib",
+        "RB016",
+        Severity::Warning,
+        2,
+        3,
+        true,
+    ),
+    (
+        "rb017_redefined.rib",
+        "RB017",
+        Severity::Warning,
+        2,
+        1,
+        false,
+    ),
     ("rb018_forward.rib", "RB018", Severity::Warning, 2, 3, false),
-    ("rb019_unknown_shader.rib", "RB019", Severity::Warning, 3, 1, true),
+    (
+        "rb019_unknown_shader.rib",
+        "RB019",
+        Severity::Warning,
+        3,
+        1,
+        true,
+    ),
     ("rb020_legacy.rib", "RB020", Severity::Info, 1, 1, false),
 ];
 
@@ -72,7 +144,9 @@ fn every_rb_code_with_position() {
         let diag = match (&r, severity) {
             (Err(e), Severity::Error) => e.diagnostic().unwrap().clone(),
             (Err(e), _) => panic!("{file}: unexpected error {e}"),
-            (Ok(_), Severity::Error) => panic!("{file}: expected error {code}, got {:?}", codes(&d)),
+            (Ok(_), Severity::Error) => {
+                panic!("{file}: expected error {code}, got {:?}", codes(&d))
+            }
             (Ok(_), _) => d
                 .with_code(code)
                 .next()
@@ -82,7 +156,11 @@ fn every_rb_code_with_position() {
         assert_eq!(diag.code, code, "{file}");
         assert_eq!(diag.severity, severity, "{file}");
         let loc = diag.location.as_ref().unwrap();
-        assert_eq!((&*loc.file, loc.line, loc.column), ("t.rib", line, column), "{file}: {diag}");
+        assert_eq!(
+            (&*loc.file, loc.line, loc.column),
+            ("t.rib", line, column),
+            "{file}: {diag}"
+        );
     }
 }
 
@@ -95,30 +173,49 @@ fn error_details() {
     assert_eq!(d.count("RB010"), 2);
     let net = r.unwrap();
     let tex = net.find("tex").unwrap();
-    assert_eq!(net.value(tex, "filename"), Some(&Value::Str("C:mapswood.tex".into())));
+    assert_eq!(
+        net.value(tex, "filename"),
+        Some(&Value::Str("C:mapswood.tex".into()))
+    );
     // RB015: the later value wins.
     let (r, _) = parse_with(&data("rb015_duplicate.rib"), &NoDefinitions);
     let net = r.unwrap();
-    assert_eq!(net.value(net.find("noise").unwrap(), "layers"), Some(&Value::Int(3)));
+    assert_eq!(
+        net.value(net.find("noise").unwrap(), "layers"),
+        Some(&Value::Int(3))
+    );
     // RB012: the type comes from the definition.
     let (r, _) = parse_with(&data("rb012_type_from_definition.rib"), &defs());
     let net = r.unwrap();
     let n = net.find("noise").unwrap();
     assert_eq!(net.value(n, "frequency"), Some(&Value::Float(2.0)));
-    assert!(!net[n].param("frequency").unwrap().decl().unwrap().inline_type);
+    assert!(
+        !net[n]
+            .param("frequency")
+            .unwrap()
+            .decl()
+            .unwrap()
+            .inline_type
+    );
     // RB014: kept as written.
     let (r, _) = parse_with(&data("rb014_count.rib"), &NoDefinitions);
     let net = r.unwrap();
     assert_eq!(
         net.value(net.find("surf").unwrap(), "diffuseColor"),
-        Some(&Value::Array(BaseType::Color, vec![Value::Float(0.5), Value::Float(0.5)]))
+        Some(&Value::Array(
+            BaseType::Color,
+            vec![Value::Float(0.5), Value::Float(0.5)]
+        ))
     );
     // RB013: unknown type kept raw.
     let (r, _) = parse_with(&data("rb013_unknown_type.rib"), &NoDefinitions);
     let net = r.unwrap();
     assert_eq!(
         net.value(net.find("noise").unwrap(), "note"),
-        Some(&Value::Array(BaseType::Unknown("message".into()), vec![Value::Str("hi".into())]))
+        Some(&Value::Array(
+            BaseType::Unknown("message".into()),
+            vec![Value::Str("hi".into())]
+        ))
     );
     // No RB019 without definitions.
     let (_, d) = parse_with(&data("rb019_unknown_shader.rib"), &NoDefinitions);
@@ -128,13 +225,23 @@ fn error_details() {
     // RB016 fires for connections too, but never on a placeholder head.
     let heads = Table::new()
         .shader("M", &[("baselayer", "vstruct"), ("mask", "float")], &[])
-        .shader("L", &[], &[("pxrMaterialOut", "vstruct"), ("resultRGB", "color")]);
+        .shader(
+            "L",
+            &[],
+            &[("pxrMaterialOut", "vstruct"), ("resultRGB", "color")],
+        );
     let src = br#"Pattern "L" "l"
 Pattern "M" "m" "reference float baselayer" ["l:pxrMaterialOut"] "reference color mask" ["l:resultRGB"]"#;
     let (r, d) = parse_with(src, &heads);
     r.unwrap();
     assert_eq!(d.count("RB016"), 1);
-    assert!(d.with_code("RB016").next().unwrap().message.contains("mask"));
+    assert!(
+        d.with_code("RB016")
+            .next()
+            .unwrap()
+            .message
+            .contains("mask")
+    );
 }
 
 #[test]
@@ -192,17 +299,35 @@ fn decl_forms_and_values() {
     assert!(d.is_empty(), "{:?}", codes(&d));
     let p = net.find("p").unwrap();
     let arr = |b: BaseType, v: Vec<f32>| Value::Array(b, v.into_iter().map(Value::Float).collect());
-    assert_eq!(net.value(p, "a"), Some(&arr(BaseType::Float, vec![1.0, 2.0])));
-    assert_eq!(net.value(p, "b"), Some(&arr(BaseType::Float, vec![1.0, 2.0, 3.0])));
+    assert_eq!(
+        net.value(p, "a"),
+        Some(&arr(BaseType::Float, vec![1.0, 2.0]))
+    );
+    assert_eq!(
+        net.value(p, "b"),
+        Some(&arr(BaseType::Float, vec![1.0, 2.0, 3.0]))
+    );
     assert_eq!(net.value(p, "c"), Some(&Value::Float(0.0)));
-    assert_eq!(net[p].param("c").unwrap().decl().unwrap().class.as_deref(), Some("uniform"));
-    assert_eq!(net.value(p, "d"), Some(&arr(BaseType::Float, vec![0.5, -0.0])));
-    assert_eq!(net.value(p, "e"), Some(&Value::Triple(BaseType::Point, [1.0, 2.0, 3.0])));
-    assert_eq!(net.value(p, "f"), Some(&Value::HPoint([1.0, 2.0, 3.0, 4.0])));
+    assert_eq!(
+        net[p].param("c").unwrap().decl().unwrap().class.as_deref(),
+        Some("uniform")
+    );
+    assert_eq!(
+        net.value(p, "d"),
+        Some(&arr(BaseType::Float, vec![0.5, -0.0]))
+    );
+    assert_eq!(
+        net.value(p, "e"),
+        Some(&Value::Triple(BaseType::Point, [1.0, 2.0, 3.0]))
+    );
+    assert_eq!(
+        net.value(p, "f"),
+        Some(&Value::HPoint([1.0, 2.0, 3.0, 4.0]))
+    );
     assert!(matches!(net.value(p, "g"), Some(Value::Matrix(m)) if m[0] == 1.0 && m[15] == 1.0));
     assert_eq!(net.value(p, "h"), Some(&Value::Str("bare".into())));
     assert_eq!(net.value(p, "i"), Some(&Value::Int(7)));
-    assert_eq!(net.value(p, "j"), Some(&Value::Float(9.99999968e+37)));
+    assert_eq!(net.value(p, "j"), Some(&Value::Float("9.99999968e+37".parse().unwrap())));
     assert_eq!(
         net.value(p, "k"),
         Some(&Value::Array(
@@ -215,10 +340,19 @@ fn decl_forms_and_values() {
     );
     assert_eq!(net.value(p, "l"), Some(&Value::Int(1)));
     let decl_b = net[p].param("b").unwrap().decl().unwrap();
-    assert_eq!(decl_b.ty, Type { base: BaseType::Float, array: ArraySpec::Fixed(3) });
+    assert_eq!(
+        decl_b.ty,
+        Type {
+            base: BaseType::Float,
+            array: ArraySpec::Fixed(3)
+        }
+    );
     // Order of parameters is the source order.
     let names: Vec<&str> = net[p].params().map(|p| p.name()).collect();
-    assert_eq!(names, ["a", "b", "c", "d", "e", "f", "g", "h", "i", "j", "k", "l"]);
+    assert_eq!(
+        names,
+        ["a", "b", "c", "d", "e", "f", "g", "h", "i", "j", "k", "l"]
+    );
 }
 
 #[test]
@@ -236,7 +370,10 @@ fn value_problems_are_rb014() {
         assert_eq!(codes(&d), ["RB014"], "{decl} {value}");
     }
     let (net, _) = parse("Pattern \"P\" \"p\" \"float x\" [1e39]");
-    assert_eq!(net.value(net.find("p").unwrap(), "x"), Some(&Value::Float(f32::MAX)));
+    assert_eq!(
+        net.value(net.find("p").unwrap(), "x"),
+        Some(&Value::Float(f32::MAX))
+    );
 }
 
 #[test]
@@ -256,10 +393,16 @@ Pattern "PxrBlend" "b"
     let f = net.find("ns:sub:Fractal 1|x").unwrap();
     let surf = net.find("plain|surf").unwrap();
     let b = net.find("b").unwrap();
-    assert_eq!(net.connections(b, "colonHandle"), &[Link::missing("ns:sub", Some("Fractal 1|x"))]);
+    assert_eq!(
+        net.connections(b, "colonHandle"),
+        &[Link::missing("ns:sub", Some("Fractal 1|x"))]
+    );
     assert_eq!(
         net.connections(b, "inputs"),
-        &[Link::node(f, Some("resultF")), Link::node(f, Some("resultG"))]
+        &[
+            Link::node(f, Some("resultF")),
+            Link::node(f, Some("resultG"))
+        ]
     );
     // Whole-node reference: no output name.
     assert_eq!(net.connections(b, "shading"), &[Link::node(surf, None)]);
@@ -267,8 +410,18 @@ Pattern "PxrBlend" "b"
     let mut edges: Vec<_> = net.graph().edge_weights().cloned().collect();
     edges.sort_by_key(|e| (e.input.clone(), e.index));
     assert_eq!(edges.len(), 3);
-    assert_eq!((edges[0].input.as_str(), edges[0].index, edges[0].output.as_deref()), ("inputs", 0, Some("resultF")));
-    assert_eq!((edges[1].index, edges[1].output.as_deref()), (1, Some("resultG")));
+    assert_eq!(
+        (
+            edges[0].input.as_str(),
+            edges[0].index,
+            edges[0].output.as_deref()
+        ),
+        ("inputs", 0, Some("resultF"))
+    );
+    assert_eq!(
+        (edges[1].index, edges[1].output.as_deref()),
+        (1, Some("resultG"))
+    );
     assert_eq!(edges[2].output, None);
 }
 
@@ -293,18 +446,30 @@ Bxdf "PxrSurface" "self" "reference float diffuseGain" ["self:resultF"]
     assert_eq!(net[net.by_key("noise#2").unwrap()].shader(), "PxrWorley");
     // `surf` bound to noise#0 (the only version before it); surf2 to the latest, noise#2.
     let surf = net.find("surf").unwrap();
-    assert_eq!(net.connections(surf, "diffuseGain")[0].upstream, Upstream::Node(net.by_key("noise#0").unwrap()));
+    assert_eq!(
+        net.connections(surf, "diffuseGain")[0].upstream,
+        Upstream::Node(net.by_key("noise#0").unwrap())
+    );
     let surf2 = net.find("surf2").unwrap();
-    assert_eq!(net.connections(surf2, "diffuseGain")[0].upstream, Upstream::Node(net.by_key("noise#2").unwrap()));
+    assert_eq!(
+        net.connections(surf2, "diffuseGain")[0].upstream,
+        Upstream::Node(net.by_key("noise#2").unwrap())
+    );
     // A reference to its own handle, not defined before: dangling (RB018).
     let me = net.find("self").unwrap();
-    assert_eq!(net.connections(me, "diffuseGain")[0].missing_handle(), Some("self"));
+    assert_eq!(
+        net.connections(me, "diffuseGain")[0].missing_handle(),
+        Some("self")
+    );
     assert_eq!(d.count("RB018"), 1);
     // RB017 points at the new request and names the previous one.
     let rb017 = d.with_code("RB017").next().unwrap();
     assert_eq!(rb017.location.as_ref().unwrap().line, 3);
     assert_eq!(rb017.related[0].1.line, 1);
-    assert_eq!(net[net.by_key("noise#1").unwrap()].display_name(), "noise (line 3)");
+    assert_eq!(
+        net[net.by_key("noise#1").unwrap()].display_name(),
+        "noise (line 3)"
+    );
 }
 
 #[test]
@@ -315,7 +480,10 @@ Pattern "PxrLayer" "layer"
 "#,
     );
     let mix = net.find("mix").unwrap();
-    assert_eq!(net.connections(mix, "baselayer"), &[Link::missing("layer", Some("pxrMaterialOut"))]);
+    assert_eq!(
+        net.connections(mix, "baselayer"),
+        &[Link::missing("layer", Some("pxrMaterialOut"))]
+    );
     assert_eq!(net.graph().edge_count(), 0);
     assert_eq!(codes(&d), ["RB018"]);
 }
@@ -334,7 +502,10 @@ Bxdf "PxrLayerSurface" "PxrLayerSurface1"
     assert!(d.is_empty());
     let s = net.find("PxrLayerSurface1").unwrap();
     let m = net.find("PxrLayerMixer1").unwrap();
-    assert_eq!(net.connections(s, "inputMaterial"), &[Link::node(m, Some("pxrMaterialOut"))]);
+    assert_eq!(
+        net.connections(s, "inputMaterial"),
+        &[Link::node(m, Some("pxrMaterialOut"))]
+    );
     assert_eq!(net.connected_inputs(m), ["baselayer", "layer1"]);
 }
 
@@ -357,13 +528,27 @@ AttributeEnd
     );
     assert!(d.is_empty(), "{:?}", codes(&d));
     let kinds: Vec<RequestKind> = net.node_ids().map(|i| net[i].kind()).collect();
-    assert_eq!(kinds, [RequestKind::Displace, RequestKind::LightFilter, RequestKind::Light]);
+    assert_eq!(
+        kinds,
+        [
+            RequestKind::Displace,
+            RequestKind::LightFilter,
+            RequestKind::Light
+        ]
+    );
     let terminals: Vec<(&str, &str)> = net
         .materials()
         .iter()
         .map(|m| (m.name.as_str(), m.terminals[0].name.as_str()))
         .collect();
-    assert_eq!(terminals, [("d", "displacement"), ("blocker", "lightFilter"), ("dome", "light")]);
+    assert_eq!(
+        terminals,
+        [
+            ("d", "displacement"),
+            ("blocker", "lightFilter"),
+            ("dome", "light")
+        ]
+    );
 }
 
 #[test]
@@ -383,7 +568,10 @@ WorldBegin
     assert_eq!(s.items.len(), 2);
     let lead: Vec<&str> = s.items[0].leading_comments.iter().map(text).collect();
     assert_eq!(lead, ["# header comment", "# before filename"]);
-    assert_eq!(s.items[0].trailing_comment.as_ref().map(text), Some("# after filename"));
+    assert_eq!(
+        s.items[0].trailing_comment.as_ref().map(text),
+        Some("# after filename")
+    );
     let lead: Vec<&str> = s.items[1].leading_comments.iter().map(text).collect();
     assert_eq!(lead, ["#\"int invertT\" [0]"]);
     // The span ends with the last value: the comment after it is passed through.

@@ -24,13 +24,28 @@ fn defs() -> Table {
             ],
             &[],
         )
-        .shader("PxrFractal", &[("layers", "int")], &[("resultF", "float"), ("resultRGB", "color")])
-        .shader("PxrTexture", &[("filename", "string")], &[("resultRGB", "color"), ("resultA", "float")])
+        .shader(
+            "PxrFractal",
+            &[("layers", "int")],
+            &[("resultF", "float"), ("resultRGB", "color")],
+        )
+        .shader(
+            "PxrTexture",
+            &[("filename", "string")],
+            &[("resultRGB", "color"), ("resultA", "float")],
+        )
 }
 
 fn read(src: &str, types: &dyn ParamTypes) -> Network {
     let mut d = Diagnostics::new();
-    parse_rib(src.as_bytes(), "in.rib", types, &RibOptions::default(), &mut d).unwrap()
+    parse_rib(
+        src.as_bytes(),
+        "in.rib",
+        types,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap()
 }
 
 fn write(src: &str, net: &Network, types: &dyn ParamTypes) -> String {
@@ -69,7 +84,11 @@ fn modified_node_is_reserialised_in_place() {
     net.set_param(surf, "specularRoughness", Value::Float(0.35));
     net.clear_connections(surf, "presence");
     // Added in reverse declaration order: written in declaration order.
-    net.set_param(surf, "specularFaceColor", Value::Triple(BaseType::Color, [0.04, 0.04, 0.04]));
+    net.set_param(
+        surf,
+        "specularFaceColor",
+        Value::Triple(BaseType::Color, [0.04, 0.04, 0.04]),
+    );
     net.connect(surf, "diffuseRoughness", noise, "resultF");
     assert!(!net.is_modified(tex));
 
@@ -89,7 +108,10 @@ fn connected_parameter_keeps_value_but_writes_only_the_connection() {
     let noise = net.find("noise").unwrap();
     let surf = net.find("surf").unwrap();
     net.connect(surf, "specularRoughness", noise, "resultF");
-    assert_eq!(net.value(surf, "specularRoughness"), Some(&Value::Float(0.2)));
+    assert_eq!(
+        net.value(surf, "specularRoughness"),
+        Some(&Value::Float(0.2))
+    );
     let out = write(SCENE, &net, &NoDefinitions);
     // No definitions: the type comes from the source decl (float).
     assert!(out.contains("\t\t\"reference float specularRoughness\" [\"noise:resultF\"]\n"));
@@ -105,8 +127,14 @@ fn new_connection_type_falls_back_to_upstream_output_type() {
     net.connect(surf, "emission", noise, "resultRGB");
     net.push_link(surf, "ghost", Link::missing("Nowhere", None));
     let out = write(SCENE, &net, &types);
-    assert!(out.contains("\"reference color emission\" [\"noise:resultRGB\"]"), "{out}");
-    assert!(out.contains("\"reference float ghost\" [\"Nowhere\"]"), "{out}");
+    assert!(
+        out.contains("\"reference color emission\" [\"noise:resultRGB\"]"),
+        "{out}"
+    );
+    assert!(
+        out.contains("\"reference float ghost\" [\"Nowhere\"]"),
+        "{out}"
+    );
 }
 
 #[test]
@@ -114,10 +142,20 @@ fn replaced_value_of_other_type_gets_a_new_decl() {
     let mut net = read(SCENE, &NoDefinitions);
     let surf = net.find("surf").unwrap();
     net.set_param(surf, "diffuseGain", Value::Int(2));
-    net.set_param(surf, "diffuseColor", Value::Triple(BaseType::Color, [1.0, 0.25, 0.0]));
+    net.set_param(
+        surf,
+        "diffuseColor",
+        Value::Triple(BaseType::Color, [1.0, 0.25, 0.0]),
+    );
     let out = write(SCENE, &net, &NoDefinitions);
-    assert!(out.contains("\t\t\"int diffuseGain\" [2] # gain comment\n"), "{out}");
-    assert!(out.contains("\t\t\"color diffuseColor\" [1 0.25 0]\n"), "{out}");
+    assert!(
+        out.contains("\t\t\"int diffuseGain\" [2] # gain comment\n"),
+        "{out}"
+    );
+    assert!(
+        out.contains("\t\t\"color diffuseColor\" [1 0.25 0]\n"),
+        "{out}"
+    );
     // A source connection replaced by a value.
     net.clear_connections(surf, "presence");
     net.set_param(surf, "presence", Value::Float(0.5));
@@ -132,7 +170,11 @@ fn network_built_in_code_is_written_upstream_first() {
     let noise = net.add_node("noise", "PxrFractal");
     net.set_param(noise, "layers", Value::Int(4));
     net.connect(surf, "diffuseGain", noise, "resultF");
-    net.set_param(surf, "diffuseColor", Value::Triple(BaseType::Color, [1.0, 0.5, 0.0]));
+    net.set_param(
+        surf,
+        "diffuseColor",
+        Value::Triple(BaseType::Color, [1.0, 0.5, 0.0]),
+    );
     net.set_param(surf, "label", Value::Str("say \"hi\"\n".into()));
     let m = net.add_material("MySG");
     net.set_terminal(m, "surface", surf, None);
@@ -141,8 +183,14 @@ fn network_built_in_code_is_written_upstream_first() {
     let again = read(&out, &NoDefinitions);
     let s = again.find("surf").unwrap();
     assert_eq!(again[s].material_id(), Some("MySG"));
-    assert_eq!(again.value(s, "label"), Some(&Value::Str("say \"hi\"\n".into())));
-    assert_eq!(again.connections(s, "diffuseGain")[0].upstream_node(), again.find("noise"));
+    assert_eq!(
+        again.value(s, "label"),
+        Some(&Value::Str("say \"hi\"\n".into()))
+    );
+    assert_eq!(
+        again.connections(s, "diffuseGain")[0].upstream_node(),
+        again.find("noise")
+    );
 }
 
 #[test]
@@ -158,7 +206,10 @@ fn new_node_in_a_read_network_goes_before_its_first_user() {
     insta::assert_snapshot!("inserted_node", out);
     let again = read(&out, &NoDefinitions);
     let s = again.find("surf").unwrap();
-    assert_eq!(again.connections(s, "diffuseGain")[0].upstream_node(), again.find("remap"));
+    assert_eq!(
+        again.connections(s, "diffuseGain")[0].upstream_node(),
+        again.find("remap")
+    );
 }
 
 #[test]
@@ -181,7 +232,10 @@ fn duplicate_parameters_keep_the_winner_and_move_comments() {
     let p = net.find("p").unwrap();
     net.set_param(p, "y", Value::Int(5));
     let out = write(src, &net, &NoDefinitions);
-    assert_eq!(out, "Pattern \"P\" \"p\"\n\t# first\n\t\"int y\" [5]\n\t\"int x\" [2]\n");
+    assert_eq!(
+        out,
+        "Pattern \"P\" \"p\"\n\t# first\n\t\"int y\" [5]\n\t\"int x\" [2]\n"
+    );
     let again = read(&out, &NoDefinitions);
     assert_eq!(summary(&again), summary(&net));
 }

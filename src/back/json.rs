@@ -45,7 +45,9 @@ impl Out {
     fn write(&self, out: &mut String, indent: usize) {
         match self {
             Out::Raw(s) => out.push_str(s),
-            Out::Str(s) => out.push_str(&serde_json::to_string(s).unwrap_or_else(|_| "\"\"".into())),
+            Out::Str(s) => {
+                out.push_str(&serde_json::to_string(s).unwrap_or_else(|_| "\"\"".into()))
+            }
             Out::Arr(items) if items.is_empty() => out.push_str("[]"),
             Out::Arr(items) if !items.iter().any(Out::is_container) => {
                 out.push('[');
@@ -148,7 +150,11 @@ fn material(net: &Network, index: usize) -> Out {
                 parameters.insert(p.name().to_string(), canonical(v));
             }
             if p.is_connected() {
-                let list = p.connections().iter().map(|l| connection(net, l, &names)).collect();
+                let list = p
+                    .connections()
+                    .iter()
+                    .map(|l| connection(net, l, &names))
+                    .collect();
                 inputs.insert(p.name().to_string(), Out::Arr(list));
             }
         }
@@ -195,10 +201,10 @@ fn local_names(net: &Network, ids: &[NodeId]) -> HashMap<NodeId, String> {
 
 fn connection(net: &Network, link: &Link, names: &HashMap<NodeId, String>) -> Out {
     let node = match &link.upstream {
-        Upstream::Node(id) => names
-            .get(id)
-            .cloned()
-            .unwrap_or_else(|| net.get(*id).map_or_else(String::new, |n| n.handle().to_string())),
+        Upstream::Node(id) => names.get(id).cloned().unwrap_or_else(|| {
+            net.get(*id)
+                .map_or_else(String::new, |n| n.handle().to_string())
+        }),
         Upstream::Missing(h) => h.clone(),
     };
     let mut c = Out::obj();
@@ -262,7 +268,10 @@ mod tests {
 
     #[test]
     fn canonical_values() {
-        assert_eq!(text(canonical(&Value::Float(0.1))), "{\n  \"type\": \"float\",\n  \"value\": 0.1\n}");
+        assert_eq!(
+            text(canonical(&Value::Float(0.1))),
+            "{\n  \"type\": \"float\",\n  \"value\": 0.1\n}"
+        );
         assert_eq!(
             text(json_value(&Value::Array(
                 BaseType::Color,

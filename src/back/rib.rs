@@ -90,7 +90,11 @@ pub fn write_rib(
 /// let rib = write_rib_to_vec(b"", &net, &NoDefinitions).unwrap();
 /// assert_eq!(String::from_utf8(rib).unwrap(), "Pattern \"PxrFractal\" \"f\"\n\t\"int layers\" [2]\n");
 /// ```
-pub fn write_rib_to_vec(source: &[u8], net: &Network, types: &dyn ParamTypes) -> io::Result<Vec<u8>> {
+pub fn write_rib_to_vec(
+    source: &[u8],
+    net: &Network,
+    types: &dyn ParamTypes,
+) -> io::Result<Vec<u8>> {
     let mut out = Vec::with_capacity(source.len() + 1024);
     write_rib(source, net, types, &mut out)?;
     Ok(out)
@@ -108,9 +112,9 @@ fn invalid(msg: &str) -> io::Error {
 
 impl Writer<'_> {
     fn bytes(&self, r: &Range<usize>) -> io::Result<&[u8]> {
-        self.source
-            .get(r.clone())
-            .ok_or_else(|| invalid("network source spans do not match the RIB bytes given to the writer"))
+        self.source.get(r.clone()).ok_or_else(|| {
+            invalid("network source spans do not match the RIB bytes given to the writer")
+        })
     }
 
     fn write(&self, out: &mut dyn Write) -> io::Result<()> {
@@ -285,7 +289,10 @@ impl Writer<'_> {
             .enumerate()
             .filter(|(_, p)| p.change() == ParamChange::Added)
             .map(|(i, p)| {
-                let pos = self.types.input_position(node.shader(), p.name()).unwrap_or(usize::MAX);
+                let pos = self
+                    .types
+                    .input_position(node.shader(), p.name())
+                    .unwrap_or(usize::MAX);
                 (pos, i, p)
             })
             .collect();
@@ -337,7 +344,12 @@ impl Writer<'_> {
         Ok(t)
     }
 
-    fn value_text(&self, node: &Node, p: &Param, item: Option<&SourceParam>) -> io::Result<Vec<u8>> {
+    fn value_text(
+        &self,
+        node: &Node,
+        p: &Param,
+        item: Option<&SourceParam>,
+    ) -> io::Result<Vec<u8>> {
         let Some(v) = p.value() else {
             return self.connection_text(node, p, item);
         };
@@ -352,7 +364,12 @@ impl Writer<'_> {
         Ok(t)
     }
 
-    fn connection_text(&self, node: &Node, p: &Param, item: Option<&SourceParam>) -> io::Result<Vec<u8>> {
+    fn connection_text(
+        &self,
+        node: &Node,
+        p: &Param,
+        item: Option<&SourceParam>,
+    ) -> io::Result<Vec<u8>> {
         let mut t = match (item, p.decl()) {
             (Some(item), Some(d)) if d.reference => self.bytes(&item.decl)?.to_vec(),
             _ => format!(
@@ -478,7 +495,9 @@ fn value_fits(ty: &Type, v: &Value) -> bool {
         (ArraySpec::None, Value::Array(..)) => false,
         (ArraySpec::None, v) => v.base_type() == ty.base,
         (ArraySpec::Fixed(n), Value::Array(b, items)) => {
-            items.len() == n && *b == ty.base && items.iter().all(|i| !matches!(i, Value::Array(..)))
+            items.len() == n
+                && *b == ty.base
+                && items.iter().all(|i| !matches!(i, Value::Array(..)))
         }
         (ArraySpec::Dynamic, Value::Array(b, _)) => *b == ty.base,
         _ => false,
@@ -552,7 +571,10 @@ mod tests {
             "[0.5 1 0.25]"
         );
         assert_eq!(
-            format_value(&Value::Array(BaseType::String, vec![Value::Str("a".into()), Value::Str("b\\".into())])),
+            format_value(&Value::Array(
+                BaseType::String,
+                vec![Value::Str("a".into()), Value::Str("b\\".into())]
+            )),
             r#"["a" "b\\"]"#
         );
     }
@@ -575,10 +597,19 @@ mod tests {
     #[test]
     fn fits() {
         let f2 = Type::parse_decl("float2");
-        assert!(value_fits(&f2, &Value::Array(BaseType::Float, vec![Value::Float(1.0), Value::Float(2.0)])));
+        assert!(value_fits(
+            &f2,
+            &Value::Array(BaseType::Float, vec![Value::Float(1.0), Value::Float(2.0)])
+        ));
         assert!(!value_fits(&f2, &Value::Float(1.0)));
-        assert!(value_fits(&Type::scalar(BaseType::Color), &Value::Triple(BaseType::Color, [0.0; 3])));
-        assert!(!value_fits(&Type::scalar(BaseType::Vector), &Value::Triple(BaseType::Color, [0.0; 3])));
+        assert!(value_fits(
+            &Type::scalar(BaseType::Color),
+            &Value::Triple(BaseType::Color, [0.0; 3])
+        ));
+        assert!(!value_fits(
+            &Type::scalar(BaseType::Vector),
+            &Value::Triple(BaseType::Color, [0.0; 3])
+        ));
         assert!(!value_fits(&Type::scalar(BaseType::Float), &Value::Int(1)));
     }
 

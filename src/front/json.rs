@@ -224,9 +224,15 @@ pub fn parse_json(
 fn parse_tree(bytes: &[u8], file: &Arc<str>) -> Result<J, Error> {
     let ctx = Ctx::default();
     let mut de = serde_json::Deserializer::from_slice(bytes);
-    let result = Seed(&ctx).deserialize(&mut de).and_then(|j| de.end().map(|()| j));
+    let result = Seed(&ctx)
+        .deserialize(&mut de)
+        .and_then(|j| de.end().map(|()| j));
     result.map_err(|e| {
-        let mut loc = Location::new(file.clone(), e.line() as u32, char_column(bytes, e.line(), e.column()));
+        let mut loc = Location::new(
+            file.clone(),
+            e.line() as u32,
+            char_column(bytes, e.line(), e.column()),
+        );
         let duplicate = ctx.duplicate.borrow_mut().take();
         let d = match (e.classify(), duplicate) {
             (serde_json::error::Category::Data, Some(pointer)) => {
@@ -264,6 +270,9 @@ fn char_column(bytes: &[u8], line: usize, byte_col: usize) -> u32 {
     text.chars().count().max(1) as u32
 }
 
+/// The connections of one node, per parameter index, waiting to be bound.
+type NodeConns = Vec<(usize, Vec<Conn>)>;
+
 /// A parsed connection object.
 struct Conn {
     node: String,
@@ -299,14 +308,22 @@ impl Reader<'_, '_> {
     fn object<'j>(&self, j: &'j J, pointer: &str, what: &str) -> Result<&'j [(String, J)], Error> {
         match j {
             J::Obj(m) => Ok(m),
-            other => Err(self.error("JS002", pointer, format!("{what} must be an object, found {}", other.kind()))),
+            other => Err(self.error(
+                "JS002",
+                pointer,
+                format!("{what} must be an object, found {}", other.kind()),
+            )),
         }
     }
 
     fn string<'j>(&self, j: &'j J, pointer: &str, what: &str) -> Result<&'j str, Error> {
         match j {
             J::Str(s) => Ok(s),
-            other => Err(self.error("JS002", pointer, format!("{what} must be a string, found {}", other.kind()))),
+            other => Err(self.error(
+                "JS002",
+                pointer,
+                format!("{what} must be a string, found {}", other.kind()),
+            )),
         }
     }
 
@@ -326,14 +343,20 @@ impl Reader<'_, '_> {
                 return Err(self.error(
                     "JS003",
                     "/vstructcNetwork",
-                    format!("unsupported vstructcNetwork version {}; only 1 is supported", n.as_f64()),
+                    format!(
+                        "unsupported vstructcNetwork version {}; only 1 is supported",
+                        n.as_f64()
+                    ),
                 ));
             }
             Some(other) => {
                 return Err(self.error(
                     "JS002",
                     "/vstructcNetwork",
-                    format!("`vstructcNetwork` must be the integer 1, found {}", other.kind()),
+                    format!(
+                        "`vstructcNetwork` must be the integer 1, found {}",
+                        other.kind()
+                    ),
                 ));
             }
         }
@@ -367,7 +390,11 @@ impl Reader<'_, '_> {
             }
         }
         let Some(nodes) = nodes else {
-            return Err(self.error("JS002", pointer, format!("material `{name}` has no `nodes`")));
+            return Err(self.error(
+                "JS002",
+                pointer,
+                format!("material `{name}` has no `nodes`"),
+            ));
         };
         let tpointer = ptr(pointer, "terminals");
         let terms: Vec<(String, Conn)> = terminals
@@ -377,14 +404,19 @@ impl Reader<'_, '_> {
         // A node's kind comes from the first terminal naming it.
         let mut kinds: HashMap<&str, RequestKind> = HashMap::new();
         for (t, c) in &terms {
-            kinds.entry(c.node.as_str()).or_insert(RequestKind::from_terminal_name(t));
+            kinds
+                .entry(c.node.as_str())
+                .or_insert(RequestKind::from_terminal_name(t));
         }
         let npointer = ptr(pointer, "nodes");
         let mut ids: Vec<NodeId> = Vec::with_capacity(nodes.len());
         let mut by_name: HashMap<&str, NodeId> = HashMap::new();
-        let mut pending: Vec<(NodeId, Vec<(usize, Vec<Conn>)>)> = Vec::new();
+        let mut pending: Vec<(NodeId, NodeConns)> = Vec::new();
         for (node_name, nj) in nodes {
-            let kind = kinds.get(node_name.as_str()).copied().unwrap_or(RequestKind::Pattern);
+            let kind = kinds
+                .get(node_name.as_str())
+                .copied()
+                .unwrap_or(RequestKind::Pattern);
             let (id, conns) = self.node(node_name, nj, kind, &ptr(&npointer, node_name))?;
             ids.push(id);
             by_name.insert(node_name, id);
@@ -419,9 +451,16 @@ impl Reader<'_, '_> {
             J::Arr(items) => items
                 .iter()
                 .enumerate()
-                .map(|(i, v)| self.string(v, &ptr(pointer, &i.to_string()), "a primvar").map(str::to_string))
+                .map(|(i, v)| {
+                    self.string(v, &ptr(pointer, &i.to_string()), "a primvar")
+                        .map(str::to_string)
+                })
                 .collect(),
-            other => Err(self.error("JS002", pointer, format!("`primvars` must be an array, found {}", other.kind()))),
+            other => Err(self.error(
+                "JS002",
+                pointer,
+                format!("`primvars` must be an array, found {}", other.kind()),
+            )),
         }
     }
 
@@ -432,7 +471,10 @@ impl Reader<'_, '_> {
             None => {
                 let d = Diagnostic::warning(
                     "JS010",
-                    format!("connection to `{}`, which is not a node of material `{material}`; kept", c.node),
+                    format!(
+                        "connection to `{}`, which is not a node of material `{material}`; kept",
+                        c.node
+                    ),
                 )
                 .at(self.loc(&c.pointer));
                 self.diags.push(d);
@@ -449,7 +491,9 @@ impl Reader<'_, '_> {
             let p = ptr(pointer, k);
             match k.as_str() {
                 "upstreamNode" => node = Some(self.string(v, &p, "`upstreamNode`")?.to_string()),
-                "upstreamOutputName" => output = Some(self.string(v, &p, "`upstreamOutputName`")?.to_string()),
+                "upstreamOutputName" => {
+                    output = Some(self.string(v, &p, "`upstreamOutputName`")?.to_string())
+                }
                 _ => self.unknown_key(&p, k, "a connection"),
             }
         }
@@ -472,14 +516,13 @@ impl Reader<'_, '_> {
 
     /// Read one node; returns its id and its connections (per parameter index), to bind once
     /// every node of the material exists.
-    #[allow(clippy::type_complexity)]
     fn node(
         &mut self,
         name: &str,
         j: &J,
         kind: RequestKind,
         pointer: &str,
-    ) -> Result<(NodeId, Vec<(usize, Vec<Conn>)>), Error> {
+    ) -> Result<(NodeId, NodeConns), Error> {
         let members = self.object(j, pointer, "a node")?;
         let mut shader = None;
         let mut parameters: &[(String, J)] = &[];
@@ -494,7 +537,11 @@ impl Reader<'_, '_> {
             }
         }
         let Some(shader) = shader else {
-            return Err(self.error("JS002", pointer, format!("node `{name}` has no `nodeTypeId`")));
+            return Err(self.error(
+                "JS002",
+                pointer,
+                format!("node `{name}` has no `nodeTypeId`"),
+            ));
         };
         let mut params: Vec<Param> = Vec::new();
         let mut index: HashMap<&str, usize> = HashMap::new();
@@ -503,14 +550,27 @@ impl Reader<'_, '_> {
             let p = ptr(&ppointer, pname);
             let (value, decl) = self.parameter(shader, pname, pj, &p)?;
             index.insert(pname, params.len());
-            params.push(Param::from_source(pname.clone(), Some(value), Some(decl), Some(self.loc(&p)), None));
+            params.push(Param::from_source(
+                pname.clone(),
+                Some(value),
+                Some(decl),
+                Some(self.loc(&p)),
+                None,
+            ));
         }
         let ipointer = ptr(pointer, "inputConnections");
-        let mut conns: Vec<(usize, Vec<Conn>)> = Vec::new();
+        let mut conns: NodeConns = Vec::new();
         for (input, list) in inputs {
             let p = ptr(&ipointer, input);
             let J::Arr(items) = list else {
-                return Err(self.error("JS002", &p, format!("connections of `{input}` must be an array, found {}", list.kind())));
+                return Err(self.error(
+                    "JS002",
+                    &p,
+                    format!(
+                        "connections of `{input}` must be an array, found {}",
+                        list.kind()
+                    ),
+                ));
             };
             let list: Vec<Conn> = items
                 .iter()
@@ -531,7 +591,13 @@ impl Reader<'_, '_> {
 
     /// A parameter value: canonical `{ "type", "value" }`, or a shorthand bare value typed by
     /// the definition.
-    fn parameter(&mut self, shader: &str, name: &str, j: &J, pointer: &str) -> Result<(Value, Decl), Error> {
+    fn parameter(
+        &mut self,
+        shader: &str,
+        name: &str,
+        j: &J,
+        pointer: &str,
+    ) -> Result<(Value, Decl), Error> {
         if let J::Obj(members) = j {
             let mut ty = None;
             let mut value = None;
@@ -547,14 +613,25 @@ impl Reader<'_, '_> {
                 return Err(self.error(
                     "JS002",
                     pointer,
-                    format!("parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"),
+                    format!(
+                        "parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"
+                    ),
                 ));
             };
             let Some(t) = parse_type(text) else {
-                return Err(self.error("JS002", &ptr(pointer, "type"), format!("unknown type `{text}` of `{name}`")));
+                return Err(self.error(
+                    "JS002",
+                    &ptr(pointer, "type"),
+                    format!("unknown type `{text}` of `{name}`"),
+                ));
             };
-            let value = to_value(&t, v)
-                .map_err(|why| self.error("JS004", &ptr(pointer, "value"), format!("value of `{name}` does not match its type `{text}`: {why}")))?;
+            let value = to_value(&t, v).map_err(|why| {
+                self.error(
+                    "JS004",
+                    &ptr(pointer, "value"),
+                    format!("value of `{name}` does not match its type `{text}`: {why}"),
+                )
+            })?;
             let decl = Decl {
                 text: text.to_string(),
                 class: None,
@@ -572,7 +649,11 @@ impl Reader<'_, '_> {
             ));
         };
         let value = to_value(&t, j).map_err(|why| {
-            self.error("JS004", pointer, format!("value of `{name}` does not match its declared type `{t}`: {why}"))
+            self.error(
+                "JS004",
+                pointer,
+                format!("value of `{name}` does not match its declared type `{t}`: {why}"),
+            )
         })?;
         let decl = Decl {
             text: String::new(),
@@ -647,7 +728,10 @@ fn float(j: &J) -> Result<f32, String> {
 
 fn floats<const N: usize>(j: &J) -> Result<[f32; N], String> {
     let J::Arr(items) = j else {
-        return Err(format!("expected an array of {N} numbers, found {}", j.kind()));
+        return Err(format!(
+            "expected an array of {N} numbers, found {}",
+            j.kind()
+        ));
     };
     if items.len() != N {
         return Err(format!("expected {N} numbers, found {}", items.len()));
@@ -670,10 +754,16 @@ fn scalar(base: &BaseType, j: &J) -> Result<Value, String> {
             let v = match n {
                 Num::I(i) => i32::try_from(i).ok(),
                 Num::U(u) => i32::try_from(u).ok(),
-                Num::F(f) if f.fract() == 0.0 && f >= f64::from(i32::MIN) && f <= f64::from(i32::MAX) => Some(f as i32),
+                Num::F(f)
+                    if f.fract() == 0.0 && f >= f64::from(i32::MIN) && f <= f64::from(i32::MAX) =>
+                {
+                    Some(f as i32)
+                }
                 Num::F(_) => None,
             };
-            Value::Int(v.ok_or_else(|| format!("{} is not an integer in the int range", n.as_f64()))?)
+            Value::Int(
+                v.ok_or_else(|| format!("{} is not an integer in the int range", n.as_f64()))?,
+            )
         }
         BaseType::Float => Value::Float(float(j)?),
         BaseType::String => Value::Str(string(j)?),
@@ -729,8 +819,17 @@ mod tests {
 
     #[test]
     fn types_and_values() {
-        assert_eq!(parse_type("float[2]"), Some(Type { base: BaseType::Float, array: ArraySpec::Fixed(2) }));
-        assert_eq!(parse_type("int[]").map(|t| t.array), Some(ArraySpec::Dynamic));
+        assert_eq!(
+            parse_type("float[2]"),
+            Some(Type {
+                base: BaseType::Float,
+                array: ArraySpec::Fixed(2)
+            })
+        );
+        assert_eq!(
+            parse_type("int[]").map(|t| t.array),
+            Some(ArraySpec::Dynamic)
+        );
         assert_eq!(parse_type("vstruct"), None);
         assert_eq!(parse_type("float[x]"), None);
         let t = Type::scalar(BaseType::Int);
@@ -738,8 +837,15 @@ mod tests {
         assert!(to_value(&t, &J::Num(Num::F(2.5))).is_err());
         assert!(to_value(&t, &J::Num(Num::I(1 << 40))).is_err());
         let c = Type::scalar(BaseType::Color);
-        let arr = J::Arr(vec![J::Num(Num::I(1)), J::Num(Num::F(0.5)), J::Num(Num::U(0))]);
-        assert_eq!(to_value(&c, &arr), Ok(Value::Triple(BaseType::Color, [1.0, 0.5, 0.0])));
+        let arr = J::Arr(vec![
+            J::Num(Num::I(1)),
+            J::Num(Num::F(0.5)),
+            J::Num(Num::U(0)),
+        ]);
+        assert_eq!(
+            to_value(&c, &arr),
+            Ok(Value::Triple(BaseType::Color, [1.0, 0.5, 0.0]))
+        );
         assert!(to_value(&Type::scalar(BaseType::Float), &J::Num(Num::F(1e39))).is_err());
     }
 }

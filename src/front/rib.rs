@@ -275,14 +275,18 @@ fn read_args(
             }
             (TokKind::Open, None) => array = Some((tok, Vec::new(), None)),
             (TokKind::Open, Some(_)) => {
-                return Err(Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
-                    .at(lx.tok_loc(&tok))
-                    .into());
+                return Err(
+                    Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
+                        .at(lx.tok_loc(&tok))
+                        .into(),
+                );
             }
             (TokKind::Close, None) => {
-                return Err(Diagnostic::error("RB004", "unexpected `]` without a matching `[`")
-                    .at(lx.tok_loc(&tok))
-                    .into());
+                return Err(
+                    Diagnostic::error("RB004", "unexpected `]` without a matching `[`")
+                        .at(lx.tok_loc(&tok))
+                        .into(),
+                );
             }
             (TokKind::Close, Some(_)) => {
                 if let Some((open, items, _)) = array.take() {
@@ -300,9 +304,12 @@ fn read_args(
 }
 
 fn unterminated_array(lx: &Lexer<'_>, open: &Token) -> Error {
-    Diagnostic::error("RB004", "unterminated array: missing `]` before the end of input")
-        .at(lx.tok_loc(open))
-        .into()
+    Diagnostic::error(
+        "RB004",
+        "unterminated array: missing `]` before the end of input",
+    )
+    .at(lx.tok_loc(open))
+    .into()
 }
 
 /// True if a top-level string argument is a decl containing the word `reference`.
@@ -422,7 +429,10 @@ impl<'a> Assembler<'a, '_> {
                 }
                 Some(p) => Err(Diagnostic::error(
                     "RB004",
-                    format!("unexpected {} after `{kind}`: expected the {what} string", piece_name(p)),
+                    format!(
+                        "unexpected {} after `{kind}`: expected the {what} string",
+                        piece_name(p)
+                    ),
                 )
                 .at(lx.tok_loc(p.first()))
                 .into()),
@@ -438,9 +448,8 @@ impl<'a> Assembler<'a, '_> {
         let (handle, handle_tok) = header_string("handle", &mut i)?;
         let mut end = handle_tok.end;
 
-        let mut read: Vec<ReadParam> = Vec::new();
+        let mut read: Vec<ReadParam> = Vec::with_capacity(pieces.len() / 2);
         let mut pending = header_comments;
-        let mut seen: HashSet<String> = HashSet::new();
         while i < pieces.len() {
             let decl_tok = match &pieces[i] {
                 Piece::Comment(c) => {
@@ -452,7 +461,10 @@ impl<'a> Assembler<'a, '_> {
                 other => {
                     return Err(Diagnostic::error(
                         "RB004",
-                        format!("unexpected {}: expected a parameter declaration string", piece_name(other)),
+                        format!(
+                            "unexpected {}: expected a parameter declaration string",
+                            piece_name(other)
+                        ),
                     )
                     .at(lx.tok_loc(other.first()))
                     .into());
@@ -490,16 +502,20 @@ impl<'a> Assembler<'a, '_> {
                 }
             }
             let param = self.read_param(&shader, decl_text, location, value_piece, item, diags)?;
-            if !seen.insert(param.name.clone()) {
-                diags.push(
-                    Diagnostic::warning(
-                        "RB015",
-                        format!("duplicate parameter `{}` on `{handle}`; the later one wins", param.name),
-                    )
-                    .at(param.location.clone()),
-                );
-            }
             read.push(param);
+        }
+        let (repeated, shadowed) = duplicates(&read);
+        for (p, _) in read.iter().zip(&repeated).filter(|(_, r)| **r) {
+            diags.push(
+                Diagnostic::warning(
+                    "RB015",
+                    format!(
+                        "duplicate parameter `{}` on `{handle}`; the later one wins",
+                        p.name
+                    ),
+                )
+                .at(p.location.clone()),
+            );
         }
 
         if self.is_reuse(&handle, &shader, &read) {
@@ -532,7 +548,16 @@ impl<'a> Assembler<'a, '_> {
         // Comments after the last parameter lie outside the span (they are passed through);
         // only comments inside the header of a request without parameters remain.
         pending.retain(|c| c.end <= end);
-        self.add_node(kind, &handle, &shader, kw.start..end, location, read, pending);
+        self.add_node(
+            kind,
+            &handle,
+            &shader,
+            kw.start..end,
+            location,
+            read,
+            &shadowed,
+            pending,
+        );
         Ok(())
     }
 
@@ -559,27 +584,21 @@ impl<'a> Assembler<'a, '_> {
         span: Range<usize>,
         location: Location,
         read: Vec<ReadParam>,
+        shadowed: &[bool],
         end_comments: Vec<Range<usize>>,
     ) {
-        // Later duplicates win: drop earlier occurrences from the parameter list but keep
-        // their source items (their comments move to the next written parameter).
+        // Later duplicates win: earlier occurrences are not parameters, but their source
+        // items stay (their comments move to the next written parameter).
         let mut items: Vec<SourceParam> = Vec::with_capacity(read.len());
         let mut params: Vec<Param> = Vec::with_capacity(read.len());
         let mut links: Vec<Vec<Link>> = Vec::with_capacity(read.len());
-        for rp in read {
-            if let Some(old) = params.iter().position(|p| p.name() == rp.name) {
-                params.remove(old);
-                links.remove(old);
-                for it in &mut items {
-                    match it.param {
-                        Some(k) if k as usize == old => it.param = None,
-                        Some(k) if k as usize > old => it.param = Some(k - 1),
-                        _ => {}
-                    }
-                }
-            }
+        for (rp, &shadow) in read.into_iter().zip(shadowed) {
             let origin = items.len() as u32;
             let mut item = rp.item;
+            if shadow {
+                items.push(item);
+                continue;
+            }
             item.param = Some(params.len() as u32);
             items.push(item);
             params.push(Param::from_source(
@@ -628,18 +647,23 @@ impl<'a> Assembler<'a, '_> {
             diags.push(
                 Diagnostic::warning(
                     "RB013",
-                    format!("unknown word(s) `{}` in the declaration of `{name}`", words.extra.join(" ")),
+                    format!(
+                        "unknown word(s) `{}` in the declaration of `{name}`",
+                        words.extra.join(" ")
+                    ),
                 )
                 .at(location.clone()),
             );
         }
         let (ty, inline_type) = self.decl_type(shader, &words, &location, diags)?;
         let elems = self.elems(value);
+        let class = words.class.map(str::to_string);
+        let reference = words.reference;
         let mut param = ReadParam {
             decl: Decl {
-                text: decl_text.clone(),
-                class: words.class.map(str::to_string),
-                reference: words.reference,
+                text: decl_text,
+                class,
+                reference,
                 ty: ty.clone(),
                 inline_type,
             },
@@ -652,10 +676,10 @@ impl<'a> Assembler<'a, '_> {
         if inline_type {
             self.check_definition_type(shader, &param, diags);
         }
-        if words.reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
+        if reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
             param.links = self.read_links(&param, &ty, elems, diags)?;
         } else {
-            if words.reference {
+            if reference {
                 diags.push(
                     Diagnostic::warning(
                         "RB014",
@@ -664,7 +688,13 @@ impl<'a> Assembler<'a, '_> {
                     .at(param.location.clone()),
                 );
             }
-            param.value = Some(convert_value(&ty, &elems, &param.name, &param.location, diags));
+            param.value = Some(convert_value(
+                &ty,
+                &elems,
+                &param.name,
+                &param.location,
+                diags,
+            ));
         }
         Ok(param)
     }
@@ -684,8 +714,11 @@ impl<'a> Assembler<'a, '_> {
                 Err(_) => {
                     let word = format!("{}[{n}]", words.type_word.unwrap_or(""));
                     diags.push(
-                        Diagnostic::warning("RB013", format!("unknown type `{word}` of `{}`", words.name))
-                            .at(location.clone()),
+                        Diagnostic::warning(
+                            "RB013",
+                            format!("unknown type `{word}` of `{}`", words.name),
+                        )
+                        .at(location.clone()),
                     );
                     return Ok((Type::scalar(BaseType::Unknown(word)), true));
                 }
@@ -706,7 +739,10 @@ impl<'a> Assembler<'a, '_> {
             diags.push(
                 Diagnostic::warning(
                     "RB012",
-                    format!("parameter `{}` has no inline type; using `{ty}` from `{shader}`", words.name),
+                    format!(
+                        "parameter `{}` has no inline type; using `{ty}` from `{shader}`",
+                        words.name
+                    ),
                 )
                 .at(location.clone()),
             );
@@ -717,8 +753,11 @@ impl<'a> Assembler<'a, '_> {
         };
         let Some(mut ty) = rib_base_type(word) else {
             diags.push(
-                Diagnostic::warning("RB013", format!("unknown type `{word}` of `{}`", words.name))
-                    .at(location.clone()),
+                Diagnostic::warning(
+                    "RB013",
+                    format!("unknown type `{word}` of `{}`", words.name),
+                )
+                .at(location.clone()),
             );
             return Ok((Type::scalar(BaseType::Unknown(word.to_string())), true));
         };
@@ -726,8 +765,11 @@ impl<'a> Assembler<'a, '_> {
             if ty.is_array() {
                 let word = format!("{word}[{n}]");
                 diags.push(
-                    Diagnostic::warning("RB013", format!("unknown type `{word}` of `{}`", words.name))
-                        .at(location.clone()),
+                    Diagnostic::warning(
+                        "RB013",
+                        format!("unknown type `{word}` of `{}`", words.name),
+                    )
+                    .at(location.clone()),
                 );
                 return Ok((Type::scalar(BaseType::Unknown(word)), true));
             }
@@ -748,7 +790,11 @@ impl<'a> Assembler<'a, '_> {
             return;
         };
         if !types_compatible(&p.decl.ty, &def) {
-            let what = if p.decl.reference { "connection" } else { "value" };
+            let what = if p.decl.reference {
+                "connection"
+            } else {
+                "value"
+            };
             diags.push(
                 Diagnostic::warning(
                     "RB016",
@@ -839,6 +885,22 @@ impl<'a> Assembler<'a, '_> {
     }
 }
 
+/// For each parameter occurrence: whether an earlier occurrence has the same name (RB015),
+/// and whether a later one does (this one is overridden).
+fn duplicates(read: &[ReadParam]) -> (Vec<bool>, Vec<bool>) {
+    let mut order: Vec<usize> = (0..read.len()).collect();
+    order.sort_by(|&a, &b| read[a].name.cmp(&read[b].name).then(a.cmp(&b)));
+    let mut repeated = vec![false; read.len()];
+    let mut shadowed = vec![false; read.len()];
+    for w in order.windows(2) {
+        if read[w[0]].name == read[w[1]].name {
+            repeated[w[1]] = true;
+            shadowed[w[0]] = true;
+        }
+    }
+    (repeated, shadowed)
+}
+
 fn piece_name(p: &Piece) -> &'static str {
     match p {
         Piece::Array { .. } => "array",
@@ -873,8 +935,11 @@ fn convert_value(
 ) -> Value {
     let warn = |diags: &mut Diagnostics, why: String| {
         diags.push(
-            Diagnostic::warning("RB014", format!("value of `{name}` does not match its type `{ty}`: {why}"))
-                .at(location.clone()),
+            Diagnostic::warning(
+                "RB014",
+                format!("value of `{name}` does not match its type `{ty}`: {why}"),
+            )
+            .at(location.clone()),
         );
     };
     if let BaseType::Unknown(_) = ty.base {
@@ -898,7 +963,10 @@ fn convert_value(
         ArraySpec::Dynamic => elems.len() / comps,
     };
     if elems.len() != comps * count {
-        warn(diags, format!("{} element(s), expected {}", elems.len(), comps * count));
+        warn(
+            diags,
+            format!("{} element(s), expected {}", elems.len(), comps * count),
+        );
         return flat(&ty.base, elems, &mut |_| {});
     }
     let mut problems: Vec<String> = Vec::new();
@@ -1051,7 +1119,10 @@ mod tests {
         let d = split_decl("float[2] PixelFilterWidth").unwrap();
         assert_eq!((d.type_word, d.array), (Some("float"), Some("2")));
         let d = split_decl("uniform float [3]  x").unwrap();
-        assert_eq!((d.class, d.type_word, d.array), (Some("uniform"), Some("float"), Some("3")));
+        assert_eq!(
+            (d.class, d.type_word, d.array),
+            (Some("uniform"), Some("float"), Some("3"))
+        );
         let d = split_decl("diffuseGain").unwrap();
         assert_eq!((d.type_word, d.name), (None, "diffuseGain"));
         let d = split_decl("reference x").unwrap();

@@ -466,7 +466,11 @@ impl Node {
     pub(crate) fn set_raw_params(&mut self, params: Vec<Param>) {
         self.params = params;
         let mut order: Vec<u32> = (0..self.params.len() as u32).collect();
-        order.sort_by(|&a, &b| self.params[a as usize].name.cmp(&self.params[b as usize].name));
+        order.sort_by(|&a, &b| {
+            self.params[a as usize]
+                .name
+                .cmp(&self.params[b as usize].name)
+        });
         self.by_name = order;
     }
 
@@ -788,9 +792,7 @@ impl Network {
         let mut ids: Vec<NodeId> = self.graph.node_indices().collect();
         ids.sort_by(|&x, &y| {
             let (nx, ny) = (&self.graph[x], &self.graph[y]);
-            nx.handle
-                .cmp(&ny.handle)
-                .then(nx.version.cmp(&ny.version))
+            nx.handle.cmp(&ny.handle).then(nx.version.cmp(&ny.version))
         });
         ids
     }
@@ -925,7 +927,13 @@ impl Network {
         }
     }
 
-    fn add_edge_for(&mut self, down: NodeId, input: &str, link: &Link, index: usize) -> Option<EdgeId> {
+    fn add_edge_for(
+        &mut self,
+        down: NodeId,
+        input: &str,
+        link: &Link,
+        index: usize,
+    ) -> Option<EdgeId> {
         let up = link.upstream_node()?;
         Some(self.graph.add_edge(
             up,
@@ -1144,7 +1152,13 @@ impl Network {
 
     /// Set terminal `name` of material `material` to `node` (output `None`: the whole node),
     /// replacing a terminal of the same name.
-    pub fn set_terminal(&mut self, material: usize, name: &str, node: NodeId, output: Option<&str>) {
+    pub fn set_terminal(
+        &mut self,
+        material: usize,
+        name: &str,
+        node: NodeId,
+        output: Option<&str>,
+    ) {
         let link = Link::node(node, output);
         let m = &mut self.materials[material];
         match m.terminals.iter_mut().find(|t| t.name == name) {

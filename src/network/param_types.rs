@@ -69,13 +69,25 @@ pub trait ParamTypes {
     /// True if `input` is an input head (a vstruct placeholder input) of `shader`. Defaults
     /// to "declared type is `Vstruct`", which is what the registry's head normalisation gives.
     fn is_input_head(&self, shader: &str, input: &str) -> bool {
-        matches!(self.input_type(shader, input), Some(Type { base: BaseType::Vstruct, .. }))
+        matches!(
+            self.input_type(shader, input),
+            Some(Type {
+                base: BaseType::Vstruct,
+                ..
+            })
+        )
     }
 
     /// True if `output` is an output head of `shader`. Defaults to "declared type is
     /// `Vstruct`".
     fn is_output_head(&self, shader: &str, output: &str) -> bool {
-        matches!(self.output_type(shader, output), Some(Type { base: BaseType::Vstruct, .. }))
+        matches!(
+            self.output_type(shader, output),
+            Some(Type {
+                base: BaseType::Vstruct,
+                ..
+            })
+        )
     }
 }
 

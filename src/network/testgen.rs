@@ -30,7 +30,10 @@ fn write_material(out: &mut String, m: usize) {
     // Values derived from the index; the exact numbers do not matter, only that they differ.
     let t = (m % 97) as f32 / 97.0;
     let _ = writeln!(out, "AttributeBegin");
-    let _ = writeln!(out, "\tAttribute \"identifier\" \"string name\" [\"mesh{m}\"]");
+    let _ = writeln!(
+        out,
+        "\tAttribute \"identifier\" \"string name\" [\"mesh{m}\"]"
+    );
     for (l, name) in ["base", "top", "coat"].iter().enumerate() {
         let _ = writeln!(out, "\tPattern \"PxrLayer\" \"m{m}_{name}\"");
         let _ = writeln!(out, "\t\t\"int enableDiffuse\" [1]");
@@ -51,16 +54,28 @@ fn write_material(out: &mut String, m: usize) {
     }
     let _ = writeln!(out, "\tPattern \"PxrLayerMixer\" \"m{m}_mixer\"");
     let _ = writeln!(out, "\t\t\"int enableDiffuseAlways\" [1]");
-    let _ = writeln!(out, "\t\t\"reference vstruct baselayer\" [\"m{m}_base:pxrMaterialOut\"]");
+    let _ = writeln!(
+        out,
+        "\t\t\"reference vstruct baselayer\" [\"m{m}_base:pxrMaterialOut\"]"
+    );
     let _ = writeln!(out, "\t\t\"int layer1Enabled\" [1]");
-    let _ = writeln!(out, "\t\t\"reference vstruct layer1\" [\"m{m}_top:pxrMaterialOut\"]");
+    let _ = writeln!(
+        out,
+        "\t\t\"reference vstruct layer1\" [\"m{m}_top:pxrMaterialOut\"]"
+    );
     let _ = writeln!(out, "\t\t\"float layer1Mask\" [{}]", 0.25 + t / 2.0);
     let _ = writeln!(out, "\t\t\"int layer2Enabled\" [1]");
-    let _ = writeln!(out, "\t\t\"reference vstruct layer2\" [\"m{m}_coat:pxrMaterialOut\"]");
+    let _ = writeln!(
+        out,
+        "\t\t\"reference vstruct layer2\" [\"m{m}_coat:pxrMaterialOut\"]"
+    );
     let _ = writeln!(out, "\t\t\"float layer2Mask\" [0.5]");
     let _ = writeln!(out);
     let _ = writeln!(out, "\tBxdf \"PxrLayerSurface\" \"m{m}_surface\"");
-    let _ = writeln!(out, "\t\t\"reference float inputMaterial\" [\"m{m}_mixer:pxrMaterialOut\"]");
+    let _ = writeln!(
+        out,
+        "\t\t\"reference float inputMaterial\" [\"m{m}_mixer:pxrMaterialOut\"]"
+    );
     let _ = writeln!(out, "\t\t\"string __materialid\" [\"m{m}_SG\"]");
     let _ = writeln!(out, "\tSphere 1 -1 1 360");
     let _ = writeln!(out, "AttributeEnd");

@@ -47,14 +47,19 @@ pub fn codes(d: &Diagnostics) -> Vec<&'static str> {
     d.iter().map(|x| x.code).collect()
 }
 
+/// Named, typed properties in declaration order.
+pub type Props = Vec<(String, Type)>;
+
 /// A small in-test definition table: (shader, inputs in declaration order, outputs).
 pub struct Table {
-    pub shaders: Vec<(String, Vec<(String, Type)>, Vec<(String, Type)>)>,
+    pub shaders: Vec<(String, Props, Props)>,
 }
 
 impl Table {
     pub fn new() -> Self {
-        Table { shaders: Vec::new() }
+        Table {
+            shaders: Vec::new(),
+        }
     }
     pub fn shader(mut self, id: &str, inputs: &[(&str, &str)], outputs: &[(&str, &str)]) -> Self {
         let conv = |list: &[(&str, &str)]| {
@@ -62,10 +67,11 @@ impl Table {
                 .map(|(n, t)| (n.to_string(), parse_type(t)))
                 .collect::<Vec<_>>()
         };
-        self.shaders.push((id.to_string(), conv(inputs), conv(outputs)));
+        self.shaders
+            .push((id.to_string(), conv(inputs), conv(outputs)));
         self
     }
-    fn find(&self, id: &str) -> Option<&(String, Vec<(String, Type)>, Vec<(String, Type)>)> {
+    fn find(&self, id: &str) -> Option<&(String, Props, Props)> {
         self.shaders.iter().find(|s| s.0 == id)
     }
 }
@@ -97,7 +103,9 @@ impl ParamTypes for Table {
     }
     fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
         let s = self.find(shader)?;
-        s.2.iter().find(|(n, _)| n == output).map(|(_, t)| t.clone())
+        s.2.iter()
+            .find(|(n, _)| n == output)
+            .map(|(_, t)| t.clone())
     }
     fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
         let s = self.find(shader)?;

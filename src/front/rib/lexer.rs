@@ -155,7 +155,11 @@ impl<'a> Lexer<'a> {
             b'[' | b']' => {
                 self.pos += 1;
                 self.col += 1;
-                tok.kind = if b == b'[' { TokKind::Open } else { TokKind::Close };
+                tok.kind = if b == b'[' {
+                    TokKind::Open
+                } else {
+                    TokKind::Close
+                };
             }
             b'"' | b'\'' => {
                 let (end, escaped) = self.scan_string(start, b, diags)?;
@@ -226,7 +230,12 @@ impl<'a> Lexer<'a> {
 
     /// Find the end of the string starting at `start` (quote `q`); report unknown escapes.
     /// Returns the end offset (after the closing quote) and whether a backslash occurs.
-    fn scan_string(&self, start: usize, q: u8, diags: &mut Diagnostics) -> Result<(usize, bool), Error> {
+    fn scan_string(
+        &self,
+        start: usize,
+        q: u8,
+        diags: &mut Diagnostics,
+    ) -> Result<(usize, bool), Error> {
         let mut i = start + 1;
         let mut escaped = false;
         loop {
@@ -253,8 +262,11 @@ impl<'a> Lexer<'a> {
                     format!("\\ followed by byte 0x{e:02X}")
                 };
                 diags.push(
-                    Diagnostic::info("RB010", format!("unknown string escape `{shown}`, read as the character itself"))
-                        .at(self.loc(line, col)),
+                    Diagnostic::info(
+                        "RB010",
+                        format!("unknown string escape `{shown}`, read as the character itself"),
+                    )
+                    .at(self.loc(line, col)),
                 );
             }
             i += 2;
@@ -279,8 +291,10 @@ impl<'a> Lexer<'a> {
 /// Escapes that need no RB010: `\n \r \t \b \f \\ \"`, octal digits, backslash-newline, and
 /// the quote character of a single-quoted string.
 fn is_known_escape(e: u8, quote: u8) -> bool {
-    matches!(e, b'n' | b'r' | b't' | b'b' | b'f' | b'\\' | b'"' | b'\n' | b'\r' | b'0'..=b'7')
-        || e == quote
+    matches!(
+        e,
+        b'n' | b'r' | b't' | b'b' | b'f' | b'\\' | b'"' | b'\n' | b'\r' | b'0'..=b'7'
+    ) || e == quote
 }
 
 /// The decoded content of a string token (quotes removed, escapes applied). Invalid UTF-8 is
@@ -357,7 +371,17 @@ mod tests {
 
     #[test]
     fn numbers_in_every_form() {
-        for n in ["0.", "1.", "-0", "9.99999968e+37", "3.04999995", ".8", "+2", "1e5", "-1.5E-3"] {
+        for n in [
+            "0.",
+            "1.",
+            "-0",
+            "9.99999968e+37",
+            "3.04999995",
+            ".8",
+            "+2",
+            "1e5",
+            "-1.5E-3",
+        ] {
             let (toks, _) = lex(n);
             assert_eq!(toks, vec![(TokKind::Number, n.to_string())], "{n}");
         }
@@ -369,7 +393,13 @@ mod tests {
         let kinds: Vec<_> = toks.iter().map(|t| t.0).collect();
         assert_eq!(
             kinds,
-            [TokKind::Open, TokKind::Number, TokKind::Number, TokKind::Close, TokKind::Ident]
+            [
+                TokKind::Open,
+                TokKind::Number,
+                TokKind::Number,
+                TokKind::Close,
+                TokKind::Ident
+            ]
         );
     }
 
