@@ -1,4 +1,6 @@
 //! The RIB reader and writer on the real public RIB files of `../shared/fixtures/rib`.
+// Float literals are written exactly as they appear in the fixture files.
+#![allow(clippy::excessive_precision)]
 
 mod common;
 mod network_common;

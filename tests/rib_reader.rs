@@ -327,7 +327,10 @@ fn decl_forms_and_values() {
     assert!(matches!(net.value(p, "g"), Some(Value::Matrix(m)) if m[0] == 1.0 && m[15] == 1.0));
     assert_eq!(net.value(p, "h"), Some(&Value::Str("bare".into())));
     assert_eq!(net.value(p, "i"), Some(&Value::Int(7)));
-    assert_eq!(net.value(p, "j"), Some(&Value::Float(9.99999968e+37)));
+    assert_eq!(
+        net.value(p, "j"),
+        Some(&Value::Float("9.99999968e+37".parse().unwrap()))
+    );
     assert_eq!(
         net.value(p, "k"),
         Some(&Value::Array(

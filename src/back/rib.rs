@@ -30,7 +30,12 @@
 //! * A connection is written as `"<upstream handle>:<output>"`. RIB references bind to the
 //!   latest version of a handle defined earlier in the file, so a link to an older version, or
 //!   to a node written later, cannot be expressed exactly; it is written by handle all the same.
-//! * Lines end in `\n`.
+//!   Likewise a whole-node reference to a handle containing `:` reads back as `handle:output`
+//!   (references are split at the last `:`).
+//! * Lines end in `\n`, also in files that use `\r\n` (only re-serialised requests are
+//!   affected; pass-through bytes are copied as they are).
+//! * A comment inside an array value (between `[` and `]`) is part of the value text: it is
+//!   kept while the value is unchanged and dropped when the value is replaced.
 
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
 use crate::network::{Param, RequestKind, SourceParam};

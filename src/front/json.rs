@@ -270,6 +270,9 @@ fn char_column(bytes: &[u8], line: usize, byte_col: usize) -> u32 {
     text.chars().count().max(1) as u32
 }
 
+/// The connections of one node, per parameter index, waiting to be bound.
+type NodeConns = Vec<(usize, Vec<Conn>)>;
+
 /// A parsed connection object.
 struct Conn {
     node: String,
@@ -408,7 +411,7 @@ impl Reader<'_, '_> {
         let npointer = ptr(pointer, "nodes");
         let mut ids: Vec<NodeId> = Vec::with_capacity(nodes.len());
         let mut by_name: HashMap<&str, NodeId> = HashMap::new();
-        let mut pending: Vec<(NodeId, Vec<(usize, Vec<Conn>)>)> = Vec::new();
+        let mut pending: Vec<(NodeId, NodeConns)> = Vec::new();
         for (node_name, nj) in nodes {
             let kind = kinds
                 .get(node_name.as_str())
@@ -513,14 +516,13 @@ impl Reader<'_, '_> {
 
     /// Read one node; returns its id and its connections (per parameter index), to bind once
     /// every node of the material exists.
-    #[allow(clippy::type_complexity)]
     fn node(
         &mut self,
         name: &str,
         j: &J,
         kind: RequestKind,
         pointer: &str,
-    ) -> Result<(NodeId, Vec<(usize, Vec<Conn>)>), Error> {
+    ) -> Result<(NodeId, NodeConns), Error> {
         let members = self.object(j, pointer, "a node")?;
         let mut shader = None;
         let mut parameters: &[(String, J)] = &[];
@@ -557,7 +559,7 @@ impl Reader<'_, '_> {
             ));
         }
         let ipointer = ptr(pointer, "inputConnections");
-        let mut conns: Vec<(usize, Vec<Conn>)> = Vec::new();
+        let mut conns: NodeConns = Vec::new();
         for (input, list) in inputs {
             let p = ptr(&ipointer, input);
             let J::Arr(items) = list else {

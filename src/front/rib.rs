@@ -130,13 +130,13 @@ pub fn parse_rib(
             TokKind::Ident => {
                 let name = std::str::from_utf8(lx.bytes(&tok)).unwrap_or("");
                 if let Some(kind) = RequestKind::from_keyword(name) {
-                    let (pieces, after) = read_args(&mut lx, diags, true)?;
-                    asm.shading_request(&lx, kind, &tok, &pieces, diags)?;
+                    let (args, after) = read_args(&mut lx, diags, true)?;
+                    asm.shading_request(&lx, kind, &tok, &args, diags)?;
                     next = after;
                 } else {
                     let legacy = LEGACY_REQUESTS.contains(&name);
-                    let (pieces, after) = read_args(&mut lx, diags, legacy)?;
-                    if legacy && has_reference_decl(bytes, &pieces) {
+                    let (args, after) = read_args(&mut lx, diags, legacy)?;
+                    if legacy && has_reference_decl(bytes, &args.pieces) {
                         diags.push(
                             Diagnostic::info(
                                 "RB020",
@@ -184,9 +184,18 @@ enum Piece {
     /// stay in the value's byte range).
     Array {
         open: Token,
-        items: Vec<Token>,
+        /// Range into [`Args::items`].
+        items: Range<usize>,
         close: Token,
     },
+}
+
+/// The arguments of one request: pieces in order, and the elements of all its arrays in one
+/// buffer (one allocation per request rather than one per array).
+#[derive(Debug, Default)]
+struct Args {
+    pieces: Vec<Piece>,
+    items: Vec<Token>,
 }
 
 impl Piece {
@@ -217,18 +226,18 @@ fn read_args(
     lx: &mut Lexer<'_>,
     diags: &mut Diagnostics,
     keep: bool,
-) -> Result<(Vec<Piece>, Option<Token>), Error> {
-    let mut pieces = Vec::new();
-    let mut array: Option<(Token, Vec<Token>, Option<TokKind>)> = None;
+) -> Result<(Args, Option<Token>), Error> {
+    let mut args = Args::default();
+    let mut array: Option<(Token, usize, Option<TokKind>)> = None;
     loop {
         let Some(tok) = lx.next_token(diags)? else {
             if let Some((open, ..)) = array {
                 return Err(unterminated_array(lx, &open));
             }
-            return Ok((pieces, None));
+            return Ok((args, None));
         };
         match (tok.kind, array.as_mut()) {
-            (TokKind::Ident, None) => return Ok((pieces, Some(tok))),
+            (TokKind::Ident, None) => return Ok((args, Some(tok))),
             (TokKind::Ident, Some((open, ..))) => {
                 let open = *open;
                 return Err(Diagnostic::error(
@@ -243,16 +252,16 @@ fn read_args(
             }
             (TokKind::Comment, None) => {
                 if keep {
-                    pieces.push(Piece::Comment(tok));
+                    args.pieces.push(Piece::Comment(tok));
                 }
             }
             (TokKind::Comment, Some(_)) => {}
             (TokKind::Number | TokKind::Str, None) => {
                 if keep {
-                    pieces.push(Piece::Value(tok));
+                    args.pieces.push(Piece::Value(tok));
                 }
             }
-            (TokKind::Number | TokKind::Str, Some((open, items, kind))) => {
+            (TokKind::Number | TokKind::Str, Some((open, _, kind))) => {
                 match kind {
                     None => *kind = Some(tok.kind),
                     Some(k) if *k != tok.kind => {
@@ -270,10 +279,10 @@ fn read_args(
                     Some(_) => {}
                 }
                 if keep {
-                    items.push(tok);
+                    args.items.push(tok);
                 }
             }
-            (TokKind::Open, None) => array = Some((tok, Vec::new(), None)),
+            (TokKind::Open, None) => array = Some((tok, args.items.len(), None)),
             (TokKind::Open, Some(_)) => {
                 return Err(
                     Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
@@ -289,9 +298,10 @@ fn read_args(
                 );
             }
             (TokKind::Close, Some(_)) => {
-                if let Some((open, items, _)) = array.take() {
+                if let Some((open, first, _)) = array.take() {
                     if keep {
-                        pieces.push(Piece::Array {
+                        let items = first..args.items.len();
+                        args.pieces.push(Piece::Array {
                             open,
                             items,
                             close: tok,
@@ -334,24 +344,26 @@ struct DeclWords<'s> {
 }
 
 fn split_decl(text: &str) -> Option<DeclWords<'_>> {
-    let mut words: Vec<&str> = text
+    // Walk the words from the end (name, then `[N]`, then type) without collecting them.
+    let mut words = text
         .split(|c: char| c.is_ascii() && lexer::is_space(c as u8))
         .filter(|w| !w.is_empty())
-        .collect();
-    let name = words.pop()?;
+        .rev()
+        .peekable();
+    let name = words.next()?;
     let mut d = DeclWords {
         name,
         ..DeclWords::default()
     };
-    if let Some(last) = words.last() {
+    if let Some(last) = words.peek() {
         if last.len() >= 2 && last.starts_with('[') && last.ends_with(']') {
             d.array = Some(&last[1..last.len() - 1]);
-            words.pop();
+            words.next();
         }
     }
-    if let Some(&last) = words.last() {
+    if let Some(&last) = words.peek() {
         if last != "reference" && !CLASSES.contains(&last) {
-            words.pop();
+            words.next();
             match (d.array, last.find('[')) {
                 (None, Some(open)) if open > 0 && last.ends_with(']') => {
                     d.type_word = Some(&last[..open]);
@@ -370,6 +382,7 @@ fn split_decl(text: &str) -> Option<DeclWords<'_>> {
             d.extra.push(w);
         }
     }
+    d.extra.reverse();
     Some(d)
 }
 
@@ -396,6 +409,16 @@ struct Assembler<'a, 't> {
     net: Network,
 }
 
+/// A decl and its value as found in a request, before interpretation.
+struct RawParam<'p> {
+    decl_text: String,
+    location: Location,
+    value: &'p Piece,
+    /// The request's array elements ([`Args::items`]).
+    arena: &'p [Token],
+    item: SourceParam,
+}
+
 /// A parameter read from a request, before the node exists.
 struct ReadParam {
     name: String,
@@ -412,9 +435,10 @@ impl<'a> Assembler<'a, '_> {
         lx: &Lexer<'_>,
         kind: RequestKind,
         kw: &Token,
-        pieces: &[Piece],
+        args: &Args,
         diags: &mut Diagnostics,
     ) -> Result<(), Error> {
+        let pieces = &args.pieces[..];
         let mut i = 0;
         let mut header_comments: Vec<Range<usize>> = Vec::new();
         let mut header_string = |what: &str, i: &mut usize| -> Result<(String, Token), Error> {
@@ -448,9 +472,8 @@ impl<'a> Assembler<'a, '_> {
         let (handle, handle_tok) = header_string("handle", &mut i)?;
         let mut end = handle_tok.end;
 
-        let mut read: Vec<ReadParam> = Vec::new();
+        let mut read: Vec<ReadParam> = Vec::with_capacity(pieces.len() / 2);
         let mut pending = header_comments;
-        let mut seen: HashSet<String> = HashSet::new();
         while i < pieces.len() {
             let decl_tok = match &pieces[i] {
                 Piece::Comment(c) => {
@@ -502,20 +525,28 @@ impl<'a> Assembler<'a, '_> {
                     i += 1;
                 }
             }
-            let param = self.read_param(&shader, decl_text, location, value_piece, item, diags)?;
-            if !seen.insert(param.name.clone()) {
-                diags.push(
-                    Diagnostic::warning(
-                        "RB015",
-                        format!(
-                            "duplicate parameter `{}` on `{handle}`; the later one wins",
-                            param.name
-                        ),
-                    )
-                    .at(param.location.clone()),
-                );
-            }
+            let raw = RawParam {
+                decl_text,
+                location,
+                value: value_piece,
+                arena: &args.items,
+                item,
+            };
+            let param = self.read_param(&shader, raw, diags)?;
             read.push(param);
+        }
+        let (repeated, shadowed) = duplicates(&read);
+        for (p, _) in read.iter().zip(&repeated).filter(|(_, r)| **r) {
+            diags.push(
+                Diagnostic::warning(
+                    "RB015",
+                    format!(
+                        "duplicate parameter `{}` on `{handle}`; the later one wins",
+                        p.name
+                    ),
+                )
+                .at(p.location.clone()),
+            );
         }
 
         if self.is_reuse(&handle, &shader, &read) {
@@ -555,6 +586,7 @@ impl<'a> Assembler<'a, '_> {
             kw.start..end,
             location,
             read,
+            &shadowed,
             pending,
         );
         Ok(())
@@ -583,27 +615,21 @@ impl<'a> Assembler<'a, '_> {
         span: Range<usize>,
         location: Location,
         read: Vec<ReadParam>,
+        shadowed: &[bool],
         end_comments: Vec<Range<usize>>,
     ) {
-        // Later duplicates win: drop earlier occurrences from the parameter list but keep
-        // their source items (their comments move to the next written parameter).
+        // Later duplicates win: earlier occurrences are not parameters, but their source
+        // items stay (their comments move to the next written parameter).
         let mut items: Vec<SourceParam> = Vec::with_capacity(read.len());
         let mut params: Vec<Param> = Vec::with_capacity(read.len());
         let mut links: Vec<Vec<Link>> = Vec::with_capacity(read.len());
-        for rp in read {
-            if let Some(old) = params.iter().position(|p| p.name() == rp.name) {
-                params.remove(old);
-                links.remove(old);
-                for it in &mut items {
-                    match it.param {
-                        Some(k) if k as usize == old => it.param = None,
-                        Some(k) if k as usize > old => it.param = Some(k - 1),
-                        _ => {}
-                    }
-                }
-            }
+        for (rp, &shadow) in read.into_iter().zip(shadowed) {
             let origin = items.len() as u32;
             let mut item = rp.item;
+            if shadow {
+                items.push(item);
+                continue;
+            }
             item.param = Some(params.len() as u32);
             items.push(item);
             params.push(Param::from_source(
@@ -636,12 +662,16 @@ impl<'a> Assembler<'a, '_> {
     fn read_param(
         &self,
         shader: &str,
-        decl_text: String,
-        location: Location,
-        value: &Piece,
-        item: SourceParam,
+        raw: RawParam<'_>,
         diags: &mut Diagnostics,
     ) -> Result<ReadParam, Error> {
+        let RawParam {
+            decl_text,
+            location,
+            value,
+            arena,
+            item,
+        } = raw;
         let Some(words) = split_decl(&decl_text) else {
             return Err(Diagnostic::error("RB006", "empty parameter declaration")
                 .at(location)
@@ -661,12 +691,14 @@ impl<'a> Assembler<'a, '_> {
             );
         }
         let (ty, inline_type) = self.decl_type(shader, &words, &location, diags)?;
-        let elems = self.elems(value);
+        let elems = self.elems(value, arena);
+        let class = words.class.map(str::to_string);
+        let reference = words.reference;
         let mut param = ReadParam {
             decl: Decl {
-                text: decl_text.clone(),
-                class: words.class.map(str::to_string),
-                reference: words.reference,
+                text: decl_text,
+                class,
+                reference,
                 ty: ty.clone(),
                 inline_type,
             },
@@ -679,10 +711,10 @@ impl<'a> Assembler<'a, '_> {
         if inline_type {
             self.check_definition_type(shader, &param, diags);
         }
-        if words.reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
+        if reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
             param.links = self.read_links(&param, &ty, elems, diags)?;
         } else {
-            if words.reference {
+            if reference {
                 diags.push(
                     Diagnostic::warning(
                         "RB014",
@@ -811,7 +843,7 @@ impl<'a> Assembler<'a, '_> {
         }
     }
 
-    fn elems(&self, value: &Piece) -> Vec<Elem<'a>> {
+    fn elems(&self, value: &Piece, arena: &[Token]) -> Vec<Elem<'a>> {
         let src: &'a [u8] = self.src;
         let one = |t: &Token| -> Elem<'a> {
             if t.kind == TokKind::Str {
@@ -822,7 +854,12 @@ impl<'a> Assembler<'a, '_> {
         };
         match value {
             Piece::Value(t) => vec![one(t)],
-            Piece::Array { items, .. } => items.iter().map(one).collect(),
+            Piece::Array { items, .. } => arena
+                .get(items.clone())
+                .unwrap_or_default()
+                .iter()
+                .map(one)
+                .collect(),
             Piece::Comment(_) => Vec::new(),
         }
     }
@@ -886,6 +923,22 @@ impl<'a> Assembler<'a, '_> {
         }
         Ok(links)
     }
+}
+
+/// For each parameter occurrence: whether an earlier occurrence has the same name (RB015),
+/// and whether a later one does (this one is overridden).
+fn duplicates(read: &[ReadParam]) -> (Vec<bool>, Vec<bool>) {
+    let mut order: Vec<usize> = (0..read.len()).collect();
+    order.sort_by(|&a, &b| read[a].name.cmp(&read[b].name).then(a.cmp(&b)));
+    let mut repeated = vec![false; read.len()];
+    let mut shadowed = vec![false; read.len()];
+    for w in order.windows(2) {
+        if read[w[0]].name == read[w[1]].name {
+            repeated[w[1]] = true;
+            shadowed[w[0]] = true;
+        }
+    }
+    (repeated, shadowed)
 }
 
 fn piece_name(p: &Piece) -> &'static str {
@@ -976,14 +1029,15 @@ fn convert_value(
 /// One element of type `base` from exactly `components()` elements; `None` if it cannot be
 /// represented (non-integral int).
 fn scalar(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Option<Value> {
-    let mut floats = || -> Vec<f32> {
-        elems
-            .iter()
-            .map(|e| match e {
-                Elem::Num(t) => parse_f32(t, note),
-                Elem::Str(_) => 0.0,
-            })
-            .collect()
+    // At most 16 components (a matrix): no allocation.
+    let mut floats = || -> [f32; 16] {
+        let mut out = [0.0f32; 16];
+        for (o, e) in out.iter_mut().zip(elems) {
+            if let Elem::Num(t) = e {
+                *o = parse_f32(t, note);
+            }
+        }
+        out
     };
     Some(match base {
         BaseType::Int => match &elems[0] {
@@ -1003,12 +1057,7 @@ fn scalar(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> 
             let f = floats();
             Value::HPoint([f[0], f[1], f[2], f[3]])
         }
-        BaseType::Matrix => {
-            let f = floats();
-            let mut m = [0.0f32; 16];
-            m.copy_from_slice(&f[..16]);
-            Value::Matrix(m)
-        }
+        BaseType::Matrix => Value::Matrix(floats()),
         _ => return None,
     })
 }

@@ -47,9 +47,12 @@ pub fn codes(d: &Diagnostics) -> Vec<&'static str> {
     d.iter().map(|x| x.code).collect()
 }
 
+/// Named, typed properties in declaration order.
+pub type Props = Vec<(String, Type)>;
+
 /// A small in-test definition table: (shader, inputs in declaration order, outputs).
 pub struct Table {
-    pub shaders: Vec<(String, Vec<(String, Type)>, Vec<(String, Type)>)>,
+    pub shaders: Vec<(String, Props, Props)>,
 }
 
 impl Table {
@@ -68,7 +71,7 @@ impl Table {
             .push((id.to_string(), conv(inputs), conv(outputs)));
         self
     }
-    fn find(&self, id: &str) -> Option<&(String, Vec<(String, Type)>, Vec<(String, Type)>)> {
+    fn find(&self, id: &str) -> Option<&(String, Props, Props)> {
         self.shaders.iter().find(|s| s.0 == id)
     }
 }
