@@ -853,7 +853,7 @@ fn always_connects(entry: &CondEntry) -> bool {
         Some(stmt) => {
             let connects = |a: &Action| matches!(a.kind, ActionKind::Connect);
             connects(&stmt.action)
-                && stmt.fallback.as_ref().is_none_or(|f| connects(f))
+                && stmt.fallback.as_ref().is_none_or(connects)
                 && (stmt.condition.is_none() || stmt.fallback.is_some())
                 && stmt.else_ifs.iter().all(|l| connects(&l.action))
         }
