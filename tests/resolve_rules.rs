@@ -40,6 +40,8 @@ const UP: &str = r#"<args format="1.0">
   <output name="out_isset" vstructmember="out.isset" vstructConditionalExpr="other is set"><tags><tag value="float"/></tags></output>
   <output name="out_headconn" vstructmember="out.headconn" vstructConditionalExpr="h is connected"><tags><tag value="float"/></tags></output>
   <output name="out_memconn" vstructmember="out.memconn" vstructConditionalExpr="h_flag is connected"><tags><tag value="float"/></tags></output>
+  <output name="ClearCoat_CG" vstructmember="out.clearcoatEdgeColor"><tags><tag value="color"/></tags></output>
+  <output name="out_nested" vstructmember="out.nested"><tags><tag value="float"/></tags></output>
   <output name="out_bad" vstructmember="out.bad" vstructConditionalExpr="connect if x = 1"><tags><tag value="float"/></tags></output>
 </args>"#;
 
@@ -463,4 +465,83 @@ fn chain_of_100k_nodes_resolves_without_recursion() {
     // every other node has enable 1 (default), so h_flag = 1 from the second-to-last on.
     assert_eq!(net.value(ids[n - 2], "h_flag"), Some(&Value::Int(0)));
     assert_eq!(net.value(ids[0], "h_flag"), Some(&Value::Int(1)));
+}
+
+#[test]
+fn r10_member_names_not_property_names_decide_the_match() {
+    // Laika adapter style: the upstream output `ClearCoat_CG` carries the member
+    // `clearcoatEdgeColor` and feeds the downstream `p_clearcoatEdgeColor`.
+    let (reg, mut net, _, d) = simple(&[("clearcoatEdgeColor", "color")]);
+    let text = run(&mut net, &reg, &ResolveOptions::default());
+    assert_eq!(
+        net.connections(d, "p_clearcoatEdgeColor")[0].output(),
+        Some("ClearCoat_CG")
+    );
+    insta::assert_snapshot!(text);
+}
+
+#[test]
+fn r12_nested_head_member_is_connected_but_not_expanded() {
+    let mut reg = registry(&[]);
+    reg.add_args_text(
+        "Nest",
+        r#"<args format="1.0"><shaderType><tag value="bxdf"/></shaderType>
+  <param name="inputMaterial" type="float"><tags><tag value="vstruct"/></tags></param>
+  <param name="p_nested" type="float" vstructmember="inputMaterial.nested"/>
+  <param name="p_nested_x" type="float" vstructmember="p_nested.x"/>
+</args>"#,
+    )
+    .expect("Nest parses");
+    let mut net = Network::new();
+    let u = net.add_node("U", "Up");
+    let d = net.add_node("D", "Nest");
+    net.connect(d, "inputMaterial", u, "out");
+    let res = resolve(&mut net, &reg, &ResolveOptions::default());
+    assert_eq!(net.connections(d, "p_nested")[0].output(), Some("out_nested"));
+    assert!(net.connections(d, "p_nested_x").is_empty());
+    let registry_diags = reg.diagnostics();
+    assert_eq!(registry_diags.count("VS008"), 1);
+    insta::assert_snapshot!(format!(
+        "{}--\n{}\n{}\n",
+        dump(&net),
+        diags(&registry_diags),
+        diags(&res.diagnostics)
+    ));
+}
+
+#[test]
+fn cycle_of_length_one_terminates() {
+    let reg = registry(&[]);
+    let mut net = Network::new();
+    let a = net.add_node("A", "Up");
+    net.connect(a, "h", a, "out");
+    let text = run(&mut net, &reg, &ResolveOptions::default());
+    assert!(net.connections(a, "h").is_empty());
+    insta::assert_snapshot!(text);
+}
+
+#[test]
+fn vs020_unknown_downstream_type_is_info_and_untouched() {
+    let reg = registry(&[]);
+    let mut net = Network::new();
+    let u = net.add_node("U", "Up");
+    let x = net.add_node("X", "Mystery");
+    net.connect(x, "inputMaterial", u, "out");
+    let res = resolve(&mut net, &reg, &ResolveOptions::default());
+    assert_eq!(net.connections(x, "inputMaterial").len(), 1);
+    let infos: Vec<_> = res.diagnostics.with_code("VS020").collect();
+    assert_eq!(infos.len(), 1);
+    assert_eq!(infos[0].severity, Severity::Info);
+    insta::assert_snapshot!(infos[0].message.clone());
+}
+
+#[test]
+fn vs017_head_value_without_connection_is_removed_too() {
+    let reg = registry(&abc());
+    let mut net = Network::new();
+    let d = net.add_node("D", "Down");
+    net.set_param(d, "inputMaterial", Value::Float(1.0));
+    let text = run(&mut net, &reg, &ResolveOptions::default());
+    assert_eq!(net.value(d, "inputMaterial"), None);
+    insta::assert_snapshot!(text);
 }
