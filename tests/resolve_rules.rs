@@ -497,7 +497,10 @@ fn r12_nested_head_member_is_connected_but_not_expanded() {
     let d = net.add_node("D", "Nest");
     net.connect(d, "inputMaterial", u, "out");
     let res = resolve(&mut net, &reg, &ResolveOptions::default());
-    assert_eq!(net.connections(d, "p_nested")[0].output(), Some("out_nested"));
+    assert_eq!(
+        net.connections(d, "p_nested")[0].output(),
+        Some("out_nested")
+    );
     assert!(net.connections(d, "p_nested_x").is_empty());
     let registry_diags = reg.diagnostics();
     assert_eq!(registry_diags.count("VS008"), 1);
