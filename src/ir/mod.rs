@@ -243,6 +243,11 @@ impl IrBuilder {
         id
     }
 
+    /// The node with this id.
+    pub fn node_at(&self, id: NodeId) -> &Node {
+        &self.nodes[id.index()]
+    }
+
     fn is_zero(&self, r: Reg) -> bool {
         self.prog.constant(r) == Some(Vec3::ZERO)
     }

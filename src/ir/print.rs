@@ -10,17 +10,9 @@ use super::MaterialIr;
 use glam::Vec3;
 use std::fmt::Write;
 
-/// Format a float compactly and stably (at most 6 significant decimals, no `-0`).
+/// Format a float stably: the shortest text that reads back to the same `f32`, `0` for ±0.
 pub fn fmt_f32(x: f32) -> String {
-    if x == 0.0 {
-        return "0".into();
-    }
-    if !x.is_finite() {
-        return format!("{x}");
-    }
-    let s = format!("{:.6}", x);
-    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    if s == "-0" { "0".into() } else { s }
+    if x == 0.0 { "0".into() } else { format!("{x}") }
 }
 
 /// Format a register value: a scalar when all lanes are equal.
