@@ -403,11 +403,13 @@ impl LeafKind {
 
     /// Layerable (§2.4): the leaf lets through what it does not reflect. Opaque leaves have
     /// throughput 0. A microfacet lobe with a conductor Fresnel is layerable only when its κ
-    /// is the constant 0 — the caller passes that fact as `kappa_zero`.
+    /// is the constant 0 — the caller passes that fact as `kappa_zero`; one with the F82
+    /// form is a metal (§4.4 `METAL`) and opaque.
     pub fn is_layerable(&self, kappa_zero: impl Fn(Reg) -> bool) -> bool {
         match self {
             LeafKind::MicrofacetR { fresnel, .. } => match fresnel {
                 Fresnel::Conductor { kappa, .. } => kappa_zero(*kappa),
+                Fresnel::F82 { .. } => false,
                 _ => true,
             },
             LeafKind::Dielectric { mode, .. } => *mode == DielectricMode::R,
