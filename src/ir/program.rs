@@ -122,7 +122,7 @@ pub enum OpCode {
     Max,
     /// clamp(a, imm[0], imm[1]).
     Clamp,
-    /// lerp(a, b, t) = a + (b − a) t.
+    /// lerp(a, b, t) = (1 − t) a + t b.
     Lerp,
     /// c ≠ 0 ? a : b, per lane.
     Select,
@@ -762,8 +762,9 @@ fn eval_op(op: &Op, regs: &[Vec3], ctx: &RunContext<'_>) -> Vec3 {
         Max => r(0).max(r(1)),
         Clamp => lanes(r(0), |a| a.max(op.imm[0]).min(op.imm[1])),
         Lerp => {
+            // (1 − t)a + t b is exact at both ends (t = 0 gives a, t = 1 gives b).
             let (a, b, t) = (r(0), r(1), r(2));
-            a + (b - a) * t
+            (Vec3::ONE - t) * a + t * b
         }
         Select => lanes3(r(0), r(1), r(2), |c, a, b| if c != 0.0 { a } else { b }),
         CmpEq => lanes2(r(0), r(1), |a, b| b2f(a == b)),
