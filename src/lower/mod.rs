@@ -430,6 +430,10 @@ pub fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
     let p = &mut b.prog;
     let r2 = p.mul(r, r);
     let alpha = p.clamp(r2, 1e-6, 1.0);
+    if p.constant(a) == Some(Vec3::ZERO) {
+        // Isotropic: one register for both widths.
+        return (alpha, alpha);
+    }
     let aa = p.un(crate::ir::OpCode::Abs, a);
     let cap = p.constf(0.98);
     let aa = p.bin(crate::ir::OpCode::Min, aa, cap);
