@@ -292,3 +292,19 @@ fn patterns_are_fused_into_the_program() {
     assert_eq!(at(0.6, 0.1), Vec3::new(0.0, 0.0, 1.0), "s = 2u crosses a cell");
     assert_eq!(at(0.6, 1.1), Vec3::new(1.0, 0.0, 0.0));
 }
+
+/// The generated benchmark scene lowers completely, sequentially and in parallel alike.
+#[test]
+fn generated_scene_lowers_in_parallel_like_sequentially() {
+    use vstructc::lower::{lower_many, scene::layered_scene};
+    let (g, t) = layered_scene(40);
+    let a = lower_many(&g, &NoDefinitions, &t, false);
+    let b = lower_many(&g, &NoDefinitions, &t, true);
+    assert_eq!(a.len(), 40);
+    for ((ra, _), (rb, _)) in a.iter().zip(&b) {
+        let (ia, ib) = (ra.as_ref().unwrap(), rb.as_ref().unwrap());
+        assert_eq!(print::ir_text(ia), print::ir_text(ib));
+        // Diffuse, specular and the top layer's clearcoat.
+        assert_eq!(ia.lobe_count(), 3, "{}", print::ir_text(ia));
+    }
+}

@@ -17,6 +17,7 @@ pub mod mia;
 pub mod patterns;
 pub mod physical;
 pub mod pxr;
+pub mod scene;
 pub mod vray;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
@@ -78,8 +79,8 @@ pub struct SimpleGraph {
 struct SimpleNode {
     handle: String,
     shader: String,
-    values: Vec<(String, Value)>,
-    conns: Vec<(String, usize, String)>,
+    values: HashMap<String, Value>,
+    conns: HashMap<String, (usize, String)>,
 }
 
 impl SimpleGraph {
@@ -92,16 +93,14 @@ impl SimpleGraph {
         self.nodes.push(SimpleNode {
             handle: handle.into(),
             shader: shader.into(),
-            values: Vec::new(),
-            conns: Vec::new(),
+            values: HashMap::new(),
+            conns: HashMap::new(),
         });
         self.nodes.len() - 1
     }
     /// Author a value (replacing an earlier one).
     pub fn set(&mut self, n: usize, param: &str, v: Value) -> &mut Self {
-        let vals = &mut self.nodes[n].values;
-        vals.retain(|(p, _)| p != param);
-        vals.push((param.into(), v));
+        self.nodes[n].values.insert(param.into(), v);
         self
     }
     /// Author a float.
@@ -116,11 +115,11 @@ impl SimpleGraph {
     pub fn setc(&mut self, n: usize, param: &str, c: [f32; 3]) -> &mut Self {
         self.set(n, param, Value::Triple(BaseType::Color, c))
     }
-    /// Connect `up.output` to `down.param`.
+    /// Connect `up.output` to `down.param` (replacing an earlier connection).
     pub fn connect(&mut self, down: usize, param: &str, up: usize, output: &str) -> &mut Self {
         self.nodes[down]
             .conns
-            .push((param.into(), up, output.into()));
+            .insert(param.into(), (up, output.into()));
         self
     }
     /// The id of the node with this handle.
@@ -138,18 +137,10 @@ impl Graph for SimpleGraph {
         &self.nodes[n].handle
     }
     fn value(&self, n: usize, param: &str) -> Option<&Value> {
-        self.nodes[n]
-            .values
-            .iter()
-            .find(|(p, _)| p == param)
-            .map(|(_, v)| v)
+        self.nodes[n].values.get(param)
     }
     fn connection(&self, n: usize, param: &str) -> Option<(usize, String)> {
-        self.nodes[n]
-            .conns
-            .iter()
-            .find(|(p, _, _)| p == param)
-            .map(|(_, u, o)| (*u, o.clone()))
+        self.nodes[n].conns.get(param).map(|(u, o)| (*u, o.clone()))
     }
     fn location(&self, _n: usize) -> Option<Location> {
         None
@@ -244,12 +235,12 @@ impl<'a, G: Graph> Lower<'a, G> {
 
     /// The definition of a node's shader (cached).
     pub fn definition(&mut self, n: G::Id) -> Option<Arc<Definition>> {
-        let shader = self.graph.shader(n).to_string();
-        if let Some(d) = self.def_cache.get(&shader) {
+        let shader = self.graph.shader(n);
+        if let Some(d) = self.def_cache.get(shader) {
             return d.clone();
         }
-        let d = self.defs.definition(&shader);
-        self.def_cache.insert(shader, d.clone());
+        let d = self.defs.definition(shader);
+        self.def_cache.insert(shader.to_string(), d.clone());
         d
     }
 
