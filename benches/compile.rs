@@ -1,9 +1,9 @@
 //! Compile (lower) the generated layered scene: 3 PxrLayers → PxrLayerMixer →
 //! PxrLayerSurface per material, sequentially and with rayon across materials.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use vstructc::lower::{lower_many, scene::layered_scene, NoDefinitions};
+use vstructc::lower::{NoDefinitions, lower_many, scene::layered_scene};
 
 fn bench(c: &mut Criterion) {
     let (g, terminals) = layered_scene(10_000);

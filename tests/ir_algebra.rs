@@ -7,7 +7,7 @@ use proptest::prelude::*;
 use vstructc::ir::algebra::{flatten, leaf_throughput};
 use vstructc::ir::passes::topo_from_root;
 use vstructc::ir::{
-    Fresnel, FrameSlot, IrBuilder, Leaf, LeafKind, Masking, MaterialIr, Node, NodeId,
+    FrameSlot, Fresnel, IrBuilder, Leaf, LeafKind, Masking, MaterialIr, Node, NodeId,
     ProgramBuilder, RecipeId, TintMode,
 };
 
@@ -15,7 +15,12 @@ use vstructc::ir::{
 /// pretend response value f_k|μ_i| for one fixed L.
 #[derive(Debug, Clone)]
 enum T {
-    Leaf { layerable: bool, tint: Vec3, e: Vec3, resp: Vec3 },
+    Leaf {
+        layerable: bool,
+        tint: Vec3,
+        e: Vec3,
+        resp: Vec3,
+    },
     Layer(Box<T>, Box<T>, TintMode),
     Mix(Box<T>, Box<T>, Vec3),
     Add(Box<T>, Box<T>),
@@ -36,15 +41,27 @@ fn mode() -> impl Strategy<Value = TintMode> {
 }
 
 fn leaf() -> impl Strategy<Value = T> {
-    (any::<bool>(), unit3(), unit3(), unit3())
-        .prop_map(|(layerable, tint, e, resp)| T::Leaf { layerable, tint, e, resp })
+    (any::<bool>(), unit3(), unit3(), unit3()).prop_map(|(layerable, tint, e, resp)| T::Leaf {
+        layerable,
+        tint,
+        e,
+        resp,
+    })
 }
 
 fn tree() -> impl Strategy<Value = T> {
     leaf().prop_recursive(5, 24, 2, |inner| {
         prop_oneof![
-            (inner.clone(), inner.clone(), mode()).prop_map(|(a, b, m)| T::Layer(Box::new(a), Box::new(b), m)),
-            (inner.clone(), inner.clone(), unit3()).prop_map(|(a, b, m)| T::Mix(Box::new(a), Box::new(b), m)),
+            (inner.clone(), inner.clone(), mode()).prop_map(|(a, b, m)| T::Layer(
+                Box::new(a),
+                Box::new(b),
+                m
+            )),
+            (inner.clone(), inner.clone(), unit3()).prop_map(|(a, b, m)| T::Mix(
+                Box::new(a),
+                Box::new(b),
+                m
+            )),
             (inner.clone(), inner.clone()).prop_map(|(a, b)| T::Add(Box::new(a), Box::new(b))),
             (inner, unit3()).prop_map(|(a, c)| T::Mul(Box::new(a), c)),
         ]
@@ -64,29 +81,60 @@ fn build(t: &T) -> Built {
     let mut nodes = Vec::new();
     let mut e = Vec::new();
     let mut resp = Vec::new();
-    fn go(t: &T, p: &mut ProgramBuilder, nodes: &mut Vec<Node>, e: &mut Vec<Vec3>, resp: &mut Vec<Vec3>) -> NodeId {
+    fn go(
+        t: &T,
+        p: &mut ProgramBuilder,
+        nodes: &mut Vec<Node>,
+        e: &mut Vec<Vec3>,
+        resp: &mut Vec<Vec3>,
+    ) -> NodeId {
         let n = match t {
-            T::Leaf { layerable, tint, e: ee, resp: rr } => {
+            T::Leaf {
+                layerable,
+                tint,
+                e: ee,
+                resp: rr,
+            } => {
                 let one = p.constf(1.0);
                 let kind = if *layerable {
-                    LeafKind::MicrofacetR { alpha_x: one, alpha_y: one, fresnel: Fresnel::One, masking: Masking::HeightCorrelated, comp: one }
+                    LeafKind::MicrofacetR {
+                        alpha_x: one,
+                        alpha_y: one,
+                        fresnel: Fresnel::One,
+                        masking: Masking::HeightCorrelated,
+                        comp: one,
+                    }
                 } else {
                     LeafKind::Lambert { albedo: one }
                 };
                 let label = e.len().to_string();
                 e.push(*ee);
                 resp.push(*rr);
-                Node::Leaf(Leaf { kind, tint: p.constant3(*tint), ttint: one, frame: 0, label })
+                Node::Leaf(Leaf {
+                    kind,
+                    tint: p.constant3(*tint),
+                    ttint: one,
+                    frame: 0,
+                    label,
+                })
             }
             T::Layer(a, b, m) => {
                 let a = go(a, p, nodes, e, resp);
                 let b = go(b, p, nodes, e, resp);
-                Node::Layer { top: a, base: b, mode: *m }
+                Node::Layer {
+                    top: a,
+                    base: b,
+                    mode: *m,
+                }
             }
             T::Mix(a, b, m) => {
                 let a = go(a, p, nodes, e, resp);
                 let b = go(b, p, nodes, e, resp);
-                Node::Mix { a, b, m: p.constant3(*m) }
+                Node::Mix {
+                    a,
+                    b,
+                    m: p.constant3(*m),
+                }
             }
             T::Add(a, b) => {
                 let a = go(a, p, nodes, e, resp);
@@ -95,7 +143,10 @@ fn build(t: &T) -> Built {
             }
             T::Mul(a, c) => {
                 let a = go(a, p, nodes, e, resp);
-                Node::Multiply { f: a, c: p.constant3(*c) }
+                Node::Multiply {
+                    f: a,
+                    c: p.constant3(*c),
+                }
             }
         };
         nodes.push(n);
@@ -117,8 +168,17 @@ fn build(t: &T) -> Built {
 /// Independent recursive (response, throughput) of §2.2 for inherited `mode`.
 fn rt(t: &T, mode: TintMode) -> (Vec3, Vec3) {
     match t {
-        T::Leaf { layerable, tint, e, resp } => {
-            let thr = if *layerable { leaf_throughput(mode, *tint, Vec3::ONE, *e) } else { Vec3::ZERO };
+        T::Leaf {
+            layerable,
+            tint,
+            e,
+            resp,
+        } => {
+            let thr = if *layerable {
+                leaf_throughput(mode, *tint, Vec3::ONE, *e)
+            } else {
+                Vec3::ZERO
+            };
             (*tint * *resp, thr)
         }
         T::Layer(a, b, m) => {
@@ -139,7 +199,10 @@ fn rt(t: &T, mode: TintMode) -> (Vec3, Vec3) {
         }
         T::Mul(a, c) => {
             let (ra, ta) = rt(a, mode);
-            (*c * ra, (Vec3::ONE - *c * (Vec3::ONE - ta)).clamp(Vec3::ZERO, Vec3::ONE))
+            (
+                *c * ra,
+                (Vec3::ONE - *c * (Vec3::ONE - ta)).clamp(Vec3::ZERO, Vec3::ONE),
+            )
         }
     }
 }
@@ -153,7 +216,9 @@ fn flat_rt(b: &Built) -> (Vec3, Vec3, Vec<(String, Vec3)>) {
     let mut r = Vec3::ZERO;
     let mut ws = Vec::new();
     for l in &flat.lobes {
-        let Node::Leaf(leaf) = &b.ir.nodes[l.node.index()] else { panic!() };
+        let Node::Leaf(leaf) = &b.ir.nodes[l.node.index()] else {
+            panic!()
+        };
         let k: usize = leaf.label.parse().unwrap();
         r += l.weight * b.resp[k];
         ws.push((leaf.label.clone(), l.weight));
@@ -167,7 +232,12 @@ fn close(a: Vec3, b: Vec3) -> bool {
 }
 
 fn lf(layerable: bool, tint: Vec3, e: Vec3, resp: Vec3) -> T {
-    T::Leaf { layerable, tint, e, resp }
+    T::Leaf {
+        layerable,
+        tint,
+        e,
+        resp,
+    }
 }
 
 proptest! {
@@ -259,7 +329,10 @@ proptest! {
 #[test]
 fn multiply_by_zero_removes_the_lobe() {
     let t = T::Add(
-        Box::new(T::Mul(Box::new(lf(false, Vec3::ONE, Vec3::ONE, Vec3::ONE)), Vec3::ZERO)),
+        Box::new(T::Mul(
+            Box::new(lf(false, Vec3::ONE, Vec3::ONE, Vec3::ONE)),
+            Vec3::ZERO,
+        )),
         Box::new(lf(false, Vec3::splat(0.5), Vec3::ONE, Vec3::ONE)),
     );
     let (_, _, w) = flat_rt(&build(&t));
@@ -299,11 +372,25 @@ fn tint_modes() {
     let tint = Vec3::new(1.0, 0.5, 0.0);
     let e = Vec3::new(0.5, 0.5, 0.5);
     let tt = Vec3::ONE;
-    assert_eq!(leaf_throughput(TintMode::Rgb, tint, tt, e), Vec3::new(0.5, 0.75, 1.0));
-    assert_eq!(leaf_throughput(TintMode::Gray, tint, tt, e), Vec3::splat(0.5));
+    assert_eq!(
+        leaf_throughput(TintMode::Rgb, tint, tt, e),
+        Vec3::new(0.5, 0.75, 1.0)
+    );
+    assert_eq!(
+        leaf_throughput(TintMode::Gray, tint, tt, e),
+        Vec3::splat(0.5)
+    );
     let l = 1.0 - (0.2126 * 0.5 + 0.7152 * 0.25);
-    assert!((leaf_throughput(TintMode::Luminance, tint, tt, e) - Vec3::splat(l)).abs().max_element() < 1e-6);
-    assert_eq!(leaf_throughput(TintMode::MaxChannel, tint, tt, e), Vec3::splat(0.5));
+    assert!(
+        (leaf_throughput(TintMode::Luminance, tint, tt, e) - Vec3::splat(l))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    assert_eq!(
+        leaf_throughput(TintMode::MaxChannel, tint, tt, e),
+        Vec3::splat(0.5)
+    );
     // Transmission tint filters everything below.
     let coat = Vec3::new(1.0, 0.5, 0.25);
     assert_eq!(leaf_throughput(TintMode::Gray, tint, coat, e), coat * 0.5);
@@ -328,5 +415,10 @@ fn too_many_lobes_is_lw010() {
         let l = b.simple_leaf(LeafKind::Lambert { albedo: a }, "d");
         root = b.add(root, l);
     }
-    assert_eq!(b.finish("ok", RecipeId::Custom, root).unwrap().max_static_lobes, 16);
+    assert_eq!(
+        b.finish("ok", RecipeId::Custom, root)
+            .unwrap()
+            .max_static_lobes,
+        16
+    );
 }

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use vstructc::diag::Diagnostics;
 use vstructc::ir::{Leaf, MaterialIr, Node};
-use vstructc::lower::{lower_node, NoDefinitions, SimpleGraph};
+use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 
 fn lower(g: &SimpleGraph, n: usize) -> MaterialIr {
     let mut d = Diagnostics::new();
@@ -110,7 +110,11 @@ fn mia_four_weights_against_the_pseudocode() {
                 }
                 refract = refract.map(|r| r * (1.0 - t0));
                 let r = if metal == 1 {
-                    [reflect[0] * dcol[0], reflect[1] * dcol[1], reflect[2] * dcol[2]]
+                    [
+                        reflect[0] * dcol[0],
+                        reflect[1] * dcol[1],
+                        reflect[2] * dcol[2],
+                    ]
                 } else {
                     reflect
                 };
@@ -123,7 +127,10 @@ fn mia_four_weights_against_the_pseudocode() {
                     ("translucency", transl),
                 ] {
                     let got = w_of(&ws, label);
-                    assert!(close(got, v(want), 2e-6), "{label} metal={metal} fresnel={fresnel} mu={mu}: {got} vs {want:?}");
+                    assert!(
+                        close(got, v(want), 2e-6),
+                        "{label} metal={metal} fresnel={fresnel} mu={mu}: {got} vs {want:?}"
+                    );
                 }
             }
         }
@@ -204,20 +211,34 @@ fn physical_six_weights_against_direct_formula() {
                         let ws = weights(&ir, 0.6, &albedo);
                         let f = |x: f32| x as f64;
                         let k = 1.0 - f(w_r) * f(e_r);
-                        let coat = |ch: usize| (1.0 - f(w_c)) + f(w_c) * f(coat_color[ch]) * (1.0 - f(e_c));
-                        let expect = |s: f64| Vec3::new((s * coat(0)) as f32, (s * coat(1)) as f32, (s * coat(2)) as f32);
+                        let coat = |ch: usize| {
+                            (1.0 - f(w_c)) + f(w_c) * f(coat_color[ch]) * (1.0 - f(e_c))
+                        };
+                        let expect = |s: f64| {
+                            Vec3::new(
+                                (s * coat(0)) as f32,
+                                (s * coat(1)) as f32,
+                                (s * coat(2)) as f32,
+                            )
+                        };
                         let diel = 1.0 - f(m);
                         let want = [
                             ("reflection", expect(f(w_r) * diel)),
                             ("transmission", expect(k * f(w_t) * diel)),
                             ("sss", expect(k * (1.0 - f(w_t)) * f(w_s) * diel)),
-                            ("diffuse", expect(k * (1.0 - f(w_t)) * (1.0 - f(w_s)) * f(w_b) * diel)),
+                            (
+                                "diffuse",
+                                expect(k * (1.0 - f(w_t)) * (1.0 - f(w_s)) * f(w_b) * diel),
+                            ),
                             ("metal", expect(f(w_r) * f(m))),
                             ("coat", Vec3::splat(w_c)),
                         ];
                         for (label, v) in want {
                             let got = w_of(&ws, label);
-                            assert!(close(got, v, 2e-6), "{label} at w_r={w_r} w_t={w_t} w_s={w_s} m={m} w_c={w_c}: {got} vs {v}");
+                            assert!(
+                                close(got, v, 2e-6),
+                                "{label} at w_r={w_r} w_t={w_t} w_s={w_s} m={m} w_c={w_c}: {got} vs {v}"
+                            );
                             checked += 1;
                         }
                     }
@@ -236,19 +257,31 @@ fn vray_sheen_over_diffuse_formula() {
     let mut g = SimpleGraph::new();
     let n = g.node("v", "VRayMtl");
     let sheen = [0.8f32, 0.5, 0.2];
-    g.setc(n, "sheen_color", sheen).setc(n, "diffuse", [0.4, 0.5, 0.6]);
+    g.setc(n, "sheen_color", sheen)
+        .setc(n, "diffuse", [0.4, 0.5, 0.6]);
     let ir = lower(&g, n);
     for e in [0.1f32, 0.3, 0.7] {
-        let ws = weights(&ir, 0.5, &|l| if l == "sheen" { Vec3::splat(e) } else { Vec3::ONE });
+        let ws = weights(&ir, 0.5, &|l| {
+            if l == "sheen" {
+                Vec3::splat(e)
+            } else {
+                Vec3::ONE
+            }
+        });
         let s = Vec3::from_array(sheen);
         assert!(close(w_of(&ws, "sheen"), s, 1e-7));
-        assert!(close(w_of(&ws, "diffuse"), Vec3::ONE - s * e, 1e-6), "{ws:?}");
+        assert!(
+            close(w_of(&ws, "diffuse"), Vec3::ONE - s * e, 1e-6),
+            "{ws:?}"
+        );
     }
     // The diffuse colour is the lobe's albedo, not part of its weight.
     let d = ir.leaves().find(|(_, l)| l.label == "diffuse").unwrap().1;
     let regs = ir.run_program(None, 1.0);
     match d.kind {
-        vstructc::ir::LeafKind::Lambert { albedo } => assert_eq!(regs[albedo.index()], Vec3::new(0.4, 0.5, 0.6)),
+        vstructc::ir::LeafKind::Lambert { albedo } => {
+            assert_eq!(regs[albedo.index()], Vec3::new(0.4, 0.5, 0.6))
+        }
         k => panic!("{k:?}"),
     }
 }
@@ -257,7 +290,9 @@ fn vray_sheen_over_diffuse_formula() {
 fn vray_metalness_one_removes_the_dielectric_stack() {
     let mut g = SimpleGraph::new();
     let n = g.node("v", "VRayMtl");
-    g.setc(n, "reflect", [1.0; 3]).setf(n, "metalness", 1.0).setc(n, "sheen_color", [0.5; 3]);
+    g.setc(n, "reflect", [1.0; 3])
+        .setf(n, "metalness", 1.0)
+        .setc(n, "sheen_color", [0.5; 3]);
     let ir = lower(&g, n);
     let labels: Vec<_> = ir.leaves().map(|(_, l)| l.label.clone()).collect();
     assert_eq!(labels, ["metal"]);

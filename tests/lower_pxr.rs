@@ -1,10 +1,12 @@
 //! PxrSurface / PxrLayerSurface lowering with PxrLayer and PxrLayerMixer interpreted
 //! (closures.md §4.1, §4.2, §5.8).
 
+// Colours are written exactly as the fixture RIB writes them.
+#![allow(clippy::excessive_precision)]
 use glam::Vec3;
 use vstructc::diag::Diagnostics;
-use vstructc::ir::{print, LeafKind, MaterialIr, Node, SimpleAlbedo};
-use vstructc::lower::{lower_node, NoDefinitions, SimpleGraph};
+use vstructc::ir::{LeafKind, MaterialIr, Node, SimpleAlbedo, print};
+use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 
 /// The golden network of vstruct.md §12 in its resolved form, built by hand: two layers
 /// (green base, red layer 1), a mixer whose layer-1 mask comes from PxrThreshold1, and the
@@ -15,31 +17,62 @@ fn golden() -> (SimpleGraph, usize) {
     let l1 = g.node("PxrLayer1", "PxrLayer");
     let l2 = g.node("PxrLayer2", "PxrLayer");
     for (l, dc, fc) in [
-        (l1, [0.00967446715, 0.179702222, 0.0572573431], [0.0, 0.0, 0.0]),
-        (l2, [0.179702222, 0.0125546111, 0.0125546111], [0.179702222, 0.0125546111, 0.0125546111]),
+        (
+            l1,
+            [0.00967446715, 0.179702222, 0.0572573431],
+            [0.0, 0.0, 0.0],
+        ),
+        (
+            l2,
+            [0.179702222, 0.0125546111, 0.0125546111],
+            [0.179702222, 0.0125546111, 0.0125546111],
+        ),
     ] {
         g.seti(l, "enableDiffuse", 1).seti(l, "enableSpecular", 1);
         g.setf(l, "diffuseGain", 1.0).setc(l, "diffuseColor", dc);
-        g.setf(l, "specularGain", 1.0).setc(l, "specularFaceColor", fc);
+        g.setf(l, "specularGain", 1.0)
+            .setc(l, "specularFaceColor", fc);
         g.setc(l, "specularEdgeColor", [1.0; 3]);
         g.setf(l, "specularRoughness", 0.2);
     }
     let mx = g.node("PxrLayerMixer1", "PxrLayerMixer");
     g.connect(mx, "layer1Mask", thr, "resultR");
     let members = [
-        "diffuseGain", "diffuseColor", "diffuseRoughness", "diffuseBackColor",
-        "diffuseTransmitGain", "diffuseTransmitColor", "specularFaceColor",
-        "specularEdgeColor", "specularIor", "specularExtinctionCoeff", "specularRoughness",
+        "diffuseGain",
+        "diffuseColor",
+        "diffuseRoughness",
+        "diffuseBackColor",
+        "diffuseTransmitGain",
+        "diffuseTransmitColor",
+        "specularFaceColor",
+        "specularEdgeColor",
+        "specularIor",
+        "specularExtinctionCoeff",
+        "specularRoughness",
         "specularAnisotropy",
     ];
     for (prefix, l) in [("baselayer", l1), ("layer1", l2)] {
         for m in members {
-            g.connect(mx, &format!("{prefix}_{m}"), l, &format!("pxrMaterialOut_{m}"));
+            g.connect(
+                mx,
+                &format!("{prefix}_{m}"),
+                l,
+                &format!("pxrMaterialOut_{m}"),
+            );
         }
         for x in ["Diffuse", "Specular"] {
             g.seti(mx, &format!("{prefix}_enable{x}"), 1);
         }
-        for x in ["RoughSpecular", "Clearcoat", "Iridescence", "Fuzz", "RR", "Subsurface", "Singlescatter", "Glow"] {
+        for x in [
+            "RoughSpecular",
+            "Clearcoat",
+            "Iridescence",
+            "Fuzz",
+            "RR",
+            "Subsurface",
+            "Singlescatter",
+            "Glow",
+        ] {
             g.seti(mx, &format!("{prefix}_enable{x}"), 0);
         }
     }
@@ -68,33 +101,61 @@ fn golden_network_lowers_to_lambert_and_one_schlick_specular() {
     assert_eq!(d.count("LW002"), 1);
     let leaves: Vec<_> = ir.leaves().map(|(_, l)| l.kind).collect();
     assert_eq!(leaves.len(), 2, "{leaves:?}");
-    assert!(matches!(leaves[..], [LeafKind::MicrofacetR { .. }, LeafKind::Lambert { .. }] | [LeafKind::Lambert { .. }, LeafKind::MicrofacetR { .. }]));
-    let _ = Node::Add { a: vstructc::ir::NodeId(0), b: vstructc::ir::NodeId(0) };
+    assert!(matches!(
+        leaves[..],
+        [LeafKind::MicrofacetR { .. }, LeafKind::Lambert { .. }]
+            | [LeafKind::Lambert { .. }, LeafKind::MicrofacetR { .. }]
+    ));
+    let _ = Node::Add {
+        a: vstructc::ir::NodeId(0),
+        b: vstructc::ir::NodeId(0),
+    };
 }
 
 /// §5.8: with slot value 0 the surface shows PxrLayer1 (green diffuse, black-faced
 /// specular with white edge, α = 0.04); with 1 it shows PxrLayer2.
 #[test]
 fn golden_network_slot_values_select_the_layers() {
-    use vstructc::ir::passes::specialize;
     use vstructc::ir::Fresnel;
+    use vstructc::ir::passes::specialize;
     let (g, s) = golden();
     let (ir, _) = lower(&g, s);
     let cases = [
-        (0.0, Vec3::new(0.00967446715, 0.179702222, 0.0572573431), Vec3::ZERO),
-        (1.0, Vec3::new(0.179702222, 0.0125546111, 0.0125546111), Vec3::new(0.179702222, 0.0125546111, 0.0125546111)),
+        (
+            0.0,
+            Vec3::new(0.00967446715, 0.179702222, 0.0572573431),
+            Vec3::ZERO,
+        ),
+        (
+            1.0,
+            Vec3::new(0.179702222, 0.0125546111, 0.0125546111),
+            Vec3::new(0.179702222, 0.0125546111, 0.0125546111),
+        ),
     ];
     for (slot, diffuse, f0) in cases {
         // Evaluating with the slot value and specialising must agree.
         let spec = specialize(&ir, 0, Vec3::splat(slot)).unwrap();
         assert!(spec.inputs.is_empty());
-        assert_eq!(spec.program.ops.iter().filter(|o| o.code != vstructc::ir::OpCode::Const).count(), 0, "all constant");
+        assert_eq!(
+            spec.program
+                .ops
+                .iter()
+                .filter(|o| o.code != vstructc::ir::OpCode::Const)
+                .count(),
+            0,
+            "all constant"
+        );
         for m in [&ir, &spec] {
             let regs = m.run_program(Some(&[Vec3::splat(slot)][..m.inputs.len()]), 1.0);
             for (_, leaf) in m.leaves() {
                 match leaf.kind {
                     LeafKind::Lambert { albedo } => assert_eq!(regs[albedo.index()], diffuse),
-                    LeafKind::MicrofacetR { alpha_x, alpha_y, fresnel: Fresnel::Schlick { f0: r0, f90, q }, .. } => {
+                    LeafKind::MicrofacetR {
+                        alpha_x,
+                        alpha_y,
+                        fresnel: Fresnel::Schlick { f0: r0, f90, q },
+                        ..
+                    } => {
                         assert_eq!(regs[r0.index()], f0);
                         assert_eq!(regs[f90.index()], Vec3::ONE);
                         assert_eq!(regs[q.index()], Vec3::splat(5.0));
@@ -109,20 +170,37 @@ fn golden_network_slot_values_select_the_layers() {
 }
 
 const LOBE_MEMBERS: [&str; 13] = [
-    "diffuseGain", "diffuseColor", "diffuseRoughness", "specularFaceColor", "specularEdgeColor",
-    "specularRoughness", "specularIor", "specularAnisotropy", "clearcoatFaceColor",
-    "clearcoatEdgeColor", "clearcoatRoughness", "clearcoatThickness", "clearcoatAbsorptionTint",
+    "diffuseGain",
+    "diffuseColor",
+    "diffuseRoughness",
+    "specularFaceColor",
+    "specularEdgeColor",
+    "specularRoughness",
+    "specularIor",
+    "specularAnisotropy",
+    "clearcoatFaceColor",
+    "clearcoatEdgeColor",
+    "clearcoatRoughness",
+    "clearcoatThickness",
+    "clearcoatAbsorptionTint",
 ];
 
 fn add_layer(g: &mut SimpleGraph, name: &str, base: f32) -> usize {
     let l = g.node(name, "PxrLayer");
-    g.seti(l, "enableDiffuse", 1).seti(l, "enableSpecular", 1).seti(l, "enableClearcoat", 1);
-    g.setf(l, "diffuseGain", 0.9 - base).setc(l, "diffuseColor", [base, 0.2, 0.3]);
+    g.seti(l, "enableDiffuse", 1)
+        .seti(l, "enableSpecular", 1)
+        .seti(l, "enableClearcoat", 1);
+    g.setf(l, "diffuseGain", 0.9 - base)
+        .setc(l, "diffuseColor", [base, 0.2, 0.3]);
     g.setf(l, "diffuseRoughness", base);
-    g.setf(l, "specularGain", 1.0).setc(l, "specularFaceColor", [0.04 + base, 0.04, 0.04]);
-    g.setc(l, "specularEdgeColor", [1.0; 3]).setf(l, "specularRoughness", 0.1 + base);
-    g.setf(l, "clearcoatGain", 1.0).setc(l, "clearcoatFaceColor", [0.05; 3]);
-    g.setc(l, "clearcoatEdgeColor", [0.5 + base; 3]).setf(l, "clearcoatRoughness", base);
+    g.setf(l, "specularGain", 1.0)
+        .setc(l, "specularFaceColor", [0.04 + base, 0.04, 0.04]);
+    g.setc(l, "specularEdgeColor", [1.0; 3])
+        .setf(l, "specularRoughness", 0.1 + base);
+    g.setf(l, "clearcoatGain", 1.0)
+        .setc(l, "clearcoatFaceColor", [0.05; 3]);
+    g.setc(l, "clearcoatEdgeColor", [0.5 + base; 3])
+        .setf(l, "clearcoatRoughness", base);
     l
 }
 
@@ -141,7 +219,8 @@ fn mixer_graph(mask: Option<f32>, direct: Option<usize>, flags: [i32; 2]) -> (Si
         }
         None => {
             let mx = g.node("mixer", "PxrLayerMixer");
-            g.setf(mx, "layer1Mask", mask.unwrap_or(1.0)).seti(mx, "layer1Enabled", 1);
+            g.setf(mx, "layer1Mask", mask.unwrap_or(1.0))
+                .seti(mx, "layer1Enabled", 1);
             for (prefix, l, flag) in [("baselayer", l1, flags[0]), ("layer1", l2, flags[1])] {
                 for m in LOBE_MEMBERS {
                     // As resolution does: the base's coat members are connected only when
@@ -149,7 +228,12 @@ fn mixer_graph(mask: Option<f32>, direct: Option<usize>, flags: [i32; 2]) -> (Si
                     if prefix == "baselayer" && flag == 0 && m.starts_with("clearcoat") {
                         continue;
                     }
-                    g.connect(mx, &format!("{prefix}_{m}"), l, &format!("pxrMaterialOut_{m}"));
+                    g.connect(
+                        mx,
+                        &format!("{prefix}_{m}"),
+                        l,
+                        &format!("pxrMaterialOut_{m}"),
+                    );
                 }
                 // Flags as resolution's `set` actions write them.
                 g.seti(mx, &format!("{prefix}_enableDiffuse"), 1);
@@ -195,7 +279,11 @@ fn enable_flags_written_by_set_prune_lobes() {
         ir.leaves().filter(|(_, l)| l.label == "clearcoat").count()
     };
     assert_eq!(count([1, 1]), 1);
-    assert_eq!(count([0, 1]), 1, "the top layer's coat shows through mask 1");
+    assert_eq!(
+        count([0, 1]),
+        1,
+        "the top layer's coat shows through mask 1"
+    );
     // Both flags 0: the mixer's clearcoat colours stay at 0 and the lobe is removed.
     assert_eq!(count([0, 0]), 0);
     // Base on, top off with mask 1: the base's coat stays (the top does not participate).
@@ -207,7 +295,13 @@ fn enable_flags_written_by_set_prune_lobes() {
         let regs = ir.run_program(None, 1.0);
         ir.leaves()
             .filter(|(_, l)| l.label == "clearcoat")
-            .map(|(_, l)| l.kind.params().iter().map(|(n, r)| (n.to_string(), regs[r.index()])).collect::<Vec<_>>())
+            .map(|(_, l)| {
+                l.kind
+                    .params()
+                    .iter()
+                    .map(|(n, r)| (n.to_string(), regs[r.index()]))
+                    .collect::<Vec<_>>()
+            })
             .collect::<Vec<_>>()
     };
     assert_eq!(cc(&ir), cc(&irb));
@@ -218,11 +312,20 @@ fn enable_flags_written_by_set_prune_lobes() {
 fn layer_outputs_fold_gains_and_rename_rr() {
     let mut g = SimpleGraph::new();
     let l = g.node("l", "PxrLayer");
-    g.seti(l, "enableSpecular", 1).setf(l, "specularGain", 0.5).setc(l, "specularFaceColor", [0.2, 0.4, 0.6]);
+    g.seti(l, "enableSpecular", 1)
+        .setf(l, "specularGain", 0.5)
+        .setc(l, "specularFaceColor", [0.2, 0.4, 0.6]);
     g.setc(l, "specularEdgeColor", [1.0; 3]);
-    g.seti(l, "enableRR", 1).setf(l, "rrRefractionGain", 1.0).setf(l, "rrIor", 1.33);
+    g.seti(l, "enableRR", 1)
+        .setf(l, "rrRefractionGain", 1.0)
+        .setf(l, "rrIor", 1.33);
     let s = g.node("s", "PxrSurface");
-    for m in ["specularFaceColor", "specularEdgeColor", "refractionGain", "glassIor"] {
+    for m in [
+        "specularFaceColor",
+        "specularEdgeColor",
+        "refractionGain",
+        "glassIor",
+    ] {
         g.connect(s, m, l, &format!("pxrMaterialOut_{m}"));
     }
     let (ir, _) = lower(&g, s);
@@ -230,7 +333,10 @@ fn layer_outputs_fold_gains_and_rename_rr() {
     let mut seen = 0;
     for (_, leaf) in ir.leaves() {
         match leaf.kind {
-            LeafKind::MicrofacetR { fresnel: vstructc::ir::Fresnel::Schlick { f0, f90, .. }, .. } if leaf.label == "specular" => {
+            LeafKind::MicrofacetR {
+                fresnel: vstructc::ir::Fresnel::Schlick { f0, f90, .. },
+                ..
+            } if leaf.label == "specular" => {
                 assert_eq!(regs[f0.index()], Vec3::new(0.1, 0.2, 0.3));
                 assert_eq!(regs[f90.index()], Vec3::splat(0.5));
                 seen += 1;
@@ -274,22 +380,39 @@ fn patterns_are_fused_into_the_program() {
     g.setf(uv, "scaleS", 2.0);
     let ch = g.node("ch", "vsChecker");
     g.connect(ch, "manifold", uv, "result");
-    g.setf(ch, "frequency", 1.0).setc(ch, "colorA", [1.0, 0.0, 0.0]).setc(ch, "colorB", [0.0, 0.0, 1.0]);
+    g.setf(ch, "frequency", 1.0)
+        .setc(ch, "colorA", [1.0, 0.0, 0.0])
+        .setc(ch, "colorB", [0.0, 0.0, 1.0]);
     let s = g.node("s", "PxrSurface");
     g.connect(s, "diffuseColor", ch, "resultRGB");
     let (ir, d) = lower(&g, s);
     assert!(ir.inputs.is_empty());
     assert_eq!(d.count("LW002"), 0);
-    let albedo = ir.leaves().find_map(|(_, l)| match l.kind {
-        LeafKind::Lambert { albedo } => Some(albedo),
-        _ => None,
-    }).unwrap();
+    let albedo = ir
+        .leaves()
+        .find_map(|(_, l)| match l.kind {
+            LeafKind::Lambert { albedo } => Some(albedo),
+            _ => None,
+        })
+        .unwrap();
     let at = |u: f32, v: f32| {
-        let regs = ir.program.run(&RunContext { inputs: &[], mu_o: &[1.0], globals: Globals { u, v, ..Globals::default() } });
+        let regs = ir.program.run(&RunContext {
+            inputs: &[],
+            mu_o: &[1.0],
+            globals: Globals {
+                u,
+                v,
+                ..Globals::default()
+            },
+        });
         regs[albedo.index()]
     };
     assert_eq!(at(0.1, 0.1), Vec3::new(1.0, 0.0, 0.0));
-    assert_eq!(at(0.6, 0.1), Vec3::new(0.0, 0.0, 1.0), "s = 2u crosses a cell");
+    assert_eq!(
+        at(0.6, 0.1),
+        Vec3::new(0.0, 0.0, 1.0),
+        "s = 2u crosses a cell"
+    );
     assert_eq!(at(0.6, 1.1), Vec3::new(1.0, 0.0, 0.0));
 }
 

@@ -3,8 +3,8 @@
 //! with `SimpleAlbedo` (smooth-surface Fresnel estimates), so they can be checked by hand.
 
 use vstructc::diag::Diagnostics;
-use vstructc::ir::{print, SimpleAlbedo};
-use vstructc::lower::{lower_node, NoDefinitions, SimpleGraph};
+use vstructc::ir::{SimpleAlbedo, print};
+use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 
 fn snap(name: &str, g: &SimpleGraph, n: usize) {
     let mut d = Diagnostics::new();
@@ -34,14 +34,21 @@ fn pxr_surface_defaults() {
 fn pxr_surface_all_lobes() {
     let (g, n) = one("PxrLayerSurface", |g, n| {
         g.setf(n, "diffuseRoughness", 0.3);
-        g.setc(n, "specularFaceColor", [0.04; 3]).setc(n, "specularEdgeColor", [1.0; 3]);
-        g.setc(n, "roughSpecularFaceColor", [0.02; 3]).setc(n, "roughSpecularEdgeColor", [0.5; 3]);
-        g.setc(n, "clearcoatFaceColor", [0.04; 3]).setc(n, "clearcoatEdgeColor", [1.0; 3]);
-        g.setf(n, "clearcoatThickness", 0.5).setc(n, "clearcoatAbsorptionTint", [0.8, 0.3, 0.1]);
-        g.setf(n, "fuzzGain", 0.5).setc(n, "fuzzColor", [0.9, 0.8, 0.7]);
+        g.setc(n, "specularFaceColor", [0.04; 3])
+            .setc(n, "specularEdgeColor", [1.0; 3]);
+        g.setc(n, "roughSpecularFaceColor", [0.02; 3])
+            .setc(n, "roughSpecularEdgeColor", [0.5; 3]);
+        g.setc(n, "clearcoatFaceColor", [0.04; 3])
+            .setc(n, "clearcoatEdgeColor", [1.0; 3]);
+        g.setf(n, "clearcoatThickness", 0.5)
+            .setc(n, "clearcoatAbsorptionTint", [0.8, 0.3, 0.1]);
+        g.setf(n, "fuzzGain", 0.5)
+            .setc(n, "fuzzColor", [0.9, 0.8, 0.7]);
         g.setf(n, "subsurfaceGain", 0.25);
-        g.setf(n, "refractionGain", 0.5).setf(n, "reflectionGain", 1.0);
-        g.setf(n, "glowGain", 0.1).setc(n, "glowColor", [1.0, 0.5, 0.0]);
+        g.setf(n, "refractionGain", 0.5)
+            .setf(n, "reflectionGain", 1.0);
+        g.setf(n, "glowGain", 0.1)
+            .setc(n, "glowColor", [1.0, 0.5, 0.0]);
         g.setf(n, "presence", 0.9);
     });
     snap("pxr_surface_all_lobes", &g, n);
@@ -50,9 +57,11 @@ fn pxr_surface_all_lobes() {
 #[test]
 fn pxr_surface_physical_fresnel_anisotropy_bump() {
     let (mut g, n) = one("PxrSurface", |g, n| {
-        g.seti(n, "specularFresnelMode", 1).setc(n, "specularIor", [0.183, 0.421, 1.373]);
+        g.seti(n, "specularFresnelMode", 1)
+            .setc(n, "specularIor", [0.183, 0.421, 1.373]);
         g.setc(n, "specularExtinctionCoeff", [3.424, 2.346, 1.770]);
-        g.setf(n, "specularAnisotropy", -0.5).seti(n, "specularModelType", 1);
+        g.setf(n, "specularAnisotropy", -0.5)
+            .seti(n, "specularModelType", 1);
         g.setf(n, "diffuseGain", 0.0);
     });
     let bump = g.node("bump", "PxrNormalMap");
@@ -63,8 +72,11 @@ fn pxr_surface_physical_fresnel_anisotropy_bump() {
 #[test]
 fn pxr_surface_thin_glass_and_diffuse_transmission() {
     let (g, n) = one("PxrSurface", |g, n| {
-        g.seti(n, "diffuseDoubleSided", 1).setf(n, "diffuseTransmitGain", 0.4);
-        g.setf(n, "refractionGain", 0.3).setf(n, "reflectionGain", 0.5).seti(n, "thinGlass", 1);
+        g.seti(n, "diffuseDoubleSided", 1)
+            .setf(n, "diffuseTransmitGain", 0.4);
+        g.setf(n, "refractionGain", 0.3)
+            .setf(n, "reflectionGain", 0.5)
+            .seti(n, "thinGlass", 1);
         g.setc(n, "refractionColor", [0.9, 1.0, 0.9]);
     });
     snap("pxr_surface_thin_glass_and_diffuse_transmission", &g, n);
@@ -77,12 +89,14 @@ fn pxr_surface_fused_patterns() {
     g.setf(uv, "scaleS", 4.0).setf(uv, "scaleT", 4.0);
     let ch = g.node("checker", "vsChecker");
     g.connect(ch, "manifold", uv, "result");
-    g.setc(ch, "colorA", [0.8, 0.1, 0.1]).setc(ch, "colorB", [0.1, 0.1, 0.8]);
+    g.setc(ch, "colorA", [0.8, 0.1, 0.1])
+        .setc(ch, "colorB", [0.1, 0.1, 0.8]);
     let noise = g.node("noise", "vsValueNoise");
     g.setf(noise, "frequency", 8.0);
     let remap = g.node("remap", "vsRemap");
     g.connect(remap, "input", noise, "resultRGB");
-    g.setf(remap, "outputMin", 0.1).setf(remap, "outputMax", 0.4);
+    g.setf(remap, "outputMin", 0.1)
+        .setf(remap, "outputMax", 0.4);
     let clamp = g.node("clamp", "vsClamp");
     g.connect(clamp, "input", remap, "resultRGB");
     g.setc(clamp, "max", [0.3; 3]);
@@ -108,12 +122,18 @@ fn vray_defaults() {
 #[test]
 fn vray_reflect_sheen_coat_refract() {
     let (g, n) = one("VRayMtl", |g, n| {
-        g.setc(n, "reflect", [1.0; 3]).setf(n, "reflect_glossiness", 0.7);
-        g.setc(n, "sheen_color", [0.3, 0.2, 0.1]).setf(n, "roughness", 0.5);
-        g.setf(n, "coat_amount", 0.5).setc(n, "coat_color", [0.9, 0.7, 0.5]).setf(n, "coat_glossiness", 0.9);
-        g.setc(n, "refract", [0.5, 0.5, 0.25]).setf(n, "metalness", 0.25);
+        g.setc(n, "reflect", [1.0; 3])
+            .setf(n, "reflect_glossiness", 0.7);
+        g.setc(n, "sheen_color", [0.3, 0.2, 0.1])
+            .setf(n, "roughness", 0.5);
+        g.setf(n, "coat_amount", 0.5)
+            .setc(n, "coat_color", [0.9, 0.7, 0.5])
+            .setf(n, "coat_glossiness", 0.9);
+        g.setc(n, "refract", [0.5, 0.5, 0.25])
+            .setf(n, "metalness", 0.25);
         g.setc(n, "self_illumination", [0.1, 0.0, 0.0]);
-        g.setf(n, "anisotropy", 0.5).setf(n, "anisotropy_rotation", 0.25);
+        g.setf(n, "anisotropy", 0.5)
+            .setf(n, "anisotropy_rotation", 0.25);
     });
     snap("vray_reflect_sheen_coat_refract", &g, n);
 }
@@ -121,9 +141,12 @@ fn vray_reflect_sheen_coat_refract() {
 #[test]
 fn vray_translucency_thin_opacity_no_fresnel() {
     let (g, n) = one("VRayMtl", |g, n| {
-        g.seti(n, "translucency", 1).setc(n, "translucency_color", [0.9, 0.5, 0.4]);
+        g.seti(n, "translucency", 1)
+            .setc(n, "translucency_color", [0.9, 0.5, 0.4]);
         g.setc(n, "refract", [0.3; 3]).seti(n, "thin_walled", 1);
-        g.setc(n, "opacity", [0.5; 3]).setc(n, "reflect", [0.5; 3]).seti(n, "fresnel", 0);
+        g.setc(n, "opacity", [0.5; 3])
+            .setc(n, "reflect", [0.5; 3])
+            .seti(n, "fresnel", 0);
         g.seti(n, "brdf_type", 1);
     });
     snap("vray_translucency_thin_opacity_no_fresnel", &g, n);
@@ -138,10 +161,18 @@ fn physical_defaults() {
 #[test]
 fn physical_all_layers() {
     let (g, n) = one("PhysicalMaterial", |g, n| {
-        g.setf(n, "coating", 0.5).setc(n, "coat_color", [0.9, 0.8, 0.6]).setf(n, "coat_roughness", 0.2);
-        g.setf(n, "scattering", 0.3).setf(n, "transparency", 0.2).setf(n, "metalness", 0.3);
-        g.setf(n, "roughness", 0.8).seti(n, "roughness_inv", 1).seti(n, "brdf_mode", 0);
-        g.setf(n, "diff_roughness", 0.5).setf(n, "emission", 2.0).setc(n, "emit_color", [1.0, 0.9, 0.8]);
+        g.setf(n, "coating", 0.5)
+            .setc(n, "coat_color", [0.9, 0.8, 0.6])
+            .setf(n, "coat_roughness", 0.2);
+        g.setf(n, "scattering", 0.3)
+            .setf(n, "transparency", 0.2)
+            .setf(n, "metalness", 0.3);
+        g.setf(n, "roughness", 0.8)
+            .seti(n, "roughness_inv", 1)
+            .seti(n, "brdf_mode", 0);
+        g.setf(n, "diff_roughness", 0.5)
+            .setf(n, "emission", 2.0)
+            .setc(n, "emit_color", [1.0, 0.9, 0.8]);
     });
     snap("physical_all_layers", &g, n);
 }
@@ -149,8 +180,12 @@ fn physical_all_layers() {
 #[test]
 fn physical_thin_walled_cutout_metal() {
     let (g, n) = one("PhysicalMaterial", |g, n| {
-        g.setf(n, "transparency", 0.5).seti(n, "thin_walled", 1).setc(n, "trans_color", [0.2, 0.9, 0.2]);
-        g.setf(n, "cutout", 0.75).setf(n, "reflectivity", 0.5).setf(n, "anisotropy", 0.5);
+        g.setf(n, "transparency", 0.5)
+            .seti(n, "thin_walled", 1)
+            .setc(n, "trans_color", [0.2, 0.9, 0.2]);
+        g.setf(n, "cutout", 0.75)
+            .setf(n, "reflectivity", 0.5)
+            .setf(n, "anisotropy", 0.5);
         g.setf(n, "trans_depth", 1.0);
     });
     snap("physical_thin_walled_cutout_metal", &g, n);
@@ -165,7 +200,9 @@ fn mia_defaults() {
 #[test]
 fn mia_transparency_translucency() {
     let (g, n) = one("mia_material", |g, n| {
-        g.setf(n, "transparency", 0.5).seti(n, "refr_translucency", 1).setf(n, "refr_gloss", 0.5);
+        g.setf(n, "transparency", 0.5)
+            .seti(n, "refr_translucency", 1)
+            .setf(n, "refr_gloss", 0.5);
         g.setf(n, "diffuse_roughness", 0.4);
     });
     snap("mia_transparency_translucency", &g, n);
@@ -174,10 +211,17 @@ fn mia_transparency_translucency() {
 #[test]
 fn mia_metal_fresnel_thin_cutout() {
     let (g, n) = one("mia_material", |g, n| {
-        g.seti(n, "refl_is_metal", 1).seti(n, "brdf_fresnel", 1).setc(n, "diffuse", [0.9, 0.6, 0.2]);
-        g.setf(n, "reflectivity", 1.0).setf(n, "refl_gloss", 0.5).setf(n, "anisotropy", 2.0);
-        g.setf(n, "transparency", 0.2).seti(n, "thin_walled", 1).setf(n, "cutout_opacity", 0.5);
-        g.setc(n, "additional_color", [0.0, 0.05, 0.0]).seti(n, "brdf_conserve_energy", 0);
+        g.seti(n, "refl_is_metal", 1)
+            .seti(n, "brdf_fresnel", 1)
+            .setc(n, "diffuse", [0.9, 0.6, 0.2]);
+        g.setf(n, "reflectivity", 1.0)
+            .setf(n, "refl_gloss", 0.5)
+            .setf(n, "anisotropy", 2.0);
+        g.setf(n, "transparency", 0.2)
+            .seti(n, "thin_walled", 1)
+            .setf(n, "cutout_opacity", 0.5);
+        g.setc(n, "additional_color", [0.0, 0.05, 0.0])
+            .seti(n, "brdf_conserve_energy", 0);
     });
     snap("mia_metal_fresnel_thin_cutout", &g, n);
 }

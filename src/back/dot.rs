@@ -28,7 +28,11 @@ pub fn to_dot(ir: &MaterialIr) -> String {
             Node::Emission { .. } | Node::Transparent { .. } => "note",
             _ => "ellipse",
         };
-        let _ = writeln!(s, "  n{i} [shape={shape}, label=\"#{i} {}\"];", escape(&text));
+        let _ = writeln!(
+            s,
+            "  n{i} [shape={shape}, label=\"#{i} {}\"];",
+            escape(&text)
+        );
     }
     let op = |r| operand(&ir.program, r);
     for (i, node) in ir.nodes.iter().enumerate() {

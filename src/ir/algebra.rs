@@ -63,9 +63,9 @@ impl AlbedoSource for SimpleAlbedo {
                     )
                 }
             },
-            LeafKind::Dielectric {
-                eta, refl_tint, ..
-            } => Vec3::splat(fresnel_dielectric(mu, r(eta).x)) * r(refl_tint),
+            LeafKind::Dielectric { eta, refl_tint, .. } => {
+                Vec3::splat(fresnel_dielectric(mu, r(eta).x)) * r(refl_tint)
+            }
             LeafKind::Ward { rho_s, .. } => r(rho_s),
             LeafKind::MiaHighlight3 { .. } => Vec3::ONE,
             LeafKind::SheenCk { .. } | LeafKind::SheenLtc { .. } => {
@@ -244,7 +244,10 @@ pub fn flatten(ir: &MaterialIr, regs: &[Vec3], mu_o: &[f32], albedo: &dyn Albedo
 /// Symbolic weight of every leaf: for each path from the root, the product of its factors
 /// (`(1 − m)`, `m`, `c`, `T[mode](#top)` for the throughput of a layer's top), as text.
 /// Paths are listed in depth-first order; a leaf reached on several paths shows a sum.
-pub fn symbolic_weights(ir: &MaterialIr, operand: &dyn Fn(super::Reg) -> String) -> Vec<(NodeId, String)> {
+pub fn symbolic_weights(
+    ir: &MaterialIr,
+    operand: &dyn Fn(super::Reg) -> String,
+) -> Vec<(NodeId, String)> {
     let mut out: Vec<(NodeId, Vec<String>)> = Vec::new();
     if ir.nodes.is_empty() {
         return Vec::new();

@@ -218,7 +218,8 @@ impl IrBuilder {
     /// The index of a frame, created on first use. A frame whose registers are all absent
     /// or constant zero is the default frame 0.
     pub fn frame(&mut self, slot: FrameSlot) -> u32 {
-        let zero_or_none = |r: Option<Reg>| r.is_none_or(|r| self.prog.constant(r) == Some(Vec3::ZERO));
+        let zero_or_none =
+            |r: Option<Reg>| r.is_none_or(|r| self.prog.constant(r) == Some(Vec3::ZERO));
         let slot = FrameSlot {
             normal: slot.normal.filter(|_| !zero_or_none(slot.normal)),
             tangent: slot.tangent.filter(|_| !zero_or_none(slot.tangent)),
@@ -271,12 +272,11 @@ impl IrBuilder {
             | LeafKind::MiaDiffuse { albedo, .. }
             | LeafKind::Burley { albedo, .. } => self.is_zero(albedo),
             LeafKind::Ward { rho_s, .. } => self.is_zero(rho_s),
-            LeafKind::MicrofacetR { fresnel, .. } => match fresnel {
-                Fresnel::Schlick { f0, f90, .. } | Fresnel::F82 { f0, f90, .. } => {
-                    self.is_zero(f0) && self.is_zero(f90)
-                }
-                _ => false,
-            },
+            LeafKind::MicrofacetR {
+                fresnel: Fresnel::Schlick { f0, f90, .. } | Fresnel::F82 { f0, f90, .. },
+                ..
+            } => self.is_zero(f0) && self.is_zero(f90),
+            LeafKind::MicrofacetR { .. } => false,
             LeafKind::Dielectric {
                 mode,
                 refl_tint,

@@ -5,7 +5,7 @@
 
 use super::closure::{Node, NodeId};
 use super::program::{OpCode, ProgramBuilder, Reg};
-use super::{Cl, FrameSlot, IrBuilder, MaterialIr, MAX_LOBES};
+use super::{Cl, FrameSlot, IrBuilder, MAX_LOBES, MaterialIr};
 use crate::diag::Diagnostic;
 use glam::Vec3;
 use std::collections::HashMap;
@@ -265,7 +265,11 @@ pub fn optimize(ir: MaterialIr) -> Result<MaterialIr, Box<Diagnostic>> {
 
 /// Replace input slot `slot` by a constant and re-optimise (used to specialise a material
 /// for a known input value).
-pub fn specialize(ir: &MaterialIr, slot: usize, value: Vec3) -> Result<MaterialIr, Box<Diagnostic>> {
+pub fn specialize(
+    ir: &MaterialIr,
+    slot: usize,
+    value: Vec3,
+) -> Result<MaterialIr, Box<Diagnostic>> {
     let mut ir = ir.clone();
     for op in &mut ir.program.ops {
         if op.code == OpCode::Input && op.args[0] as usize == slot {

@@ -3,10 +3,10 @@
 //! Constant operands are printed inline as literals (a scalar when all lanes are equal,
 //! else `(r, g, b)`), so `const` ops do not appear in the op listing.
 
+use super::MaterialIr;
 use super::algebra::{self, AlbedoSource};
 use super::closure::{DielectricMode, Leaf, LeafKind, Node, NodeId};
 use super::program::{Global, OpCode, Program, Reg};
-use super::MaterialIr;
 use glam::Vec3;
 use std::fmt::Write;
 
@@ -33,9 +33,16 @@ pub fn operand(p: &Program, r: Reg) -> String {
 }
 
 fn global_name(i: u32) -> &'static str {
-    [Global::P, Global::N, Global::T, Global::I, Global::U, Global::V]
-        .get(i as usize)
-        .map_or("?", |g| g.name())
+    [
+        Global::P,
+        Global::N,
+        Global::T,
+        Global::I,
+        Global::U,
+        Global::V,
+    ]
+    .get(i as usize)
+    .map_or("?", |g| g.name())
 }
 
 /// The text of one op (without the destination).
@@ -58,7 +65,11 @@ pub fn op_text(ir: &MaterialIr, i: usize) -> String {
             fmt_f32(op.imm[0]),
             fmt_f32(op.imm[1])
         ),
-        OpCode::Splat => format!("splat {}, {}", args[0], ["r", "g", "b"][op.args[1].min(2) as usize]),
+        OpCode::Splat => format!(
+            "splat {}, {}",
+            args[0],
+            ["r", "g", "b"][op.args[1].min(2) as usize]
+        ),
         c => format!("{} {}", c.mnemonic(), args.join(", ")),
     }
 }
@@ -145,7 +156,8 @@ pub fn ir_text(ir: &MaterialIr) -> String {
     }
     let _ = writeln!(s, "frames:");
     for (k, f) in ir.frames.iter().enumerate() {
-        let show = |r: Option<Reg>, dflt: &str| r.map_or(dflt.to_string(), |r| operand(&ir.program, r));
+        let show =
+            |r: Option<Reg>, dflt: &str| r.map_or(dflt.to_string(), |r| operand(&ir.program, r));
         let _ = writeln!(
             s,
             "  f{k} normal={} tangent={} rotation={}",

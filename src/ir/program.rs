@@ -426,7 +426,9 @@ impl ProgramBuilder {
 
     /// The scalar constant held by `r`, if it is a constant with equal lanes.
     pub fn scalar(&self, r: Reg) -> Option<f32> {
-        self.constant(r).filter(|c| c.x == c.y && c.y == c.z).map(|c| c.x)
+        self.constant(r)
+            .filter(|c| c.x == c.y && c.y == c.z)
+            .map(|c| c.x)
     }
 
     /// Emit `op` (after folding and sharing); returns its register.
@@ -442,8 +444,8 @@ impl ProgramBuilder {
             // Evaluate on a local register file holding just the constant operands.
             let mut local = [Vec3::ZERO; 4];
             let mut renamed = op;
-            for k in 0..op.code.arity() {
-                local[k] = Vec3::from_array(self.ops[op.args[k] as usize].imm);
+            for (k, slot) in local.iter_mut().enumerate().take(op.code.arity()) {
+                *slot = Vec3::from_array(self.ops[op.args[k] as usize].imm);
                 renamed.args[k] = k as u32;
             }
             let ctx = RunContext {
@@ -668,7 +670,11 @@ pub fn fresnel_conductor(mu: f32, eta: f32, kappa: f32) -> f32 {
     let rs = (a2b2 - 2.0 * a * c + c2) / (a2b2 + 2.0 * a * c + c2).max(1e-12);
     let rp_num = c2 * a2b2 - 2.0 * a * c * s2 + s2 * s2;
     let rp_den = c2 * a2b2 + 2.0 * a * c * s2 + s2 * s2;
-    let rp = if rp_den > 0.0 { rs * rp_num / rp_den } else { rs };
+    let rp = if rp_den > 0.0 {
+        rs * rp_num / rp_den
+    } else {
+        rs
+    };
     (0.5 * (rs + rp)).clamp(0.0, 1.0)
 }
 

@@ -30,7 +30,9 @@ pub fn builtin_default(param: &str) -> Value {
         "reflectivity" => f(0.6),
         "refl_color" => c(1.0),
         "refl_gloss" => f(1.0),
-        "refl_is_metal" | "refl_hl_only" | "thin_walled" | "refr_translucency" | "brdf_fresnel" => i(0),
+        "refl_is_metal" | "refl_hl_only" | "thin_walled" | "refr_translucency" | "brdf_fresnel" => {
+            i(0)
+        }
         "transparency" => f(0.0),
         "refr_color" => c(1.0),
         "refr_gloss" => f(1.0),
@@ -152,10 +154,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
 
     let sigma = p(cx, n, "diffuse_roughness")?;
     let diff = cx.b.leaf(Leaf {
-        kind: LeafKind::MiaDiffuse {
-            albedo: one,
-            sigma,
-        },
+        kind: LeafKind::MiaDiffuse { albedo: one, sigma },
         tint: one,
         ttint: one,
         frame: 0,
@@ -224,10 +223,17 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         ("backface_cull", 0.0),
         ("propagate_alpha", 0.0),
     ] {
-        if cx.graph.value(n, name).is_some_and(|v| crate::ir::value_to_vec3(v).x != dflt) {
+        if cx
+            .graph
+            .value(n, name)
+            .is_some_and(|v| crate::ir::value_to_vec3(v).x != dflt)
+        {
             cx.diag(
                 n,
-                Diagnostic::info("LW020", format!("`{name}` has no BSDF effect and is ignored")),
+                Diagnostic::info(
+                    "LW020",
+                    format!("`{name}` has no BSDF effect and is ignored"),
+                ),
             );
         }
     }

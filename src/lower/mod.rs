@@ -21,7 +21,7 @@ pub mod scene;
 pub mod vray;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-use crate::ir::{value_to_vec3, IrBuilder, MaterialIr, Reg};
+use crate::ir::{IrBuilder, MaterialIr, Reg, value_to_vec3};
 use crate::registry::Definition;
 use crate::types::{BaseType, Type, Value};
 use glam::Vec3;
@@ -378,7 +378,11 @@ impl<'a, G: Graph> Lower<'a, G> {
                     self.graph.handle(up)
                 ),
             )
-            .with_note(format!("path: {} -> {}", path.join(" -> "), self.graph.handle(up)));
+            .with_note(format!(
+                "path: {} -> {}",
+                path.join(" -> "),
+                self.graph.handle(up)
+            ));
             if let Some(l) = self.graph.location(up) {
                 d = d.at(l);
             }

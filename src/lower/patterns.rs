@@ -27,7 +27,11 @@ pub fn is_pattern(shader: &str) -> bool {
 }
 
 /// The program expression of `output` of pattern node `n`; `None` for an unknown output.
-pub fn output<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id, output: &str) -> Result<Option<Reg>, Error> {
+pub fn output<G: Graph>(
+    cx: &mut Lower<'_, G>,
+    n: G::Id,
+    output: &str,
+) -> Result<Option<Reg>, Error> {
     let shader = cx.graph.shader(n).to_string();
     let result = match shader.as_str() {
         "vsConstant" => {

@@ -12,7 +12,7 @@
 //! `Gray`, except the coat colour as transmission tint). Roughness maps to `α = r²`;
 //! `anisotropy` 1 is isotropic and maps to `a = 1 − anisotropy` (§0).
 
-use super::{aniso_alpha, Graph, Lower};
+use super::{Graph, Lower, aniso_alpha};
 use crate::diag::{Diagnostic, Error};
 use crate::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, Leaf, LeafKind, Masking, OpCode, Reg, TintMode,
@@ -113,7 +113,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     // REFL.
     let trans_ior = p(cx, n, "trans_ior")?;
     let fresnel = match cx.static_scalar(n, "brdf_mode", 1.0) {
-        Some(x) if x == 0.0 => Fresnel::Schlick {
+        Some(0.0) => Fresnel::Schlick {
             f0: p(cx, n, "brdf_low")?,
             f90: p(cx, n, "brdf_high")?,
             q: p(cx, n, "brdf_curve")?,
@@ -171,7 +171,8 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let diff = cx.b.simple_leaf(dkind, "diffuse");
     let diff = cx.b.mul(diff, w_b);
     let sss_color = p(cx, n, "sss_color")?;
-    let sss = cx.b.simple_leaf(LeafKind::SubsurfaceProxy { albedo: sss_color }, "sss");
+    let sss =
+        cx.b.simple_leaf(LeafKind::SubsurfaceProxy { albedo: sss_color }, "sss");
     let trans_color = p(cx, n, "trans_color")?;
     let thin = cx.static_scalar(n, "thin_walled", 0.0).unwrap_or(0.0) != 0.0;
     let trans = if thin {

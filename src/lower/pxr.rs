@@ -10,7 +10,7 @@
 //! * LW020 for `<p>ModelType ≠ 1` and LW021 for iridescence and single scattering are
 //!   reported only for lobes that survive constant folding.
 
-use super::{aniso_alpha, Graph, Lower};
+use super::{Graph, Lower, aniso_alpha};
 use crate::diag::{Diagnostic, Error};
 use crate::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, Leaf, LeafKind, Masking, OpCode, Reg, SheenMasking,
@@ -560,7 +560,9 @@ fn dropped_features<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<(), Err
                 n,
                 Diagnostic::warning(
                     "LW021",
-                    format!("`{gain}` is non-zero or connected; the effect is not supported and dropped"),
+                    format!(
+                        "`{gain}` is non-zero or connected; the effect is not supported and dropped"
+                    ),
                 ),
             );
         }

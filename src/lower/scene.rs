@@ -34,9 +34,12 @@ pub fn layered_scene(materials: usize) -> (SimpleGraph, Vec<(String, usize)>) {
             g.setf(n, "diffuseGain", 1.0);
             g.setc(n, "diffuseColor", [x, 0.2 + 0.1 * i as f32, 0.5]);
             g.setf(n, "diffuseRoughness", 0.1 * i as f32);
-            g.setf(n, "specularGain", 1.0).setc(n, "specularFaceColor", [0.04; 3]);
-            g.setc(n, "specularEdgeColor", [1.0; 3]).setf(n, "specularRoughness", 0.2 + 0.1 * x);
-            g.setf(n, "clearcoatGain", 1.0).setc(n, "clearcoatFaceColor", [0.04; 3]);
+            g.setf(n, "specularGain", 1.0)
+                .setc(n, "specularFaceColor", [0.04; 3]);
+            g.setc(n, "specularEdgeColor", [1.0; 3])
+                .setf(n, "specularRoughness", 0.2 + 0.1 * x);
+            g.setf(n, "clearcoatGain", 1.0)
+                .setc(n, "clearcoatFaceColor", [0.04; 3]);
             g.setc(n, "clearcoatEdgeColor", [1.0; 3]);
             *l = n;
         }
@@ -50,7 +53,12 @@ pub fn layered_scene(materials: usize) -> (SimpleGraph, Vec<(String, usize)>) {
                 if m.starts_with("clearcoat") && i != 2 {
                     continue; // not connected: the layer's conditional is false
                 }
-                g.connect(mx, &format!("{prefix}_{m}"), l, &format!("pxrMaterialOut_{m}"));
+                g.connect(
+                    mx,
+                    &format!("{prefix}_{m}"),
+                    l,
+                    &format!("pxrMaterialOut_{m}"),
+                );
             }
             for x in ["Diffuse", "Specular"] {
                 g.seti(mx, &format!("{prefix}_enable{x}"), 1);
@@ -58,7 +66,8 @@ pub fn layered_scene(materials: usize) -> (SimpleGraph, Vec<(String, usize)>) {
             g.seti(mx, &format!("{prefix}_enableClearcoat"), i32::from(i == 2));
         }
         g.seti(mx, "layer1Enabled", 1).setf(mx, "layer1Mask", 0.5);
-        g.seti(mx, "layer2Enabled", 1).setf(mx, "layer2Mask", 0.25 + 0.5 * x);
+        g.seti(mx, "layer2Enabled", 1)
+            .setf(mx, "layer2Mask", 0.25 + 0.5 * x);
         let s = g.node(&format!("m{k}_surface"), "PxrLayerSurface");
         for m in MEMBERS {
             g.connect(s, m, mx, &format!("pxrMaterialOut_{m}"));

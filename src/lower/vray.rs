@@ -16,7 +16,7 @@
 //! Roughness from glossiness: `r = 1 − glossiness`, `α = r²` (§0). A connected
 //! `translucency` mode is lowered as `none` (LW020).
 
-use super::{aniso_alpha, Graph, Lower};
+use super::{Graph, Lower, aniso_alpha};
 use crate::diag::{Diagnostic, Error};
 use crate::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, Leaf, LeafKind, Masking, Reg, SheenMasking, TintMode,
@@ -154,7 +154,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         rotation: Some(rot),
     });
     let fresnel = match cx.static_scalar(n, "fresnel", 1.0) {
-        Some(x) if x == 0.0 => Fresnel::One,
+        Some(0.0) => Fresnel::One,
         _ => Fresnel::Dielectric {
             eta: p(cx, n, "fresnel_ior")?,
         },
@@ -230,7 +230,10 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     if cx.static_scalar(n, "brdf_type", 4.0) != Some(4.0) {
         cx.diag(
             n,
-            Diagnostic::info("LW020", "`brdf_type` other than GGX (4) is approximated by GGX"),
+            Diagnostic::info(
+                "LW020",
+                "`brdf_type` other than GGX (4) is approximated by GGX",
+            ),
         );
     }
     if cx.static_scalar(n, "hilight_glossiness_lock", 1.0) == Some(0.0) {
