@@ -396,15 +396,16 @@ impl IrBuilder {
             Some(r) => passes::topo_from_root(&self.nodes, r),
             None => Vec::new(),
         };
+        let program = self.prog.program();
         let ir = MaterialIr {
             name: name.to_string(),
             recipe,
             inputs: self.inputs,
-            program: self.prog.finish(),
+            program,
             nodes,
             frames: self.frames,
             max_static_lobes: 0,
         };
-        passes::optimize(ir)
+        passes::optimize_with(ir, Some(self.prog))
     }
 }

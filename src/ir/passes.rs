@@ -138,14 +138,28 @@ fn replay(
 /// Fold constants, share subexpressions, drop dead lobes, unused ops and unused input slots,
 /// order the nodes root-first, and check `MAX_LOBES` (LW010, error).
 pub fn optimize(ir: MaterialIr) -> Result<MaterialIr, Box<Diagnostic>> {
-    // 1. Fold + CSE: replay every op through a fresh builder.
+    optimize_with(ir, None)
+}
+
+/// [`optimize`], reusing `prog` as the already folded program builder of `ir` (the
+/// [`IrBuilder::finish`] path, which need not fold twice).
+pub(super) fn optimize_with(
+    ir: MaterialIr,
+    prog: Option<ProgramBuilder>,
+) -> Result<MaterialIr, Box<Diagnostic>> {
+    // 1. Fold + CSE: replay every op through a fresh builder (unless already folded).
+    let folded = prog.is_some();
     let mut b = IrBuilder {
-        prog: ProgramBuilder::new(),
+        prog: prog.unwrap_or_default(),
         inputs: ir.inputs.clone(),
         ..IrBuilder::default()
     };
-    let mut map = Vec::with_capacity(ir.program.len());
-    for op in &ir.program.ops {
+    let mut map: Vec<u32> = Vec::with_capacity(ir.program.len());
+    for (i, op) in ir.program.ops.iter().enumerate() {
+        if folded {
+            map.push(i as u32);
+            continue;
+        }
         let mut new = *op;
         for k in 0..op.code.arity() {
             new.args[k] = map[op.args[k] as usize];
@@ -203,7 +217,7 @@ pub fn optimize(ir: MaterialIr) -> Result<MaterialIr, Box<Diagnostic>> {
         roots.extend(f.normal.iter().chain(&f.tangent).chain(&f.rotation));
     }
     let program = b.prog.finish();
-    let (mut program, rmap) = program.rebuild(&roots);
+    let (mut program, rmap) = program.compact(&roots);
     let rr = |r: Reg| rmap.get(&r).copied().unwrap_or(r);
     let nodes: Vec<Node> = nodes
         .iter()

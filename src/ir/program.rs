@@ -8,6 +8,38 @@
 
 use glam::Vec3;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A small multiplicative hasher for the value-numbering table (keys are a few integers;
+/// SipHash's DoS resistance is not needed and costs most of the builder's time).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct FastHasher(u64);
+
+impl Hasher for FastHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u8(&mut self, x: u8) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+/// `HashMap` with [`FastHasher`].
+pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
 
 /// A register: the index of the op that defines it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -349,10 +381,33 @@ impl Program {
         regs
     }
 
-    /// Re-emit the live ops through a fresh [`ProgramBuilder`] (constant folding and CSE),
-    /// keeping only registers reachable from `roots`. Returns the new program and the mapping
-    /// old register → new register (for the live ones).
-    pub fn rebuild(&self, roots: &[Reg]) -> (Program, HashMap<Reg, Reg>) {
+    /// Keep only the ops reachable from `roots` (dead-code elimination without re-folding).
+    /// Returns the new program and the mapping old register → new register.
+    pub fn compact(&self, roots: &[Reg]) -> (Program, HashMap<Reg, Reg>) {
+        let live = self.liveness(roots);
+        let mut map = vec![u32::MAX; self.ops.len()];
+        let mut ops = Vec::with_capacity(self.ops.len());
+        for (i, op) in self.ops.iter().enumerate() {
+            if !live[i] {
+                continue;
+            }
+            let mut new = *op;
+            for k in 0..op.code.arity() {
+                new.args[k] = map[op.args[k] as usize];
+            }
+            map[i] = ops.len() as u32;
+            ops.push(new);
+        }
+        let pairs = map
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| **n != u32::MAX)
+            .map(|(i, n)| (Reg(i as u32), Reg(*n)))
+            .collect();
+        (Program { ops }, pairs)
+    }
+
+    fn liveness(&self, roots: &[Reg]) -> Vec<bool> {
         let mut live = vec![false; self.ops.len()];
         for r in roots {
             if let Some(l) = live.get_mut(r.index()) {
@@ -366,6 +421,14 @@ impl Program {
                 }
             }
         }
+        live
+    }
+
+    /// Re-emit the live ops through a fresh [`ProgramBuilder`] (constant folding and CSE),
+    /// keeping only registers reachable from `roots`. Returns the new program and the mapping
+    /// old register → new register (for the live ones).
+    pub fn rebuild(&self, roots: &[Reg]) -> (Program, HashMap<Reg, Reg>) {
+        let live = self.liveness(roots);
         let mut b = ProgramBuilder::new();
         let mut map: HashMap<Reg, Reg> = HashMap::new();
         for (i, op) in self.ops.iter().enumerate() {
@@ -387,7 +450,7 @@ impl Program {
 #[derive(Debug, Default)]
 pub struct ProgramBuilder {
     ops: Vec<Op>,
-    seen: HashMap<(OpCode, [u32; 4], [u32; 3]), Reg>,
+    seen: FastMap<(OpCode, [u32; 4], [u32; 3]), Reg>,
 }
 
 impl ProgramBuilder {

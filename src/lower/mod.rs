@@ -330,8 +330,10 @@ impl<'a, G: Graph> Lower<'a, G> {
                 None => builtin.clone(),
             },
             None => {
-                let shader = self.graph.shader(n).to_string();
-                if self.warned_no_def.insert(shader.clone()) {
+                let shader = self.graph.shader(n);
+                if !self.warned_no_def.contains(shader) {
+                    let shader = shader.to_string();
+                    self.warned_no_def.insert(shader.clone());
                     self.diag(
                         n,
                         Diagnostic::warning(
