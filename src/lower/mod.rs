@@ -213,6 +213,9 @@ pub struct Lower<'a, G: Graph> {
     /// Diagnostics sink.
     pub diags: &'a mut Diagnostics,
     outputs: HashMap<(G::Id, String), Reg>,
+    /// Per PxrLayerMixer node and lobe group: gates and compositing factors (see
+    /// `pxr::mixer_gates`).
+    pub(crate) mixer_gates: HashMap<(G::Id, &'static str), [(Reg, Reg); 4]>,
     visiting: Vec<G::Id>,
     warned_no_def: HashSet<String>,
     def_cache: HashMap<String, Option<Arc<Definition>>>,
@@ -227,6 +230,7 @@ impl<'a, G: Graph> Lower<'a, G> {
             b: IrBuilder::new(),
             diags,
             outputs: HashMap::new(),
+            mixer_gates: HashMap::new(),
             visiting: Vec::new(),
             warned_no_def: HashSet::new(),
             def_cache: HashMap::new(),

@@ -164,8 +164,8 @@ pub fn mixer_output<G: Graph>(
         return Ok(None);
     };
     let zero = cx.constf(0.0);
-    let one = cx.constf(1.0);
     if let Some(x) = m.strip_prefix("enable") {
+        let one = cx.constf(1.0);
         // OR of the five `<prefix>_enableX == 1`.
         let mut acc = zero;
         for p in MIXER_PREFIXES {
@@ -185,24 +185,10 @@ pub fn mixer_output<G: Graph>(
         base
     };
     let mut any_normal = if normal { nonzero(cx, base) } else { zero };
+    let gates = mixer_gates(cx, n, lobe)?;
     for (i, p) in MIXER_PREFIXES.iter().enumerate().skip(1) {
-        let enabled = cx.pi(n, &format!("layer{i}Enabled"), 1)?;
-        let part = cx.b.prog.bin(OpCode::CmpEq, enabled, one);
+        let (gate, t) = gates[i - 1];
         let v = cx.param(n, &format!("{p}_{m}"), dflt.clone())?;
-        let gate_flag = match lobe {
-            Some(x) => {
-                let e = cx.pi(n, &format!("{p}_enable{x}"), 0)?;
-                cx.b.prog.bin(OpCode::CmpEq, e, one)
-            }
-            None => {
-                let bump = cx.pv(n, &format!("{p}_bumpNormal"), [0.0; 3])?;
-                nonzero(cx, bump)
-            }
-        };
-        let gate = cx.b.prog.bin(OpCode::And, part, gate_flag);
-        let mask = cx.pf(n, &format!("layer{i}Mask"), 1.0)?;
-        let mask = cx.b.prog.saturate(mask);
-        let t = cx.b.prog.select(gate, mask, zero);
         let v = if normal {
             let nz = nonzero(cx, v);
             let both = cx.b.prog.bin(OpCode::And, gate, nz);
@@ -218,6 +204,43 @@ pub fn mixer_output<G: Graph>(
         acc = cx.b.prog.select(any_normal, unit, zero);
     }
     Ok(Some(acc))
+}
+
+/// For layers 1–4 of mixer `n` and lobe group `lobe` (`None`: the global bump normal): the
+/// gate `g_i(X)` and the compositing factor `g_i ? clamp(mask_i) : 0` (memoised per node and
+/// group: every member of a group shares them).
+fn mixer_gates<G: Graph>(
+    cx: &mut Lower<'_, G>,
+    n: G::Id,
+    lobe: Option<&'static str>,
+) -> Result<[(Reg, Reg); 4], Error> {
+    let key = lobe.unwrap_or("");
+    if let Some(g) = cx.mixer_gates.get(&(n, key)) {
+        return Ok(*g);
+    }
+    let zero = cx.constf(0.0);
+    let one = cx.constf(1.0);
+    let mut out = [(zero, zero); 4];
+    for (i, p) in MIXER_PREFIXES.iter().enumerate().skip(1) {
+        let enabled = cx.pi(n, &format!("layer{i}Enabled"), 1)?;
+        let part = cx.b.prog.bin(OpCode::CmpEq, enabled, one);
+        let gate_flag = match lobe {
+            Some(x) => {
+                let e = cx.pi(n, &format!("{p}_enable{x}"), 0)?;
+                cx.b.prog.bin(OpCode::CmpEq, e, one)
+            }
+            None => {
+                let bump = cx.pv(n, &format!("{p}_bumpNormal"), [0.0; 3])?;
+                nonzero(cx, bump)
+            }
+        };
+        let gate = cx.b.prog.bin(OpCode::And, part, gate_flag);
+        let mask = cx.pf(n, &format!("layer{i}Mask"), 1.0)?;
+        let mask = cx.b.prog.saturate(mask);
+        out[i - 1] = (gate, cx.b.prog.select(gate, mask, zero));
+    }
+    cx.mixer_gates.insert((n, key), out);
+    Ok(out)
 }
 
 fn mixer_member_default(m: &str) -> Value {
