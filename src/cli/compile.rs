@@ -1,16 +1,17 @@
 //! `vstructc compile [--args DIR]... [--emit ir|lobes|dot] [--material NAME] INPUT`: read a
 //! RIB or JSON network, resolve it (a no-op when it holds no placeholders), lower each
-//! material and print its IR, flat lobe list or closure tree.
+//! material (or only `--material`) and print its IR, flat lobe list or closure tree.
 //!
-//! (Enabled once `network`, `registry` and `resolve` are on main: add `pub mod compile;` and
-//! the `Compile` variant to `src/cli/mod.rs`.)
+//! The lobe list's numeric weights use [`SimpleAlbedo`] (table-free estimates) until the
+//! interpreter's albedo tables are plugged in.
 
-use super::CommonOptions;
+use super::input::{load_network, report_error};
+use super::resolve::resolve_options;
+use super::{CommonOptions, info::registry_for};
 use crate::diag::{Diagnostics, Error};
-use crate::ir::{print, SimpleAlbedo};
+use crate::ir::{MaterialIr, SimpleAlbedo, print};
 use crate::lower::network::{lower_terminal, report_placeholders, terminals};
-use crate::registry::{Registry, RegistryOptions};
-use crate::resolve::{resolve, ResolveOptions};
+use crate::resolve::resolve;
 use clap::ValueEnum;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -30,6 +31,8 @@ pub enum Emit {
 /// Arguments of `vstructc compile`.
 #[derive(Debug, clap::Args)]
 pub struct CompileArgs {
+    /// The network: a RIB or JSON file, or `-` for standard input.
+    pub input: PathBuf,
     /// What to print.
     #[arg(long, value_enum, default_value_t = Emit::Ir)]
     pub emit: Emit,
@@ -39,12 +42,13 @@ pub struct CompileArgs {
     /// Resolve without evaluating conditionals.
     #[arg(long)]
     pub no_conditions: bool,
-    /// The network (`.rib` or `.json`).
-    pub input: PathBuf,
+    /// Single-quoted RIB strings are an error instead of an info (RB011).
+    #[arg(long)]
+    pub strict_rib: bool,
 }
 
 /// Render one lowered material.
-pub fn render(ir: &crate::ir::MaterialIr, emit: Emit) -> String {
+pub fn render(ir: &MaterialIr, emit: Emit) -> String {
     match emit {
         Emit::Ir => print::ir_text(ir),
         Emit::Lobes => print::lobes_text(ir, &SimpleAlbedo),
@@ -54,62 +58,48 @@ pub fn render(ir: &crate::ir::MaterialIr, emit: Emit) -> String {
 
 /// Run `vstructc compile`.
 pub fn run(args: &CompileArgs, common: &CommonOptions) -> ExitCode {
-    let mut diags = Diagnostics::new();
-    match compile(args, common, &mut diags) {
-        Ok(text) => {
-            print!("{text}");
-            super::report(&diags, common)
-        }
-        Err(Error::Usage(msg)) => {
-            let _ = super::report(&diags, common);
-            eprintln!("error: {msg}");
-            ExitCode::from(2)
-        }
+    let options = match resolve_options(args.no_conditions, common) {
+        Ok(o) => o,
         Err(e) => {
-            if let Some(d) = e.diagnostic() {
-                diags.push(d.clone());
-            } else {
-                eprintln!("error: {e}");
-            }
-            let _ = super::report(&diags, common);
-            ExitCode::from(1)
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
         }
-    }
-}
-
-fn compile(args: &CompileArgs, common: &CommonOptions, diags: &mut Diagnostics) -> Result<String, Error> {
-    let registry = Registry::new(RegistryOptions {
-        paths: common.args.clone(),
-        ..RegistryOptions::default()
-    });
-    let bytes = std::fs::read(&args.input).map_err(|source| Error::Io {
-        path: args.input.clone(),
-        source,
-    })?;
-    let path = args.input.display().to_string();
-    let mut net = if path.ends_with(".json") {
-        crate::front::json::parse_json(&bytes, &path, &registry, diags)?
-    } else {
-        crate::front::rib::parse_rib(&bytes, &path, &registry, &Default::default(), diags)?
     };
-    let options = ResolveOptions {
-        conditions: !args.no_conditions,
-        verbose: common.verbose,
-        ..ResolveOptions::default()
+    let registry = registry_for(common);
+    let mut diags = Diagnostics::new();
+    let mut loaded = match load_network(&args.input, &registry, args.strict_rib, &mut diags) {
+        Ok(l) => l,
+        Err(e) => {
+            super::report(&diags, common);
+            return report_error(&e, common);
+        }
     };
-    let resolution = resolve(&mut net, &registry, &options);
-    diags.extend(resolution.diagnostics);
-    report_placeholders(&net, &registry, diags);
+    let res = resolve(&mut loaded.network, &registry, &options);
+    diags.extend(registry.diagnostics());
+    diags.extend(res.diagnostics);
+    report_placeholders(&loaded.network, &registry, &mut diags);
+    let net = &loaded.network;
+    let list = match terminals(net, args.material.as_deref()) {
+        Ok(l) => l,
+        Err(Error::Usage(msg)) => {
+            super::report(&diags, common);
+            eprintln!("error: {msg}");
+            return ExitCode::from(2);
+        }
+        Err(e) => return report_error(&e, common),
+    };
     let mut out = String::new();
-    for (name, node) in terminals(&net, args.material.as_deref())? {
-        match lower_terminal(&net, &registry, node, &name, diags) {
+    for (name, node) in list {
+        match lower_terminal(net, &registry, node, &name, &mut diags) {
             Ok(ir) => {
                 out.push_str(&render(&ir, args.emit));
                 out.push('\n');
             }
             Err(Error::Input(d)) => diags.push(*d),
-            Err(e) => return Err(e),
+            Err(e) => return report_error(&e, common),
         }
     }
-    Ok(out)
+    diags.sort();
+    print!("{out}");
+    super::report(&diags, common)
 }

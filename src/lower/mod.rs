@@ -14,6 +14,7 @@
 //! without definition).
 
 pub mod mia;
+pub mod network;
 pub mod patterns;
 pub mod physical;
 pub mod pxr;
@@ -202,6 +203,9 @@ pub fn lower_node<G: Graph>(
     })
 }
 
+/// Gate and compositing factor of mixer layers 1–4 for one lobe group.
+pub(crate) type MixerGates = [(Reg, Reg); 4];
+
 /// The lowering context: the graph, definitions, the IR builder and diagnostics.
 pub struct Lower<'a, G: Graph> {
     /// The network.
@@ -215,7 +219,7 @@ pub struct Lower<'a, G: Graph> {
     outputs: HashMap<(G::Id, String), Reg>,
     /// Per PxrLayerMixer node and lobe group: gates and compositing factors (see
     /// `pxr::mixer_gates`).
-    pub(crate) mixer_gates: HashMap<(G::Id, &'static str), [(Reg, Reg); 4]>,
+    pub(crate) mixer_gates: HashMap<(G::Id, &'static str), MixerGates>,
     visiting: Vec<G::Id>,
     warned_no_def: HashSet<String>,
     def_cache: HashMap<String, Option<Arc<Definition>>>,

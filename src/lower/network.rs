@@ -1,10 +1,7 @@
 //! Adapters from the crate's network model and registry to the lowering's [`Graph`] and
 //! [`Definitions`] traits, and the per-material entry point used by `vstructc compile`.
-//!
-//! (Enabled once `network`, `registry` and `resolve` are on main: add `pub mod network;` to
-//! `src/lower/mod.rs`.)
 
-use super::{lower_node, Definitions, Graph};
+use super::{Definitions, Graph, lower_node};
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::ir::MaterialIr;
 use crate::network::{Network, NodeId};
