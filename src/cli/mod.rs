@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+pub mod compile;
 pub mod explain;
 pub mod expr;
 pub mod info;
@@ -86,6 +87,8 @@ pub enum Command {
     Resolve(resolve::ResolveArgs),
     /// Tell the story of one member input's value during resolution.
     Explain(explain::ExplainArgs),
+    /// Lower each material of a network to the closure IR and print it.
+    Compile(compile::CompileArgs),
 }
 
 /// Parse the process arguments and run; the binary's whole `main`.
@@ -112,6 +115,7 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Expr(a) => expr::run(a, common),
         Command::Resolve(a) => resolve::run(a, common),
         Command::Explain(a) => explain::run(a, common),
+        Command::Compile(a) => compile::run(a, common),
     }
 }
 
