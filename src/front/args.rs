@@ -146,6 +146,11 @@ struct PropertyChildren {
 }
 
 /// Shader kinds the spec lists as known (formats.md §2.2).
+/// Largest fixed `arraySize` accepted (robustness limit; the reference has none). A larger
+/// size would make the zero-padded default allocate gigabytes, so it is reported (AR013) and
+/// the property becomes a dynamic array, keeping whatever default values were written.
+pub const MAX_FIXED_ARRAY: usize = 1 << 20;
+
 const KNOWN_KINDS: &[&str] = &[
     "bxdf",
     "pattern",
@@ -1011,6 +1016,15 @@ impl<'a> ArgsParser<'a> {
             let off = a.offset;
             let parsed = a.value.trim().parse::<i64>();
             let spec = match parsed {
+                Ok(n) if n > MAX_FIXED_ARRAY as i64 => {
+                    self.report(
+                        Severity::Warning,
+                        "AR013",
+                        format!("arraySize {n} exceeds the limit of {MAX_FIXED_ARRAY} elements; treated as a dynamic array"),
+                        off,
+                    );
+                    Some(ArraySpec::Dynamic)
+                }
                 Ok(n) if n > 0 => Some(ArraySpec::Fixed(n as usize)),
                 Ok(-1) => Some(ArraySpec::Dynamic),
                 Ok(0) => Some(ArraySpec::None),
