@@ -143,9 +143,16 @@ fn write_rows(out: &mut String, props: &[&Property], tables: &VstructTables, inp
             ]
         })
         .collect();
-    let w0 = rows.iter().map(|r| r[0].chars().count()).max().unwrap_or(0);
-    let w1 = rows.iter().map(|r| r[1].chars().count()).max().unwrap_or(0);
-    let w2 = rows.iter().map(|r| r[2].chars().count()).max().unwrap_or(0);
+    // Column widths are capped: `format!` panics on a width above u16::MAX, and a 1 MB
+    // property name or default must not crash `info` (longer cells just overflow the column).
+    let width = |i: usize| {
+        rows.iter()
+            .map(|r: &[String; 4]| r[i].chars().count())
+            .max()
+            .unwrap_or(0)
+            .min(MAX_COLUMN)
+    };
+    let (w0, w1, w2) = (width(0), width(1), width(2));
     for r in rows {
         let line = if inputs {
             format!("    {:w0$}  {:w1$}  {:w2$}  {}", r[0], r[1], r[2], r[3])
@@ -155,6 +162,9 @@ fn write_rows(out: &mut String, props: &[&Property], tables: &VstructTables, inp
         let _ = writeln!(out, "{}", line.trim_end());
     }
 }
+
+/// Widest padded column in the human summary.
+const MAX_COLUMN: usize = 120;
 
 /// Short flags: head / member, hidden, not connectable, declared type when it differs.
 fn flags(p: &Property, tables: &VstructTables, input: bool) -> String {

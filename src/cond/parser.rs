@@ -79,6 +79,7 @@ pub fn parse_statement(text: &str, ext: &Extensions) -> Result<Statement, ParseE
         tokens,
         pos: 0,
         ext: *ext,
+        depth: 0,
     };
     p.statement()
 }
@@ -87,7 +88,14 @@ struct Parser<'a> {
     tokens: Vec<Token<'a>>,
     pos: usize,
     ext: Extensions,
+    /// Open parentheses around the current position (bounded by [`MAX_PAREN_DEPTH`]).
+    depth: usize,
 }
+
+/// Deepest parenthesis nesting accepted in a conditional (robustness limit: the parser and
+/// every pass over the tree recurse once per level; real expressions use 1–3 levels). Deeper
+/// nesting is a syntax error (VS001) at the parenthesis that exceeds it.
+pub const MAX_PAREN_DEPTH: usize = 64;
 
 impl<'a> Parser<'a> {
     /// The token `k` positions ahead (the final `Eof` repeats).
@@ -385,8 +393,16 @@ impl<'a> Parser<'a> {
     fn primary(&mut self) -> Result<(Expr, Span), ParseError> {
         let t = self.peek();
         if t.kind == TokenKind::LParen {
+            if self.depth >= MAX_PAREN_DEPTH {
+                let mut e = self.error(&[Want::Param]);
+                e.message = format!("parentheses nested deeper than {MAX_PAREN_DEPTH} levels");
+                return Err(e);
+            }
             self.bump();
-            let (inner, _) = self.or_expr()?;
+            self.depth += 1;
+            let inner = self.or_expr();
+            self.depth -= 1;
+            let (inner, _) = inner?;
             if self.peek().kind != TokenKind::RParen {
                 return Err(self.error(&[
                     Want::Kw(Keyword::And),

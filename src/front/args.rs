@@ -60,9 +60,26 @@ pub fn parse_args_with(
 ) -> Result<Definition, Error> {
     let file: Arc<str> = Arc::from(path);
     let text = decode_utf8(bytes, &file)?;
+    reject_nul(text, &file)?;
     let mut parser = ArgsParser::new(text, file, id, options);
     parser.parse_document()?;
     parser.finish(diags)
+}
+
+/// NUL is not a legal XML character anywhere (XML 1.0 `Char`); quick-xml passes it through,
+/// so it is rejected here (AR001 at the NUL).
+fn reject_nul(text: &str, file: &Arc<str>) -> Result<(), Error> {
+    let Some(offset) = text.find('\0') else {
+        return Ok(());
+    };
+    let (line, column) = crate::diag::line_column(&text[..offset], offset);
+    Err(Error::from(
+        Diagnostic::error("AR001", "not well-formed XML: NUL character").at(Location::new(
+            file.clone(),
+            line,
+            column,
+        )),
+    ))
 }
 
 /// Checks the bytes are UTF-8 (AR005 with the position of the first bad byte otherwise) and
@@ -146,6 +163,15 @@ struct PropertyChildren {
 }
 
 /// Shader kinds the spec lists as known (formats.md §2.2).
+/// Largest fixed `arraySize` accepted (robustness limit; the reference has none). A larger
+/// size would make the zero-padded default allocate gigabytes, so it is reported (AR013) and
+/// the property becomes a dynamic array, keeping whatever default values were written.
+pub const MAX_FIXED_ARRAY: usize = 1 << 20;
+
+/// Deepest `<page>` nesting accepted (robustness limit; real files use 1–3 levels). Deeper
+/// nesting is rejected with AR001, so recursion and page-path building stay bounded.
+pub const MAX_PAGE_DEPTH: usize = 64;
+
 const KNOWN_KINDS: &[&str] = &[
     "bxdf",
     "pattern",
@@ -567,6 +593,13 @@ impl<'a> ArgsParser<'a> {
             .unwrap_or_default();
         if empty {
             return Ok(());
+        }
+        if self.pages.len() >= MAX_PAGE_DEPTH {
+            return Err(self.reject(
+                "AR001",
+                format!("<page> nesting deeper than {MAX_PAGE_DEPTH} levels (vstructc limit)"),
+                pos,
+            ));
         }
         self.pages.push(name);
         let saved = self.page_path.replace(self.pages.join(":"));
@@ -1011,6 +1044,15 @@ impl<'a> ArgsParser<'a> {
             let off = a.offset;
             let parsed = a.value.trim().parse::<i64>();
             let spec = match parsed {
+                Ok(n) if n > MAX_FIXED_ARRAY as i64 => {
+                    self.report(
+                        Severity::Warning,
+                        "AR013",
+                        format!("arraySize {n} exceeds the limit of {MAX_FIXED_ARRAY} elements; treated as a dynamic array"),
+                        off,
+                    );
+                    Some(ArraySpec::Dynamic)
+                }
                 Ok(n) if n > 0 => Some(ArraySpec::Fixed(n as usize)),
                 Ok(-1) => Some(ArraySpec::Dynamic),
                 Ok(0) => Some(ArraySpec::None),

@@ -981,7 +981,8 @@ impl Reader<'_> {
         let count = sym.values.len();
         let expected = match sym.ty.array {
             ArraySpec::None => comps,
-            ArraySpec::Fixed(n) => comps * n,
+            // Saturating: a declared length near usize::MAX must not overflow (it simply never matches).
+            ArraySpec::Fixed(n) => comps.saturating_mul(n),
             ArraySpec::Dynamic if count % comps == 0 => count,
             ArraySpec::Dynamic => count.next_multiple_of(comps),
         };

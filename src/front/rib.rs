@@ -1002,10 +1002,12 @@ fn convert_value(
         ArraySpec::Fixed(n) => n,
         ArraySpec::Dynamic => elems.len() / comps,
     };
-    if elems.len() != comps * count {
+    // Saturating: `color[6148914691236517206]` must not overflow (it simply never matches).
+    let expected = comps.saturating_mul(count);
+    if elems.len() != expected {
         warn(
             diags,
-            format!("{} element(s), expected {}", elems.len(), comps * count),
+            format!("{} element(s), expected {expected}", elems.len()),
         );
         return flat(&ty.base, elems, &mut |_| {});
     }
