@@ -380,7 +380,8 @@ mod tests {
 
     #[test]
     fn human_rendering_has_code_and_location() {
-        let d = Diagnostic::error("AR004", "duplicate parameter `x`").at(Location::new("a.args", 3, 5));
+        let d =
+            Diagnostic::error("AR004", "duplicate parameter `x`").at(Location::new("a.args", 3, 5));
         assert_eq!(
             d.render_human(),
             "error[AR004]: duplicate parameter `x`\n  --> a.args:3:5"

@@ -72,8 +72,10 @@ impl BaseType {
 
     /// True for types whose components are numbers (int, float, triples, hpoint, matrix).
     pub fn is_numeric(&self) -> bool {
-        matches!(self, BaseType::Int | BaseType::Float | BaseType::HPoint | BaseType::Matrix)
-            || self.is_triple()
+        matches!(
+            self,
+            BaseType::Int | BaseType::Float | BaseType::HPoint | BaseType::Matrix
+        ) || self.is_triple()
     }
 
     /// Parse a declared type word (`float`, `color`, `struct`, `bxdf`, …). `float2`/`float3`
@@ -329,7 +331,10 @@ mod tests {
         ] {
             assert_eq!(BaseType::from_word(w).word(), w);
         }
-        assert_eq!(BaseType::from_word("message"), BaseType::Unknown("message".into()));
+        assert_eq!(
+            BaseType::from_word("message"),
+            BaseType::Unknown("message".into())
+        );
         assert_eq!(Type::parse_decl("float2").to_string(), "float[2]");
     }
 

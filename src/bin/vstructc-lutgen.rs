@@ -3,7 +3,7 @@
 //! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|all]` (default: all groups, into
 //! `src/interp/tables/` of this crate). Run it in release mode; the 3-D dielectric tables
 //! take several CPU-minutes. Each group's tables (and the `Eavg` tables derived from them)
-//! are written as soon as the group is done.
+//! are written as soon as the group is done. `--entry NAME I J K` prints one entry.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -13,7 +13,12 @@ use vstructc::interp::tables::{self, TableId};
 fn main() {
     let mut out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/interp/tables");
     let mut only = String::from("all");
-    let mut args = std::env::args().skip(1);
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    if argv.first().map(String::as_str) == Some("--entry") {
+        print_entry(&argv[1..]);
+        return;
+    }
+    let mut args = argv.into_iter();
     while let Some(a) = args.next() {
         match (a.as_str(), args.next()) {
             ("--out", Some(v)) => out = PathBuf::from(v),
@@ -47,6 +52,21 @@ fn main() {
             }
         }
         eprintln!("{group:?}: {:.1} s", start.elapsed().as_secs_f64());
+    }
+}
+
+/// `--entry NAME I J K`: computes and prints one entry (for checks).
+fn print_entry(args: &[String]) {
+    let id = TableId::ALL
+        .iter()
+        .find(|t| Some(t.name()) == args.first().map(String::as_str));
+    let idx: Vec<usize> = args.iter().skip(1).filter_map(|a| a.parse().ok()).collect();
+    match (id, idx.as_slice()) {
+        (Some(id), [i, j, k]) => println!("{:.8}", lutgen::compute_entry(*id, [*i, *j, *k])),
+        _ => {
+            eprintln!("usage: vstructc-lutgen --entry NAME I J K");
+            std::process::exit(2);
+        }
     }
 }
 

@@ -14,7 +14,11 @@ pub mod info;
 
 /// Top-level command line.
 #[derive(Debug, Parser)]
-#[command(name = "vstructc", version, about = "Shader-network compiler: vstruct resolution, closure IR, previews")]
+#[command(
+    name = "vstructc",
+    version,
+    about = "Shader-network compiler: vstruct resolution, closure IR, previews"
+)]
 pub struct Cli {
     /// Options shared by every subcommand.
     #[command(flatten)]

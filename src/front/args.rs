@@ -14,7 +14,9 @@ pub fn parse_args(
     _id: &str,
     _diags: &mut Diagnostics,
 ) -> Result<Definition, Error> {
-    Err(Diagnostic::error("AR001", "the .args reader is not implemented yet")
-        .at(Location::file(path))
-        .into())
+    Err(
+        Diagnostic::error("AR001", "the .args reader is not implemented yet")
+            .at(Location::file(path))
+            .into(),
+    )
 }

@@ -9,7 +9,9 @@ use crate::registry::Definition;
 
 /// Parse an `.oso` document.
 pub fn parse_oso(_bytes: &[u8], path: &str, _diags: &mut Diagnostics) -> Result<Definition, Error> {
-    Err(Diagnostic::error("OS001", "the .oso reader is not implemented yet")
-        .at(Location::file(path))
-        .into())
+    Err(
+        Diagnostic::error("OS001", "the .oso reader is not implemented yet")
+            .at(Location::file(path))
+            .into(),
+    )
 }

@@ -160,7 +160,7 @@ pub fn eon_e_hat(mu: f32, sigma: f32) -> f32 {
 /// EON's `Ê(μ)` by the polynomial fit in `1 − μ`.
 pub fn eon_e_hat_fast(mu: f32, sigma: f32) -> f32 {
     let m = 1.0 - mu.clamp(0.0, 1.0);
-    let g = m * (0.057_108_53 + m * (0.491_881_87 + m * (-0.332_181_44 + m * 0.071_442_995)));
+    let g = m * (0.057_108_53 + m * (0.491_881_87 + m * (-0.332_181_44 + m * 0.071_442_99)));
     (1.0 + sigma * g) / (1.0 + EON_C1 * sigma)
 }
 
@@ -199,7 +199,11 @@ pub struct PreparedOrenNayar {
 impl OrenNayar {
     /// Precomputes the view-only terms for view `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedOrenNayar {
-        let sigma = if self.sigma.is_nan() { 0.0 } else { self.sigma.clamp(0.0, 1.0) };
+        let sigma = if self.sigma.is_nan() {
+            0.0
+        } else {
+            self.sigma.clamp(0.0, 1.0)
+        };
         let rho_pi = self.rho * FRAC_1_PI;
         let mut p = PreparedOrenNayar {
             v,
@@ -400,7 +404,11 @@ pub fn burley_albedo_fit(mu: f32, sigma: f32) -> f32 {
 impl Burley {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedBurley {
-        let sigma = if self.sigma.is_nan() { 0.0 } else { self.sigma.clamp(0.0, 1.0) };
+        let sigma = if self.sigma.is_nan() {
+            0.0
+        } else {
+            self.sigma.clamp(0.0, 1.0)
+        };
         PreparedBurley {
             v,
             rho_pi: self.rho * FRAC_1_PI,

@@ -25,7 +25,11 @@ impl Frame {
         } else {
             z.any_orthonormal_vector()
         };
-        Frame { x, y: z.cross(x), z }
+        Frame {
+            x,
+            y: z.cross(x),
+            z,
+        }
     }
 
     /// A frame with an arbitrary tangent around normal `n`.

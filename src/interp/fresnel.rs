@@ -78,7 +78,8 @@ pub fn conductor(mu: f32, eta: Rgb, kappa: Rgb) -> Rgb {
     let ab2 = (t0 * t0 + 4.0 * e2 * k2).sqrt();
     let a = (0.5 * (ab2 + t0)).max(Vec3::ZERO).sqrt();
     let two_ac = 2.0 * c * a;
-    let rs = (ab2 - two_ac + Vec3::splat(c2)) / (ab2 + two_ac + Vec3::splat(c2)).max(Vec3::splat(1e-30));
+    let rs =
+        (ab2 - two_ac + Vec3::splat(c2)) / (ab2 + two_ac + Vec3::splat(c2)).max(Vec3::splat(1e-30));
     let num = c2 * ab2 - two_ac * s2 + Vec3::splat(s2 * s2);
     let den = (c2 * ab2 + two_ac * s2 + Vec3::splat(s2 * s2)).max(Vec3::splat(1e-30));
     (0.5 * (rs + rs * num / den)).clamp(Vec3::ZERO, Vec3::ONE)

@@ -111,5 +111,9 @@ pub fn roughness_to_alpha(r: f32, a: f32) -> (f32, f32) {
     let alpha = (r * r).clamp(1e-6, 1.0);
     let s = (1.0 - a.abs().min(0.98)).sqrt();
     let (along, across) = ((alpha / s).min(1.0), alpha * s);
-    if a >= 0.0 { (along, across) } else { (across, along) }
+    if a >= 0.0 {
+        (along, across)
+    } else {
+        (across, along)
+    }
 }

@@ -295,7 +295,10 @@ impl Lobe {
 
     /// True for leaves that may see light from below the surface whatever [`Sides`] says.
     pub fn is_two_sided(&self) -> bool {
-        matches!(self, Lobe::Translucent(_) | Lobe::Dielectric(_) | Lobe::Transparent(_))
+        matches!(
+            self,
+            Lobe::Translucent(_) | Lobe::Dielectric(_) | Lobe::Transparent(_)
+        )
     }
 
     /// Precomputes every view-only term for local view `v` (unit, local frame).
@@ -438,7 +441,7 @@ impl PreparedLobe {
             State::SheenCK(p) => p.sample(u),
             State::SheenLTC(p) => p.sample(u),
         }?;
-        if !(s.pdf > 0.0) || !s.weight.is_finite() {
+        if s.pdf.is_nan() || s.pdf <= 0.0 || !s.weight.is_finite() {
             return None;
         }
         Some(if self.flipped {

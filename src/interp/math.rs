@@ -37,7 +37,11 @@ pub fn pow5(x: f32) -> f32 {
 /// `x^q`, with a multiplication-only path for the common `q = 5`.
 #[inline]
 pub fn pow_q(x: f32, q: f32) -> f32 {
-    if q == 5.0 { pow5(x) } else { x.max(0.0).powf(q) }
+    if q == 5.0 {
+        pow5(x)
+    } else {
+        x.max(0.0).powf(q)
+    }
 }
 
 /// Mirror reflection of `v` about the unit vector `h`: `2(v·h)h − v`.

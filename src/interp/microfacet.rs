@@ -70,7 +70,8 @@ pub fn reflection_albedo(f: &Fresnel, masking: Masking, mu: f32, alpha: f32) -> 
         Fresnel::Conductor { eta, kappa } => {
             let (f0, t) = fresnel::conductor_to_f82(eta, kappa);
             let a = fresnel::f82_coefficient(f0, Vec3::ONE, 5.0, t);
-            (schlick(f0, Vec3::ONE, 5.0) - a * tables::lookup2(h82, mu, y)).clamp(Vec3::ZERO, Vec3::ONE)
+            (schlick(f0, Vec3::ONE, 5.0) - a * tables::lookup2(h82, mu, y))
+                .clamp(Vec3::ZERO, Vec3::ONE)
         }
     }
 }
@@ -78,6 +79,17 @@ pub fn reflection_albedo(f: &Fresnel, masking: Masking, mu: f32, alpha: f32) -> 
 /// Dielectric albedos `[E_R, E_T, E_T without (1 − F)]` (transmission in the radiance
 /// convention) from the tables; η outside [1/3, 3] is clamped.
 pub fn dielectric_albedos(masking: Masking, mu: f32, alpha: f32, eta: f32) -> [f32; 3] {
+    dielectric_albedos_masked(masking, mu, alpha, eta, [true; 3])
+}
+
+/// As [`dielectric_albedos`], looking up only the entries selected by `want` (others 0).
+pub fn dielectric_albedos_masked(
+    masking: Masking,
+    mu: f32,
+    alpha: f32,
+    eta: f32,
+    want: [bool; 3],
+) -> [f32; 3] {
     let (inv, z) = tables::eta_axis(eta);
     let ids = if inv {
         [TableId::ErDielInv, TableId::EtDielInv, TableId::EtnDielInv]
@@ -85,9 +97,18 @@ pub fn dielectric_albedos(masking: Masking, mu: f32, alpha: f32, eta: f32) -> [f
         [TableId::ErDiel, TableId::EtDiel, TableId::EtnDiel]
     };
     let y = tables::ggx_axis(alpha);
-    let mut out = ids.map(|t| tables::lookup3(t, mu, y, z));
+    let mut k = 0;
+    let mut out = ids.map(|t| {
+        k += 1;
+        if want[k - 1] {
+            tables::lookup3(t, mu, y, z)
+        } else {
+            0.0
+        }
+    });
     if masking == Masking::Separable {
-        let r = e1(Masking::Separable, mu, alpha) / e1(Masking::HeightCorrelated, mu, alpha).max(1e-6);
+        let r =
+            e1(Masking::Separable, mu, alpha) / e1(Masking::HeightCorrelated, mu, alpha).max(1e-6);
         out = out.map(|e| e * r);
     }
     out
@@ -177,7 +198,11 @@ impl MicrofacetR {
                 p.e_row = Some(Row::new(e1_table(self.masking), tables::ggx_axis(alpha)));
                 let a_ms = f_ms * (1.0 - e_o);
                 let total = lum(ess + a_ms);
-                p.p_ms = if total > 0.0 { (lum(a_ms) / total).clamp(0.0, 1.0) } else { 0.0 };
+                p.p_ms = if total > 0.0 {
+                    (lum(a_ms) / total).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 p.albedo = ess + a_ms;
             }
         }
@@ -351,7 +376,11 @@ impl Dielectric {
     /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
     /// below the surface (the frame was flipped), so η is inverted.
     pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
-        let eta0 = if self.eta.is_finite() && self.eta > 0.0 { self.eta } else { 1.0 };
+        let eta0 = if self.eta.is_finite() && self.eta > 0.0 {
+            self.eta
+        } else {
+            1.0
+        };
         let eta = if flipped { 1.0 / eta0 } else { eta0 };
         let lambda_v = self.ggx.lambda(v);
         let refl = self.mode != DielectricMode::T;
@@ -388,7 +417,8 @@ impl Dielectric {
             let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
             [f, (1.0 - f) * t, t]
         } else {
-            dielectric_albedos(self.masking, v.z, alpha, eta)
+            let want = [refl, trans && self.t_fresnel, trans && !self.t_fresnel];
+            dielectric_albedos_masked(self.masking, v.z, alpha, eta, want)
         };
         if refl {
             p.albedo.reflect = tint_r * er;

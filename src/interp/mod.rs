@@ -19,7 +19,9 @@ pub mod lutgen;
 pub mod math;
 pub mod microfacet;
 pub mod sheen;
+pub mod soa;
 pub mod tables;
+pub mod verify;
 pub mod ward;
 
 pub use diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};

@@ -65,7 +65,11 @@ pub struct PreparedSheenCK {
 impl SheenCK {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
-        let r = if self.r.is_nan() { 1.0 } else { self.r.clamp(SHEEN_CK_MIN_R, 1.0) };
+        let r = if self.r.is_nan() {
+            1.0
+        } else {
+            self.r.clamp(SHEEN_CK_MIN_R, 1.0)
+        };
         let coef = ck_coefficients(r);
         let table = match self.masking {
             SheenMasking::MaterialX => TableId::SheenMx,
@@ -173,10 +177,18 @@ pub struct PreparedSheenLTC {
 impl SheenLTC {
     /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
-        let y = if self.r.is_nan() { 1.0 } else { self.r.clamp(0.01, 1.0) };
+        let y = if self.r.is_nan() {
+            1.0
+        } else {
+            self.r.clamp(0.01, 1.0)
+        };
         let x = v.z.clamp(0.0, 1.0);
         let t = Vec3::new(v.x, v.y, 0.0);
-        let ax_x = if t.length_squared() > 1e-14 { t.normalize() } else { Vec3::X };
+        let ax_x = if t.length_squared() > 1e-14 {
+            t.normalize()
+        } else {
+            Vec3::X
+        };
         let (a, b) = sheen_ltc_coefficients(x, y);
         PreparedSheenLTC {
             ax_x,
@@ -239,4 +251,3 @@ impl PreparedSheenLTC {
         LobeAlbedo::reflect(Vec3::splat(self.e_hat))
     }
 }
-

@@ -314,7 +314,12 @@ pub fn decode(id: TableId, bytes: &[u8]) -> Result<Lut, LutError> {
 }
 
 /// Encodes a table blob (used by the generator).
-pub fn encode(id: TableId, generator_version: u32, samples_per_entry: u32, data: &[f32]) -> Vec<u8> {
+pub fn encode(
+    id: TableId,
+    generator_version: u32,
+    samples_per_entry: u32,
+    data: &[f32],
+) -> Vec<u8> {
     let mut out = Vec::with_capacity(HEADER_BYTES + 4 * data.len());
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&generator_version.to_le_bytes());

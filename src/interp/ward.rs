@@ -24,7 +24,11 @@ pub enum WardVariant {
 pub const WARD_MIN_ALPHA: f32 = 1e-3;
 
 fn clamp_alpha(a: f32) -> f32 {
-    if a.is_nan() { 1.0 } else { a.clamp(WARD_MIN_ALPHA, 1.0) }
+    if a.is_nan() {
+        1.0
+    } else {
+        a.clamp(WARD_MIN_ALPHA, 1.0)
+    }
 }
 
 /// Albedo (ρ = 1) of a Ward lobe from the tables, `α = √(α_x α_y)`.
@@ -137,7 +141,9 @@ impl PreparedWard {
             return LobeEval::ZERO;
         }
         let hh = self.v + l;
-        let (f, pdf) = self.core.eval(self.variant, hh, hh.length_squared(), self.v.dot(hh), l.z);
+        let (f, pdf) = self
+            .core
+            .eval(self.variant, hh, hh.length_squared(), self.v.dot(hh), l.z);
         LobeEval {
             f_cos: self.rho * f,
             pdf,
@@ -190,7 +196,11 @@ impl MiaHighlight3 {
     /// The three `(α_x, α_y)` pairs: `α_j = √(2/(n_j + 2))`, `n_j = n, n/2, n/4`.
     pub fn alphas(&self) -> [(f32, f32); 3] {
         let n = (8.0 * self.glossiness.clamp(0.0, 1.0)).exp2();
-        let a = if self.anisotropy.is_nan() { 1.0 } else { self.anisotropy.clamp(1e-3, 1e3) };
+        let a = if self.anisotropy.is_nan() {
+            1.0
+        } else {
+            self.anisotropy.clamp(1e-3, 1e3)
+        };
         let sa = a.sqrt();
         [1.0, 0.5, 0.25].map(|k| {
             let alpha = (2.0 / (n * k + 2.0)).sqrt();
@@ -211,7 +221,9 @@ pub struct PreparedMiaHighlight3 {
 impl MiaHighlight3 {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedMiaHighlight3 {
-        let cores = self.alphas().map(|(ax, ay)| WardCore::new(ax, ay, self.variant, v.z));
+        let cores = self
+            .alphas()
+            .map(|(ax, ay)| WardCore::new(ax, ay, self.variant, v.z));
         let albedo = (0..3)
             .map(|j| MIA_WEIGHTS[j] * ward_albedo(self.variant, v.z, cores[j].ax, cores[j].ay))
             .sum();

@@ -87,7 +87,12 @@ pub struct Property {
 
 impl Property {
     /// A property with the given name, direction and type and every other field empty.
-    pub fn new(name: impl Into<String>, direction: Direction, ty: Type, location: Location) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        direction: Direction,
+        ty: Type,
+        location: Location,
+    ) -> Self {
         Property {
             name: name.into(),
             direction,
