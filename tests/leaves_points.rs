@@ -224,7 +224,7 @@ fn golden_conductor_gold_rgb() {
 
 #[test]
 fn mia_diffuse_extra_points() {
-    let l = Vec3::new(0.0, 0.984_807_75, 0.173_648_18);
+    let l = Vec3::new(0.0, 0.984_807_8, 0.173_648_18);
     let v = config_v();
     for (sigma, want) in [(0.0, 0.0501183), (0.5, 0.0393170)] {
         let p = prep(

@@ -15,7 +15,7 @@ pub fn config_v() -> Vec3 {
     Vec3::new(0.5, 0.0, 0.866_025_4)
 }
 pub fn config_a() -> Vec3 {
-    Vec3::new(-0.664_463, 0.241_844_8, 0.707_106_8)
+    Vec3::new(-0.664_463, 0.241_844_8, std::f32::consts::FRAC_1_SQRT_2)
 }
 pub fn config_b() -> Vec3 {
     Vec3::new(-0.573_576_4, 0.0, 0.819_152)
