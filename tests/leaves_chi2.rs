@@ -378,3 +378,20 @@ fn harness_rejects_wrong_pdfs() {
     );
     assert!(out.zero_cell_hits > 0 && !out.passes(level, SAMPLES));
 }
+
+#[test]
+fn chi2_distribution_values() {
+    use vstructc::interp::verify::{chi2_sf, gamma_p, ln_gamma};
+    // Critical values from standard χ² tables.
+    for (x, dof, p) in [(3.841459, 1.0, 0.05), (6.634897, 1.0, 0.01), (18.307038, 10.0, 0.05), (124.342113, 100.0, 0.05)] {
+        assert!((chi2_sf(x, dof) - p).abs() < 1e-6, "χ²({dof}) at {x}: {}", chi2_sf(x, dof));
+    }
+    // Large dof: the median of χ²(k) is ≈ k(1 − 2/(9k))³.
+    let k = 12_799.0f64;
+    let median = k * (1.0 - 2.0 / (9.0 * k)).powi(3);
+    assert!((chi2_sf(median, k) - 0.5).abs() < 1e-3);
+    assert!((ln_gamma(0.5) - std::f64::consts::PI.sqrt().ln()).abs() < 1e-12);
+    assert!((ln_gamma(10.0) - 362_880f64.ln()).abs() < 1e-12);
+    assert!((gamma_p(1.0, 2.0) - (1.0 - (-2.0f64).exp())).abs() < 1e-12);
+    assert!((sidak(0.01, 1) - 0.01).abs() < 1e-15);
+}
