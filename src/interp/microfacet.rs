@@ -462,9 +462,10 @@ impl PreparedDielectric {
     }
 
     /// The transmission half vector (oriented to `+z`) when `(v, l)` is a valid refraction
-    /// pair: `(h, V·h, L·h)` with `V·h > 0 > L·h`.
+    /// pair: `(h, V·h, L·h, |V + η'L|²)` with `V·h > 0 > L·h`. The last value is the
+    /// squared Walter denominator `(V·h + η' L·h)²`, computed without cancellation.
     #[inline]
-    fn transmission_half(&self, l: Vec3) -> Option<(Vec3, f32, f32)> {
+    fn transmission_half(&self, l: Vec3) -> Option<(Vec3, f32, f32, f32)> {
         let ht = self.v + self.eta * l;
         let ht = if ht.z < 0.0 { -ht } else { ht };
         let len2 = ht.length_squared();
@@ -473,7 +474,19 @@ impl PreparedDielectric {
         }
         let h = ht / len2.sqrt();
         let (vh, lh) = (self.v.dot(h), l.dot(h));
-        (vh > 0.0 && lh < 0.0).then_some((h, vh, lh))
+        (vh > 0.0 && lh < 0.0).then_some((h, vh, lh, len2))
+    }
+
+    /// Fresnel reflectance of a refraction pair, computed from the optically denser side:
+    /// `F(V·h, η)` equals `F(|L·h|, 1/η)`, and for η < 1 the latter avoids the cancellation in
+    /// `η² + μ² − 1` near the critical angle (it keeps `1 − F` accurate in f32).
+    #[inline]
+    fn fresnel_t(&self, vh: f32, lh: f32) -> f32 {
+        if self.eta < 1.0 {
+            fresnel::dielectric(-lh, 1.0 / self.eta)
+        } else {
+            fresnel::dielectric(vh, self.eta)
+        }
     }
 
     /// `f·|μ_i|` and the pdf of [`PreparedDielectric::sample`].
@@ -500,14 +513,13 @@ impl PreparedDielectric {
             if !self.trans {
                 return LobeEval::ZERO;
             }
-            let Some((h, vh, lh)) = self.transmission_half(l) else {
+            let Some((h, vh, lh, denom2)) = self.transmission_half(l) else {
                 return LobeEval::ZERO;
             };
-            let f = fresnel::dielectric(vh, self.eta);
+            let f = self.fresnel_t(vh, lh);
             let d = self.ggx.d(h);
             let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
-            let denom = vh + self.eta * lh;
-            let jac = -lh / (denom * denom).max(1e-20);
+            let jac = -lh / denom2;
             let base = d * vh * jac * self.inv_mu;
             LobeEval {
                 f_cos: self.tint_t * (self.t_factor(f) * g * base),
@@ -534,40 +546,30 @@ impl PreparedDielectric {
         if vh <= 0.0 {
             return None;
         }
-        let f = fresnel::dielectric(vh, self.eta);
-        let p_r = self.p_reflect(f);
-        let d = self.ggx.d(h);
-        if u[2] < p_r {
+        let p_r = self.p_reflect(fresnel::dielectric(vh, self.eta));
+        let l = if u[2] < p_r {
             let l = reflect(self.v, h);
             if l.z <= 0.0 {
                 return None;
             }
-            let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
-            let pdf = p_r * self.g1_v * 0.25 * d * self.inv_mu;
-            (pdf > 0.0).then(|| LobeSample {
-                l,
-                weight: self.tint_r * (f * g / (self.g1_v * p_r)),
-                pdf,
-                delta: false,
-            })
+            l
         } else {
             let l = refract(self.v, h, self.eta)?;
             if l.z >= 0.0 {
                 return None;
             }
-            let lh = l.dot(h);
-            let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
-            let denom = vh + self.eta * lh;
-            let pdf = (1.0 - p_r) * self.g1_v * d * vh * self.inv_mu * self.eta * self.eta * -lh
-                / (denom * denom).max(1e-20);
-            (pdf > 0.0).then(|| LobeSample {
-                l,
-                weight: self.tint_t
-                    * (self.t_factor(f) * g / (self.g1_v * (1.0 - p_r) * self.eta * self.eta)),
-                pdf,
-                delta: false,
-            })
-        }
+            l
+        };
+        // The Fresnel factor is ill-conditioned in f32 near the critical angle and refraction
+        // near grazing, so density and weight are those `eval` gives for the returned
+        // direction (bit-consistent with `pdf(L)`, as MIS needs).
+        let e = self.eval(l);
+        (e.pdf > 0.0).then(|| LobeSample {
+            l,
+            weight: e.f_cos / e.pdf,
+            pdf: e.pdf,
+            delta: false,
+        })
     }
 
     fn sample_delta(&self, u: f32) -> Option<LobeSample> {
