@@ -22,7 +22,9 @@ fn batch_equals_scalar() {
             batch.ax[k] = 0.01 + rng.f32();
             batch.ay[k] = 0.01 + rng.f32();
             batch.eta[k] = 1.0 + 2.0 * rng.f32();
-            batch.tint.set(k, Vec3::new(rng.f32(), rng.f32(), rng.f32()));
+            batch
+                .tint
+                .set(k, Vec3::new(rng.f32(), rng.f32(), rng.f32()));
             v.set(k, rng.sphere());
             l.set(k, rng.sphere());
         }
@@ -30,7 +32,12 @@ fn batch_equals_scalar() {
         for k in 0..W {
             let lobe = Lobe::Dielectric(Dielectric {
                 tint_r: batch.tint.get(k),
-                ..Dielectric::new(Ggx::new(batch.ax[k], batch.ay[k]), Masking::HeightCorrelated, batch.eta[k], DielectricMode::R)
+                ..Dielectric::new(
+                    Ggx::new(batch.ax[k], batch.ay[k]),
+                    Masking::HeightCorrelated,
+                    batch.eta[k],
+                    DielectricMode::R,
+                )
             });
             let want = lobe.prepare(v.get(k), Sides::Front).eval(l.get(k)).f_cos;
             let got = out.get(k);

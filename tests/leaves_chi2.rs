@@ -154,7 +154,13 @@ fn cases() -> Vec<Case> {
     }
     let widths = [(0.05f32, 0.05f32), (0.3, 0.3), (1.0, 1.0), (0.1, 0.5)];
     for (ax, ay) in widths {
-        let tol = if ax != ay { 0.25 } else if ax < 0.1 { 1e-2 } else { 3e-3 };
+        let tol = if ax != ay {
+            0.25
+        } else if ax < 0.1 {
+            1e-2
+        } else {
+            3e-3
+        };
         out.push(case(
             &format!("ggx schlick {ax}/{ay}"),
             Lobe::MicrofacetR(MicrofacetR {
@@ -389,8 +395,17 @@ fn harness_rejects_wrong_pdfs() {
 fn chi2_distribution_values() {
     use vstructc::interp::verify::{chi2_sf, gamma_p, ln_gamma};
     // Critical values from standard χ² tables.
-    for (x, dof, p) in [(3.841459, 1.0, 0.05), (6.634897, 1.0, 0.01), (18.307038, 10.0, 0.05), (124.342113, 100.0, 0.05)] {
-        assert!((chi2_sf(x, dof) - p).abs() < 1e-6, "χ²({dof}) at {x}: {}", chi2_sf(x, dof));
+    for (x, dof, p) in [
+        (3.841459, 1.0, 0.05),
+        (6.634897, 1.0, 0.01),
+        (18.307038, 10.0, 0.05),
+        (124.342113, 100.0, 0.05),
+    ] {
+        assert!(
+            (chi2_sf(x, dof) - p).abs() < 1e-6,
+            "χ²({dof}) at {x}: {}",
+            chi2_sf(x, dof)
+        );
     }
     // Large dof: the median of χ²(k) is ≈ k(1 − 2/(9k))³.
     let k = 12_799.0f64;
