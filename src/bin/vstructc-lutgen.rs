@@ -1,6 +1,6 @@
 //! `vstructc-lutgen`: generates the interpreter's albedo tables (spec closures.md §3.17).
 //!
-//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|all]` (default: all groups, into
+//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|all]` (default: all groups, into
 //! `src/interp/tables/` of this crate). Run it in release mode; the 3-D dielectric tables
 //! take several CPU-minutes. Each group's tables (and the `Eavg` tables derived from them)
 //! are written as soon as the group is done. `--entry NAME I J K` prints one entry.
@@ -24,7 +24,9 @@ fn main() {
             ("--out", Some(v)) => out = PathBuf::from(v),
             ("--only", Some(v)) => only = v,
             _ => {
-                eprintln!("usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|all]");
+                eprintln!(
+                    "usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|all]"
+                );
                 std::process::exit(2);
             }
         }
@@ -39,6 +41,8 @@ fn main() {
             "2d" => matches!(group, Group::Single(_) | Group::Ggx(_)),
             "ggx" => matches!(group, Group::Ggx(_)),
             "diel" => matches!(group, Group::Dielectric(_)),
+            "diel-fwd" => group == Group::Dielectric(false),
+            "diel-inv" => group == Group::Dielectric(true),
             _ => false,
         };
         if !selected {

@@ -314,6 +314,21 @@ pub enum DielectricMode {
 
 /// GGX dielectric interface with exact Fresnel (spec §3.8). Transmission uses the radiance
 /// convention of Walter et al. 2007.
+///
+/// Choices where the spec is silent or slips:
+/// * The refraction density includes the Jacobian factor `η'²`:
+///   `pdf_T = (1 − P_R) D_V(h) η'² |L·h| / (V·h + η' L·h)²` (Walter 2007 eq. 17; pbrt-v4).
+///   The spec's §3.8 formula omits `η'²`; without it the density does not integrate to one
+///   and the χ² test fails. Sample weights then average to the radiance-convention `E_T`.
+/// * With `t_fresnel = false` the reflection probability uses the transmission factor 1
+///   instead of `1 − F`: `P_R = F lum(T_r) / (F lum(T_r) + lum(T_t))`.
+/// * Delta refraction (α below the cut-off) has weight `T_t (1 − F)/η'²` (radiance
+///   convention, consistent with `E_T`), not `1 − F`.
+/// * `eval`'s Fresnel factor for a refraction pair is computed from the optically denser
+///   side, and `sample` returns `eval`'s density and `f/pdf` for the sampled direction, so
+///   that both are exactly what `pdf(L)` gives (f32 conditioning near the critical angle).
+/// * Separable masking reuses the height-correlated `E_R`/`E_T` tables rescaled by
+///   `E1_sep/E1_hc` (no separable dielectric tables are generated).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Dielectric {
     /// The distribution (a delta when `max(α_x, α_y) < 1e-3`).
