@@ -76,6 +76,10 @@ impl WardCore {
         let hz2 = hh.z * hh.z;
         let e = (hh.x * hh.x * self.inv_ax2 + hh.y * hh.y * self.inv_ay2) / hz2;
         let ex = (-e).exp();
+        if ex <= 0.0 {
+            // Also avoids 0·∞ when H_z underflows (both directions at the horizon).
+            return (0.0, 0.0);
+        }
         let f = match variant {
             WardVariant::Classic => self.norm * ex * mu_i.sqrt(),
             WardVariant::Gm => self.norm * hh2 / (hz2 * hz2) * ex * mu_i,
