@@ -416,3 +416,88 @@ fn chi2_distribution_values() {
     assert!((gamma_p(1.0, 2.0) - (1.0 - (-2.0f64).exp())).abs() < 1e-12);
     assert!((sidak(0.01, 1) - 0.01).abs() < 1e-15);
 }
+
+/// pbrt-style energy check (spec §5.5): 10 random views × 16384 (jittered) samples; the Monte Carlo
+/// estimate of `∫ f |μ_i|` (transmission counted as energy, `η'²` times the radiance-convention
+/// weight) stays below 1.01 for every leaf expected to conserve energy.
+#[test]
+fn energy_check_monte_carlo() {
+    let one = Vec3::ONE;
+    let mut lobes = vec![
+        Lobe::Lambert(Lambert { rho: one }),
+        Lobe::Translucent(Lambert { rho: one }),
+        Lobe::OrenNayar(OrenNayar {
+            rho: one,
+            sigma: 1.0,
+            variant: OrenNayarVariant::Energy,
+        }),
+        Lobe::OrenNayar(OrenNayar {
+            rho: one,
+            sigma: 1.0,
+            variant: OrenNayarVariant::EnergyFast,
+        }),
+        Lobe::Ward(Ward {
+            ax: 0.4,
+            ay: 0.4,
+            rho: one,
+            variant: WardVariant::Gm,
+        }),
+        Lobe::SheenLTC(SheenLTC { r: 0.3 }),
+        Lobe::SheenCK(SheenCK {
+            r: 1.0,
+            masking: SheenMasking::MaterialX,
+        }),
+    ];
+    for alpha in [0.05f32, 0.3, 1.0] {
+        for comp in [
+            Compensation::None,
+            Compensation::Turquin(1.0),
+            Compensation::KullaConty,
+        ] {
+            lobes.push(Lobe::MicrofacetR(MicrofacetR {
+                ggx: Ggx::isotropic(alpha),
+                masking: Masking::HeightCorrelated,
+                fresnel: Fresnel::One,
+                comp,
+            }));
+        }
+        for eta in [1.5f32, 1.0 / 1.5] {
+            lobes.push(Lobe::Dielectric(Dielectric::new(
+                Ggx::isotropic(alpha),
+                Masking::HeightCorrelated,
+                eta,
+                DielectricMode::RT,
+            )));
+        }
+    }
+    let mut rng = Rng::new(4242);
+    for lobe in &lobes {
+        for _ in 0..10 {
+            let mut v = rng.cosine();
+            if lobe.is_two_sided() && rng.f32() < 0.5 {
+                v.z = -v.z;
+            }
+            let p = lobe.prepare(v, Sides::Front);
+            let mut sum = Vec3::ZERO.as_dvec3();
+            let n = 16_384;
+            for k in 0..n {
+                // Jittered 128 × 128 strata over (u0, u1): same count, lower variance.
+                let (i, j) = ((k / 128) as f32, (k % 128) as f32);
+                let u = [(i + rng.f32()) / 128.0, (j + rng.f32()) / 128.0, rng.f32()];
+                if let Some(s) = p.sample(u) {
+                    let transmitted = s.l.z * v.z < 0.0;
+                    let eta2 = match lobe {
+                        Lobe::Dielectric(d) if transmitted => {
+                            let e = if v.z < 0.0 { 1.0 / d.eta } else { d.eta };
+                            e * e
+                        }
+                        _ => 1.0,
+                    };
+                    sum += (s.weight * eta2).as_dvec3();
+                }
+            }
+            let e = sum / n as f64;
+            assert!(e.max_element() < 1.01, "{lobe:?} V {v}: energy {e}");
+        }
+    }
+}

@@ -213,7 +213,11 @@ fn tiny_cosines_do_not_overflow() {
             for &b in &tiny {
                 let v = Vec3::new(1.0, 0.0, a).normalize();
                 let l = Vec3::new(-0.6, 0.8, b).normalize();
-                for (v, l) in [(v, l), (v, Vec3::new(v.x, v.y, b)), (v, Vec3::new(-l.x, -l.y, -b))] {
+                for (v, l) in [
+                    (v, l),
+                    (v, Vec3::new(v.x, v.y, b)),
+                    (v, Vec3::new(-l.x, -l.y, -b)),
+                ] {
                     if let Err(e) = check(&lobe, v, l, [0.5, 0.5, 0.5]) {
                         panic!("{lobe:?} V {v} L {l}: {e}");
                     }
