@@ -132,22 +132,25 @@ pub fn ggx_moments(mu: f64, alpha: f64, hc: bool, qs: &[f64]) -> Vec<f64> {
 pub fn dielectric_moments(mu: f64, alpha: f64, eta: f64) -> [f64; 3] {
     let cs = angles();
     let v = view(mu);
-    let g1v = 1.0 / (1.0 + ref64::ggx_lambda(alpha, v));
+    // View-only terms hoisted out of the sample loop: Λ(V), G1(V), the stretched view.
+    let lambda_v = ref64::ggx_lambda(alpha, v);
+    let g1v = 1.0 / (1.0 + lambda_v);
+    let vh_dir = DVec3::new(alpha * v.x, alpha * v.y, v.z).normalize();
     let inv_eta2 = 1.0 / (eta * eta);
     let mut acc = [0.0f64; 3];
     for c in &cs {
         for j in 0..GRID {
             let (u2, wq) = vndf_u2(j);
-            let h = ref64::ggx_vndf(alpha, v, *c, u2);
+            let h = ref64::ggx_vndf_stretched(alpha, vh_dir, *c, u2);
             let vh = v.dot(h);
             let f = wq * ref64::fresnel_dielectric(vh, eta);
             let lr = 2.0 * vh * h - v;
             if lr.z > 0.0 {
-                acc[0] += f * ref64::ggx_g2(alpha, v, lr, true) / g1v;
+                acc[0] += f / ((1.0 + lambda_v + ref64::ggx_lambda(alpha, lr)) * g1v);
             }
             if let Some(lt) = ref64::refract(v, h, eta) {
                 if lt.z < 0.0 {
-                    let w = ref64::ggx_g2(alpha, v, lt, true) / g1v * inv_eta2;
+                    let w = inv_eta2 / ((1.0 + lambda_v + ref64::ggx_lambda(alpha, lt)) * g1v);
                     acc[1] += (wq - f) * w;
                     acc[2] += wq * w;
                 }

@@ -32,6 +32,11 @@ pub fn ggx_g2(alpha: f64, v: DVec3, l: DVec3, hc: bool) -> f64 {
 /// Visible-normal sample (Dupuy & Benyoub 2023) with precomputed `(cos φ, sin φ)`.
 pub fn ggx_vndf(alpha: f64, v: DVec3, cs: (f64, f64), u2: f64) -> DVec3 {
     let vh = DVec3::new(alpha * v.x, alpha * v.y, v.z).normalize();
+    ggx_vndf_stretched(alpha, vh, cs, u2)
+}
+
+/// [`ggx_vndf`] with the stretched, normalised view `vh = normalize(α V_x, α V_y, V_z)` given.
+pub fn ggx_vndf_stretched(alpha: f64, vh: DVec3, cs: (f64, f64), u2: f64) -> DVec3 {
     let z = (1.0 - u2) * (1.0 + vh.z) - vh.z;
     let s = (1.0 - z * z).clamp(0.0, 1.0).sqrt();
     let c = DVec3::new(s * cs.0, s * cs.1, z) + vh;
