@@ -19,13 +19,14 @@ fn batch_equals_scalar() {
         };
         let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
         for k in 0..W {
-            batch.ax[k] = 0.01 + rng.f32();
-            batch.ay[k] = 0.01 + rng.f32();
+            batch.ax[k] = 0.01 + 0.99 * rng.f32();
+            batch.ay[k] = 0.01 + 0.99 * rng.f32();
             batch.eta[k] = 1.0 + 2.0 * rng.f32();
             batch
                 .tint
                 .set(k, Vec3::new(rng.f32(), rng.f32(), rng.f32()));
-            v.set(k, rng.sphere());
+            let s = rng.sphere();
+            v.set(k, Vec3::new(s.x, s.y, s.z.abs()));
             l.set(k, rng.sphere());
         }
         let out = batch.eval(&v, &l);

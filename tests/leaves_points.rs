@@ -256,10 +256,7 @@ fn dielectric_transmission_points_and_generalized_reciprocity() {
     assert!(near(back, 22.3524), "swapped {back}");
     let a = fwd / 0.939_692_6 / 1.0;
     let b = back / 0.866_025_4 / 2.25;
-    assert!(
-        near(a, 11.4713) && (a - b).abs() < 1e-5 * a,
-        "{a} vs {b}"
-    );
+    assert!(near(a, 11.4713) && (a - b).abs() < 1e-5 * a, "{a} vs {b}");
 }
 
 #[test]
