@@ -1,1 +1,914 @@
-//! (in progress)
+//! vstruct resolution (spec vstruct.md §4): expand every placeholder connection between an
+//! output head and an input head into member connections and values, upstream first, exactly
+//! as OpenUSD hdPrman does, and report what the reference does silently (§8).
+//!
+//! The reference recurses; this implementation runs the same algorithm on an explicit work
+//! stack, so that a chain of 100,000 nodes cannot overflow the thread's stack. Each stack frame
+//! is one node being resolved, with the snapshot of its connected input heads and the position
+//! reached in it.
+
+use crate::cond::{
+    self, Action, ActionKind, ComparisonReport, CopyOutcome, Extension, Extensions, Statement,
+};
+use crate::diag::{Diagnostic, Diagnostics, Location};
+use crate::network::{Link, Network, NodeId};
+use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
+use crate::registry::{Definition, Property, Registry};
+use crate::types::Value;
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+
+/// Options of one resolution run.
+#[derive(Debug, Clone)]
+pub struct ResolveOptions {
+    /// Evaluate conditionals (the default). `false` is the reference's
+    /// `enableConditions = false`: every matched member connects (§4.6).
+    pub conditions: bool,
+    /// Opt-in extensions (§9). Without them, results are exactly the reference's.
+    pub extensions: Extensions,
+    /// Also report `note` diagnostics (VS021: a downstream member without counterpart).
+    pub verbose: bool,
+    /// Record one [`MemberEvent`] per member decision (used by `vstructc explain`).
+    pub record_events: bool,
+}
+
+impl Default for ResolveOptions {
+    fn default() -> Self {
+        ResolveOptions {
+            conditions: true,
+            extensions: Extensions::none(),
+            verbose: false,
+            record_events: false,
+        }
+    }
+}
+
+/// What resolution did, besides editing the network.
+#[derive(Debug, Clone, Default)]
+pub struct Resolution {
+    /// Every diagnostic, in the order the algorithm produced them.
+    pub diagnostics: Diagnostics,
+    /// Member decisions, when [`ResolveOptions::record_events`] is set.
+    pub events: Vec<MemberEvent>,
+}
+
+/// One value an expression read on the upstream node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValueRead {
+    /// The parameter name on the upstream node.
+    pub param: String,
+    /// Where the value came from.
+    pub source: ReadSource,
+    /// Whether the input had a connection at evaluation time.
+    pub connected: bool,
+}
+
+/// The origin of a value read by a conditional.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ReadSource {
+    /// An authored value (including one written by `set`/`copy` earlier in the run).
+    Authored(Value),
+    /// The definition default of a declared input.
+    Default(Value),
+    /// A declared input without value or default.
+    NoValue,
+    /// The upstream definition declares no such input.
+    Undeclared,
+}
+
+/// What happened to one downstream member.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Connected to the upstream member output.
+    Connected,
+    /// Left alone by `ignore` (keeps its value or default).
+    Ignored,
+    /// A value was written by `set` or `copy`.
+    Written(Value),
+    /// `set` or `copy` could not be applied (VS013 / VS014); nothing changed.
+    NotApplied(String),
+    /// Already connected: the direct connection wins (VS019).
+    DirectConnectionWins,
+    /// The conditional failed to parse: never connected (VS016).
+    Unparsable,
+    /// No upstream member matches any of the member's names.
+    NoCounterpart,
+}
+
+/// The story of one downstream member during resolution (for `vstructc explain`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemberEvent {
+    /// Downstream node.
+    pub node: NodeId,
+    /// Downstream member input.
+    pub member: String,
+    /// The input head it was expanded from.
+    pub head: String,
+    /// Upstream node and output head.
+    pub upstream: NodeId,
+    /// The upstream output head.
+    pub upstream_head: String,
+    /// The upstream member output that matched, and by which name.
+    pub matched: Option<(String, String)>,
+    /// The conditional text, if the matched output has one and conditions are enabled.
+    pub expression: Option<String>,
+    /// The chosen action as written (`connect`, `set 1`, …), if a conditional was evaluated.
+    pub action: Option<String>,
+    /// Every parameter the conditional names, with the value it had on the upstream node.
+    pub reads: Vec<ValueRead>,
+    /// What happened.
+    pub outcome: Outcome,
+}
+
+/// Resolve every vstruct connection of `net` against `registry` (vstruct.md §4.4).
+///
+/// Nodes are visited in sorted order (D1); each node's input heads are expanded after the
+/// upstream node has been resolved completely. Afterwards authored values on input heads are
+/// removed (§4.7, VS017).
+pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
+    let mut r = Resolver {
+        net,
+        registry,
+        options,
+        out: Resolution::default(),
+        visited: HashSet::new(),
+        on_stack: HashSet::new(),
+        types: HashMap::new(),
+        memo: HashMap::new(),
+    };
+    r.run();
+    r.remove_head_values();
+    r.out
+}
+
+/// One node under resolution on the work stack.
+struct Frame {
+    node: NodeId,
+    /// Connected input heads of the node, snapshot taken when the node was entered (step 3).
+    heads: Vec<String>,
+    /// Position in `heads`.
+    next: usize,
+    /// True when the upstream of `heads[next]` has already been entered (step 3d done).
+    upstream_done: bool,
+}
+
+/// The checked upstream end of a head connection.
+struct HeadSource {
+    upstream: NodeId,
+    head: String,
+}
+
+struct Resolver<'a> {
+    net: &'a mut Network,
+    registry: &'a Registry,
+    options: &'a ResolveOptions,
+    out: Resolution,
+    visited: HashSet<NodeId>,
+    /// Nodes of the frames on the work stack (step 1's "on stack"), for O(1) cycle checks.
+    on_stack: HashSet<NodeId>,
+    /// Per shader id: its definition and tables, looked up in the registry once per run.
+    types: HashMap<String, TypeInfo>,
+    /// Results of the conditionals evaluated during the current head expansion, keyed by the
+    /// shared parse result: members with the same expression text share one evaluation, which
+    /// is exact because expanding D never changes U (unless D is U, when nothing is cached).
+    memo: HashMap<usize, (Action, Vec<ComparisonReport>)>,
+}
+
+#[derive(Clone)]
+struct TypeInfo {
+    def: Option<Arc<IndexedDef>>,
+    tables: Option<Arc<VstructTables>>,
+}
+
+/// A definition with a name index over its inputs: definitions such as PxrLayerMixer declare
+/// hundreds of inputs, and conditionals look several of them up for every member.
+struct IndexedDef {
+    def: Arc<Definition>,
+    inputs: HashMap<String, usize>,
+}
+
+impl IndexedDef {
+    fn new(def: Arc<Definition>) -> Self {
+        let inputs = def
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.name.clone(), i))
+            .collect();
+        IndexedDef { def, inputs }
+    }
+
+    fn input(&self, name: &str) -> Option<&Property> {
+        self.inputs.get(name).map(|&i| &self.def.inputs[i])
+    }
+}
+
+impl Resolver<'_> {
+    fn type_info(&mut self, shader: &str) -> TypeInfo {
+        if let Some(info) = self.types.get(shader) {
+            return info.clone();
+        }
+        let info = TypeInfo {
+            def: self
+                .registry
+                .definition(shader)
+                .map(|d| Arc::new(IndexedDef::new(d))),
+            tables: self.registry.tables(shader),
+        };
+        self.types.insert(shader.to_string(), info.clone());
+        info
+    }
+
+    fn tables(&mut self, shader: &str) -> Option<Arc<VstructTables>> {
+        self.type_info(shader).tables
+    }
+
+    fn definition(&mut self, shader: &str) -> Option<Arc<IndexedDef>> {
+        self.type_info(shader).def
+    }
+
+    fn run(&mut self) {
+        let mut stack: Vec<Frame> = Vec::new();
+        for start in self.net.nodes_sorted() {
+            if let Some(frame) = self.enter(start) {
+                self.on_stack.insert(frame.node);
+                stack.push(frame);
+            }
+            while let Some(top) = stack.len().checked_sub(1) {
+                if stack[top].next >= stack[top].heads.len() {
+                    self.on_stack.remove(&stack[top].node);
+                    stack.pop();
+                    continue;
+                }
+                if let Some(upstream) = self.step(&mut stack, top)
+                    && let Some(frame) = self.enter(upstream)
+                {
+                    self.on_stack.insert(frame.node);
+                    stack.push(frame);
+                }
+            }
+        }
+    }
+
+    /// Step 1–3 entry: mark visited and snapshot the connected input heads. `None` if the
+    /// node was visited before or has nothing to expand.
+    fn enter(&mut self, node: NodeId) -> Option<Frame> {
+        if !self.visited.insert(node) {
+            return None;
+        }
+        let shader = self.net[node].shader().to_string();
+        let Some(tables) = self.tables(&shader) else {
+            if self.definition(&shader).is_none() {
+                self.unknown_type_info(node, &shader);
+            }
+            return None;
+        };
+        let heads: Vec<String> = self
+            .net
+            .connected_inputs(node)
+            .into_iter()
+            .filter(|i| tables.is_input_head(i))
+            .collect();
+        if heads.is_empty() {
+            return None;
+        }
+        Some(Frame {
+            node,
+            heads,
+            next: 0,
+            upstream_done: false,
+        })
+    }
+
+    /// Advance the top frame by one head. Returns an upstream node to enter first, if the
+    /// current head's upstream has not been resolved yet.
+    fn step(&mut self, stack: &mut [Frame], top: usize) -> Option<NodeId> {
+        let (node, head, upstream_done) = {
+            let f = &stack[top];
+            (f.node, f.heads[f.next].clone(), f.upstream_done)
+        };
+        let Some(source) = self.check_head(node, &head, !upstream_done) else {
+            stack[top].next += 1;
+            stack[top].upstream_done = false;
+            return None;
+        };
+        if !upstream_done {
+            stack[top].upstream_done = true;
+            if self.on_stack.contains(&source.upstream) {
+                let pos = stack
+                    .iter()
+                    .position(|f| f.node == source.upstream)
+                    .unwrap_or(0);
+                self.report_cycle(&stack[pos..], &head, &source);
+            } else if !self.visited.contains(&source.upstream) {
+                return Some(source.upstream);
+            }
+        }
+        self.expand(node, &head, &source);
+        stack[top].next += 1;
+        stack[top].upstream_done = false;
+        None
+    }
+
+    /// Steps 3b–3c: the first connection of the head must come from an output head of a known
+    /// upstream type. Diagnostics are produced on the first visit only.
+    fn check_head(&mut self, node: NodeId, head: &str, report: bool) -> Option<HeadSource> {
+        let links = self.net.connections(node, head).to_vec();
+        let first = links.first()?.clone();
+        if report && links.len() > 1 {
+            self.report_extra_connections(node, head, &links);
+        }
+        let problem = match (&first.upstream_node(), first.output()) {
+            (None, _) => format!(
+                "upstream node `{}` does not exist",
+                first.missing_handle().unwrap_or_default()
+            ),
+            (Some(_), None) => "it is a whole-node reference (no output name)".to_string(),
+            (Some(up), Some(out)) => {
+                let shader = self.net[*up].shader().to_string();
+                match self.tables(&shader) {
+                    None => {
+                        if report {
+                            self.unknown_type_warning(*up, &shader, node, head);
+                        }
+                        format!("the type `{shader}` of `{}` is unknown", self.name(*up))
+                    }
+                    Some(t) if !t.is_output_head(out) => {
+                        format!("`{out}` is not an output head of `{shader}`")
+                    }
+                    Some(_) => {
+                        return Some(HeadSource {
+                            upstream: *up,
+                            head: out.to_string(),
+                        });
+                    }
+                }
+            }
+        };
+        if report {
+            let d = Diagnostic::warning(
+                "VS010",
+                format!(
+                    "placeholder {} ← {} cannot be resolved: {problem}; it is kept",
+                    self.plug(node, head),
+                    self.link_text(&first)
+                ),
+            );
+            self.push(d, node, Some(head));
+        }
+        None
+    }
+
+    /// Steps 3e–3f: delete the placeholder(s) and expand each member of the head.
+    fn expand(&mut self, node: NodeId, head: &str, source: &HeadSource) {
+        let down_shader = self.net[node].shader().to_string();
+        let up_shader = self.net[source.upstream].shader().to_string();
+        let (Some(down_tables), Some(up_tables)) =
+            (self.tables(&down_shader), self.tables(&up_shader))
+        else {
+            return;
+        };
+        let down_def = self.definition(&down_shader);
+        let up_def = self.definition(&up_shader);
+        self.net.clear_connections(node, head);
+        self.memo.clear();
+        for member in down_tables.members_in(head) {
+            let ctx = MemberCtx {
+                node,
+                head,
+                member: &member.property,
+                source,
+                down_def: down_def.as_deref(),
+                up_def: up_def.as_deref(),
+            };
+            if !self.net.connections(node, &member.property).is_empty() {
+                self.direct_connection_wins(&ctx);
+                continue;
+            }
+            let matched = member.names.iter().find_map(|name| {
+                up_tables
+                    .reverse_out(&source.head, name)
+                    .map(|p| (name.as_str(), p))
+            });
+            match matched {
+                Some((name, output)) => self.apply_member(&ctx, name, output),
+                None => self.no_counterpart(&ctx, &member.names, &up_tables),
+            }
+        }
+    }
+
+    fn apply_member(&mut self, ctx: &MemberCtx<'_>, name: &str, output: &OutputMember) {
+        let mut event = self.event(ctx, Some((output.property.clone(), name.to_string())));
+        match (&output.cond, self.options.conditions) {
+            (None, _) => {
+                self.connect(ctx, &output.property);
+                event.outcome = Outcome::Connected;
+            }
+            (Some(entry), false) => {
+                self.connect(ctx, &output.property);
+                if !always_connects(entry) {
+                    self.no_conditions_info(ctx, &output.property, entry);
+                }
+                event.outcome = Outcome::Connected;
+            }
+            (Some(entry), true) => {
+                event.expression = Some(entry.source.text.clone());
+                match entry.statement() {
+                    Some(stmt) => self.evaluate(ctx, &output.property, entry, stmt, &mut event),
+                    None => {
+                        self.unparsable(ctx, &output.property, entry);
+                        event.outcome = Outcome::Unparsable;
+                    }
+                }
+            }
+        }
+        self.record(event);
+    }
+
+    /// §4.1 steps 3–5: evaluate the conditional against U and apply the chosen action to D.M.
+    fn evaluate(
+        &mut self,
+        ctx: &MemberCtx<'_>,
+        output: &str,
+        entry: &CondEntry,
+        stmt: &Statement,
+        event: &mut MemberEvent,
+    ) {
+        let key = Arc::as_ptr(&entry.parsed) as usize;
+        let cacheable = ctx.node != ctx.source.upstream;
+        let view = NodeView {
+            net: self.net,
+            node: ctx.source.upstream,
+            def: ctx.up_def,
+        };
+        let (action, reports) = match self.memo.get(&key).filter(|_| cacheable) {
+            Some(hit) => hit.clone(),
+            None => {
+                let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
+                let result = (evaluation.action.clone(), evaluation.reports);
+                if cacheable {
+                    self.memo.insert(key, result.clone());
+                }
+                result
+            }
+        };
+        if self.options.record_events {
+            event.reads = stmt
+                .param_names()
+                .into_iter()
+                .map(|p| view.read(p))
+                .collect();
+            event.action = Some(action.to_string());
+        }
+        for report in &reports {
+            self.comparison_warning(ctx, output, entry, report);
+        }
+        event.outcome = match &action.kind {
+            ActionKind::Connect => {
+                self.connect(ctx, output);
+                Outcome::Connected
+            }
+            ActionKind::Ignore => Outcome::Ignored,
+            ActionKind::Set { literal } => {
+                let dest = ctx
+                    .down_def
+                    .and_then(|d| d.input(ctx.member))
+                    .map(|p| &p.ty);
+                match cond::set_value(literal, dest, &self.options.extensions) {
+                    Ok(set) => {
+                        if set.saturated {
+                            self.saturated_warning(ctx, &action);
+                        }
+                        self.write(ctx, set.value.clone(), &action);
+                        Outcome::Written(set.value)
+                    }
+                    Err(why) => {
+                        let msg = why.to_string();
+                        self.not_applied(ctx, "VS013", &msg, &action);
+                        Outcome::NotApplied(msg)
+                    }
+                }
+            }
+            ActionKind::Copy { param } => self.copy(ctx, &param.name, &action),
+        };
+    }
+
+    fn copy(&mut self, ctx: &MemberCtx<'_>, param: &str, action: &Action) -> Outcome {
+        let up = ctx.source.upstream;
+        let source_prop = ctx.up_def.and_then(|d| d.input(param));
+        let value = self
+            .net
+            .value(up, param)
+            .or_else(|| source_prop.and_then(|p| p.default.as_ref()))
+            .cloned();
+        let dest = ctx
+            .down_def
+            .and_then(|d| d.input(ctx.member))
+            .map(|p| &p.ty);
+        match cond::copy_value(
+            value.as_ref(),
+            source_prop.map(|p| &p.ty),
+            dest,
+            &self.options.extensions,
+        ) {
+            Ok(CopyOutcome::Write {
+                value,
+                shape_mismatch,
+                ..
+            }) => {
+                if shape_mismatch {
+                    let msg = format!(
+                        "`copy {param}` copies between an array and a non-array (or arrays of \
+                         different sizes), as the reference does"
+                    );
+                    self.not_applied(ctx, "VS014", &msg, action);
+                }
+                self.write(ctx, value.clone(), action);
+                Outcome::Written(value)
+            }
+            Ok(CopyOutcome::NoValue) => Outcome::Ignored,
+            Err(why) => {
+                let msg = why.to_string();
+                self.not_applied(ctx, "VS014", &msg, action);
+                Outcome::NotApplied(msg)
+            }
+        }
+    }
+
+    fn connect(&mut self, ctx: &MemberCtx<'_>, output: &str) {
+        if self.net.value(ctx.node, ctx.member).is_some() {
+            let d = Diagnostic::info(
+                "VS018",
+                format!(
+                    "authored value on {} is overridden by the connection from {}",
+                    self.plug(ctx.node, ctx.member),
+                    self.plug(ctx.source.upstream, output)
+                ),
+            );
+            self.push(d, ctx.node, Some(ctx.member));
+        }
+        self.net.set_connections(
+            ctx.node,
+            ctx.member,
+            vec![Link::node(ctx.source.upstream, Some(output))],
+        );
+    }
+
+    fn write(&mut self, ctx: &MemberCtx<'_>, value: Value, action: &Action) {
+        let previous = self.net.set_param(ctx.node, ctx.member, value);
+        if let Some(old) = previous {
+            let d = Diagnostic::info(
+                "VS018",
+                format!(
+                    "authored value {old} on {} is replaced by `{action}`",
+                    self.plug(ctx.node, ctx.member)
+                ),
+            );
+            self.push(d, ctx.node, Some(ctx.member));
+        }
+    }
+
+    /// §4.7: authored values on input heads are never meaningful; remove them (VS017).
+    fn remove_head_values(&mut self) {
+        for node in self.net.nodes_sorted() {
+            let shader = self.net[node].shader().to_string();
+            let Some(tables) = self.tables(&shader) else {
+                continue;
+            };
+            let heads: Vec<String> = tables.input_heads().map(str::to_string).collect();
+            for head in heads {
+                if self.net.value(node, &head).is_none() {
+                    continue;
+                }
+                let d = Diagnostic::warning(
+                    "VS017",
+                    format!(
+                        "authored value on input head {} removed (a vstruct head carries no value)",
+                        self.plug(node, &head)
+                    ),
+                );
+                self.push(d, node, Some(&head));
+                self.net.remove_value(node, &head);
+            }
+        }
+    }
+
+    // ----- diagnostics ---------------------------------------------------------------------
+
+    fn direct_connection_wins(&mut self, ctx: &MemberCtx<'_>) {
+        let links = self.net.connections(ctx.node, ctx.member).to_vec();
+        let from = links
+            .iter()
+            .map(|l| self.link_text(l))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let d = Diagnostic::info(
+            "VS019",
+            format!(
+                "{} is already connected to {from}; the direct connection wins over the \
+                 expansion of `{}`",
+                self.plug(ctx.node, ctx.member),
+                ctx.head
+            ),
+        );
+        self.push(d, ctx.node, Some(ctx.member));
+        let mut event = self.event(ctx, None);
+        event.outcome = Outcome::DirectConnectionWins;
+        self.record(event);
+    }
+
+    fn no_counterpart(&mut self, ctx: &MemberCtx<'_>, names: &[String], _up: &Arc<VstructTables>) {
+        if self.options.verbose {
+            let d = Diagnostic::note(
+                "VS021",
+                format!(
+                    "{} has no counterpart named {} in `{}` of {}",
+                    self.plug(ctx.node, ctx.member),
+                    names
+                        .iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect::<Vec<_>>()
+                        .join(" or "),
+                    ctx.source.head,
+                    self.name(ctx.source.upstream)
+                ),
+            );
+            self.push(d, ctx.node, Some(ctx.member));
+        }
+        let mut event = self.event(ctx, None);
+        event.outcome = Outcome::NoCounterpart;
+        self.record(event);
+    }
+
+    fn unparsable(&mut self, ctx: &MemberCtx<'_>, output: &str, entry: &CondEntry) {
+        let why = match entry.parsed.as_ref() {
+            Err(e) => e.message.clone(),
+            Ok(_) => String::new(),
+        };
+        let d = Diagnostic::warning(
+            "VS016",
+            format!(
+                "{} ← {} not expanded: the conditional {:?} failed to parse ({why})",
+                self.plug(ctx.node, ctx.member),
+                self.plug(ctx.source.upstream, output),
+                entry.source.text
+            ),
+        )
+        .with_related("conditional", entry.source.location.clone());
+        self.push(d, ctx.node, Some(ctx.member));
+    }
+
+    fn no_conditions_info(&mut self, ctx: &MemberCtx<'_>, output: &str, entry: &CondEntry) {
+        let d = Diagnostic::info(
+            "VS022",
+            format!(
+                "{} ← {} connected without evaluating its conditional {:?} (--no-conditions)",
+                self.plug(ctx.node, ctx.member),
+                self.plug(ctx.source.upstream, output),
+                entry.source.text
+            ),
+        );
+        self.push(d, ctx.node, Some(ctx.member));
+    }
+
+    fn comparison_warning(
+        &mut self,
+        ctx: &MemberCtx<'_>,
+        output: &str,
+        entry: &CondEntry,
+        report: &ComparisonReport,
+    ) {
+        let d = report
+            .to_diagnostic(&entry.source.text)
+            .with_note(format!(
+                "evaluated on {} for {} ← {}",
+                self.name(ctx.source.upstream),
+                self.plug(ctx.node, ctx.member),
+                self.plug(ctx.source.upstream, output)
+            ))
+            .with_related("conditional", entry.source.location.clone());
+        self.push(d, ctx.node, Some(ctx.member));
+    }
+
+    fn saturated_warning(&mut self, ctx: &MemberCtx<'_>, action: &Action) {
+        let d = Diagnostic::warning(
+            "VS023",
+            format!(
+                "`{action}` is outside the int range; {} is saturated",
+                self.plug(ctx.node, ctx.member)
+            ),
+        );
+        self.push(d, ctx.node, Some(ctx.member));
+    }
+
+    fn not_applied(&mut self, ctx: &MemberCtx<'_>, code: &'static str, msg: &str, action: &Action) {
+        let d = Diagnostic::warning(
+            code,
+            format!("{}: `{action}`: {msg}", self.plug(ctx.node, ctx.member)),
+        );
+        self.push(d, ctx.node, Some(ctx.member));
+    }
+
+    fn report_extra_connections(&mut self, node: NodeId, head: &str, links: &[Link]) {
+        let dropped = links[1..]
+            .iter()
+            .map(|l| self.link_text(l))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let d = Diagnostic::warning(
+            "VS011",
+            format!(
+                "{} has {} connections; only the first ({}) is expanded and all are deleted; \
+                 dropped: {dropped}",
+                self.plug(node, head),
+                links.len(),
+                self.link_text(&links[0])
+            ),
+        );
+        self.push(d, node, Some(head));
+    }
+
+    fn report_cycle(&mut self, cycle: &[Frame], head: &str, source: &HeadSource) {
+        // One hop per frame on the cycle: `node.head ← upstream.output`.
+        let hops: Vec<String> = cycle
+            .iter()
+            .map(|f| {
+                let input = f.heads.get(f.next).map(String::as_str).unwrap_or(head);
+                let from = self
+                    .net
+                    .connections(f.node, input)
+                    .first()
+                    .map(|l| self.link_text(l))
+                    .unwrap_or_default();
+                format!("{} ← {from}", self.plug(f.node, input))
+            })
+            .collect();
+        let Some(last) = cycle.last() else { return };
+        let d = Diagnostic::warning(
+            "VS012",
+            format!(
+                "cycle: {} is still being resolved and is used as it is now: {}",
+                self.name(source.upstream),
+                hops.join(", ")
+            ),
+        );
+        self.push(d, last.node, Some(head));
+    }
+
+    fn unknown_type_info(&mut self, node: NodeId, shader: &str) {
+        let d = Diagnostic::info(
+            "VS020",
+            format!(
+                "node type `{shader}` of {} is unknown to the registry",
+                self.name(node)
+            ),
+        );
+        self.push(d, node, None);
+    }
+
+    fn unknown_type_warning(&mut self, up: NodeId, shader: &str, node: NodeId, head: &str) {
+        let d = Diagnostic::warning(
+            "VS020",
+            format!(
+                "node type `{shader}` of {} is unknown to the registry, but it feeds the head {}",
+                self.name(up),
+                self.plug(node, head)
+            ),
+        );
+        self.push(d, up, None);
+    }
+
+    // ----- helpers -------------------------------------------------------------------------
+
+    fn name(&self, node: NodeId) -> String {
+        self.net[node].display_name()
+    }
+
+    fn plug(&self, node: NodeId, param: &str) -> String {
+        format!("{}.{param}", self.name(node))
+    }
+
+    fn link_text(&self, link: &Link) -> String {
+        let up = match link.upstream_node() {
+            Some(n) => self.name(n),
+            None => link.missing_handle().unwrap_or_default().to_string(),
+        };
+        match link.output() {
+            Some(o) => format!("{up}.{o}"),
+            None => up,
+        }
+    }
+
+    /// Attach the most precise location known: the parameter's, else the node's.
+    fn push(&mut self, d: Diagnostic, node: NodeId, param: Option<&str>) {
+        let n = &self.net[node];
+        let loc: Option<Location> = param
+            .and_then(|p| n.param(p))
+            .and_then(|p| p.location().cloned())
+            .or_else(|| n.location().cloned());
+        let d = match loc {
+            Some(l) => d.at(l),
+            None => d,
+        };
+        self.out.diagnostics.push(d);
+    }
+
+    fn event(&self, ctx: &MemberCtx<'_>, matched: Option<(String, String)>) -> MemberEvent {
+        MemberEvent {
+            node: ctx.node,
+            member: ctx.member.to_string(),
+            head: ctx.head.to_string(),
+            upstream: ctx.source.upstream,
+            upstream_head: ctx.source.head.clone(),
+            matched,
+            expression: None,
+            action: None,
+            reads: Vec::new(),
+            outcome: Outcome::NoCounterpart,
+        }
+    }
+
+    fn record(&mut self, event: MemberEvent) {
+        if self.options.record_events {
+            self.out.events.push(event);
+        }
+    }
+}
+
+/// The member being expanded and everything needed to apply an action to it.
+struct MemberCtx<'c> {
+    node: NodeId,
+    head: &'c str,
+    member: &'c str,
+    source: &'c HeadSource,
+    down_def: Option<&'c IndexedDef>,
+    up_def: Option<&'c IndexedDef>,
+}
+
+/// True if every branch of the conditional connects (so `--no-conditions` changes nothing
+/// for it and VS022 is not reported).
+fn always_connects(entry: &CondEntry) -> bool {
+    match entry.statement() {
+        None => false,
+        Some(stmt) => {
+            let connects = |a: &Action| matches!(a.kind, ActionKind::Connect);
+            connects(&stmt.action)
+                && stmt.fallback.as_ref().is_none_or(connects)
+                && (stmt.condition.is_none() || stmt.fallback.is_some())
+                && stmt.else_ifs.iter().all(|l| connects(&l.action))
+        }
+    }
+}
+
+/// The upstream node as the conditional evaluator sees it: the network's current state plus
+/// the node's definition.
+struct NodeView<'v> {
+    net: &'v Network,
+    node: NodeId,
+    def: Option<&'v IndexedDef>,
+}
+
+impl NodeView<'_> {
+    fn read(&self, param: &str) -> ValueRead {
+        let connected = !self.net.connections(self.node, param).is_empty();
+        let declared = self.def.and_then(|d| d.input(param));
+        let source = match (self.net.value(self.node, param), declared) {
+            (Some(v), _) => ReadSource::Authored(v.clone()),
+            (None, Some(p)) => match &p.default {
+                Some(v) => ReadSource::Default(v.clone()),
+                None => ReadSource::NoValue,
+            },
+            (None, None) => ReadSource::Undeclared,
+        };
+        ValueRead {
+            param: param.to_string(),
+            source,
+            connected,
+        }
+    }
+}
+
+impl cond::Upstream for NodeView<'_> {
+    fn authored(&self, param: &str) -> Option<&Value> {
+        self.net.value(self.node, param)
+    }
+    fn declares_input(&self, param: &str) -> bool {
+        self.def.is_some_and(|d| d.input(param).is_some())
+    }
+    fn default_value(&self, param: &str) -> Option<&Value> {
+        self.def?.input(param)?.default.as_ref()
+    }
+    fn is_connected(&self, param: &str) -> bool {
+        !self.net.connections(self.node, param).is_empty()
+    }
+}
+
+/// Extensions that act in the resolver and are not implemented yet; a caller asking for them
+/// gets an error instead of silently unchanged results.
+pub fn unsupported_extensions(ext: &Extensions) -> Vec<&'static str> {
+    [Extension::ArrayHeads, Extension::Nested]
+        .into_iter()
+        .filter(|e| ext.contains(*e))
+        .map(Extension::name)
+        .collect()
+}

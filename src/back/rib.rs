@@ -1,1 +1,626 @@
-//! (in progress)
+//! RIB writer (spec formats.md §3.7).
+//!
+//! [`write_rib`] writes a network back over the RIB source it was read from:
+//!
+//! 1. bytes outside interpreted requests (other requests, comments, whitespace, re-use
+//!    requests) are copied unchanged;
+//! 2. requests of unmodified nodes ([`Node::is_modified`]) are copied unchanged;
+//! 3. modified nodes are re-serialised in place: the request line, then one parameter per line
+//!    indented one tab deeper than the request; parameters read from the source keep their
+//!    position (and their decl and value text when unchanged); new parameters are appended in
+//!    the declaration order given by [`ParamTypes::input_position`]; removed parameters are
+//!    omitted; comments keep their parameter (a comment on an omitted parameter moves to the
+//!    next written one; a comment on the value line stays on that line).
+//!
+//! Nodes not read from this source (networks from JSON or built in code, or nodes added to a
+//! read network) are written as fresh requests in dependency order (upstream first, ties in
+//! insertion order). In a read network they are written as one block just before the first
+//! source request that references one of them, or at the end when none does.
+//!
+//! Choices where the spec is silent:
+//!
+//! * A parameter whose connections changed but whose source decl was already `reference` keeps
+//!   its decl text. A replaced value keeps its decl text when the decl's type still describes
+//!   the value; otherwise the decl is written from the value's type.
+//! * The type of a new connection: the definition's input type, else the upstream output's
+//!   type, else the parameter's source decl type, else `float`.
+//! * A fresh `Bxdf` that is the surface terminal of a material whose name differs from its
+//!   handle and has no `__materialid` gets `"string __materialid" ["<material>"]`, so the
+//!   material name survives a round trip.
+//! * A connection is written as `"<upstream handle>:<output>"`. RIB references bind to the
+//!   latest version of a handle defined earlier in the file, so a link to an older version, or
+//!   to a node written later, cannot be expressed exactly; it is written by handle all the same.
+//!   Likewise a whole-node reference to a handle containing `:` reads back as `handle:output`
+//!   (references are split at the last `:`).
+//! * Lines end in `\n`, also in files that use `\r\n` (only re-serialised requests are
+//!   affected; pass-through bytes are copied as they are).
+//! * A comment inside an array value (between `[` and `]`) is part of the value text: it is
+//!   kept while the value is unchanged and dropped when the value is replaced.
+
+use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
+use crate::network::{Param, RequestKind, SourceParam};
+use crate::types::{ArraySpec, BaseType, Type, Value, format_f32};
+use std::collections::HashMap;
+use std::io::{self, Write};
+use std::ops::Range;
+
+/// Write `net` as RIB over `source`, the bytes it was read from (empty for networks that were
+/// not read from RIB), to `out`.
+///
+/// Fails with `InvalidInput` if a node's source span does not lie inside `source` (the network
+/// was read from other bytes), or with the error of `out`.
+///
+/// ```
+/// use vstructc::back::rib::write_rib;
+/// use vstructc::front::rib::{RibOptions, parse_rib};
+/// use vstructc::network::NoDefinitions;
+/// use vstructc::{Diagnostics, Value};
+///
+/// let src = b"Pattern \"PxrFractal\" \"f\"  \"int layers\" [3] # noise\nWorldBegin\n";
+/// let mut diags = Diagnostics::new();
+/// let mut net = parse_rib(src, "a.rib", &NoDefinitions, &RibOptions::default(), &mut diags).unwrap();
+///
+/// let mut same = Vec::new();
+/// write_rib(src, &net, &NoDefinitions, &mut same).unwrap();
+/// assert_eq!(same, src);
+///
+/// let f = net.find("f").unwrap();
+/// net.set_param(f, "layers", Value::Int(6));
+/// let mut out = Vec::new();
+/// write_rib(src, &net, &NoDefinitions, &mut out).unwrap();
+/// assert_eq!(
+///     String::from_utf8(out).unwrap(),
+///     "Pattern \"PxrFractal\" \"f\"\n\t\"int layers\" [6] # noise\nWorldBegin\n"
+/// );
+/// ```
+pub fn write_rib(
+    source: &[u8],
+    net: &Network,
+    types: &dyn ParamTypes,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let w = Writer { source, net, types };
+    w.write(out)
+}
+
+/// [`write_rib`] into a new byte vector.
+///
+/// ```
+/// use vstructc::back::rib::write_rib_to_vec;
+/// use vstructc::network::{NoDefinitions, Network};
+/// use vstructc::Value;
+/// let mut net = Network::new();
+/// let n = net.add_node("f", "PxrFractal");
+/// net.set_param(n, "layers", Value::Int(2));
+/// let rib = write_rib_to_vec(b"", &net, &NoDefinitions).unwrap();
+/// assert_eq!(String::from_utf8(rib).unwrap(), "Pattern \"PxrFractal\" \"f\"\n\t\"int layers\" [2]\n");
+/// ```
+pub fn write_rib_to_vec(
+    source: &[u8],
+    net: &Network,
+    types: &dyn ParamTypes,
+) -> io::Result<Vec<u8>> {
+    let mut out = Vec::with_capacity(source.len() + 1024);
+    write_rib(source, net, types, &mut out)?;
+    Ok(out)
+}
+
+struct Writer<'a> {
+    source: &'a [u8],
+    net: &'a Network,
+    types: &'a dyn ParamTypes,
+}
+
+fn invalid(msg: &str) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg.to_string())
+}
+
+impl Writer<'_> {
+    fn bytes(&self, r: &Range<usize>) -> io::Result<&[u8]> {
+        self.source.get(r.clone()).ok_or_else(|| {
+            invalid("network source spans do not match the RIB bytes given to the writer")
+        })
+    }
+
+    fn write(&self, out: &mut dyn Write) -> io::Result<()> {
+        let mut sourced: Vec<(Range<usize>, NodeId)> = Vec::new();
+        let mut fresh: Vec<NodeId> = Vec::new();
+        for id in self.net.node_ids() {
+            match self.net[id].source() {
+                Some(s) => sourced.push((s.span.clone(), id)),
+                None => fresh.push(id),
+            }
+        }
+        sourced.sort_by_key(|(r, _)| r.start);
+        let fresh = self.dependency_order(&fresh);
+        let fresh_set: std::collections::HashSet<NodeId> = fresh.iter().copied().collect();
+        // The fresh block goes before the first source request that references a fresh node.
+        let block_before = sourced.iter().position(|(_, id)| {
+            self.net[*id]
+                .params()
+                .flat_map(|p| p.connections())
+                .any(|l| l.upstream_node().is_some_and(|u| fresh_set.contains(&u)))
+        });
+        let mut cursor = 0;
+        for (k, (span, id)) in sourced.iter().enumerate() {
+            if span.start < cursor {
+                return Err(invalid("overlapping node source spans"));
+            }
+            out.write_all(self.bytes(&(cursor..span.start))?)?;
+            let indent = self.indent_before(span.start);
+            if block_before == Some(k) {
+                for &f in &fresh {
+                    self.fresh_node(out, f, &indent)?;
+                    out.write_all(b"\n\n")?;
+                    out.write_all(&indent)?;
+                }
+            }
+            let node = &self.net[*id];
+            if node.is_modified() {
+                self.reserialise(out, *id, &indent)?;
+            } else {
+                out.write_all(self.bytes(span)?)?;
+            }
+            cursor = span.end;
+        }
+        out.write_all(self.bytes(&(cursor..self.source.len()))?)?;
+        if block_before.is_none() && !fresh.is_empty() {
+            if !self.source.is_empty() && !self.source.ends_with(b"\n") {
+                out.write_all(b"\n")?;
+            }
+            for (k, &f) in fresh.iter().enumerate() {
+                if k > 0 {
+                    out.write_all(b"\n")?;
+                }
+                self.fresh_node(out, f, b"")?;
+                out.write_all(b"\n")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The spaces and tabs between the start of the line and `at`, if only those.
+    fn indent_before(&self, at: usize) -> Vec<u8> {
+        let line_start = self.source[..at]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        let prefix = &self.source[line_start..at];
+        if prefix.iter().all(|&b| b == b' ' || b == b'\t') {
+            prefix.to_vec()
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// Kahn's algorithm over `nodes` (edges among them only), ties in the given order; nodes on
+    /// cycles follow in the given order.
+    fn dependency_order(&self, nodes: &[NodeId]) -> Vec<NodeId> {
+        let pos: HashMap<NodeId, usize> = nodes.iter().enumerate().map(|(i, &n)| (n, i)).collect();
+        let mut indegree = vec![0usize; nodes.len()];
+        let mut downstream: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+        for (i, &n) in nodes.iter().enumerate() {
+            for u in self.net.upstream_nodes(n) {
+                if let Some(&j) = pos.get(&u) {
+                    if j != i {
+                        indegree[i] += 1;
+                        downstream[j].push(i);
+                    }
+                }
+            }
+        }
+        let mut ready: std::collections::BTreeSet<usize> =
+            (0..nodes.len()).filter(|&i| indegree[i] == 0).collect();
+        let mut done = vec![false; nodes.len()];
+        let mut order = Vec::with_capacity(nodes.len());
+        while let Some(i) = ready.pop_first() {
+            done[i] = true;
+            order.push(nodes[i]);
+            for &d in &downstream[i] {
+                indegree[d] -= 1;
+                if indegree[d] == 0 {
+                    ready.insert(d);
+                }
+            }
+        }
+        order.extend((0..nodes.len()).filter(|&i| !done[i]).map(|i| nodes[i]));
+        order
+    }
+
+    fn header(&self, node: &Node) -> Vec<u8> {
+        let mut h = Vec::new();
+        h.extend_from_slice(node.kind().keyword().as_bytes());
+        h.push(b' ');
+        h.extend_from_slice(quote(node.shader()).as_bytes());
+        h.push(b' ');
+        h.extend_from_slice(quote(node.handle()).as_bytes());
+        h
+    }
+
+    /// Re-serialise a modified node read from the source (formats.md §3.7 item 3).
+    fn reserialise(&self, out: &mut dyn Write, id: NodeId, indent: &[u8]) -> io::Result<()> {
+        let node = &self.net[id];
+        let Some(src) = node.source() else {
+            return self.fresh_node(out, id, indent);
+        };
+        let mut lines = Lines::new(indent);
+        out.write_all(&self.header(node))?;
+        for item in &src.items {
+            for c in &item.leading_comments {
+                lines.pending.push(self.bytes(c)?.to_vec());
+            }
+            let param = item.param.and_then(|k| node.all_params().get(k as usize));
+            let text = match param {
+                None => None,
+                Some(p) => match p.change() {
+                    ParamChange::Removed => None,
+                    ParamChange::Unchanged | ParamChange::Added => Some(self.original_text(item)?),
+                    ParamChange::ValueReplaced => Some(self.value_text(node, p, Some(item))?),
+                    ParamChange::Connected => Some(self.connection_text(node, p, Some(item))?),
+                },
+            };
+            let trailing = match &item.trailing_comment {
+                Some(c) => Some(self.bytes(c)?.to_vec()),
+                None => None,
+            };
+            match text {
+                Some(mut t) => {
+                    if let Some(c) = trailing {
+                        t.push(b' ');
+                        t.extend_from_slice(&c);
+                    }
+                    lines.param(t);
+                }
+                // Comments of omitted parameters move to the next written parameter.
+                None => lines.pending.extend(trailing),
+            }
+        }
+        for c in &src.end_comments {
+            lines.pending.push(self.bytes(c)?.to_vec());
+        }
+        for p in self.added_params(node) {
+            let t = self.fresh_param_text(node, p)?;
+            lines.param(t);
+        }
+        lines.finish(out)
+    }
+
+    /// Parameters not from the source, in declaration order (unknown positions last, in the
+    /// order they were added).
+    fn added_params<'n>(&self, node: &'n Node) -> Vec<&'n Param> {
+        let mut added: Vec<(usize, usize, &Param)> = node
+            .all_params()
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.change() == ParamChange::Added)
+            .map(|(i, p)| {
+                let pos = self
+                    .types
+                    .input_position(node.shader(), p.name())
+                    .unwrap_or(usize::MAX);
+                (pos, i, p)
+            })
+            .collect();
+        added.sort_by_key(|&(pos, i, _)| (pos, i));
+        added.into_iter().map(|(_, _, p)| p).collect()
+    }
+
+    /// A node not read from the source: request line and every live parameter.
+    fn fresh_node(&self, out: &mut dyn Write, id: NodeId, indent: &[u8]) -> io::Result<()> {
+        let node = &self.net[id];
+        out.write_all(&self.header(node))?;
+        let mut lines = Lines::new(indent);
+        for p in node.params() {
+            let t = self.fresh_param_text(node, p)?;
+            lines.param(t);
+        }
+        if node.kind() == RequestKind::Bxdf && node.material_id().is_none() {
+            if let Some(name) = self.material_name_of(id) {
+                if name != node.handle() {
+                    lines.param(format!("\"string __materialid\" [{}]", quote(name)).into_bytes());
+                }
+            }
+        }
+        lines.finish(out)
+    }
+
+    fn material_name_of(&self, id: NodeId) -> Option<&str> {
+        self.net
+            .materials()
+            .iter()
+            .find(|m| {
+                m.terminals
+                    .iter()
+                    .any(|t| t.name == "surface" && t.link.upstream_node() == Some(id))
+            })
+            .map(|m| m.name.as_str())
+    }
+
+    /// Decl and value exactly as written (one space between them if the source had a line
+    /// break or comment there).
+    fn original_text(&self, item: &SourceParam) -> io::Result<Vec<u8>> {
+        let between = self.bytes(&(item.decl.end..item.value.start))?;
+        if between.iter().all(|&b| b == b' ' || b == b'\t') {
+            return Ok(self.bytes(&(item.decl.start..item.value.end))?.to_vec());
+        }
+        let mut t = self.bytes(&item.decl)?.to_vec();
+        t.push(b' ');
+        t.extend_from_slice(self.bytes(&item.value)?);
+        Ok(t)
+    }
+
+    fn value_text(
+        &self,
+        node: &Node,
+        p: &Param,
+        item: Option<&SourceParam>,
+    ) -> io::Result<Vec<u8>> {
+        let Some(v) = p.value() else {
+            return self.connection_text(node, p, item);
+        };
+        let mut t = match (item, p.decl()) {
+            (Some(item), Some(d)) if !d.reference && d.inline_type && value_fits(&d.ty, v) => {
+                self.bytes(&item.decl)?.to_vec()
+            }
+            _ => format!("\"{} {}\"", value_type_text(v), escape(p.name())).into_bytes(),
+        };
+        t.push(b' ');
+        t.extend_from_slice(format_value(v).as_bytes());
+        Ok(t)
+    }
+
+    fn connection_text(
+        &self,
+        node: &Node,
+        p: &Param,
+        item: Option<&SourceParam>,
+    ) -> io::Result<Vec<u8>> {
+        let mut t = match (item, p.decl()) {
+            (Some(item), Some(d)) if d.reference => self.bytes(&item.decl)?.to_vec(),
+            _ => format!(
+                "\"reference {} {}\"",
+                self.connection_type(node, p),
+                escape(p.name())
+            )
+            .into_bytes(),
+        };
+        t.push(b' ');
+        t.extend_from_slice(self.links_text(p.connections()).as_bytes());
+        Ok(t)
+    }
+
+    fn fresh_param_text(&self, node: &Node, p: &Param) -> io::Result<Vec<u8>> {
+        if p.is_connected() {
+            self.connection_text(node, p, None)
+        } else {
+            self.value_text(node, p, None)
+        }
+    }
+
+    /// Decl type of a new connection: definition input type, else upstream output type, else
+    /// the source decl's type, else `float`.
+    fn connection_type(&self, node: &Node, p: &Param) -> String {
+        let n = p.connections().len();
+        let upstream_type = || {
+            let link = p.connections().first()?;
+            let up = self.net.get(link.upstream_node()?)?;
+            self.types.output_type(up.shader(), link.output()?)
+        };
+        let ty = self
+            .types
+            .input_type(node.shader(), p.name())
+            .or_else(upstream_type)
+            .or_else(|| p.decl().map(|d| d.ty.clone()))
+            .unwrap_or(Type::scalar(BaseType::Float));
+        let word = decl_word(&ty.base);
+        match ty.array {
+            ArraySpec::None if n <= 1 => word.to_string(),
+            ArraySpec::Fixed(k) if k == n => format!("{word}[{k}]"),
+            _ => format!("{word}[{n}]"),
+        }
+    }
+
+    fn links_text(&self, links: &[Link]) -> String {
+        let parts: Vec<String> = links
+            .iter()
+            .map(|l| {
+                let handle = match &l.upstream {
+                    Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
+                    Upstream::Missing(h) => h.as_str(),
+                };
+                match l.output() {
+                    Some(o) => quote(&format!("{handle}:{o}")),
+                    None => quote(handle),
+                }
+            })
+            .collect();
+        format!("[{}]", parts.join(" "))
+    }
+}
+
+/// Accumulates parameter lines; comments wait in `pending` until the next parameter.
+struct Lines<'i> {
+    indent: &'i [u8],
+    body: Vec<u8>,
+    pending: Vec<Vec<u8>>,
+}
+
+impl<'i> Lines<'i> {
+    fn new(indent: &'i [u8]) -> Self {
+        Lines {
+            indent,
+            body: Vec::new(),
+            pending: Vec::new(),
+        }
+    }
+
+    fn line(&mut self, text: &[u8]) {
+        self.body.push(b'\n');
+        self.body.extend_from_slice(self.indent);
+        self.body.push(b'\t');
+        self.body.extend_from_slice(text);
+    }
+
+    fn param(&mut self, text: Vec<u8>) {
+        for c in std::mem::take(&mut self.pending) {
+            self.line(&c);
+        }
+        self.line(&text);
+    }
+
+    fn finish(mut self, out: &mut dyn Write) -> io::Result<()> {
+        for c in std::mem::take(&mut self.pending) {
+            self.line(&c);
+        }
+        out.write_all(&self.body)
+    }
+}
+
+/// The RIB decl word of a base type (`struct` without its name; JSON-only types as the RIB type
+/// that carries them).
+fn decl_word(b: &BaseType) -> &str {
+    match b {
+        BaseType::Token | BaseType::Asset => "string",
+        BaseType::Bool => "int",
+        other => other.word(),
+    }
+}
+
+/// The decl type text describing value `v` (`float`, `color`, `int[1]`, …).
+fn value_type_text(v: &Value) -> String {
+    match v {
+        Value::Array(b, items) => format!("{}[{}]", decl_word(b), items.len()),
+        other => decl_word(&other.base_type()).to_string(),
+    }
+}
+
+/// True if a decl of type `ty` describes value `v` exactly (so its text can be kept).
+fn value_fits(ty: &Type, v: &Value) -> bool {
+    match (ty.array, v) {
+        (ArraySpec::None, Value::Array(..)) => false,
+        (ArraySpec::None, v) => v.base_type() == ty.base,
+        (ArraySpec::Fixed(n), Value::Array(b, items)) => {
+            items.len() == n
+                && *b == ty.base
+                && items.iter().all(|i| !matches!(i, Value::Array(..)))
+        }
+        (ArraySpec::Dynamic, Value::Array(b, _)) => *b == ty.base,
+        _ => false,
+    }
+}
+
+/// A value in RIB syntax, always bracketed: `[1]`, `[0.5]`, `["s"]`, `[1 0 0]`.
+pub fn format_value(v: &Value) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    push_elements(v, &mut parts);
+    format!("[{}]", parts.join(" "))
+}
+
+fn push_elements(v: &Value, parts: &mut Vec<String>) {
+    match v {
+        Value::Int(i) => parts.push(i.to_string()),
+        Value::Float(x) => parts.push(format_f32(*x)),
+        Value::Str(s) | Value::Token(s) | Value::Asset(s) => parts.push(quote(s)),
+        Value::Triple(_, xs) => parts.extend(xs.iter().map(|x| format_f32(*x))),
+        Value::HPoint(xs) => parts.extend(xs.iter().map(|x| format_f32(*x))),
+        Value::Matrix(xs) => parts.extend(xs.iter().map(|x| format_f32(*x))),
+        Value::Bool(b) => parts.push(if *b { "1".into() } else { "0".into() }),
+        Value::Array(_, items) => {
+            for i in items {
+                push_elements(i, parts);
+            }
+        }
+    }
+}
+
+/// A RIB string literal: double quotes, `\"`, `\\`, `\n`, `\t` escaped, other control
+/// characters as `\ddd` (formats.md §3.7 item 4).
+///
+/// ```
+/// use vstructc::back::rib::quote;
+/// assert_eq!(quote("a \"b\"\n"), r#""a \"b\"\n""#);
+/// assert_eq!(quote("\u{1}"), r#""\001""#);
+/// ```
+pub fn quote(s: &str) -> String {
+    format!("\"{}\"", escape(s))
+}
+
+fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x20 || c as u32 == 0x7f => {
+                out.push_str(&format!("\\{:03o}", c as u32));
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn value_formatting() {
+        assert_eq!(format_value(&Value::Float(0.1)), "[0.1]");
+        assert_eq!(format_value(&Value::Float(1.0)), "[1]");
+        assert_eq!(format_value(&Value::Int(-3)), "[-3]");
+        assert_eq!(
+            format_value(&Value::Triple(BaseType::Color, [0.5, 1.0, 0.25])),
+            "[0.5 1 0.25]"
+        );
+        assert_eq!(
+            format_value(&Value::Array(
+                BaseType::String,
+                vec![Value::Str("a".into()), Value::Str("b\\".into())]
+            )),
+            r#"["a" "b\\"]"#
+        );
+    }
+
+    #[test]
+    fn value_type_texts() {
+        assert_eq!(value_type_text(&Value::Int(1)), "int");
+        assert_eq!(value_type_text(&Value::Bool(true)), "int");
+        assert_eq!(value_type_text(&Value::Token("x".into())), "string");
+        assert_eq!(
+            value_type_text(&Value::Array(BaseType::Int, vec![Value::Int(0)])),
+            "int[1]"
+        );
+        assert_eq!(
+            value_type_text(&Value::Triple(BaseType::Normal, [0.0; 3])),
+            "normal"
+        );
+    }
+
+    #[test]
+    fn fits() {
+        let f2 = Type::parse_decl("float2");
+        assert!(value_fits(
+            &f2,
+            &Value::Array(BaseType::Float, vec![Value::Float(1.0), Value::Float(2.0)])
+        ));
+        assert!(!value_fits(&f2, &Value::Float(1.0)));
+        assert!(value_fits(
+            &Type::scalar(BaseType::Color),
+            &Value::Triple(BaseType::Color, [0.0; 3])
+        ));
+        assert!(!value_fits(
+            &Type::scalar(BaseType::Vector),
+            &Value::Triple(BaseType::Color, [0.0; 3])
+        ));
+        assert!(!value_fits(&Type::scalar(BaseType::Float), &Value::Int(1)));
+    }
+
+    #[test]
+    fn escapes() {
+        assert_eq!(escape("tab\there"), "tab\\there");
+        assert_eq!(escape("\u{7f}é"), "\\177é");
+    }
+}

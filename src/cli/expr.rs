@@ -1,14 +1,82 @@
-//! `vstructc expr` (in progress).
+//! `vstructc expr 'TEXT' [--json]`: parse one conditional expression and print its
+//! desugared form and AST, or the syntax error with a caret under the offending column.
+//!
+//! The parse error is reported as `error[VS001]` here (in a definition the same problem is a
+//! warning, because loading continues; here it is the command's only input). Exit status: 0
+//! when the expression parses, 1 on a syntax error, 2 on a usage error (unknown `--ext`).
 
 use super::CommonOptions;
+use crate::cond::{self, Extensions};
+use crate::diag::{Diagnostics, Location, Severity};
 use std::process::ExitCode;
 
 /// Arguments of `vstructc expr`.
 #[derive(Debug, clap::Args)]
-pub struct ExprArgs {}
+pub struct ExprArgs {
+    /// The expression, e.g. 'set 1 if enableDiffuse == 1 else set 0'.
+    #[arg(value_name = "TEXT", allow_hyphen_values = true)]
+    pub text: String,
+    /// Print a JSON document on stdout instead of the readable form.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Run `vstructc expr`.
-pub fn run(_args: &ExprArgs, _common: &CommonOptions) -> ExitCode {
-    eprintln!("vstructc expr: not implemented yet");
-    ExitCode::from(2)
+pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
+    let ext = match Extensions::from_names(&common.ext) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let text = args.text.as_str();
+    match cond::parse_with(text, &ext) {
+        Ok(stmt) => {
+            if args.json {
+                let doc = serde_json::json!({
+                    "input": text,
+                    "extensions": ext.names(),
+                    "desugared": stmt.to_string(),
+                    "statement": stmt,
+                });
+                println!("{}", pretty(&doc));
+            } else {
+                println!("{stmt}");
+                println!();
+                print!("{}", cond::dump(&stmt));
+            }
+            ExitCode::SUCCESS
+        }
+        Err(err) => {
+            let (line, column) = err.line_column(text);
+            if args.json {
+                let doc = serde_json::json!({
+                    "input": text,
+                    "extensions": ext.names(),
+                    "error": {
+                        "code": cond::ParseError::CODE,
+                        "message": err.message,
+                        "span": [err.span.start, err.span.end],
+                        "line": line,
+                        "column": column,
+                        "expected": err.expected,
+                        "found": err.found,
+                        "notes": err.notes,
+                    },
+                });
+                println!("{}", pretty(&doc));
+            }
+            let d = err
+                .to_diagnostic_with(text, Severity::Error)
+                .at(Location::new("<expr>", line, column));
+            let mut diags = Diagnostics::new();
+            diags.push(d);
+            super::report(&diags, common)
+        }
+    }
+}
+
+fn pretty(v: &serde_json::Value) -> String {
+    serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string())
 }

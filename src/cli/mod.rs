@@ -9,8 +9,12 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+pub mod compile;
+pub mod explain;
 pub mod expr;
 pub mod info;
+pub mod input;
+pub mod resolve;
 
 /// Top-level command line.
 #[derive(Debug, Parser)]
@@ -79,6 +83,12 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Parse one conditional expression and print its desugared form or diagnostics.
     Expr(expr::ExprArgs),
+    /// Expand the vstruct connections of a network (RIB or JSON) and write it back.
+    Resolve(resolve::ResolveArgs),
+    /// Tell the story of one member input's value during resolution.
+    Explain(explain::ExplainArgs),
+    /// Lower each material of a network to the closure IR and print it.
+    Compile(compile::CompileArgs),
 }
 
 /// Parse the process arguments and run; the binary's whole `main`.
@@ -103,6 +113,9 @@ pub fn run(cli: Cli) -> ExitCode {
     match &cli.command {
         Command::Info(a) => info::run(a, common),
         Command::Expr(a) => expr::run(a, common),
+        Command::Resolve(a) => resolve::run(a, common),
+        Command::Explain(a) => explain::run(a, common),
+        Command::Compile(a) => compile::run(a, common),
     }
 }
 

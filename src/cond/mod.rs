@@ -1,37 +1,61 @@
-//! The `vstructConditionalExpr` language (spec vstruct.md §3): lexer, parser, AST, evaluator.
+//! The `vstructConditionalExpr` language (spec vstruct.md §3–§4.3, §5.6, §9): lexer, parser,
+//! AST, evaluator, `set`/`copy` typing, the VS009 check and the opt-in extensions.
 //!
-//! Interface contract (kept by the full implementation): [`parse`] returns a [`Statement`] or a
-//! [`ParseError`] with the byte span of the offending token; [`Statement::param_names`] lists
-//! every parameter name the statement reads (predicates and `copy`).
+//! The formal grammar users read is `grammar/vstruct-conditional.ebnf`.
+//!
+//! ```
+//! use vstructc::cond::{self, ActionKind, Choice, MapUpstream};
+//! use vstructc::types::Value;
+//!
+//! let stmt = cond::parse("set 1 if enableDiffuse == 1 else set 0").unwrap();
+//! assert_eq!(stmt.to_string(), "set 1 if enableDiffuse == 1 else set 0");
+//! assert_eq!(stmt.param_names(), ["enableDiffuse"]);
+//!
+//! let upstream = MapUpstream::new().input("enableDiffuse", Some(Value::Int(0)));
+//! let ev = cond::evaluate(&stmt, &upstream, &cond::Extensions::none());
+//! assert_eq!(ev.choice, Choice::Fallback);
+//! assert!(matches!(&ev.action.kind, ActionKind::Set { literal } if literal.as_number() == Some(0.0)));
+//!
+//! let err = cond::parse("connect if x = 1").unwrap_err();
+//! assert_eq!(err.message, "expected a comparison operator (==, !=, <, >, <=, >=), found '='");
+//! assert_eq!(err.column("connect if x = 1"), 14);
+//! ```
+//!
+//! Interface contract: [`parse`] (compat mode) returns a [`Statement`] or a [`ParseError`]
+//! with the byte span of the offending token; [`Statement::param_names`] lists every
+//! parameter name the statement reads (predicates and `copy`).
 
-use std::ops::Range;
+pub mod action;
+pub mod ast;
+pub mod check;
+pub mod error;
+pub mod eval;
+pub mod ext;
+pub mod lexer;
+pub mod parser;
 
-/// A parsed, desugared statement.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Statement {
-    names: Vec<String>,
-}
+pub use action::{
+    CopyOutcome, CopyPlan, CopyRejection, SetRejection, SetValue, copy_plan, copy_value, set_value,
+};
+pub use ast::{
+    Action, ActionKind, ElseIf, Expr, ExprKind, IsTest, Literal, LiteralKind, Param, Span,
+    Statement, dump,
+};
+pub use check::check_params;
+pub use error::{ParseError, location_in, render_caret};
+pub use eval::{
+    Choice, ComparisonReport, Evaluation, FalseReason, MapUpstream, Upstream, evaluate,
+};
+pub use ext::{Extension, Extensions, UnknownExtension};
+pub use lexer::CmpOp;
 
-impl Statement {
-    /// Every parameter name the statement reads, in source order (predicates and `copy`).
-    pub fn param_names(&self) -> Vec<&str> {
-        self.names.iter().map(String::as_str).collect()
-    }
-}
-
-/// A syntax error (VS001).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParseError {
-    /// Byte span of the offending token (empty at end of input).
-    pub span: Range<usize>,
-    /// Message naming the unexpected token and the expected set.
-    pub message: String,
-}
-
-/// Parse one conditional expression in compat mode.
+/// Parse one conditional expression in compat mode (no extension).
 pub fn parse(text: &str) -> Result<Statement, ParseError> {
-    Err(ParseError {
-        span: text.len()..text.len(),
-        message: "the conditional parser is not implemented yet".into(),
-    })
+    parser::parse_statement(text, &Extensions::none())
+}
+
+/// Parse one conditional expression with the given extensions (only `else-if` changes the
+/// grammar).
+pub fn parse_with(text: &str, ext: &Extensions) -> Result<Statement, ParseError> {
+    parser::parse_statement(text, ext)
 }

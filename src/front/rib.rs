@@ -1,1 +1,1206 @@
-//! (in progress)
+//! RIB shading-network reader (spec formats.md §3.1–§3.6, error policy §3.8).
+//!
+//! [`parse_rib`] reads ASCII RIB bytes into a [`Network`]. Only the shading-node requests
+//! `Pattern`, `Bxdf`, `Displace`, `Light` and `LightFilter` are interpreted; every other
+//! request is tokenized (to find where it ends and to reject malformed or binary input) but not
+//! stored: the writer ([`crate::back::rib`]) copies the bytes between interpreted requests from
+//! the input unchanged. Each node records the byte ranges of its request, parameters and
+//! comments ([`crate::network::NodeSource`]), never copies of the text, so reading a large
+//! scene costs about one copy of its shading requests.
+//!
+//! Choices where the spec is silent (documented here, tested in `tests/rib_reader.rs`):
+//!
+//! * A request that re-uses a handle with an empty parameter list (or only
+//!   `"string __materialid"`) is a *use* of the earlier node only if it names the same shader;
+//!   with a different shader it is a redefinition (RB017).
+//! * `Integrator`, `Projection`, `DisplayFilter`, `SampleFilter` are passed through (the spec
+//!   lists only the five requests above as interpreted).
+//! * Decl words: `[class]` and `reference` may come in either order before the type; other
+//!   unrecognised leading words are kept and reported as RB013.
+//! * Values that do not fit the declared type (wrong count, strings for a numeric type, a
+//!   non-integral number for `int`, a value for a type without value form such as `struct`)
+//!   are RB014 warnings and kept as written: a flat [`Value::Array`] of their elements with the
+//!   declared base type. Numbers outside the `f32` / `i32` range are RB014 and saturated.
+//! * A `reference` parameter whose value contains numbers is RB014; it is kept as a value.
+//! * An integral number written with a fraction or exponent (`1.`) is accepted for `int`.
+//! * Strings with invalid UTF-8 are decoded with U+FFFD replacements.
+
+mod lexer;
+
+use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::network::{
+    Decl, Link, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamTypes,
+    RequestKind, SourceParam, Terminal,
+};
+use crate::types::{ArraySpec, BaseType, Type, Value};
+use lexer::{Lexer, TokKind, Token, decode_string};
+use std::collections::HashSet;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// Options of the RIB reader.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RibOptions {
+    /// `--strict-rib`: single-quoted strings are an error (RB011) instead of an info.
+    pub strict: bool,
+}
+
+/// Legacy RSL shading requests: passed through; RB020 when they carry `reference` params.
+const LEGACY_REQUESTS: &[&str] = &[
+    "Surface",
+    "Displacement",
+    "Atmosphere",
+    "Interior",
+    "Exterior",
+    "Deformation",
+    "Imager",
+    "LightSource",
+    "AreaLightSource",
+    "Shader",
+];
+
+/// Storage-class words that may precede the type in a decl.
+const CLASSES: &[&str] = &[
+    "constant",
+    "uniform",
+    "varying",
+    "vertex",
+    "facevarying",
+    "facevertex",
+];
+
+/// Read a RIB file into a network.
+///
+/// `path` names the input in diagnostics. `types` supplies declared types for decls without
+/// an inline type (RB012/RB006), the RB016 type check and the RB019 unknown-shader check.
+/// Warnings and infos go to `diags`; the first error stops reading and is returned (nothing is
+/// written for a file with errors, §3.8).
+///
+/// Materials: one per `Bxdf` (named by its `__materialid`, else its handle), `Displace`,
+/// `Light` and `LightFilter` node version (named by handle), with the matching terminal and the
+/// upstream closure as node set. A name already taken by an earlier material gets a `#n`
+/// suffix (`ConstantCurvature#1`).
+///
+/// ```
+/// use vstructc::front::rib::{RibOptions, parse_rib};
+/// use vstructc::network::NoDefinitions;
+/// use vstructc::{Diagnostics, Value};
+///
+/// let rib = br#"
+/// Pattern "PxrFractal" "noise" "float frequency" [2]
+/// Bxdf "PxrSurface" "Solid Material 21"
+///     "reference float diffuseGain" ["noise:resultF"]
+///     "string __materialid" ["RedSG"]
+/// "#;
+/// let mut diags = Diagnostics::new();
+/// let net = parse_rib(rib, "scene.rib", &NoDefinitions, &RibOptions::default(), &mut diags).unwrap();
+/// let noise = net.find("noise").unwrap();
+/// let surface = net.find("Solid Material 21").unwrap();
+/// assert_eq!(net.value(noise, "frequency"), Some(&Value::Float(2.0)));
+/// assert_eq!(net.connections(surface, "diffuseGain")[0].upstream_node(), Some(noise));
+/// assert_eq!(net.materials()[0].name, "RedSG");
+/// assert!(diags.is_empty());
+/// ```
+pub fn parse_rib(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    options: &RibOptions,
+    diags: &mut Diagnostics,
+) -> Result<Network, Error> {
+    let file: Arc<str> = Arc::from(path);
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        return Err(Diagnostic::error(
+            "RB001",
+            "gzip-compressed RIB is not supported; decompress it first",
+        )
+        .at(Location::new(file, 1, 1))
+        .into());
+    }
+    let mut lx = Lexer::new(bytes, file.clone(), options.strict);
+    let mut asm = Assembler {
+        src: bytes,
+        types,
+        net: Network::new(),
+    };
+    let mut next = lx.next_token(diags)?;
+    while let Some(tok) = next {
+        match tok.kind {
+            TokKind::Comment => next = lx.next_token(diags)?,
+            TokKind::Ident => {
+                let name = std::str::from_utf8(lx.bytes(&tok)).unwrap_or("");
+                if let Some(kind) = RequestKind::from_keyword(name) {
+                    let (args, after) = read_args(&mut lx, diags, true)?;
+                    asm.shading_request(&lx, kind, &tok, &args, diags)?;
+                    next = after;
+                } else {
+                    let legacy = LEGACY_REQUESTS.contains(&name);
+                    let (args, after) = read_args(&mut lx, diags, legacy)?;
+                    if legacy && has_reference_decl(bytes, &args.pieces) {
+                        diags.push(
+                            Diagnostic::info(
+                                "RB020",
+                                format!("legacy `{name}` request with `reference` parameters is passed through, not resolved"),
+                            )
+                            .at(lx.tok_loc(&tok)),
+                        );
+                    }
+                    next = after;
+                }
+            }
+            _ => {
+                return Err(Diagnostic::error(
+                    "RB004",
+                    format!("unexpected {}: expected a request name", describe(&tok)),
+                )
+                .at(lx.tok_loc(&tok))
+                .into());
+            }
+        }
+    }
+    let mut net = asm.net;
+    add_materials(&mut net);
+    Ok(net)
+}
+
+fn describe(t: &Token) -> &'static str {
+    match t.kind {
+        TokKind::Ident => "request name",
+        TokKind::Number => "number",
+        TokKind::Str => "string",
+        TokKind::Open => "`[`",
+        TokKind::Close => "`]`",
+        TokKind::Comment => "comment",
+    }
+}
+
+/// One argument of a request, or a comment between arguments.
+#[derive(Debug, Clone)]
+enum Piece {
+    Comment(Token),
+    /// A bare number or string.
+    Value(Token),
+    /// `[ … ]`: the brackets and the numbers/strings inside (comments inside are dropped; they
+    /// stay in the value's byte range).
+    Array {
+        open: Token,
+        /// Range into [`Args::items`].
+        items: Range<usize>,
+        close: Token,
+    },
+}
+
+/// The arguments of one request: pieces in order, and the elements of all its arrays in one
+/// buffer (one allocation per request rather than one per array).
+#[derive(Debug, Default)]
+struct Args {
+    pieces: Vec<Piece>,
+    items: Vec<Token>,
+}
+
+impl Piece {
+    fn range(&self) -> Range<usize> {
+        match self {
+            Piece::Comment(t) | Piece::Value(t) => t.start..t.end,
+            Piece::Array { open, close, .. } => open.start..close.end,
+        }
+    }
+    fn end_line(&self) -> u32 {
+        match self {
+            Piece::Comment(t) | Piece::Value(t) => t.end_line,
+            Piece::Array { close, .. } => close.end_line,
+        }
+    }
+    fn first(&self) -> &Token {
+        match self {
+            Piece::Comment(t) | Piece::Value(t) => t,
+            Piece::Array { open, .. } => open,
+        }
+    }
+}
+
+/// Read the arguments of a request up to the next request name (returned) or the end.
+/// Validates arrays (flat, homogeneous, closed). With `keep == false` nothing is stored, so
+/// pass-through requests of any size cost no memory.
+fn read_args(
+    lx: &mut Lexer<'_>,
+    diags: &mut Diagnostics,
+    keep: bool,
+) -> Result<(Args, Option<Token>), Error> {
+    let mut args = Args::default();
+    let mut array: Option<(Token, usize, Option<TokKind>)> = None;
+    loop {
+        let Some(tok) = lx.next_token(diags)? else {
+            if let Some((open, ..)) = array {
+                return Err(unterminated_array(lx, &open));
+            }
+            return Ok((args, None));
+        };
+        match (tok.kind, array.as_mut()) {
+            (TokKind::Ident, None) => return Ok((args, Some(tok))),
+            (TokKind::Ident, Some((open, ..))) => {
+                let open = *open;
+                return Err(Diagnostic::error(
+                    "RB004",
+                    format!(
+                        "unexpected request name inside the array opened at {}:{}; expected `]`",
+                        open.line, open.col
+                    ),
+                )
+                .at(lx.tok_loc(&tok))
+                .into());
+            }
+            (TokKind::Comment, None) => {
+                if keep {
+                    args.pieces.push(Piece::Comment(tok));
+                }
+            }
+            (TokKind::Comment, Some(_)) => {}
+            (TokKind::Number | TokKind::Str, None) => {
+                if keep {
+                    args.pieces.push(Piece::Value(tok));
+                }
+            }
+            (TokKind::Number | TokKind::Str, Some((open, _, kind))) => {
+                match kind {
+                    None => *kind = Some(tok.kind),
+                    Some(k) if *k != tok.kind => {
+                        let open = *open;
+                        return Err(Diagnostic::error(
+                            "RB005",
+                            format!(
+                                "mixed array: numbers and strings in the array opened at {}:{}",
+                                open.line, open.col
+                            ),
+                        )
+                        .at(lx.tok_loc(&tok))
+                        .into());
+                    }
+                    Some(_) => {}
+                }
+                if keep {
+                    args.items.push(tok);
+                }
+            }
+            (TokKind::Open, None) => array = Some((tok, args.items.len(), None)),
+            (TokKind::Open, Some(_)) => {
+                return Err(
+                    Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
+                        .at(lx.tok_loc(&tok))
+                        .into(),
+                );
+            }
+            (TokKind::Close, None) => {
+                return Err(
+                    Diagnostic::error("RB004", "unexpected `]` without a matching `[`")
+                        .at(lx.tok_loc(&tok))
+                        .into(),
+                );
+            }
+            (TokKind::Close, Some(_)) => {
+                if let Some((open, first, _)) = array.take() {
+                    if keep {
+                        let items = first..args.items.len();
+                        args.pieces.push(Piece::Array {
+                            open,
+                            items,
+                            close: tok,
+                        });
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn unterminated_array(lx: &Lexer<'_>, open: &Token) -> Error {
+    Diagnostic::error(
+        "RB004",
+        "unterminated array: missing `]` before the end of input",
+    )
+    .at(lx.tok_loc(open))
+    .into()
+}
+
+/// True if a top-level string argument is a decl containing the word `reference`.
+fn has_reference_decl(src: &[u8], pieces: &[Piece]) -> bool {
+    pieces.iter().any(|p| match p {
+        Piece::Value(t) if t.kind == TokKind::Str => decode_string(src, t)
+            .split(|c: char| c.is_ascii_whitespace())
+            .any(|w| w == "reference"),
+        _ => false,
+    })
+}
+
+/// The words of a decl string: `[class] [reference] type [[N]] name`.
+#[derive(Debug, Default, PartialEq)]
+struct DeclWords<'s> {
+    class: Option<&'s str>,
+    reference: bool,
+    type_word: Option<&'s str>,
+    array: Option<&'s str>,
+    name: &'s str,
+    extra: Vec<&'s str>,
+}
+
+fn split_decl(text: &str) -> Option<DeclWords<'_>> {
+    // Walk the words from the end (name, then `[N]`, then type) without collecting them.
+    let mut words = text
+        .split(|c: char| c.is_ascii() && lexer::is_space(c as u8))
+        .filter(|w| !w.is_empty())
+        .rev()
+        .peekable();
+    let name = words.next()?;
+    let mut d = DeclWords {
+        name,
+        ..DeclWords::default()
+    };
+    if let Some(last) = words.peek() {
+        if last.len() >= 2 && last.starts_with('[') && last.ends_with(']') {
+            d.array = Some(&last[1..last.len() - 1]);
+            words.next();
+        }
+    }
+    if let Some(&last) = words.peek() {
+        if last != "reference" && !CLASSES.contains(&last) {
+            words.next();
+            match (d.array, last.find('[')) {
+                (None, Some(open)) if open > 0 && last.ends_with(']') => {
+                    d.type_word = Some(&last[..open]);
+                    d.array = Some(&last[open + 1..last.len() - 1]);
+                }
+                _ => d.type_word = Some(last),
+            }
+        }
+    }
+    for w in words {
+        if w == "reference" && !d.reference {
+            d.reference = true;
+        } else if CLASSES.contains(&w) && d.class.is_none() {
+            d.class = Some(w);
+        } else {
+            d.extra.push(w);
+        }
+    }
+    d.extra.reverse();
+    Some(d)
+}
+
+/// The RIB type words of formats.md §3.4 (plus `integrator`); anything else is `Unknown`.
+fn rib_base_type(word: &str) -> Option<Type> {
+    match word {
+        "float" | "int" | "string" | "color" | "point" | "vector" | "normal" | "matrix"
+        | "hpoint" | "float2" | "float3" | "struct" | "vstruct" | "bxdf" | "lightfilter"
+        | "samplefilter" | "displayfilter" | "integrator" => Some(Type::parse_decl(word)),
+        _ => None,
+    }
+}
+
+/// One element of a value: a number (its text) or a decoded string.
+enum Elem<'a> {
+    Num(&'a str),
+    Str(String),
+}
+
+/// Assembles nodes from shading requests.
+struct Assembler<'a, 't> {
+    src: &'a [u8],
+    types: &'t dyn ParamTypes,
+    net: Network,
+}
+
+/// A decl and its value as found in a request, before interpretation.
+struct RawParam<'p> {
+    decl_text: String,
+    location: Location,
+    value: &'p Piece,
+    /// The request's array elements ([`Args::items`]).
+    arena: &'p [Token],
+    item: SourceParam,
+}
+
+/// A parameter read from a request, before the node exists.
+struct ReadParam {
+    name: String,
+    decl: Decl,
+    value: Option<Value>,
+    links: Vec<Link>,
+    location: Location,
+    item: SourceParam,
+}
+
+impl<'a> Assembler<'a, '_> {
+    fn shading_request(
+        &mut self,
+        lx: &Lexer<'_>,
+        kind: RequestKind,
+        kw: &Token,
+        args: &Args,
+        diags: &mut Diagnostics,
+    ) -> Result<(), Error> {
+        let pieces = &args.pieces[..];
+        let mut i = 0;
+        let mut header_comments: Vec<Range<usize>> = Vec::new();
+        let mut header_string = |what: &str, i: &mut usize| -> Result<(String, Token), Error> {
+            while let Some(Piece::Comment(c)) = pieces.get(*i) {
+                header_comments.push(c.start..c.end);
+                *i += 1;
+            }
+            match pieces.get(*i) {
+                Some(Piece::Value(t)) if t.kind == TokKind::Str => {
+                    *i += 1;
+                    Ok((decode_string(self.src, t), *t))
+                }
+                Some(p) => Err(Diagnostic::error(
+                    "RB004",
+                    format!(
+                        "unexpected {} after `{kind}`: expected the {what} string",
+                        piece_name(p)
+                    ),
+                )
+                .at(lx.tok_loc(p.first()))
+                .into()),
+                None => Err(Diagnostic::error(
+                    "RB004",
+                    format!("`{kind}` request without {what} string"),
+                )
+                .at(lx.tok_loc(kw))
+                .into()),
+            }
+        };
+        let (shader, _) = header_string("shader name", &mut i)?;
+        let (handle, handle_tok) = header_string("handle", &mut i)?;
+        let mut end = handle_tok.end;
+
+        let mut read: Vec<ReadParam> = Vec::with_capacity(pieces.len() / 2);
+        let mut pending = header_comments;
+        while i < pieces.len() {
+            let decl_tok = match &pieces[i] {
+                Piece::Comment(c) => {
+                    pending.push(c.start..c.end);
+                    i += 1;
+                    continue;
+                }
+                Piece::Value(t) if t.kind == TokKind::Str => *t,
+                other => {
+                    return Err(Diagnostic::error(
+                        "RB004",
+                        format!(
+                            "unexpected {}: expected a parameter declaration string",
+                            piece_name(other)
+                        ),
+                    )
+                    .at(lx.tok_loc(other.first()))
+                    .into());
+                }
+            };
+            i += 1;
+            while let Some(Piece::Comment(c)) = pieces.get(i) {
+                pending.push(c.start..c.end);
+                i += 1;
+            }
+            let decl_text = decode_string(self.src, &decl_tok);
+            let location = lx.tok_loc(&decl_tok);
+            let Some(value_piece) = pieces.get(i) else {
+                return Err(Diagnostic::error(
+                    "RB007",
+                    format!("parameter `{}` has no value", decl_text.trim()),
+                )
+                .at(location)
+                .into());
+            };
+            i += 1;
+            let mut item = SourceParam {
+                param: None,
+                decl: decl_tok.start..decl_tok.end,
+                value: value_piece.range(),
+                leading_comments: std::mem::take(&mut pending),
+                trailing_comment: None,
+            };
+            end = item.value.end;
+            if let Some(Piece::Comment(c)) = pieces.get(i) {
+                if c.line == value_piece.end_line() {
+                    item.trailing_comment = Some(c.start..c.end);
+                    end = c.end;
+                    i += 1;
+                }
+            }
+            let raw = RawParam {
+                decl_text,
+                location,
+                value: value_piece,
+                arena: &args.items,
+                item,
+            };
+            let param = self.read_param(&shader, raw, diags)?;
+            read.push(param);
+        }
+        let (repeated, shadowed) = duplicates(&read);
+        for (p, _) in read.iter().zip(&repeated).filter(|(_, r)| **r) {
+            diags.push(
+                Diagnostic::warning(
+                    "RB015",
+                    format!(
+                        "duplicate parameter `{}` on `{handle}`; the later one wins",
+                        p.name
+                    ),
+                )
+                .at(p.location.clone()),
+            );
+        }
+
+        if self.is_reuse(&handle, &shader, &read) {
+            return Ok(());
+        }
+        let location = lx.tok_loc(kw);
+        if let Some(&prev) = self.net.versions(&handle).last() {
+            let mut d = Diagnostic::warning(
+                "RB017",
+                format!(
+                    "handle `{handle}` redefined (version {}); later references bind to this definition",
+                    self.net.versions(&handle).len()
+                ),
+            )
+            .at(location.clone());
+            if let Some(l) = self.net[prev].location() {
+                d = d.with_related("previous definition", l.clone());
+            }
+            diags.push(d);
+        }
+        if self.types.has_definitions() && !self.types.shader_known(&shader) {
+            diags.push(
+                Diagnostic::warning(
+                    "RB019",
+                    format!("shader `{shader}` of `{handle}` is not in the registry; its parameters are kept verbatim"),
+                )
+                .at(location.clone()),
+            );
+        }
+        // Comments after the last parameter lie outside the span (they are passed through);
+        // only comments inside the header of a request without parameters remain.
+        pending.retain(|c| c.end <= end);
+        self.add_node(
+            kind,
+            &handle,
+            &shader,
+            kw.start..end,
+            location,
+            read,
+            &shadowed,
+            pending,
+        );
+        Ok(())
+    }
+
+    /// A request whose handle is defined, for the same shader, with no parameters other than
+    /// `string __materialid` re-uses the earlier node (formats.md §3.6).
+    fn is_reuse(&self, handle: &str, shader: &str, read: &[ReadParam]) -> bool {
+        let Some(prev) = self.net.find(handle) else {
+            return false;
+        };
+        self.net[prev].shader() == shader
+            && read.iter().all(|p| {
+                p.name == "__materialid"
+                    && !p.decl.reference
+                    && p.decl.ty == Type::scalar(BaseType::String)
+            })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_node(
+        &mut self,
+        kind: RequestKind,
+        handle: &str,
+        shader: &str,
+        span: Range<usize>,
+        location: Location,
+        read: Vec<ReadParam>,
+        shadowed: &[bool],
+        end_comments: Vec<Range<usize>>,
+    ) {
+        // Later duplicates win: earlier occurrences are not parameters, but their source
+        // items stay (their comments move to the next written parameter).
+        let mut items: Vec<SourceParam> = Vec::with_capacity(read.len());
+        let mut params: Vec<Param> = Vec::with_capacity(read.len());
+        let mut links: Vec<Vec<Link>> = Vec::with_capacity(read.len());
+        for (rp, &shadow) in read.into_iter().zip(shadowed) {
+            let origin = items.len() as u32;
+            let mut item = rp.item;
+            if shadow {
+                items.push(item);
+                continue;
+            }
+            item.param = Some(params.len() as u32);
+            items.push(item);
+            params.push(Param::from_source(
+                rp.name,
+                rp.value,
+                Some(rp.decl),
+                Some(rp.location),
+                Some(origin),
+            ));
+            links.push(rp.links);
+        }
+        let mut node = Node::new_raw(handle, shader, kind);
+        node.set_raw_params(params);
+        node.set_origin(
+            Some(location),
+            Some(NodeSource {
+                span,
+                items,
+                end_comments,
+            }),
+        );
+        let id = self.net.insert_node(node);
+        for (k, l) in links.into_iter().enumerate() {
+            if !l.is_empty() {
+                self.net.push_source_links(id, k, l);
+            }
+        }
+    }
+
+    fn read_param(
+        &self,
+        shader: &str,
+        raw: RawParam<'_>,
+        diags: &mut Diagnostics,
+    ) -> Result<ReadParam, Error> {
+        let RawParam {
+            decl_text,
+            location,
+            value,
+            arena,
+            item,
+        } = raw;
+        let Some(words) = split_decl(&decl_text) else {
+            return Err(Diagnostic::error("RB006", "empty parameter declaration")
+                .at(location)
+                .into());
+        };
+        let name = words.name.to_string();
+        if !words.extra.is_empty() {
+            diags.push(
+                Diagnostic::warning(
+                    "RB013",
+                    format!(
+                        "unknown word(s) `{}` in the declaration of `{name}`",
+                        words.extra.join(" ")
+                    ),
+                )
+                .at(location.clone()),
+            );
+        }
+        let (ty, inline_type) = self.decl_type(shader, &words, &location, diags)?;
+        let elems = self.elems(value, arena);
+        let class = words.class.map(str::to_string);
+        let reference = words.reference;
+        let mut param = ReadParam {
+            decl: Decl {
+                text: decl_text,
+                class,
+                reference,
+                ty: ty.clone(),
+                inline_type,
+            },
+            name,
+            value: None,
+            links: Vec::new(),
+            location,
+            item,
+        };
+        if inline_type {
+            self.check_definition_type(shader, &param, diags);
+        }
+        if reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
+            param.links = self.read_links(&param, &ty, elems, diags)?;
+        } else {
+            if reference {
+                diags.push(
+                    Diagnostic::warning(
+                        "RB014",
+                        format!("`reference` parameter `{}` has numbers instead of `handle:output` strings; kept as a value", param.name),
+                    )
+                    .at(param.location.clone()),
+                );
+            }
+            param.value = Some(convert_value(
+                &ty,
+                &elems,
+                &param.name,
+                &param.location,
+                diags,
+            ));
+        }
+        Ok(param)
+    }
+
+    /// The parameter type: inline, or from the definition (RB012), or RB006.
+    fn decl_type(
+        &self,
+        shader: &str,
+        words: &DeclWords<'_>,
+        location: &Location,
+        diags: &mut Diagnostics,
+    ) -> Result<(Type, bool), Error> {
+        let array = match words.array {
+            None => None,
+            Some(n) => match n.parse::<usize>() {
+                Ok(n) => Some(n),
+                Err(_) => {
+                    let word = format!("{}[{n}]", words.type_word.unwrap_or(""));
+                    diags.push(
+                        Diagnostic::warning(
+                            "RB013",
+                            format!("unknown type `{word}` of `{}`", words.name),
+                        )
+                        .at(location.clone()),
+                    );
+                    return Ok((Type::scalar(BaseType::Unknown(word)), true));
+                }
+            },
+        };
+        let Some(word) = words.type_word else {
+            let Some(mut ty) = self.types.input_type(shader, words.name) else {
+                return Err(Diagnostic::error(
+                    "RB006",
+                    format!(
+                        "parameter `{}` has no type and `{shader}` does not declare it",
+                        words.name
+                    ),
+                )
+                .at(location.clone())
+                .into());
+            };
+            diags.push(
+                Diagnostic::warning(
+                    "RB012",
+                    format!(
+                        "parameter `{}` has no inline type; using `{ty}` from `{shader}`",
+                        words.name
+                    ),
+                )
+                .at(location.clone()),
+            );
+            if let (Some(n), ArraySpec::None) = (array, ty.array) {
+                ty.array = ArraySpec::Fixed(n);
+            }
+            return Ok((ty, false));
+        };
+        let Some(mut ty) = rib_base_type(word) else {
+            diags.push(
+                Diagnostic::warning(
+                    "RB013",
+                    format!("unknown type `{word}` of `{}`", words.name),
+                )
+                .at(location.clone()),
+            );
+            return Ok((Type::scalar(BaseType::Unknown(word.to_string())), true));
+        };
+        if let Some(n) = array {
+            if ty.is_array() {
+                let word = format!("{word}[{n}]");
+                diags.push(
+                    Diagnostic::warning(
+                        "RB013",
+                        format!("unknown type `{word}` of `{}`", words.name),
+                    )
+                    .at(location.clone()),
+                );
+                return Ok((Type::scalar(BaseType::Unknown(word)), true));
+            }
+            ty.array = ArraySpec::Fixed(n);
+        }
+        Ok((ty, true))
+    }
+
+    /// RB016: the inline type differs from the definition's (not on input heads).
+    fn check_definition_type(&self, shader: &str, p: &ReadParam, diags: &mut Diagnostics) {
+        if !self.types.has_definitions()
+            || matches!(p.decl.ty.base, BaseType::Unknown(_))
+            || self.types.is_input_head(shader, &p.name)
+        {
+            return;
+        }
+        let Some(def) = self.types.input_type(shader, &p.name) else {
+            return;
+        };
+        if !types_compatible(&p.decl.ty, &def) {
+            let what = if p.decl.reference {
+                "connection"
+            } else {
+                "value"
+            };
+            diags.push(
+                Diagnostic::warning(
+                    "RB016",
+                    format!(
+                        "{what} `{}` is declared `{}` but `{shader}` declares it `{def}`",
+                        p.name, p.decl.ty
+                    ),
+                )
+                .at(p.location.clone()),
+            );
+        }
+    }
+
+    fn elems(&self, value: &Piece, arena: &[Token]) -> Vec<Elem<'a>> {
+        let src: &'a [u8] = self.src;
+        let one = |t: &Token| -> Elem<'a> {
+            if t.kind == TokKind::Str {
+                Elem::Str(decode_string(src, t))
+            } else {
+                Elem::Num(std::str::from_utf8(&src[t.start..t.end]).unwrap_or("0"))
+            }
+        };
+        match value {
+            Piece::Value(t) => vec![one(t)],
+            Piece::Array { items, .. } => arena
+                .get(items.clone())
+                .unwrap_or_default()
+                .iter()
+                .map(one)
+                .collect(),
+            Piece::Comment(_) => Vec::new(),
+        }
+    }
+
+    /// Connections of a `reference` parameter: one `handle:output` string per element, split
+    /// at the last `:`, bound to the latest version of the handle defined so far.
+    fn read_links(
+        &self,
+        p: &ReadParam,
+        ty: &Type,
+        elems: Vec<Elem<'_>>,
+        diags: &mut Diagnostics,
+    ) -> Result<Vec<Link>, Error> {
+        let expected = match ty.array {
+            ArraySpec::Fixed(n) => Some(n),
+            ArraySpec::None => Some(1),
+            ArraySpec::Dynamic => None,
+        };
+        if expected.is_some_and(|n| n != elems.len()) {
+            diags.push(
+                Diagnostic::warning(
+                    "RB014",
+                    format!(
+                        "`{}` has {} connection(s) but its type `{ty}` takes {}",
+                        p.name,
+                        elems.len(),
+                        expected.unwrap_or(0)
+                    ),
+                )
+                .at(p.location.clone()),
+            );
+        }
+        let mut links = Vec::with_capacity(elems.len());
+        for e in elems {
+            let Elem::Str(s) = e else { continue };
+            let (handle, output) = match s.rfind(':') {
+                Some(k) if k + 1 == s.len() => {
+                    return Err(Diagnostic::error(
+                        "RB008",
+                        format!("connection `{s}` of `{}` has an empty output name", p.name),
+                    )
+                    .at(p.location.clone())
+                    .into());
+                }
+                Some(k) => (&s[..k], Some(&s[k + 1..])),
+                None => (s.as_str(), None),
+            };
+            match self.net.find(handle) {
+                Some(id) => links.push(Link::node(id, output)),
+                None => {
+                    diags.push(
+                        Diagnostic::warning(
+                            "RB018",
+                            format!("`{}` references `{handle}`, which is not defined before this request; kept as a dangling connection", p.name),
+                        )
+                        .at(p.location.clone()),
+                    );
+                    links.push(Link::missing(handle, output));
+                }
+            }
+        }
+        Ok(links)
+    }
+}
+
+/// For each parameter occurrence: whether an earlier occurrence has the same name (RB015),
+/// and whether a later one does (this one is overridden).
+fn duplicates(read: &[ReadParam]) -> (Vec<bool>, Vec<bool>) {
+    let mut order: Vec<usize> = (0..read.len()).collect();
+    order.sort_by(|&a, &b| read[a].name.cmp(&read[b].name).then(a.cmp(&b)));
+    let mut repeated = vec![false; read.len()];
+    let mut shadowed = vec![false; read.len()];
+    for w in order.windows(2) {
+        if read[w[0]].name == read[w[1]].name {
+            repeated[w[1]] = true;
+            shadowed[w[0]] = true;
+        }
+    }
+    (repeated, shadowed)
+}
+
+fn piece_name(p: &Piece) -> &'static str {
+    match p {
+        Piece::Array { .. } => "array",
+        other => describe(other.first()),
+    }
+}
+
+/// Decl type vs definition type, for RB016: same base type (any struct names match) and a
+/// compatible shape (`[1]` matches a scalar, anything matches a dynamic array).
+fn types_compatible(decl: &Type, def: &Type) -> bool {
+    let base_ok = match (&decl.base, &def.base) {
+        (BaseType::Struct(_), BaseType::Struct(_)) => true,
+        (a, b) => a == b,
+    };
+    let shape_ok = match (decl.array, def.array) {
+        (_, ArraySpec::Dynamic) => true,
+        (ArraySpec::None, ArraySpec::None) => true,
+        (ArraySpec::Fixed(1), ArraySpec::None) | (ArraySpec::None, ArraySpec::Fixed(1)) => true,
+        (ArraySpec::Fixed(a), ArraySpec::Fixed(b)) => a == b,
+        _ => false,
+    };
+    base_ok && shape_ok
+}
+
+/// Convert RIB value elements to a typed value (RB014 and a flat array when they do not fit).
+fn convert_value(
+    ty: &Type,
+    elems: &[Elem<'_>],
+    name: &str,
+    location: &Location,
+    diags: &mut Diagnostics,
+) -> Value {
+    let warn = |diags: &mut Diagnostics, why: String| {
+        diags.push(
+            Diagnostic::warning(
+                "RB014",
+                format!("value of `{name}` does not match its type `{ty}`: {why}"),
+            )
+            .at(location.clone()),
+        );
+    };
+    if let BaseType::Unknown(_) = ty.base {
+        // Already reported as RB013; kept raw.
+        return flat(&ty.base, elems, &mut |_| {});
+    }
+    let comps = ty.base.components();
+    if comps == 0 {
+        warn(diags, "this type has no value form".into());
+        return flat(&ty.base, elems, &mut |_| {});
+    }
+    let is_string = ty.base == BaseType::String;
+    if elems.iter().any(|e| matches!(e, Elem::Str(_)) != is_string) {
+        let want = if is_string { "strings" } else { "numbers" };
+        warn(diags, format!("expected {want}"));
+        return flat(&ty.base, elems, &mut |_| {});
+    }
+    let count = match ty.array {
+        ArraySpec::None => 1,
+        ArraySpec::Fixed(n) => n,
+        ArraySpec::Dynamic => elems.len() / comps,
+    };
+    if elems.len() != comps * count {
+        warn(
+            diags,
+            format!("{} element(s), expected {}", elems.len(), comps * count),
+        );
+        return flat(&ty.base, elems, &mut |_| {});
+    }
+    let mut problems: Vec<String> = Vec::new();
+    let mut note = |s: String| problems.push(s);
+    let value = if ty.is_array() {
+        let items = elems
+            .chunks(comps)
+            .map(|chunk| scalar(&ty.base, chunk, &mut note))
+            .collect::<Option<Vec<Value>>>();
+        items.map(|items| Value::Array(ty.base.clone(), items))
+    } else {
+        scalar(&ty.base, elems, &mut note)
+    };
+    for p in problems {
+        warn(diags, p);
+    }
+    value.unwrap_or_else(|| flat(&ty.base, elems, &mut |_| {}))
+}
+
+/// One element of type `base` from exactly `components()` elements; `None` if it cannot be
+/// represented (non-integral int).
+fn scalar(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Option<Value> {
+    // At most 16 components (a matrix): no allocation.
+    let mut floats = || -> [f32; 16] {
+        let mut out = [0.0f32; 16];
+        for (o, e) in out.iter_mut().zip(elems) {
+            if let Elem::Num(t) = e {
+                *o = parse_f32(t, note);
+            }
+        }
+        out
+    };
+    Some(match base {
+        BaseType::Int => match &elems[0] {
+            Elem::Num(t) => Value::Int(parse_int(t, note)?),
+            Elem::Str(_) => return None,
+        },
+        BaseType::Float => Value::Float(floats()[0]),
+        BaseType::String => match &elems[0] {
+            Elem::Str(s) => Value::Str(s.clone()),
+            Elem::Num(_) => return None,
+        },
+        b if b.is_triple() => {
+            let f = floats();
+            Value::Triple(b.clone(), [f[0], f[1], f[2]])
+        }
+        BaseType::HPoint => {
+            let f = floats();
+            Value::HPoint([f[0], f[1], f[2], f[3]])
+        }
+        BaseType::Matrix => Value::Matrix(floats()),
+        _ => return None,
+    })
+}
+
+/// Parse a float, saturating (RB014) outside the f32 range.
+fn parse_f32(text: &str, note: &mut dyn FnMut(String)) -> f32 {
+    let x: f32 = text.parse().unwrap_or(0.0);
+    if x.is_finite() {
+        x
+    } else {
+        note(format!("{text} is outside the f32 range; saturated"));
+        if x > 0.0 { f32::MAX } else { f32::MIN }
+    }
+}
+
+/// Parse an int: integer text (saturated outside i32, RB014), or an integral float (`1.`).
+fn parse_int(text: &str, note: &mut dyn FnMut(String)) -> Option<i32> {
+    if let Ok(v) = text.parse::<i64>() {
+        if let Ok(v) = i32::try_from(v) {
+            return Some(v);
+        }
+        note(format!("{text} is outside the int range; saturated"));
+        return Some(if v > 0 { i32::MAX } else { i32::MIN });
+    }
+    let x: f64 = text.parse().ok()?;
+    if x.fract() == 0.0 && x >= f64::from(i32::MIN) && x <= f64::from(i32::MAX) {
+        return Some(x as i32);
+    }
+    note(format!("{text} is not an integer"));
+    None
+}
+
+/// A flat array of the elements as written: integer-looking numbers as `Int`, other numbers as
+/// `Float`, strings as `Str`.
+fn flat(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Value {
+    let items = elems
+        .iter()
+        .map(|e| match e {
+            Elem::Str(s) => Value::Str(s.clone()),
+            Elem::Num(t) => match t.parse::<i32>() {
+                Ok(i) => Value::Int(i),
+                Err(_) => Value::Float(parse_f32(t, note)),
+            },
+        })
+        .collect();
+    Value::Array(base.clone(), items)
+}
+
+/// One material per terminal node version, in file order (formats.md §3.6, §5.4).
+fn add_materials(net: &mut Network) {
+    let mut taken: HashSet<String> = HashSet::new();
+    let terminals: Vec<NodeId> = net
+        .node_ids()
+        .filter(|&id| net[id].kind() != RequestKind::Pattern)
+        .collect();
+    for id in terminals {
+        let node = &net[id];
+        let Some(terminal) = node.kind().terminal_name() else {
+            continue;
+        };
+        let base = match node.kind() {
+            RequestKind::Bxdf => node.material_id().unwrap_or(node.handle()).to_string(),
+            _ => node.handle().to_string(),
+        };
+        let mut name = base.clone();
+        let mut n = 1;
+        while taken.contains(&name) {
+            name = format!("{base}#{n}");
+            n += 1;
+        }
+        taken.insert(name.clone());
+        let material = Material {
+            name,
+            terminals: vec![Terminal {
+                name: terminal.to_string(),
+                link: Link::node(id, None),
+            }],
+            nodes: MaterialNodes::UpstreamOfTerminals,
+            primvars: Vec::new(),
+            location: node.location().cloned(),
+        };
+        net.materials_mut().push(material);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decl_words() {
+        let d = split_decl("reference struct manifold").unwrap();
+        assert!(d.reference);
+        assert_eq!((d.type_word, d.name), (Some("struct"), "manifold"));
+        let d = split_decl("float[2] PixelFilterWidth").unwrap();
+        assert_eq!((d.type_word, d.array), (Some("float"), Some("2")));
+        let d = split_decl("uniform float [3]  x").unwrap();
+        assert_eq!(
+            (d.class, d.type_word, d.array),
+            (Some("uniform"), Some("float"), Some("3"))
+        );
+        let d = split_decl("diffuseGain").unwrap();
+        assert_eq!((d.type_word, d.name), (None, "diffuseGain"));
+        let d = split_decl("reference x").unwrap();
+        assert_eq!((d.reference, d.type_word), (true, None));
+        let d = split_decl("foo bar float x").unwrap();
+        assert_eq!(d.extra, vec!["foo", "bar"]);
+        assert!(split_decl("  ").is_none());
+    }
+
+    #[test]
+    fn compatible_types() {
+        let f = Type::scalar(BaseType::Float);
+        let i = Type::scalar(BaseType::Int);
+        let f2 = Type::parse_decl("float2");
+        let int_dyn = Type {
+            base: BaseType::Int,
+            array: ArraySpec::Dynamic,
+        };
+        let int1 = Type {
+            base: BaseType::Int,
+            array: ArraySpec::Fixed(1),
+        };
+        assert!(types_compatible(&f, &f));
+        assert!(!types_compatible(&f, &i));
+        assert!(!types_compatible(&f, &f2));
+        assert!(types_compatible(&int1, &int_dyn));
+        assert!(types_compatible(&int1, &i));
+        assert!(types_compatible(
+            &Type::scalar(BaseType::Struct(None)),
+            &Type::scalar(BaseType::Struct(Some("manifold".into())))
+        ));
+    }
+
+    #[test]
+    fn int_parsing() {
+        let mut notes = Vec::new();
+        let mut note = |s: String| notes.push(s);
+        assert_eq!(parse_int("7", &mut note), Some(7));
+        assert_eq!(parse_int("1.", &mut note), Some(1));
+        assert_eq!(parse_int("1e2", &mut note), Some(100));
+        assert_eq!(parse_int("99999999999", &mut note), Some(i32::MAX));
+        assert_eq!(parse_int("1.5", &mut note), None);
+        assert_eq!(notes.len(), 2);
+    }
+}

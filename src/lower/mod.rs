@@ -1,1 +1,480 @@
-//! Lowering of resolved networks to the closure IR, one module per material model. (in progress)
+//! Lowering of resolved shader networks to the closure IR (spec closures.md §4), one module
+//! per material model: [`pxr`] (PxrSurface / PxrLayerSurface, with PxrLayer and
+//! PxrLayerMixer interpreted as program expressions), [`vray`], [`physical`], [`mia`], and
+//! the small fused pattern set [`patterns`].
+//!
+//! The lowering reads the network through the small [`Graph`] trait and definitions through
+//! [`Definitions`], so that it works on the crate's network model and on hand-built graphs
+//! ([`SimpleGraph`]) alike.
+//!
+//! Parameter binding (§4.0), in order of preference: a connection from an interpreted
+//! pattern → program expression; a connection from any other node → external input slot
+//! (LW002, info) whose fallback is the downstream parameter's value; an authored value; the
+//! definition default; the recipe's built-in default (LW003, warning, once per node type
+//! without definition).
+
+pub mod mia;
+pub mod network;
+pub mod patterns;
+pub mod physical;
+pub mod pxr;
+pub mod scene;
+pub mod vray;
+
+use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::ir::{IrBuilder, MaterialIr, Reg, value_to_vec3};
+use crate::registry::Definition;
+use crate::types::{BaseType, Type, Value};
+use glam::Vec3;
+use std::collections::{HashMap, HashSet};
+use std::fmt::Debug;
+use std::hash::Hash;
+use std::sync::Arc;
+
+/// Read access to a (resolved) shader network, as the lowering needs it.
+pub trait Graph {
+    /// Node identifier.
+    type Id: Copy + Eq + Hash + Debug;
+    /// The node's shader type (`PxrLayer`, `VRayMtl`, ...).
+    fn shader(&self, n: Self::Id) -> &str;
+    /// The node's handle (unique name).
+    fn handle(&self, n: Self::Id) -> &str;
+    /// The authored value of an input, if any.
+    fn value(&self, n: Self::Id, param: &str) -> Option<&Value>;
+    /// The first connection into an input: upstream node and output name (empty when the
+    /// connection names no output).
+    fn connection(&self, n: Self::Id, param: &str) -> Option<(Self::Id, String)>;
+    /// Where the node is defined, for diagnostics.
+    fn location(&self, n: Self::Id) -> Option<Location>;
+}
+
+/// Shader definitions by id.
+pub trait Definitions {
+    /// The definition of `shader`, if known.
+    fn definition(&self, shader: &str) -> Option<Arc<Definition>>;
+}
+
+/// No definitions at all: every recipe uses its built-in defaults (LW003).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoDefinitions;
+
+impl Definitions for NoDefinitions {
+    fn definition(&self, _shader: &str) -> Option<Arc<Definition>> {
+        None
+    }
+}
+
+impl Definitions for HashMap<String, Arc<Definition>> {
+    fn definition(&self, shader: &str) -> Option<Arc<Definition>> {
+        self.get(shader).cloned()
+    }
+}
+
+/// A small in-memory network for tests and API users who build materials by hand.
+#[derive(Debug, Clone, Default)]
+pub struct SimpleGraph {
+    nodes: Vec<SimpleNode>,
+}
+
+#[derive(Debug, Clone)]
+struct SimpleNode {
+    handle: String,
+    shader: String,
+    values: HashMap<String, Value>,
+    conns: HashMap<String, (usize, String)>,
+}
+
+impl SimpleGraph {
+    /// An empty graph.
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// Add a node; returns its id.
+    pub fn node(&mut self, handle: &str, shader: &str) -> usize {
+        self.nodes.push(SimpleNode {
+            handle: handle.into(),
+            shader: shader.into(),
+            values: HashMap::new(),
+            conns: HashMap::new(),
+        });
+        self.nodes.len() - 1
+    }
+    /// Author a value (replacing an earlier one).
+    pub fn set(&mut self, n: usize, param: &str, v: Value) -> &mut Self {
+        self.nodes[n].values.insert(param.into(), v);
+        self
+    }
+    /// Author a float.
+    pub fn setf(&mut self, n: usize, param: &str, x: f32) -> &mut Self {
+        self.set(n, param, Value::Float(x))
+    }
+    /// Author an int.
+    pub fn seti(&mut self, n: usize, param: &str, x: i32) -> &mut Self {
+        self.set(n, param, Value::Int(x))
+    }
+    /// Author a colour.
+    pub fn setc(&mut self, n: usize, param: &str, c: [f32; 3]) -> &mut Self {
+        self.set(n, param, Value::Triple(BaseType::Color, c))
+    }
+    /// Connect `up.output` to `down.param` (replacing an earlier connection).
+    pub fn connect(&mut self, down: usize, param: &str, up: usize, output: &str) -> &mut Self {
+        self.nodes[down]
+            .conns
+            .insert(param.into(), (up, output.into()));
+        self
+    }
+    /// The id of the node with this handle.
+    pub fn find(&self, handle: &str) -> Option<usize> {
+        self.nodes.iter().position(|n| n.handle == handle)
+    }
+}
+
+impl Graph for SimpleGraph {
+    type Id = usize;
+    fn shader(&self, n: usize) -> &str {
+        &self.nodes[n].shader
+    }
+    fn handle(&self, n: usize) -> &str {
+        &self.nodes[n].handle
+    }
+    fn value(&self, n: usize, param: &str) -> Option<&Value> {
+        self.nodes[n].values.get(param)
+    }
+    fn connection(&self, n: usize, param: &str) -> Option<(usize, String)> {
+        self.nodes[n].conns.get(param).map(|(u, o)| (*u, o.clone()))
+    }
+    fn location(&self, _n: usize) -> Option<Location> {
+        None
+    }
+}
+
+/// Which recipe lowers a terminal of this shader type, if any.
+pub fn recipe_for(shader: &str) -> Option<crate::ir::RecipeId> {
+    use crate::ir::RecipeId::*;
+    Some(match shader {
+        "PxrSurface" | "PxrLayerSurface" => PxrSurface,
+        "VRayMtl" => VRayMtl,
+        "PhysicalMaterial" => PhysicalMaterial,
+        "mia_material" | "mia_material_x" => MiaMaterial,
+        _ => return None,
+    })
+}
+
+/// Lower the terminal `node` of `graph` to a [`MaterialIr`] named `name`. Diagnostics
+/// (LW002, LW003, LW020, ...) are appended to `diags`; LW001, LW010 and LW011 are errors.
+pub fn lower_node<G: Graph>(
+    graph: &G,
+    defs: &dyn Definitions,
+    node: G::Id,
+    name: &str,
+    diags: &mut Diagnostics,
+) -> Result<MaterialIr, Error> {
+    let shader = graph.shader(node).to_string();
+    let Some(recipe) = recipe_for(&shader) else {
+        let mut d = Diagnostic::error(
+            "LW001",
+            format!(
+                "no lowering recipe for shader type `{shader}` (node `{}`)",
+                graph.handle(node)
+            ),
+        )
+        .with_note("recipes exist for PxrSurface, PxrLayerSurface, VRayMtl, PhysicalMaterial, mia_material");
+        if let Some(l) = graph.location(node) {
+            d = d.at(l);
+        }
+        return Err(d.into());
+    };
+    let mut cx = Lower::new(graph, defs, diags);
+    let root = match recipe {
+        crate::ir::RecipeId::PxrSurface => pxr::lower_surface(&mut cx, node),
+        crate::ir::RecipeId::VRayMtl => vray::lower(&mut cx, node),
+        crate::ir::RecipeId::PhysicalMaterial => physical::lower(&mut cx, node),
+        crate::ir::RecipeId::MiaMaterial => mia::lower(&mut cx, node),
+        crate::ir::RecipeId::Custom => Ok(None),
+    };
+    let root = root?;
+    let b = std::mem::take(&mut cx.b);
+    b.finish(name, recipe, root).map_err(|d| {
+        let d = match graph.location(node) {
+            Some(l) if d.location.is_none() => d.at(l),
+            _ => *d,
+        };
+        Error::Input(Box::new(d))
+    })
+}
+
+/// Gate and compositing factor of mixer layers 1–4 for one lobe group.
+pub(crate) type MixerGates = [(Reg, Reg); 4];
+
+/// The lowering context: the graph, definitions, the IR builder and diagnostics.
+pub struct Lower<'a, G: Graph> {
+    /// The network.
+    pub graph: &'a G,
+    /// Definitions.
+    pub defs: &'a dyn Definitions,
+    /// The IR under construction.
+    pub b: IrBuilder,
+    /// Diagnostics sink.
+    pub diags: &'a mut Diagnostics,
+    outputs: HashMap<(G::Id, String), Reg>,
+    /// Per PxrLayerMixer node and lobe group: gates and compositing factors (see
+    /// `pxr::mixer_gates`).
+    pub(crate) mixer_gates: HashMap<(G::Id, &'static str), MixerGates>,
+    visiting: Vec<G::Id>,
+    warned_no_def: HashSet<String>,
+    def_cache: HashMap<String, Option<Arc<Definition>>>,
+}
+
+impl<'a, G: Graph> Lower<'a, G> {
+    /// A fresh context.
+    pub fn new(graph: &'a G, defs: &'a dyn Definitions, diags: &'a mut Diagnostics) -> Self {
+        Lower {
+            graph,
+            defs,
+            b: IrBuilder::new(),
+            diags,
+            outputs: HashMap::new(),
+            mixer_gates: HashMap::new(),
+            visiting: Vec::new(),
+            warned_no_def: HashSet::new(),
+            def_cache: HashMap::new(),
+        }
+    }
+
+    /// The definition of a node's shader (cached).
+    pub fn definition(&mut self, n: G::Id) -> Option<Arc<Definition>> {
+        let shader = self.graph.shader(n);
+        if let Some(d) = self.def_cache.get(shader) {
+            return d.clone();
+        }
+        let d = self.defs.definition(shader);
+        self.def_cache.insert(shader.to_string(), d.clone());
+        d
+    }
+
+    /// Emit a diagnostic located at node `n`.
+    pub fn diag(&mut self, n: G::Id, d: Diagnostic) {
+        let d = match self.graph.location(n) {
+            Some(l) => d.at(l),
+            None => d,
+        };
+        self.diags.push(d);
+    }
+
+    /// Bind parameter `param` of node `n` (§4.0) with `builtin` as the recipe's default.
+    pub fn param(&mut self, n: G::Id, param: &str, builtin: Value) -> Result<Reg, Error> {
+        if let Some((up, output)) = self.graph.connection(n, param) {
+            if let Some(r) = self.pattern_output(up, &output)? {
+                return Ok(r);
+            }
+            let fallback = self.static_value(n, param, &builtin);
+            let origin = if output.is_empty() {
+                self.graph.handle(up).to_string()
+            } else {
+                format!("{}.{}", self.graph.handle(up), output)
+            };
+            let ty = self.param_type(n, param, &builtin);
+            let known = self.b.inputs().iter().any(|s| s.origin == origin);
+            if !known {
+                self.diag(
+                    n,
+                    Diagnostic::info(
+                        "LW002",
+                        format!(
+                            "`{}.{param}` is connected to `{origin}` ({}), which the lowering does not interpret; it becomes an external input slot with fallback {fallback}",
+                            self.graph.handle(n),
+                            self.graph.shader(up)
+                        ),
+                    ),
+                );
+            }
+            return Ok(self.b.input_slot(&origin, ty, fallback));
+        }
+        let v = self.static_value(n, param, &builtin);
+        Ok(self.b.prog.constant3(value_to_vec3(&v)))
+    }
+
+    /// A float parameter.
+    pub fn pf(&mut self, n: G::Id, param: &str, builtin: f32) -> Result<Reg, Error> {
+        self.param(n, param, Value::Float(builtin))
+    }
+    /// An int parameter.
+    pub fn pi(&mut self, n: G::Id, param: &str, builtin: i32) -> Result<Reg, Error> {
+        self.param(n, param, Value::Int(builtin))
+    }
+    /// A colour parameter.
+    pub fn pc(&mut self, n: G::Id, param: &str, builtin: [f32; 3]) -> Result<Reg, Error> {
+        self.param(n, param, Value::Triple(BaseType::Color, builtin))
+    }
+    /// A normal/vector parameter.
+    pub fn pv(&mut self, n: G::Id, param: &str, builtin: [f32; 3]) -> Result<Reg, Error> {
+        self.param(n, param, Value::Triple(BaseType::Vector, builtin))
+    }
+
+    /// The constant scalar value of a parameter when it is not connected (authored,
+    /// definition default or built-in), for structural choices such as Fresnel modes.
+    pub fn static_scalar(&mut self, n: G::Id, param: &str, builtin: f32) -> Option<f32> {
+        if self.graph.connection(n, param).is_some() {
+            return None;
+        }
+        let v = self.static_value(n, param, &Value::Float(builtin));
+        Some(value_to_vec3(&v).x)
+    }
+
+    /// True when the parameter is connected to anything.
+    pub fn is_connected(&self, n: G::Id, param: &str) -> bool {
+        self.graph.connection(n, param).is_some()
+    }
+
+    /// Authored value, else definition default, else `builtin` (LW003 once per shader type
+    /// when the registry has no definition).
+    pub fn static_value(&mut self, n: G::Id, param: &str, builtin: &Value) -> Value {
+        if let Some(v) = self.graph.value(n, param) {
+            return v.clone();
+        }
+        match self.definition(n) {
+            Some(def) => match def.input(param).and_then(|p| p.default.clone()) {
+                Some(v) => v,
+                None => builtin.clone(),
+            },
+            None => {
+                let shader = self.graph.shader(n);
+                if !self.warned_no_def.contains(shader) {
+                    let shader = shader.to_string();
+                    self.warned_no_def.insert(shader.clone());
+                    self.diag(
+                        n,
+                        Diagnostic::warning(
+                            "LW003",
+                            format!(
+                                "no definition of `{shader}` in the registry; the lowering uses its built-in defaults"
+                            ),
+                        ),
+                    );
+                }
+                builtin.clone()
+            }
+        }
+    }
+
+    fn param_type(&mut self, n: G::Id, param: &str, builtin: &Value) -> Type {
+        if let Some(p) = self.definition(n).and_then(|d| d.input(param).cloned()) {
+            return p.ty;
+        }
+        Type::scalar(builtin.base_type())
+    }
+
+    /// The program expression of `up.output` when `up` is a pattern the lowering interprets
+    /// (memoised); `None` when it is not interpreted. LW011 on a cycle.
+    pub fn pattern_output(&mut self, up: G::Id, output: &str) -> Result<Option<Reg>, Error> {
+        let shader = self.graph.shader(up).to_string();
+        if !is_interpreted(&shader) {
+            return Ok(None);
+        }
+        let key = (up, output.to_string());
+        if let Some(&r) = self.outputs.get(&key) {
+            return Ok(Some(r));
+        }
+        if self.visiting.contains(&up) {
+            let path: Vec<String> = self
+                .visiting
+                .iter()
+                .map(|&v| self.graph.handle(v).to_string())
+                .collect();
+            let mut d = Diagnostic::error(
+                "LW011",
+                format!(
+                    "cycle among interpreted patterns through `{}`",
+                    self.graph.handle(up)
+                ),
+            )
+            .with_note(format!(
+                "path: {} -> {}",
+                path.join(" -> "),
+                self.graph.handle(up)
+            ));
+            if let Some(l) = self.graph.location(up) {
+                d = d.at(l);
+            }
+            return Err(d.into());
+        }
+        self.visiting.push(up);
+        let r = match shader.as_str() {
+            "PxrLayer" => pxr::layer_output(self, up, output),
+            "PxrLayerMixer" => pxr::mixer_output(self, up, output),
+            _ => patterns::output(self, up, output),
+        };
+        self.visiting.pop();
+        let r = r?;
+        if let Some(r) = r {
+            self.outputs.insert(key, r);
+        }
+        Ok(r)
+    }
+
+    /// A constant register.
+    pub fn constf(&mut self, x: f32) -> Reg {
+        self.b.prog.constf(x)
+    }
+
+    /// A constant colour register.
+    pub fn const3(&mut self, v: [f32; 3]) -> Reg {
+        self.b.prog.constant3(Vec3::from_array(v))
+    }
+}
+
+/// True for the pattern types the lowering turns into program expressions.
+pub fn is_interpreted(shader: &str) -> bool {
+    matches!(shader, "PxrLayer" | "PxrLayerMixer") || patterns::is_pattern(shader)
+}
+
+/// Anisotropic widths from roughness `r` and anisotropy `a ∈ [−1, 1]` (§0):
+/// `α = clamp(r², 1e-6, 1)`, `s = √(1 − min(|a|, 0.98))`, `α_x = min(α/s, 1)`, `α_y = α s`,
+/// roles swapped for `a < 0`.
+pub fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
+    let p = &mut b.prog;
+    let r2 = p.mul(r, r);
+    let alpha = p.clamp(r2, 1e-6, 1.0);
+    if p.constant(a) == Some(Vec3::ZERO) {
+        // Isotropic: one register for both widths.
+        return (alpha, alpha);
+    }
+    let aa = p.un(crate::ir::OpCode::Abs, a);
+    let cap = p.constf(0.98);
+    let aa = p.bin(crate::ir::OpCode::Min, aa, cap);
+    let one_minus = p.one_minus(aa);
+    let s = p.un(crate::ir::OpCode::Sqrt, one_minus);
+    let q = p.div(alpha, s);
+    let one = p.constf(1.0);
+    let big = p.bin(crate::ir::OpCode::Min, q, one);
+    let small = p.mul(alpha, s);
+    let zero = p.constf(0.0);
+    let pos = p.bin(crate::ir::OpCode::CmpGe, a, zero);
+    let ax = p.select(pos, big, small);
+    let ay = p.select(pos, small, big);
+    (ax, ay)
+}
+
+/// Lower every terminal of a [`SimpleGraph`]-like graph given as `(name, node)` pairs,
+/// optionally in parallel (rayon) — materials are independent.
+pub fn lower_many<G: Graph + Sync>(
+    graph: &G,
+    defs: &(dyn Definitions + Sync),
+    terminals: &[(String, G::Id)],
+    parallel: bool,
+) -> Vec<(Result<MaterialIr, Error>, Diagnostics)>
+where
+    G::Id: Send + Sync,
+{
+    let one = |(name, id): &(String, G::Id)| {
+        let mut d = Diagnostics::new();
+        let r = lower_node(graph, defs, *id, name, &mut d);
+        (r, d)
+    };
+    if parallel {
+        use rayon::prelude::*;
+        terminals.par_iter().map(one).collect()
+    } else {
+        terminals.iter().map(one).collect()
+    }
+}

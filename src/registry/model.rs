@@ -65,6 +65,10 @@ pub struct Property {
     pub default: Option<Value>,
     /// Every attribute / `%meta` entry verbatim, in document order.
     pub metadata: Vec<(String, String)>,
+    /// Typed `%meta` values of `.oso` properties (`int`, `float`, `string` and their arrays),
+    /// in document order, under the same keys as [`Property::metadata`]. Empty for `.args`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub typed_metadata: Vec<(String, Value)>,
     /// Connection types: `<tags>` values, the deprecated `tag` attribute, OSL `tag` metas.
     pub connection_types: Vec<String>,
     /// `:`-joined page path.
@@ -100,6 +104,7 @@ impl Property {
             ty,
             default: None,
             metadata: Vec::new(),
+            typed_metadata: Vec::new(),
             connection_types: Vec::new(),
             page: None,
             label: None,

@@ -1,1 +1,468 @@
-//! (in progress)
+//! Per-type vstruct tables (spec vstruct.md §2.5–§2.7) and head normalisation.
+//!
+//! Heads are recognised only by back-reference: the heads of a node type are exactly the
+//! distinct head names of its members, per direction (D2). Tags and declared types play no
+//! part.
+//!
+//! Choices where the spec is silent:
+//!
+//! * VS007 (head without a property) and VS008 (nested head) look at properties of the same
+//!   direction as the head's members (inputs and outputs are separate namespaces).
+//! * VS001 is reported once per member carrying an unparsable conditional (each has its own
+//!   location); the expression itself is parsed once per distinct text per type.
+//! * VS001's position is the value start plus the decoded offset (formats.md §2.6 allows it).
+//! * VS003 points at the property (the readers keep no position per attribute).
+
+use super::model::{CondSource, Definition, Direction, Property};
+use crate::cond::{self, ParseError, Statement};
+use crate::diag::{Diagnostic, Location};
+use crate::types::BaseType;
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+
+/// A member conditional: its source text and the parse result (shared between members with
+/// the same text).
+#[derive(Debug, Clone)]
+pub struct CondEntry {
+    /// The raw expression and where it is written.
+    pub source: CondSource,
+    /// The parse result.
+    pub parsed: Arc<Result<Statement, ParseError>>,
+}
+
+impl CondEntry {
+    /// The parsed statement, if the expression parsed.
+    pub fn statement(&self) -> Option<&Statement> {
+        self.parsed.as_ref().as_ref().ok()
+    }
+}
+
+/// One input member of an input head.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputMember {
+    /// The member property (an input of the node type).
+    pub property: String,
+    /// Names tried in order: `[primary]` or `[primary, alias]`.
+    pub names: Vec<String>,
+}
+
+/// One output member of an output head.
+#[derive(Debug, Clone)]
+pub struct OutputMember {
+    /// The member property (an output of the node type).
+    pub property: String,
+    /// Names it is found by: `[primary]` or `[primary, alias]`.
+    pub names: Vec<String>,
+    /// Its conditional, if it has a non-empty one.
+    pub cond: Option<CondEntry>,
+}
+
+/// An input head and its members in declaration order.
+#[derive(Debug, Clone)]
+pub struct InputHead {
+    /// Head name.
+    pub name: String,
+    /// Members in declaration order.
+    pub members: Vec<InputMember>,
+}
+
+/// An output head: its members and the reverse map name → member.
+#[derive(Debug, Clone)]
+pub struct OutputHead {
+    /// Head name.
+    pub name: String,
+    /// Members in declaration order.
+    pub members: Vec<OutputMember>,
+    /// Name (primary or alias) → index in `members`; later declarations win (VS004).
+    reverse: HashMap<String, usize>,
+}
+
+impl OutputHead {
+    /// The member found by `name` (primary or alias).
+    pub fn lookup(&self, name: &str) -> Option<&OutputMember> {
+        self.reverse.get(name).map(|&i| &self.members[i])
+    }
+}
+
+/// The vstruct tables of one node type.
+#[derive(Debug, Clone, Default)]
+pub struct VstructTables {
+    inputs: Vec<InputHead>,
+    outputs: Vec<OutputHead>,
+}
+
+impl VstructTables {
+    /// True if `head` is an input head.
+    pub fn is_input_head(&self, head: &str) -> bool {
+        self.input_head(head).is_some()
+    }
+
+    /// True if `head` is an output head.
+    pub fn is_output_head(&self, head: &str) -> bool {
+        self.output_head(head).is_some()
+    }
+
+    /// The input head named `head`.
+    pub fn input_head(&self, head: &str) -> Option<&InputHead> {
+        self.inputs.iter().find(|h| h.name == head)
+    }
+
+    /// The output head named `head`.
+    pub fn output_head(&self, head: &str) -> Option<&OutputHead> {
+        self.outputs.iter().find(|h| h.name == head)
+    }
+
+    /// Members of input head `head` in declaration order (empty if it is not one).
+    pub fn members_in(&self, head: &str) -> &[InputMember] {
+        self.input_head(head).map_or(&[], |h| &h.members)
+    }
+
+    /// Members of output head `head` in declaration order (empty if it is not one).
+    pub fn members_out(&self, head: &str) -> &[OutputMember] {
+        self.output_head(head).map_or(&[], |h| &h.members)
+    }
+
+    /// The output member of `head` named `name` (primary or alias).
+    pub fn reverse_out(&self, head: &str, name: &str) -> Option<&OutputMember> {
+        self.output_head(head)?.lookup(name)
+    }
+
+    /// Input head names in order of their first member.
+    pub fn input_heads(&self) -> impl Iterator<Item = &str> {
+        self.inputs.iter().map(|h| h.name.as_str())
+    }
+
+    /// Output head names in order of their first member.
+    pub fn output_heads(&self) -> impl Iterator<Item = &str> {
+        self.outputs.iter().map(|h| h.name.as_str())
+    }
+
+    /// True if the type has no heads at all.
+    pub fn is_empty(&self) -> bool {
+        self.inputs.is_empty() && self.outputs.is_empty()
+    }
+
+    /// Builds the tables of `def`, reporting VS001–VS009 into `diags`.
+    pub fn build(def: &Definition, diags: &mut Vec<Diagnostic>) -> VstructTables {
+        let mut b = Builder {
+            def,
+            diags,
+            parsed: HashMap::new(),
+        };
+        b.check_malformed_members();
+        let inputs = b.input_heads();
+        let outputs = b.output_heads();
+        b.check_heads(&inputs, &outputs);
+        VstructTables { inputs, outputs }
+    }
+}
+
+/// The distinct head names of the members among `props`, in order of first appearance.
+fn head_names(props: &[Property]) -> Vec<&str> {
+    let mut seen = HashSet::new();
+    props
+        .iter()
+        .filter_map(|p| p.vstruct.as_ref().map(|m| m.head.as_str()))
+        .filter(|h| seen.insert(*h))
+        .collect()
+}
+
+/// Registry normalisation (vstruct.md §2.5): a property named like a head of its own direction
+/// gets type `Vstruct` (array shape and declared type kept) and loses its default.
+pub fn normalize_heads(def: &mut Definition) {
+    fn normalize(props: &mut [Property]) {
+        let heads: HashSet<String> = head_names(props).into_iter().map(String::from).collect();
+        for p in props.iter_mut().filter(|p| heads.contains(&p.name)) {
+            p.ty.base = BaseType::Vstruct;
+            p.default = None;
+        }
+    }
+    normalize(&mut def.inputs);
+    normalize(&mut def.outputs);
+}
+
+/// The names a member is known by: `[primary]` or `[primary, alias]`.
+fn member_names(p: &Property) -> Vec<String> {
+    let Some(m) = &p.vstruct else {
+        return Vec::new();
+    };
+    let mut names = vec![m.member.clone()];
+    if let Some(a) = &m.alias
+        && *a != m.member
+    {
+        names.push(a.clone());
+    }
+    names
+}
+
+struct Builder<'d, 'g> {
+    def: &'d Definition,
+    diags: &'g mut Vec<Diagnostic>,
+    parsed: HashMap<String, Arc<Result<Statement, ParseError>>>,
+}
+
+impl Builder<'_, '_> {
+    fn all(&self) -> impl Iterator<Item = &Property> {
+        self.def.inputs.iter().chain(self.def.outputs.iter())
+    }
+
+    /// VS003 for `vstructmember` values that do not split; VS006 for suspicious aliases.
+    fn check_malformed_members(&mut self) {
+        let mut found = Vec::new();
+        for p in self.all() {
+            if p.vstruct.is_none()
+                && let Some(v) = p.meta("vstructmember")
+            {
+                found.push(
+                    Diagnostic::warning(
+                        "VS003",
+                        format!(
+                            "malformed vstructmember `{v}` on `{}` (expected `head.member`); not a member",
+                            p.name
+                        ),
+                    )
+                    .at(p.location.clone()),
+                );
+            }
+            if let Some(a) = p.vstruct.as_ref().and_then(|m| m.alias.as_ref())
+                && a.contains(|c: char| c.is_whitespace() || c == ',')
+            {
+                found.push(
+                    Diagnostic::warning(
+                        "VS006",
+                        format!(
+                            "vstructmemberaliases `{a}` on `{}` contains whitespace or `,`; used as one alias",
+                            p.name
+                        ),
+                    )
+                    .at(p.location.clone()),
+                );
+            }
+        }
+        self.diags.extend(found);
+    }
+
+    /// Parses `cond` once per distinct text; reports VS001 for this member if it fails.
+    fn parse_cond(&mut self, p: &Property, src: &CondSource) -> CondEntry {
+        let parsed = self
+            .parsed
+            .entry(src.text.clone())
+            .or_insert_with(|| Arc::new(cond::parse(&src.text)))
+            .clone();
+        if let Err(e) = parsed.as_ref() {
+            self.diags.push(vs001(p, src, e));
+        }
+        CondEntry {
+            source: src.clone(),
+            parsed,
+        }
+    }
+
+    fn input_heads(&mut self) -> Vec<InputHead> {
+        let def = self.def;
+        let mut heads: Vec<InputHead> = Vec::new();
+        for p in &def.inputs {
+            let Some(m) = &p.vstruct else { continue };
+            if let Some(src) = &m.cond {
+                let entry = self.parse_cond(p, src);
+                self.diags.push(
+                    Diagnostic::info(
+                        "VS002",
+                        format!(
+                            "conditional on input member `{}` is never consulted (only output members' conditionals are)",
+                            p.name
+                        ),
+                    )
+                    .at(entry.source.location.clone()),
+                );
+            }
+            let member = InputMember {
+                property: p.name.clone(),
+                names: member_names(p),
+            };
+            match heads.iter_mut().find(|h| h.name == m.head) {
+                Some(h) => h.members.push(member),
+                None => heads.push(InputHead {
+                    name: m.head.clone(),
+                    members: vec![member],
+                }),
+            }
+        }
+        heads
+    }
+
+    fn output_heads(&mut self) -> Vec<OutputHead> {
+        let def = self.def;
+        let mut heads: Vec<OutputHead> = Vec::new();
+        for p in &def.outputs {
+            let Some(m) = &p.vstruct else { continue };
+            let cond = m.cond.as_ref().map(|src| self.parse_cond(p, src));
+            if let Some(stmt) = cond.as_ref().and_then(CondEntry::statement) {
+                self.check_cond_names(p, cond.as_ref().map(|c| &c.source), stmt);
+            }
+            let idx = match heads.iter().position(|h| h.name == m.head) {
+                Some(i) => i,
+                None => {
+                    heads.push(OutputHead {
+                        name: m.head.clone(),
+                        members: Vec::new(),
+                        reverse: HashMap::new(),
+                    });
+                    heads.len() - 1
+                }
+            };
+            let names = member_names(p);
+            let head = &mut heads[idx];
+            let member_index = head.members.len();
+            for n in &names {
+                if let Some(prev) = head.reverse.insert(n.clone(), member_index) {
+                    let prev_prop = &head.members[prev].property;
+                    let prev_loc = def.output(prev_prop).map(|q| q.location.clone());
+                    let mut d = Diagnostic::warning(
+                        "VS004",
+                        format!(
+                            "output members `{prev_prop}` and `{}` of head `{}` share the name `{n}`; the later one (`{}`) wins",
+                            p.name, m.head, p.name
+                        ),
+                    )
+                    .at(p.location.clone());
+                    if let Some(l) = prev_loc {
+                        d = d.with_related("earlier member", l);
+                    }
+                    self.diags.push(d);
+                }
+            }
+            head.members.push(OutputMember {
+                property: p.name.clone(),
+                names,
+                cond,
+            });
+        }
+        heads
+    }
+
+    /// VS009: names read by an output member's conditional that are not inputs of the type.
+    fn check_cond_names(&mut self, p: &Property, src: Option<&CondSource>, stmt: &Statement) {
+        let mut reported = HashSet::new();
+        for name in stmt.param_names() {
+            if self.def.input(name).is_none() && reported.insert(name.to_string()) {
+                let loc = src.map_or_else(|| p.location.clone(), |s| s.location.clone());
+                self.diags.push(
+                    Diagnostic::warning(
+                        "VS009",
+                        format!(
+                            "conditional of `{}` reads `{name}`, which is not an input of `{}`",
+                            p.name, self.def.id
+                        ),
+                    )
+                    .at(loc),
+                );
+            }
+        }
+    }
+
+    /// VS005, VS007, VS008.
+    fn check_heads(&mut self, inputs: &[InputHead], outputs: &[OutputHead]) {
+        let def = self.def;
+        for h in inputs {
+            if outputs.iter().any(|o| o.name == h.name) {
+                let loc = first_member_location(&def.inputs, &h.name);
+                self.diags.push(
+                    Diagnostic::warning(
+                        "VS005",
+                        format!(
+                            "head `{}` has both input and output members; they form separate input and output heads",
+                            h.name
+                        ),
+                    )
+                    .at(loc),
+                );
+            }
+        }
+        let in_names: Vec<&str> = inputs.iter().map(|h| h.name.as_str()).collect();
+        let out_names: Vec<&str> = outputs.iter().map(|h| h.name.as_str()).collect();
+        self.check_direction(&def.inputs, &in_names, Direction::In);
+        self.check_direction(&def.outputs, &out_names, Direction::Out);
+    }
+
+    fn check_direction(&mut self, props: &[Property], heads: &[&str], dir: Direction) {
+        let what = if dir == Direction::In {
+            "input"
+        } else {
+            "output"
+        };
+        for h in heads {
+            if !props.iter().any(|p| p.name == *h) {
+                self.diags.push(
+                    Diagnostic::info(
+                        "VS007",
+                        format!(
+                            "{what} head `{h}` has members but no {what} named `{h}` is declared"
+                        ),
+                    )
+                    .at(first_member_location(props, h)),
+                );
+            }
+        }
+        for p in props {
+            if p.vstruct.is_some() && heads.contains(&p.name.as_str()) {
+                self.diags.push(
+                    Diagnostic::warning(
+                        "VS008",
+                        format!(
+                            "member `{}` is itself a head of other members (nested vstruct); it is not expanded recursively",
+                            p.name
+                        ),
+                    )
+                    .at(p.location.clone()),
+                );
+            }
+        }
+    }
+}
+
+fn first_member_location(props: &[Property], head: &str) -> Location {
+    props
+        .iter()
+        .find(|p| p.vstruct.as_ref().is_some_and(|m| m.head == head))
+        .map(|p| p.location.clone())
+        .unwrap_or_default()
+}
+
+/// VS001 for an unparsable conditional: the position is the value start plus the decoded
+/// offset of the error span; notes show the expression with a caret line.
+fn vs001(p: &Property, src: &CondSource, e: &ParseError) -> Diagnostic {
+    let text = &src.text;
+    let start = floor_boundary(text, e.span.start);
+    let end = floor_boundary(text, e.span.end.max(e.span.start));
+    let before = &text[..start];
+    let mut loc = src.location.clone();
+    match before.rfind('\n') {
+        Some(nl) => {
+            loc.line += before.matches('\n').count() as u32;
+            loc.column = before[nl + 1..].chars().count() as u32 + 1;
+        }
+        None => loc.column += before.chars().count() as u32,
+    }
+    let caret_pad = before.chars().count();
+    let caret_len = text[start..end].chars().count().max(1);
+    Diagnostic::warning(
+        "VS001",
+        format!("conditional of `{}` does not parse: {}", p.name, e.message),
+    )
+    .at(loc)
+    .with_span(e.span.clone())
+    .with_note(format!(
+        "{text}\n{}{}",
+        " ".repeat(caret_pad),
+        "^".repeat(caret_len)
+    ))
+}
+
+fn floor_boundary(text: &str, i: usize) -> usize {
+    let mut i = i.min(text.len());
+    while !text.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}

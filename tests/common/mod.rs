@@ -34,3 +34,35 @@ macro_rules! fixtures_or_skip {
         }
     };
 }
+
+/// A stable text form of a network for snapshots: per node (sorted), each parameter's
+/// connections or value.
+pub fn dump_network(net: &vstructc::network::Network) -> String {
+    let mut out = String::new();
+    for id in net.nodes_sorted() {
+        let node = &net[id];
+        out.push_str(&format!("{} ({})\n", node.display_name(), node.shader()));
+        for p in node.params_by_name() {
+            if p.is_connected() {
+                let links: Vec<String> = p
+                    .connections()
+                    .iter()
+                    .map(|l| {
+                        let up = match l.upstream_node() {
+                            Some(n) => net[n].handle().to_string(),
+                            None => format!("<missing {}>", l.missing_handle().unwrap_or_default()),
+                        };
+                        match l.output() {
+                            Some(o) => format!("{up}.{o}"),
+                            None => up,
+                        }
+                    })
+                    .collect();
+                out.push_str(&format!("  {} <- {}\n", p.name(), links.join(", ")));
+            } else if let Some(v) = p.value() {
+                out.push_str(&format!("  {} = {v}\n", p.name()));
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,51 @@
+//! Resolution throughput on a generated scene of layered materials (issue 4 targets: resolve
+//! 10,000 materials ≤ 300 ms single-threaded; doubling the scene ≤ 2.2× the time).
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use vstructc::Diagnostics;
+use vstructc::back::rib::write_rib_to_vec;
+use vstructc::front::rib::{RibOptions, parse_rib};
+use vstructc::network::testgen::layered_scene;
+use vstructc::registry::Registry;
+use vstructc::resolve::{ResolveOptions, resolve};
+
+fn bench(c: &mut Criterion) {
+    let reg = Registry::embedded();
+    let mut group = c.benchmark_group("scene");
+    group.sample_size(10);
+    for materials in [10_000usize, 20_000] {
+        let rib = layered_scene(materials).into_bytes();
+        let parse = || {
+            let mut diags = Diagnostics::new();
+            parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap()
+        };
+        let parsed = parse();
+        group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
+            b.iter(|| black_box(parse()))
+        });
+        group.bench_with_input(
+            BenchmarkId::new("resolve", materials),
+            &materials,
+            |b, _| {
+                b.iter_batched(
+                    || parsed.clone(),
+                    |mut net| {
+                        let res = resolve(&mut net, &reg, &ResolveOptions::default());
+                        black_box((net, res))
+                    },
+                    criterion::BatchSize::LargeInput,
+                )
+            },
+        );
+        let mut resolved = parsed.clone();
+        resolve(&mut resolved, &reg, &ResolveOptions::default());
+        group.bench_with_input(BenchmarkId::new("write", materials), &materials, |b, _| {
+            b.iter(|| black_box(write_rib_to_vec(&rib, &resolved, &reg).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

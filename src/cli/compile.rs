@@ -1,0 +1,105 @@
+//! `vstructc compile [--args DIR]... [--emit ir|lobes|dot] [--material NAME] INPUT`: read a
+//! RIB or JSON network, resolve it (a no-op when it holds no placeholders), lower each
+//! material (or only `--material`) and print its IR, flat lobe list or closure tree.
+//!
+//! The lobe list's numeric weights use [`SimpleAlbedo`] (table-free estimates) until the
+//! interpreter's albedo tables are plugged in.
+
+use super::input::{load_network, report_error};
+use super::resolve::resolve_options;
+use super::{CommonOptions, info::registry_for};
+use crate::diag::{Diagnostics, Error};
+use crate::ir::{MaterialIr, SimpleAlbedo, print};
+use crate::lower::network::{lower_terminal, report_placeholders, terminals};
+use crate::resolve::resolve;
+use clap::ValueEnum;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// What `compile` prints.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum Emit {
+    /// The IR: inputs, frames, program, closure nodes.
+    #[default]
+    Ir,
+    /// The flat lobe list with symbolic and numeric weights.
+    Lobes,
+    /// Graphviz dot of the closure tree.
+    Dot,
+}
+
+/// Arguments of `vstructc compile`.
+#[derive(Debug, clap::Args)]
+pub struct CompileArgs {
+    /// The network: a RIB or JSON file, or `-` for standard input.
+    pub input: PathBuf,
+    /// What to print.
+    #[arg(long, value_enum, default_value_t = Emit::Ir)]
+    pub emit: Emit,
+    /// Lower only this material (material name or terminal node handle).
+    #[arg(long, value_name = "NAME")]
+    pub material: Option<String>,
+    /// Resolve without evaluating conditionals.
+    #[arg(long)]
+    pub no_conditions: bool,
+    /// Single-quoted RIB strings are an error instead of an info (RB011).
+    #[arg(long)]
+    pub strict_rib: bool,
+}
+
+/// Render one lowered material.
+pub fn render(ir: &MaterialIr, emit: Emit) -> String {
+    match emit {
+        Emit::Ir => print::ir_text(ir),
+        Emit::Lobes => print::lobes_text(ir, &SimpleAlbedo),
+        Emit::Dot => crate::back::dot::to_dot(ir),
+    }
+}
+
+/// Run `vstructc compile`.
+pub fn run(args: &CompileArgs, common: &CommonOptions) -> ExitCode {
+    let options = match resolve_options(args.no_conditions, common) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let registry = registry_for(common);
+    let mut diags = Diagnostics::new();
+    let mut loaded = match load_network(&args.input, &registry, args.strict_rib, &mut diags) {
+        Ok(l) => l,
+        Err(e) => {
+            super::report(&diags, common);
+            return report_error(&e, common);
+        }
+    };
+    let res = resolve(&mut loaded.network, &registry, &options);
+    diags.extend(registry.diagnostics());
+    diags.extend(res.diagnostics);
+    report_placeholders(&loaded.network, &registry, &mut diags);
+    let net = &loaded.network;
+    let list = match terminals(net, args.material.as_deref()) {
+        Ok(l) => l,
+        Err(Error::Usage(msg)) => {
+            super::report(&diags, common);
+            eprintln!("error: {msg}");
+            return ExitCode::from(2);
+        }
+        Err(e) => return report_error(&e, common),
+    };
+    let mut out = String::new();
+    for (name, node) in list {
+        match lower_terminal(net, &registry, node, &name, &mut diags) {
+            Ok(ir) => {
+                out.push_str(&render(&ir, args.emit));
+                out.push('\n');
+            }
+            Err(Error::Input(d)) => diags.push(*d),
+            Err(e) => return report_error(&e, common),
+        }
+    }
+    diags.sort();
+    print!("{out}");
+    super::report(&diags, common)
+}

@@ -1,0 +1,128 @@
+//! `vstructc resolve`: expand the vstruct connections of a network and write it back.
+
+use super::input::{NetFormat, load_network, report_error, write_output};
+use super::{CommonOptions, info::registry_for};
+use crate::back::json::write_json;
+use crate::back::rib::write_rib_to_vec;
+use crate::cond::Extensions;
+use crate::diag::{Diagnostics, Error};
+use crate::network::Network;
+use crate::registry::Registry;
+use crate::resolve::{ResolveOptions, resolve, unsupported_extensions};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `vstructc resolve`.
+#[derive(Debug, clap::Args)]
+pub struct ResolveArgs {
+    /// The network to resolve: a RIB or JSON file, or `-` for standard input.
+    pub input: PathBuf,
+    /// Connect every matched member without evaluating conditionals (the reference's
+    /// `enableConditions = false`).
+    #[arg(long)]
+    pub no_conditions: bool,
+    /// Output format (default: the input's).
+    #[arg(long, value_enum)]
+    pub format: Option<NetFormat>,
+    /// Write to FILE (atomically) instead of standard output.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Single-quoted RIB strings are an error instead of an info (RB011).
+    #[arg(long)]
+    pub strict_rib: bool,
+    /// Delete placeholder connections that could not be resolved (VS010) instead of writing
+    /// them unchanged.
+    #[arg(long)]
+    pub drop_unresolved: bool,
+}
+
+/// Resolution options from the command line; unknown or unsupported extensions are usage
+/// errors.
+pub fn resolve_options(
+    no_conditions: bool,
+    common: &CommonOptions,
+) -> Result<ResolveOptions, Error> {
+    let extensions =
+        Extensions::from_names(&common.ext).map_err(|e| Error::Usage(e.to_string()))?;
+    let missing = unsupported_extensions(&extensions);
+    if !missing.is_empty() {
+        return Err(Error::Usage(format!(
+            "extension(s) {} are not implemented in resolution yet",
+            missing.join(", ")
+        )));
+    }
+    Ok(ResolveOptions {
+        conditions: !no_conditions,
+        extensions,
+        verbose: common.verbose,
+        record_events: false,
+    })
+}
+
+/// Delete every connection still on an input head after resolution (the VS010 placeholders).
+pub fn drop_unresolved(net: &mut Network, registry: &Registry) {
+    for node in net.nodes_sorted() {
+        let Some(tables) = registry.tables(net[node].shader()) else {
+            continue;
+        };
+        for input in net.connected_inputs(node) {
+            if tables.is_input_head(&input) {
+                net.clear_connections(node, &input);
+            }
+        }
+    }
+}
+
+/// Run `vstructc resolve`.
+pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
+    let options = match resolve_options(args.no_conditions, common) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let registry = registry_for(common);
+    let mut diags = Diagnostics::new();
+    let mut loaded = match load_network(&args.input, &registry, args.strict_rib, &mut diags) {
+        Ok(l) => l,
+        Err(e) => {
+            super::report(&diags, common);
+            return report_error(&e, common);
+        }
+    };
+    let res = resolve(&mut loaded.network, &registry, &options);
+    if args.drop_unresolved {
+        drop_unresolved(&mut loaded.network, &registry);
+    }
+    diags.extend(registry.diagnostics());
+    diags.extend(res.diagnostics);
+    diags.sort();
+    let status = super::report(&diags, common);
+    if status != ExitCode::SUCCESS {
+        return status;
+    }
+    let data = match args.format.unwrap_or(loaded.format) {
+        NetFormat::Json => write_json(&loaded.network).into_bytes(),
+        NetFormat::Rib => {
+            let source = match loaded.format {
+                NetFormat::Rib => loaded.bytes.as_slice(),
+                NetFormat::Json => &[],
+            };
+            match write_rib_to_vec(source, &loaded.network, &registry) {
+                Ok(v) => v,
+                Err(source) => {
+                    let e = Error::Io {
+                        path: PathBuf::from("<output>"),
+                        source,
+                    };
+                    return report_error(&e, common);
+                }
+            }
+        }
+    };
+    match write_output(args.output.as_deref(), &data) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => report_error(&e, common),
+    }
+}

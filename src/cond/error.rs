@@ -1,0 +1,226 @@
+//! Parse errors (VS001) and caret rendering (spec vstruct.md §3.5).
+
+use crate::diag::{Diagnostic, Location, Severity};
+use std::fmt;
+use std::ops::Range;
+
+/// A syntax error in a conditional expression (VS001).
+///
+/// The message names the expected set and the offending token with the §3.1 token names, in
+/// the form `expected NUMBER or STRING, found PARAM "y"` (for a predicate's operator slot the
+/// expected set is summarised as `a comparison operator (==, !=, <, >, <=, >=)`; the full set,
+/// which also holds `IS` and `IS_NOT`, is in [`ParseError::expected`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParseError {
+    /// Byte span of the offending token (empty at end of input).
+    pub span: Range<usize>,
+    /// Message naming the expected set and the unexpected token.
+    pub message: String,
+    /// Every token that would have been accepted at this point (§3.1 names, operators as
+    /// spelled, `end of input`).
+    pub expected: Vec<String>,
+    /// The offending token as described in the message (`'='`, `PARAM "y"`, `end of input`).
+    pub found: String,
+    /// Hints about the likely mistake (`use '==' to compare`, …).
+    pub notes: Vec<String>,
+}
+
+impl ParseError {
+    /// The stable code of a conditional syntax error.
+    pub const CODE: &'static str = "VS001";
+
+    /// 1-based `(line, column)` of the offending token in `text` (columns count characters).
+    pub fn line_column(&self, text: &str) -> (u32, u32) {
+        crate::diag::line_column(text, self.span.start)
+    }
+
+    /// 1-based column of the offending token in `text` on its line.
+    pub fn column(&self, text: &str) -> u32 {
+        self.line_column(text).1
+    }
+
+    /// Human rendering: the message, the expression with a caret line under the offending
+    /// token, and the notes.
+    pub fn render(&self, text: &str) -> String {
+        let (line, column) = self.line_column(text);
+        let mut out = format!("{} (at line {line}, column {column})\n", self.message);
+        for l in render_caret(text, self.span.clone()).lines() {
+            out.push_str("  ");
+            out.push_str(l);
+            out.push('\n');
+        }
+        for n in &self.notes {
+            out.push_str("  note: ");
+            out.push_str(n);
+            out.push('\n');
+        }
+        out
+    }
+
+    /// A VS001 diagnostic (warning, as in definitions) with the span, the caret rendering,
+    /// the expected set and the notes. The caller adds the location (see [`location_in`]).
+    pub fn to_diagnostic(&self, text: &str) -> Diagnostic {
+        self.to_diagnostic_with(text, Severity::Warning)
+    }
+
+    /// [`ParseError::to_diagnostic`] with a chosen severity (`vstructc expr` reports the
+    /// error of its only input as an error).
+    pub fn to_diagnostic_with(&self, text: &str, severity: Severity) -> Diagnostic {
+        let column = self.column(text);
+        let mut d = Diagnostic::new(
+            severity,
+            Self::CODE,
+            format!("conditional expression: {}", self.message),
+        )
+        .with_span(self.span.clone())
+        .with_note(format!(
+            "at byte {} (column {column}) of the expression:",
+            self.span.start
+        ))
+        .with_note(indent(&render_caret(text, self.span.clone())));
+        if !self.expected.is_empty() {
+            d = d.with_note(format!("expected one of: {}", self.expected.join(" ")));
+        }
+        for n in &self.notes {
+            d = d.with_note(format!("note: {n}"));
+        }
+        d
+    }
+}
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} (bytes {}..{})",
+            self.message, self.span.start, self.span.end
+        )
+    }
+}
+
+impl std::error::Error for ParseError {}
+
+fn indent(text: &str) -> String {
+    text.lines()
+        .map(|l| format!("  {l}"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// How one character of the expression is shown: tabs stay tabs (so the caret line lines up
+/// in a terminal), other whitespace and control characters become visible escapes.
+fn shown(c: char) -> String {
+    match c {
+        '\t' => "\t".into(),
+        ' ' => " ".into(),
+        c if c.is_control() => super::lexer::escape_char(c),
+        c => c.to_string(),
+    }
+}
+
+/// Padding under a shown character: a tab under a tab, else one space per shown column.
+fn pad_for(c: char) -> String {
+    if c == '\t' {
+        "\t".into()
+    } else {
+        " ".repeat(shown(c).chars().count())
+    }
+}
+
+/// The line of `text` that contains byte `span.start`, and under it a caret line marking the
+/// span (`^` under its first character, `~` under the rest of it on that line; a single `^`
+/// just past the end for an empty span). Control characters such as `\r` are shown escaped
+/// and the caret line accounts for their width.
+///
+/// ```
+/// let r = vstructc::cond::render_caret("connect if x = 1", 13..14);
+/// assert_eq!(r, "connect if x = 1\n             ^");
+/// ```
+pub fn render_caret(text: &str, span: Range<usize>) -> String {
+    let mut start = span.start.min(text.len());
+    while !text.is_char_boundary(start) {
+        start -= 1;
+    }
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    let end = span.end.clamp(start, line_end);
+    let mut shown_line = String::new();
+    let mut carets = String::new();
+    for (i, c) in text[line_start..line_end].char_indices() {
+        let at = line_start + i;
+        shown_line.push_str(&shown(c));
+        if at < start {
+            carets.push_str(&pad_for(c));
+        } else if at < end {
+            let mark = if at == start { '^' } else { '~' };
+            let width = shown(c).chars().count().max(1);
+            carets.push(mark);
+            carets.push_str(&"~".repeat(width - 1));
+        }
+    }
+    if end == start {
+        carets.push('^');
+    }
+    format!("{}\n{}", shown_line.trim_end_matches(' '), carets)
+}
+
+/// The source location of byte `offset` of an expression whose first character is at
+/// `start` (the position the definition readers record for a `vstructConditionalExpr` value).
+/// Walks the decoded text: a newline advances the line, any other character one column. This
+/// is the "value start plus decoded offset" mapping that formats.md §2.6 allows.
+pub fn location_in(start: &Location, text: &str, offset: usize) -> Location {
+    let (dl, dc) = crate::diag::line_column(text, offset);
+    let mut loc = start.clone();
+    if start.line == 0 {
+        return loc;
+    }
+    if dl == 1 {
+        loc.column = start.column.max(1) + dc - 1;
+    } else {
+        loc.line = start.line + dl - 1;
+        loc.column = dc;
+    }
+    loc
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn caret_under_the_offending_column() {
+        assert_eq!(
+            render_caret("connect if x = 1", 13..14),
+            "connect if x = 1\n             ^"
+        );
+        assert_eq!(render_caret("copy if", 5..7), "copy if\n     ^~");
+    }
+
+    #[test]
+    fn caret_at_end_of_input() {
+        assert_eq!(render_caret("set", 3..3), "set\n   ^");
+        assert_eq!(render_caret("", 0..0), "\n^");
+    }
+
+    #[test]
+    fn caret_keeps_tabs_and_escapes_controls() {
+        assert_eq!(render_caret("a\tb\r", 3..4), "a\tb\\r\n \t ^~");
+        assert_eq!(render_caret("x\n  y z", 4..5), "  y z\n  ^");
+    }
+
+    #[test]
+    fn caret_counts_characters_not_bytes() {
+        assert_eq!(render_caret("é = 1", 3..4), "é = 1\n  ^");
+    }
+
+    #[test]
+    fn locations_map_into_the_source() {
+        let start = Location::new("PxrLayer.args", 10, 30);
+        let loc = location_in(&start, "connect if x = 1", 13);
+        assert_eq!((loc.line, loc.column), (10, 43));
+        let loc = location_in(&start, "a\nbc", 3);
+        assert_eq!((loc.line, loc.column), (11, 2));
+        let unknown = location_in(&Location::file("f"), "abc", 2);
+        assert_eq!((unknown.line, unknown.column), (0, 0));
+    }
+}

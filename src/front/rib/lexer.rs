@@ -1,0 +1,466 @@
+//! RIB tokenizer (formats.md §3.1–§3.2): byte spans, lines and columns, no copies.
+//!
+//! Tokens are produced one at a time; the parser keeps only the tokens of the shading request
+//! it is reading, so pass-through requests (geometry with millions of numbers) cost no memory.
+//! String contents are decoded on demand ([`decode_string`]).
+
+use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use nom::branch::alt;
+use nom::character::complete::{char, digit0, digit1, one_of};
+use nom::combinator::{opt, recognize};
+use nom::{IResult, Parser};
+use std::sync::Arc;
+
+/// What a token is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TokKind {
+    /// `[A-Za-z_][A-Za-z0-9_]*`: a request name.
+    Ident,
+    /// A number (integer or float syntax).
+    Number,
+    /// A double- or single-quoted string (quotes included in the span).
+    Str,
+    /// `[`
+    Open,
+    /// `]`
+    Close,
+    /// `#` to the end of the line (newline excluded).
+    Comment,
+}
+
+/// One token: kind, byte span, position of its first character, and the line it ends on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Token {
+    pub kind: TokKind,
+    pub start: usize,
+    pub end: usize,
+    pub line: u32,
+    pub col: u32,
+    pub end_line: u32,
+    /// For strings: true if the content contains a backslash (needs decoding).
+    pub escaped: bool,
+}
+
+/// Recognises a RIB number: `[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?`.
+fn number(i: &[u8]) -> IResult<&[u8], &[u8]> {
+    recognize((
+        opt(one_of("+-")),
+        alt((
+            recognize((digit1, opt((char('.'), digit0)))),
+            recognize((char('.'), digit1)),
+        )),
+        opt((one_of("eE"), opt(one_of("+-")), digit1)),
+    ))
+    .parse(i)
+}
+
+/// True for the RIB whitespace bytes: space, `\t`, `\r`, `\n`, `\f`, `\v`.
+pub(crate) fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\n' | 0x0c | 0x0b)
+}
+
+/// The tokenizer state: position, line and column (in characters) of the next byte.
+pub(crate) struct Lexer<'a> {
+    src: &'a [u8],
+    pos: usize,
+    line: u32,
+    col: u32,
+    file: Arc<str>,
+    strict: bool,
+}
+
+impl<'a> Lexer<'a> {
+    /// A tokenizer over `src`; `strict` makes single-quoted strings an error.
+    pub fn new(src: &'a [u8], file: Arc<str>, strict: bool) -> Self {
+        Lexer {
+            src,
+            pos: 0,
+            line: 1,
+            col: 1,
+            file,
+            strict,
+        }
+    }
+
+    /// The location `line:col` in this file.
+    pub fn loc(&self, line: u32, col: u32) -> Location {
+        Location::new(self.file.clone(), line, col)
+    }
+
+    /// The location of a token.
+    pub fn tok_loc(&self, t: &Token) -> Location {
+        self.loc(t.line, t.col)
+    }
+
+    /// The bytes of a token.
+    pub fn bytes(&self, t: &Token) -> &'a [u8] {
+        &self.src[t.start..t.end]
+    }
+
+    /// Advance over `src[pos..end]`, keeping line and column (characters) up to date.
+    fn advance_to(&mut self, end: usize) {
+        for &b in &self.src[self.pos..end] {
+            if b == b'\n' {
+                self.line += 1;
+                self.col = 1;
+            } else if b & 0xC0 != 0x80 {
+                self.col += 1;
+            }
+        }
+        self.pos = end;
+    }
+
+    fn skip_space(&mut self) {
+        while let Some(&b) = self.src.get(self.pos) {
+            if !is_space(b) {
+                break;
+            }
+            if b == b'\n' {
+                self.line += 1;
+                self.col = 1;
+            } else {
+                self.col += 1;
+            }
+            self.pos += 1;
+        }
+    }
+
+    /// The next token, or `None` at the end of input. Errors: RB002, RB003, RB004 (and RB011
+    /// under `strict`). Infos RB010, RB011 go to `diags`.
+    pub fn next_token(&mut self, diags: &mut Diagnostics) -> Result<Option<Token>, Error> {
+        self.skip_space();
+        let start = self.pos;
+        let Some(&b) = self.src.get(start) else {
+            return Ok(None);
+        };
+        let (line, col) = (self.line, self.col);
+        let mut tok = Token {
+            kind: TokKind::Comment,
+            start,
+            end: start,
+            line,
+            col,
+            end_line: line,
+            escaped: false,
+        };
+        match b {
+            b'#' => {
+                let end = self.src[start..]
+                    .iter()
+                    .position(|&c| c == b'\n')
+                    .map_or(self.src.len(), |n| start + n);
+                self.advance_to(end);
+                tok.kind = TokKind::Comment;
+            }
+            b'[' | b']' => {
+                self.pos += 1;
+                self.col += 1;
+                tok.kind = if b == b'[' {
+                    TokKind::Open
+                } else {
+                    TokKind::Close
+                };
+            }
+            b'"' | b'\'' => {
+                let (end, escaped) = self.scan_string(start, b, diags)?;
+                self.advance_to(end);
+                tok.kind = TokKind::Str;
+                tok.escaped = escaped;
+                if b == b'\'' {
+                    let d = Diagnostic::info("RB011", "single-quoted string (non-standard RIB)")
+                        .at(self.loc(line, col));
+                    if self.strict {
+                        return Err(Diagnostic::error(
+                            "RB011",
+                            "single-quoted string (not allowed with --strict-rib)",
+                        )
+                        .at(self.loc(line, col))
+                        .into());
+                    }
+                    diags.push(d);
+                }
+            }
+            c if c.is_ascii_alphabetic() || c == b'_' => {
+                let len = self.src[start..]
+                    .iter()
+                    .position(|&c| !(c.is_ascii_alphanumeric() || c == b'_'))
+                    .unwrap_or(self.src.len() - start);
+                self.pos += len;
+                self.col += len as u32;
+                tok.kind = TokKind::Ident;
+            }
+            c if c.is_ascii_digit() || matches!(c, b'+' | b'-' | b'.') => {
+                match number(&self.src[start..]) {
+                    Ok((_, text)) => {
+                        self.pos += text.len();
+                        self.col += text.len() as u32;
+                        tok.kind = TokKind::Number;
+                    }
+                    Err(_) => return Err(self.unexpected(start, line, col)),
+                }
+            }
+            _ => return Err(self.unexpected(start, line, col)),
+        }
+        tok.end = self.pos;
+        tok.end_line = self.line;
+        Ok(Some(tok))
+    }
+
+    fn unexpected(&self, at: usize, line: u32, col: u32) -> Error {
+        let b = self.src[at];
+        if b >= 0x80 {
+            return Diagnostic::error(
+                "RB002",
+                format!(
+                    "binary RIB is not supported (byte 0x{b:02X} at offset {at} outside a string or comment)"
+                ),
+            )
+            .at(self.loc(line, col))
+            .into();
+        }
+        let shown = if b.is_ascii_graphic() {
+            format!("`{}`", b as char)
+        } else {
+            format!("byte 0x{b:02X}")
+        };
+        Diagnostic::error("RB004", format!("unexpected character {shown}"))
+            .at(self.loc(line, col))
+            .into()
+    }
+
+    /// Find the end of the string starting at `start` (quote `q`); report unknown escapes.
+    /// Returns the end offset (after the closing quote) and whether a backslash occurs.
+    fn scan_string(
+        &self,
+        start: usize,
+        q: u8,
+        diags: &mut Diagnostics,
+    ) -> Result<(usize, bool), Error> {
+        let mut i = start + 1;
+        let mut escaped = false;
+        loop {
+            let Some(off) = self.src[i..].iter().position(|&c| c == q || c == b'\\') else {
+                return Err(Diagnostic::error("RB003", "unterminated string")
+                    .at(self.loc(self.line, self.col))
+                    .into());
+            };
+            i += off;
+            if self.src[i] == q {
+                return Ok((i + 1, escaped));
+            }
+            escaped = true;
+            let Some(&e) = self.src.get(i + 1) else {
+                return Err(Diagnostic::error("RB003", "unterminated string")
+                    .at(self.loc(self.line, self.col))
+                    .into());
+            };
+            if !is_known_escape(e, q) {
+                let (line, col) = self.position_of(i);
+                let shown = if e.is_ascii_graphic() {
+                    format!("\\{}", e as char)
+                } else {
+                    format!("\\ followed by byte 0x{e:02X}")
+                };
+                diags.push(
+                    Diagnostic::info(
+                        "RB010",
+                        format!("unknown string escape `{shown}`, read as the character itself"),
+                    )
+                    .at(self.loc(line, col)),
+                );
+            }
+            i += 2;
+        }
+    }
+
+    /// Line and column of offset `at` inside the current token (at ≥ pos).
+    fn position_of(&self, at: usize) -> (u32, u32) {
+        let (mut line, mut col) = (self.line, self.col);
+        for &b in &self.src[self.pos..at] {
+            if b == b'\n' {
+                line += 1;
+                col = 1;
+            } else if b & 0xC0 != 0x80 {
+                col += 1;
+            }
+        }
+        (line, col)
+    }
+}
+
+/// Escapes that need no RB010: `\n \r \t \b \f \\ \"`, octal digits, backslash-newline, and
+/// the quote character of a single-quoted string.
+fn is_known_escape(e: u8, quote: u8) -> bool {
+    matches!(
+        e,
+        b'n' | b'r' | b't' | b'b' | b'f' | b'\\' | b'"' | b'\n' | b'\r' | b'0'..=b'7'
+    ) || e == quote
+}
+
+/// The decoded content of a string token (quotes removed, escapes applied). Invalid UTF-8 is
+/// replaced by U+FFFD.
+pub(crate) fn decode_string(src: &[u8], t: &Token) -> String {
+    let inner = &src[t.start + 1..t.end - 1];
+    if !t.escaped {
+        return String::from_utf8_lossy(inner).into_owned();
+    }
+    let mut out: Vec<u8> = Vec::with_capacity(inner.len());
+    let mut i = 0;
+    while i < inner.len() {
+        let c = inner[i];
+        if c != b'\\' || i + 1 >= inner.len() {
+            out.push(c);
+            i += 1;
+            continue;
+        }
+        let e = inner[i + 1];
+        i += 2;
+        match e {
+            b'n' => out.push(b'\n'),
+            b'r' => out.push(b'\r'),
+            b't' => out.push(b'\t'),
+            b'b' => out.push(0x08),
+            b'f' => out.push(0x0c),
+            // Backslash-newline is a continuation: both dropped (also for CR LF).
+            b'\n' => {}
+            b'\r' => {
+                if inner.get(i) == Some(&b'\n') {
+                    i += 1;
+                }
+            }
+            b'0'..=b'7' => {
+                let mut v = u32::from(e - b'0');
+                let mut digits = 1;
+                while digits < 3 {
+                    match inner.get(i) {
+                        Some(&d @ b'0'..=b'7') => {
+                            v = v * 8 + u32::from(d - b'0');
+                            i += 1;
+                            digits += 1;
+                        }
+                        _ => break,
+                    }
+                }
+                // `\400`–`\777` do not fit a byte; like C, keep the low eight bits.
+                out.push((v & 0xFF) as u8);
+            }
+            other => out.push(other),
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lex(src: &str) -> (Vec<(TokKind, String)>, Diagnostics) {
+        let mut d = Diagnostics::new();
+        let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+        let mut out = Vec::new();
+        while let Some(t) = lx.next_token(&mut d).unwrap() {
+            let text = if t.kind == TokKind::Str {
+                decode_string(src.as_bytes(), &t)
+            } else {
+                String::from_utf8_lossy(lx.bytes(&t)).into_owned()
+            };
+            out.push((t.kind, text));
+        }
+        (out, d)
+    }
+
+    #[test]
+    fn numbers_in_every_form() {
+        for n in [
+            "0.",
+            "1.",
+            "-0",
+            "9.99999968e+37",
+            "3.04999995",
+            ".8",
+            "+2",
+            "1e5",
+            "-1.5E-3",
+        ] {
+            let (toks, _) = lex(n);
+            assert_eq!(toks, vec![(TokKind::Number, n.to_string())], "{n}");
+        }
+    }
+
+    #[test]
+    fn number_then_identifier_splits() {
+        let (toks, _) = lex("[1 2]Sphere");
+        let kinds: Vec<_> = toks.iter().map(|t| t.0).collect();
+        assert_eq!(
+            kinds,
+            [
+                TokKind::Open,
+                TokKind::Number,
+                TokKind::Number,
+                TokKind::Close,
+                TokKind::Ident
+            ]
+        );
+    }
+
+    #[test]
+    fn string_escapes() {
+        let (toks, d) = lex(r#""a\"b\\c\n\t\101\q" "x\
+y""#);
+        assert_eq!(toks[0].1, "a\"b\\c\n\tAq");
+        assert_eq!(toks[1].1, "xy");
+        assert_eq!(d.count("RB010"), 1);
+        let rb010 = d.with_code("RB010").next().unwrap();
+        assert_eq!(rb010.location.as_ref().map(|l| l.column), Some(17));
+    }
+
+    #[test]
+    fn single_quotes_are_info_or_strict_error() {
+        let (toks, d) = lex("['object']");
+        assert_eq!(toks[1], (TokKind::Str, "object".into()));
+        assert_eq!(d.count("RB011"), 1);
+        let mut d = Diagnostics::new();
+        let mut lx = Lexer::new(b"'x'", "t".into(), true);
+        let err = lx.next_token(&mut d).unwrap_err();
+        assert_eq!(err.code(), Some("RB011"));
+    }
+
+    #[test]
+    fn positions_count_characters() {
+        let src = "# é comment\n  Pattern \"é\" x";
+        let mut d = Diagnostics::new();
+        let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+        let c = lx.next_token(&mut d).unwrap().unwrap();
+        assert_eq!((c.kind, c.line, c.col), (TokKind::Comment, 1, 1));
+        let p = lx.next_token(&mut d).unwrap().unwrap();
+        assert_eq!((p.line, p.col), (2, 3));
+        let s = lx.next_token(&mut d).unwrap().unwrap();
+        assert_eq!((s.line, s.col), (2, 11));
+        let x = lx.next_token(&mut d).unwrap().unwrap();
+        assert_eq!((x.line, x.col), (2, 15));
+    }
+
+    #[test]
+    fn errors() {
+        let mut d = Diagnostics::new();
+        let mut lx = Lexer::new(b"  \"abc", "t".into(), false);
+        assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB003"));
+        let mut lx = Lexer::new(b"a {", "t".into(), false);
+        lx.next_token(&mut d).unwrap();
+        let e = lx.next_token(&mut d).unwrap_err();
+        assert_eq!(e.code(), Some("RB004"));
+        assert_eq!(e.diagnostic().unwrap().location.as_ref().unwrap().column, 3);
+        let mut lx = Lexer::new(b"a \xff", "t".into(), false);
+        lx.next_token(&mut d).unwrap();
+        let e = lx.next_token(&mut d).unwrap_err();
+        assert_eq!(e.code(), Some("RB002"));
+        assert!(e.to_string().contains("offset 2"));
+        // Bytes >= 0x80 inside strings and comments are fine.
+        let mut lx = Lexer::new("\"\u{e9}\" # \u{e9}".as_bytes(), "t".into(), false);
+        assert!(lx.next_token(&mut d).unwrap().is_some());
+        assert!(lx.next_token(&mut d).unwrap().is_some());
+        // A lone sign is not a number.
+        let mut lx = Lexer::new(b"- 1", "t".into(), false);
+        assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB004"));
+    }
+}

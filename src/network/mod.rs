@@ -1,0 +1,1327 @@
+//! The shader-network model: nodes, authored values and connections on a petgraph
+//! [`StableDiGraph`] (spec README "Pipeline", formats.md §3.6, §5).
+//!
+//! * A [`Node`] is one shader instance: a handle, a shader id, the request kind that created it
+//!   ([`RequestKind`]), and its [`Param`]s in source order. RIB handles may be defined several
+//!   times; each definition is a *version* with the unique key `handle#k`.
+//! * A [`Param`] holds an optional authored [`Value`] and an ordered list of [`Link`]s (its
+//!   connections). A link names its upstream node — or, when the reference could not be bound,
+//!   the missing handle ([`Upstream::Missing`]) — and the upstream output (`None` for a
+//!   whole-node reference).
+//! * Every link to an existing node is mirrored by a graph edge (upstream → downstream) whose
+//!   weight is an [`Edge`]: upstream output, downstream input and element index, so graph
+//!   algorithms (upstream closures, cycle checks) work on [`Network::graph`].
+//! * [`Material`]s name terminal nodes (RIB: one per `Bxdf`/`Displace`/`Light`/`LightFilter`;
+//!   JSON: the `materials` object).
+//!
+//! Every edit is cheap (parameter lookup is a binary search, connection edits touch only the
+//! edited input), and every edit is tracked: [`Param::change`] tells the RIB writer whether a
+//! parameter read from a file is unchanged, got a new value, became connected, was removed, or
+//! was added (formats.md §3.7).
+//!
+//! # Building a network in code
+//!
+//! ```
+//! use vstructc::network::{Network, RequestKind};
+//! use vstructc::Value;
+//!
+//! let mut net = Network::new();
+//! let layer = net.add_node("PxrLayer1", "PxrLayer");
+//! let mixer = net.add_node("PxrLayerMixer1", "PxrLayerMixer");
+//! let surface = net.add_node_of_kind("PxrLayerSurface1", "PxrLayerSurface", RequestKind::Bxdf);
+//! net.set_param(layer, "enableDiffuse", Value::Int(1));
+//! net.connect(mixer, "baselayer", layer, "pxrMaterialOut");
+//! net.connect(surface, "inputMaterial", mixer, "pxrMaterialOut");
+//! let m = net.add_material("PxrLayerSurface1SG");
+//! net.set_terminal(m, "surface", surface, None);
+//!
+//! assert_eq!(net.connections(surface, "inputMaterial")[0].upstream_node(), Some(mixer));
+//! assert_eq!(net.value(layer, "enableDiffuse"), Some(&Value::Int(1)));
+//! assert_eq!(net.find("PxrLayerMixer1"), Some(mixer));
+//! ```
+
+mod param_types;
+#[doc(hidden)]
+pub mod testgen;
+
+pub use param_types::{NoDefinitions, ParamTypes};
+
+use crate::diag::Location;
+use crate::types::{Type, Value};
+use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
+use std::collections::HashMap;
+use std::fmt;
+use std::ops::{Index, Range};
+
+/// Identifies a node of a [`Network`] (a petgraph node index; stable across edits).
+pub type NodeId = NodeIndex;
+
+/// Identifies a graph edge of a [`Network`].
+pub type EdgeId = EdgeIndex;
+
+/// The request kind that created a node (RIB request name; JSON: from its terminal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub enum RequestKind {
+    /// `Pattern`: a pattern node.
+    Pattern,
+    /// `Bxdf`: a surface terminal.
+    Bxdf,
+    /// `Displace`: a displacement terminal.
+    Displace,
+    /// `Light`: a light terminal.
+    Light,
+    /// `LightFilter`: a light-filter terminal.
+    LightFilter,
+}
+
+impl RequestKind {
+    /// Every kind, in a fixed order.
+    pub const ALL: [RequestKind; 5] = [
+        RequestKind::Pattern,
+        RequestKind::Bxdf,
+        RequestKind::Displace,
+        RequestKind::Light,
+        RequestKind::LightFilter,
+    ];
+
+    /// The RIB request keyword.
+    ///
+    /// ```
+    /// use vstructc::network::RequestKind;
+    /// assert_eq!(RequestKind::LightFilter.keyword(), "LightFilter");
+    /// ```
+    pub fn keyword(self) -> &'static str {
+        match self {
+            RequestKind::Pattern => "Pattern",
+            RequestKind::Bxdf => "Bxdf",
+            RequestKind::Displace => "Displace",
+            RequestKind::Light => "Light",
+            RequestKind::LightFilter => "LightFilter",
+        }
+    }
+
+    /// The kind of an interpreted RIB request keyword, `None` for every other request.
+    ///
+    /// ```
+    /// use vstructc::network::RequestKind;
+    /// assert_eq!(RequestKind::from_keyword("Bxdf"), Some(RequestKind::Bxdf));
+    /// assert_eq!(RequestKind::from_keyword("Integrator"), None);
+    /// ```
+    pub fn from_keyword(word: &str) -> Option<RequestKind> {
+        RequestKind::ALL.into_iter().find(|k| k.keyword() == word)
+    }
+
+    /// The terminal name of a node of this kind (`surface`, `displacement`, `light`,
+    /// `lightFilter`); `None` for patterns (formats.md §3.6).
+    ///
+    /// ```
+    /// use vstructc::network::RequestKind;
+    /// assert_eq!(RequestKind::Bxdf.terminal_name(), Some("surface"));
+    /// assert_eq!(RequestKind::Pattern.terminal_name(), None);
+    /// ```
+    pub fn terminal_name(self) -> Option<&'static str> {
+        match self {
+            RequestKind::Pattern => None,
+            RequestKind::Bxdf => Some("surface"),
+            RequestKind::Displace => Some("displacement"),
+            RequestKind::Light => Some("light"),
+            RequestKind::LightFilter => Some("lightFilter"),
+        }
+    }
+
+    /// The kind of a node that a JSON terminal of this name points at: `surface` and
+    /// `volume` are `Bxdf`, `displacement` is `Displace`, `light` is `Light`, `lightFilter`
+    /// is `LightFilter`; any other name leaves the node a `Pattern`.
+    ///
+    /// ```
+    /// use vstructc::network::RequestKind;
+    /// assert_eq!(RequestKind::from_terminal_name("volume"), RequestKind::Bxdf);
+    /// assert_eq!(RequestKind::from_terminal_name("custom"), RequestKind::Pattern);
+    /// ```
+    pub fn from_terminal_name(name: &str) -> RequestKind {
+        match name {
+            "surface" | "volume" => RequestKind::Bxdf,
+            "displacement" => RequestKind::Displace,
+            "light" => RequestKind::Light,
+            "lightFilter" => RequestKind::LightFilter,
+            _ => RequestKind::Pattern,
+        }
+    }
+}
+
+impl fmt::Display for RequestKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.keyword())
+    }
+}
+
+/// A parameter declaration as read from the source: the RIB decl string, or the JSON `type`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decl {
+    /// The decl text as written (decoded RIB string content, e.g. `reference color inputRGB`);
+    /// for JSON the type string.
+    pub text: String,
+    /// Storage class word (`uniform`, `varying`, …), kept but meaningless for shader params.
+    pub class: Option<String>,
+    /// True for `reference` decls (connections).
+    pub reference: bool,
+    /// The interpreted type, including `[N]` as `Fixed(N)`. For a decl without inline type,
+    /// the definition's type (RB012).
+    pub ty: Type,
+    /// False when the type came from the definition rather than the decl text.
+    pub inline_type: bool,
+}
+
+/// The upstream end of a connection.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Upstream {
+    /// An existing node of the network.
+    Node(NodeId),
+    /// A reference to a handle that names no node (RIB: not defined before the referencing
+    /// request, RB018; JSON: not in the material, JS010). Kept so the writers reproduce it and
+    /// resolution can report it (VS010).
+    Missing(String),
+}
+
+/// One connection of an input: upstream node (or missing handle) and output name.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Link {
+    /// The upstream node or missing handle.
+    pub upstream: Upstream,
+    /// The upstream output; `None` for a whole-node reference (RIB string without `:`,
+    /// JSON `upstreamOutputName: ""`).
+    pub output: Option<String>,
+}
+
+impl Link {
+    /// A connection to output `output` of node `node` (`None`: whole-node reference).
+    ///
+    /// ```
+    /// use vstructc::network::{Link, Network};
+    /// let mut net = Network::new();
+    /// let a = net.add_node("a", "PxrFractal");
+    /// let link = Link::node(a, Some("resultF"));
+    /// assert_eq!(link.upstream_node(), Some(a));
+    /// assert_eq!(link.output.as_deref(), Some("resultF"));
+    /// ```
+    pub fn node(node: NodeId, output: Option<&str>) -> Link {
+        Link {
+            upstream: Upstream::Node(node),
+            output: output.map(str::to_string),
+        }
+    }
+
+    /// A dangling connection to a handle that names no node.
+    ///
+    /// ```
+    /// use vstructc::network::Link;
+    /// let link = Link::missing("Ghost", Some("resultRGB"));
+    /// assert_eq!(link.missing_handle(), Some("Ghost"));
+    /// assert_eq!(link.upstream_node(), None);
+    /// ```
+    pub fn missing(handle: &str, output: Option<&str>) -> Link {
+        Link {
+            upstream: Upstream::Missing(handle.to_string()),
+            output: output.map(str::to_string),
+        }
+    }
+
+    /// The upstream node, if the link is bound.
+    pub fn upstream_node(&self) -> Option<NodeId> {
+        match self.upstream {
+            Upstream::Node(id) => Some(id),
+            Upstream::Missing(_) => None,
+        }
+    }
+
+    /// The missing handle, if the link is dangling.
+    pub fn missing_handle(&self) -> Option<&str> {
+        match &self.upstream {
+            Upstream::Missing(h) => Some(h),
+            Upstream::Node(_) => None,
+        }
+    }
+
+    /// The output name (`None`: whole-node reference).
+    pub fn output(&self) -> Option<&str> {
+        self.output.as_deref()
+    }
+}
+
+/// The weight of a graph edge (upstream → downstream): which output feeds which input, and
+/// the position of this connection in the input's connection list.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Edge {
+    /// Upstream output (`None`: whole-node reference).
+    pub output: Option<String>,
+    /// Downstream input.
+    pub input: String,
+    /// Element index: position in the downstream input's ordered connection list.
+    pub index: usize,
+}
+
+/// How a parameter differs from what was read from the RIB source (formats.md §3.7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ParamChange {
+    /// Read from the source and written back exactly as it was.
+    Unchanged,
+    /// Read from the source; it is now unconnected and its value was replaced (or it lost its
+    /// connection and keeps a value). Written at its original position with the new value.
+    ValueReplaced,
+    /// Read from the source; its connections were set or changed. Written at its original
+    /// position as a `reference` parameter.
+    Connected,
+    /// No longer has a value or a connection: not written (its comments move to the next
+    /// written parameter). Also the state of a parameter added and then cleared again.
+    Removed,
+    /// Not from the source (added by code or resolution): appended in declaration order.
+    Added,
+}
+
+/// One parameter of a node: authored value, connections, declaration and change state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    name: String,
+    value: Option<Value>,
+    links: Vec<Link>,
+    edges: Vec<Option<EdgeId>>,
+    decl: Option<Decl>,
+    location: Option<Location>,
+    origin: Option<u32>,
+    value_touched: bool,
+    links_touched: bool,
+}
+
+impl Param {
+    fn empty(name: &str) -> Param {
+        Param {
+            name: name.to_string(),
+            value: None,
+            links: Vec::new(),
+            edges: Vec::new(),
+            decl: None,
+            location: None,
+            origin: None,
+            value_touched: false,
+            links_touched: false,
+        }
+    }
+
+    /// A parameter as read from a file (crate-internal: used by the readers).
+    pub(crate) fn from_source(
+        name: String,
+        value: Option<Value>,
+        decl: Option<Decl>,
+        location: Option<Location>,
+        origin: Option<u32>,
+    ) -> Param {
+        Param {
+            name,
+            value,
+            links: Vec::new(),
+            edges: Vec::new(),
+            decl,
+            location,
+            origin,
+            value_touched: false,
+            links_touched: false,
+        }
+    }
+
+    /// The parameter name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The authored value, if any. A connected parameter may still hold a value (vstruct.md
+    /// §4.3: `connect` keeps the old value); the connection takes precedence.
+    pub fn value(&self) -> Option<&Value> {
+        self.value.as_ref()
+    }
+
+    /// The connections, in connection order.
+    pub fn connections(&self) -> &[Link] {
+        &self.links
+    }
+
+    /// True if the parameter has at least one connection.
+    pub fn is_connected(&self) -> bool {
+        !self.links.is_empty()
+    }
+
+    /// True if the parameter has a value or a connection.
+    pub fn is_live(&self) -> bool {
+        self.value.is_some() || !self.links.is_empty()
+    }
+
+    /// The declaration read from the source, if any.
+    pub fn decl(&self) -> Option<&Decl> {
+        self.decl.as_ref()
+    }
+
+    /// Where the parameter was declared (RIB decl string; JSON pointer), if known.
+    pub fn location(&self) -> Option<&Location> {
+        self.location.as_ref()
+    }
+
+    /// The index of this parameter's occurrence in [`NodeSource::items`], if it was read from
+    /// a RIB request.
+    pub fn source_item(&self) -> Option<usize> {
+        self.origin.map(|o| o as usize)
+    }
+
+    /// How the parameter differs from the source (see [`ParamChange`]).
+    ///
+    /// ```
+    /// use vstructc::network::{Network, ParamChange};
+    /// use vstructc::Value;
+    /// let mut net = Network::new();
+    /// let n = net.add_node("n", "PxrFractal");
+    /// net.set_param(n, "layers", Value::Int(3));
+    /// assert_eq!(net[n].param("layers").unwrap().change(), ParamChange::Added);
+    /// ```
+    pub fn change(&self) -> ParamChange {
+        if !self.is_live() {
+            return ParamChange::Removed;
+        }
+        if self.origin.is_none() {
+            return ParamChange::Added;
+        }
+        if self.links_touched && !self.links.is_empty() {
+            ParamChange::Connected
+        } else if !self.links.is_empty() {
+            // Only the (unchanged) connection is written for a connected parameter.
+            ParamChange::Unchanged
+        } else if self.links_touched || self.value_touched {
+            ParamChange::ValueReplaced
+        } else {
+            ParamChange::Unchanged
+        }
+    }
+}
+
+/// Where a node's request is in the RIB source, for the writer (byte ranges only; the bytes
+/// stay with the caller).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NodeSource {
+    /// From the request keyword to the end of its last argument, extended over a comment on
+    /// the same line as the last value. Everything outside these spans is passed through.
+    pub span: Range<usize>,
+    /// Every parameter occurrence in source order (duplicates included).
+    pub items: Vec<SourceParam>,
+    /// Comments inside the span that precede no parameter (a request without parameters).
+    pub end_comments: Vec<Range<usize>>,
+}
+
+/// One parameter occurrence inside a RIB request.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SourceParam {
+    /// Index into [`Node::all_params`] of the parameter this occurrence defines; `None` when a
+    /// later duplicate replaced it (RB015).
+    pub param: Option<u32>,
+    /// The decl string token (quotes included).
+    pub decl: Range<usize>,
+    /// The value (array brackets or the bare value token included).
+    pub value: Range<usize>,
+    /// Comments between the previous parameter and this one (or inside this one, between
+    /// decl and value), each from `#` to the end of its line (newline excluded).
+    pub leading_comments: Vec<Range<usize>>,
+    /// A comment on the same line as the end of the value.
+    pub trailing_comment: Option<Range<usize>>,
+}
+
+/// One shader node (one RIB request, one JSON node).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    key: String,
+    handle: String,
+    version: u32,
+    shader: String,
+    kind: RequestKind,
+    params: Vec<Param>,
+    by_name: Vec<u32>,
+    location: Option<Location>,
+    source: Option<NodeSource>,
+    dirty: bool,
+}
+
+impl Node {
+    /// A node with no parameters (crate-internal; use [`Network::add_node`]).
+    pub(crate) fn new_raw(handle: &str, shader: &str, kind: RequestKind) -> Node {
+        Node {
+            key: String::new(),
+            handle: handle.to_string(),
+            version: 0,
+            shader: shader.to_string(),
+            kind,
+            params: Vec::new(),
+            by_name: Vec::new(),
+            location: None,
+            source: None,
+            dirty: false,
+        }
+    }
+
+    /// Replace the parameters (crate-internal: readers). Names must be unique.
+    pub(crate) fn set_raw_params(&mut self, params: Vec<Param>) {
+        self.params = params;
+        let mut order: Vec<u32> = (0..self.params.len() as u32).collect();
+        order.sort_by(|&a, &b| {
+            self.params[a as usize]
+                .name
+                .cmp(&self.params[b as usize].name)
+        });
+        self.by_name = order;
+    }
+
+    /// Set where the node came from (crate-internal: readers).
+    pub(crate) fn set_origin(&mut self, location: Option<Location>, source: Option<NodeSource>) {
+        self.location = location;
+        self.source = source;
+    }
+
+    /// The unique key: `handle#k` for version `k` of a handle.
+    pub fn key(&self) -> &str {
+        &self.key
+    }
+
+    /// The handle (RIB) or node name (JSON).
+    pub fn handle(&self) -> &str {
+        &self.handle
+    }
+
+    /// The version `k` of the handle (0 for the first definition).
+    pub fn version(&self) -> u32 {
+        self.version
+    }
+
+    /// The shader id (`nodeTypeId`).
+    pub fn shader(&self) -> &str {
+        &self.shader
+    }
+
+    /// The request kind.
+    pub fn kind(&self) -> RequestKind {
+        self.kind
+    }
+
+    /// Where the node was defined (RIB request keyword; JSON pointer), if known.
+    pub fn location(&self) -> Option<&Location> {
+        self.location.as_ref()
+    }
+
+    /// The RIB source layout of the request, if the node was read from RIB.
+    pub fn source(&self) -> Option<&NodeSource> {
+        self.source.as_ref()
+    }
+
+    /// A name for messages: the handle, and for versions after the first, the line of the
+    /// version (`Curvature (line 57)`).
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let a = net.add_node("A", "PxrFractal");
+    /// let b = net.add_node("A", "PxrFractal");
+    /// assert_eq!(net[a].display_name(), "A");
+    /// assert_eq!(net[b].display_name(), "A#1");
+    /// ```
+    pub fn display_name(&self) -> String {
+        match (&self.location, self.version) {
+            (_, 0) => self.handle.clone(),
+            (Some(loc), _) if loc.line > 0 => format!("{} (line {})", self.handle, loc.line),
+            _ => self.key.clone(),
+        }
+    }
+
+    fn index_of(&self, name: &str) -> Option<usize> {
+        self.by_name
+            .binary_search_by(|&i| self.params[i as usize].name.as_str().cmp(name))
+            .ok()
+            .map(|pos| self.by_name[pos] as usize)
+    }
+
+    fn index_or_insert(&mut self, name: &str) -> usize {
+        match self
+            .by_name
+            .binary_search_by(|&i| self.params[i as usize].name.as_str().cmp(name))
+        {
+            Ok(pos) => self.by_name[pos] as usize,
+            Err(pos) => {
+                let idx = self.params.len();
+                self.params.push(Param::empty(name));
+                self.by_name.insert(pos, idx as u32);
+                idx
+            }
+        }
+    }
+
+    /// The parameter named `name`, if it exists (live or not).
+    pub fn param(&self, name: &str) -> Option<&Param> {
+        self.index_of(name).map(|i| &self.params[i])
+    }
+
+    /// Live parameters (with a value or a connection) in source order, then added ones in the
+    /// order they were added.
+    pub fn params(&self) -> impl Iterator<Item = &Param> + '_ {
+        self.params.iter().filter(|p| p.is_live())
+    }
+
+    /// Every parameter entry, including removed ones, indexed as [`SourceParam::param`].
+    pub fn all_params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// Live parameters sorted by name (byte-wise).
+    pub fn params_by_name(&self) -> impl Iterator<Item = &Param> + '_ {
+        self.by_name
+            .iter()
+            .map(|&i| &self.params[i as usize])
+            .filter(|p| p.is_live())
+    }
+
+    /// The authored value of `name`.
+    pub fn value(&self, name: &str) -> Option<&Value> {
+        self.param(name).and_then(Param::value)
+    }
+
+    /// The connections of input `name` in order (empty if none).
+    pub fn connections(&self, name: &str) -> &[Link] {
+        self.param(name).map_or(&[], |p| &p.links[..])
+    }
+
+    /// Names of connected inputs, sorted byte-wise.
+    pub fn connected_inputs(&self) -> impl Iterator<Item = &str> + '_ {
+        self.by_name
+            .iter()
+            .map(|&i| &self.params[i as usize])
+            .filter(|p| p.is_connected())
+            .map(|p| p.name.as_str())
+    }
+
+    /// The `string __materialid` value, if authored.
+    pub fn material_id(&self) -> Option<&str> {
+        match self.value("__materialid") {
+            Some(Value::Str(s)) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// True if some parameter differs from the source (value replaced, connected, removed or
+    /// added). Nodes not read from RIB report `true` when they have any parameter edits.
+    pub fn is_modified(&self) -> bool {
+        self.dirty
+            && self.params.iter().any(|p| match p.change() {
+                ParamChange::Unchanged => false,
+                ParamChange::Removed => p.origin.is_some(),
+                _ => true,
+            })
+    }
+}
+
+/// A terminal of a material: a name (`surface`, `displacement`, …) and the connection to the
+/// terminal node.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Terminal {
+    /// Terminal name.
+    pub name: String,
+    /// The terminal node (or a missing handle) and output (`None`: the whole node).
+    pub link: Link,
+}
+
+/// Which nodes belong to a material.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum MaterialNodes {
+    /// The transitive upstream closure of the terminal nodes (RIB; networks built in code).
+    UpstreamOfTerminals,
+    /// An explicit node set (JSON `nodes`), in file order.
+    Explicit(Vec<NodeId>),
+}
+
+/// A named material: terminals and a node set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Material name (RIB: `__materialid` or handle of the `Bxdf`).
+    pub name: String,
+    /// Terminals in order.
+    pub terminals: Vec<Terminal>,
+    /// The nodes of the material.
+    pub nodes: MaterialNodes,
+    /// JSON `primvars`, as given.
+    pub primvars: Vec<String>,
+    /// Where the material was defined, if known.
+    pub location: Option<Location>,
+}
+
+/// A shader network: nodes and connections on a petgraph [`StableDiGraph`], plus materials.
+///
+/// Nodes are never removed, so [`NodeId`]s stay valid. Methods taking a `NodeId` panic if it
+/// does not belong to this network (a programming error, like indexing a `Vec` out of range).
+#[derive(Debug, Clone, Default)]
+pub struct Network {
+    graph: StableDiGraph<Node, Edge>,
+    handles: HashMap<String, Vec<NodeId>>,
+    materials: Vec<Material>,
+}
+
+impl Index<NodeId> for Network {
+    type Output = Node;
+    /// The node `id`. Panics if `id` is not a node of this network.
+    fn index(&self, id: NodeId) -> &Node {
+        &self.graph[id]
+    }
+}
+
+impl Network {
+    /// An empty network.
+    ///
+    /// ```
+    /// let net = vstructc::network::Network::new();
+    /// assert_eq!(net.node_count(), 0);
+    /// ```
+    pub fn new() -> Network {
+        Network::default()
+    }
+
+    /// The underlying graph: node weights are [`Node`]s, edges run upstream → downstream and
+    /// carry an [`Edge`]. Dangling links have no edge.
+    pub fn graph(&self) -> &StableDiGraph<Node, Edge> {
+        &self.graph
+    }
+
+    /// Number of nodes (all versions).
+    pub fn node_count(&self) -> usize {
+        self.graph.node_count()
+    }
+
+    /// Add a `Pattern` node. If `handle` already names a node, this is a new version of it
+    /// (key `handle#k`), as a RIB redefinition would be; [`Network::find`] then returns it.
+    ///
+    /// ```
+    /// use vstructc::network::{Network, RequestKind};
+    /// let mut net = Network::new();
+    /// let n = net.add_node("PxrFractal1", "PxrFractal");
+    /// assert_eq!(net[n].key(), "PxrFractal1#0");
+    /// assert_eq!(net[n].kind(), RequestKind::Pattern);
+    /// ```
+    pub fn add_node(&mut self, handle: &str, shader: &str) -> NodeId {
+        self.add_node_of_kind(handle, shader, RequestKind::Pattern)
+    }
+
+    /// Add a node of the given request kind (see [`Network::add_node`]).
+    ///
+    /// ```
+    /// use vstructc::network::{Network, RequestKind};
+    /// let mut net = Network::new();
+    /// let s = net.add_node_of_kind("Surface1", "PxrSurface", RequestKind::Bxdf);
+    /// assert_eq!(net[s].shader(), "PxrSurface");
+    /// ```
+    pub fn add_node_of_kind(&mut self, handle: &str, shader: &str, kind: RequestKind) -> NodeId {
+        self.insert_node(Node::new_raw(handle, shader, kind))
+    }
+
+    /// Insert a prepared node, assigning its version and key (crate-internal: readers).
+    pub(crate) fn insert_node(&mut self, mut node: Node) -> NodeId {
+        let versions = self.handles.entry(node.handle.clone()).or_default();
+        node.version = versions.len() as u32;
+        node.key = format!("{}#{}", node.handle, node.version);
+        let id = self.graph.add_node(node);
+        versions.push(id);
+        id
+    }
+
+    /// The node `id`, or `None` if it is not in this network.
+    pub fn get(&self, id: NodeId) -> Option<&Node> {
+        self.graph.node_weight(id)
+    }
+
+    /// The latest version of `handle` (the node a new reference would bind to).
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let v0 = net.add_node("A", "PxrFractal");
+    /// let v1 = net.add_node("A", "PxrWorley");
+    /// assert_eq!(net.find("A"), Some(v1));
+    /// assert_eq!(net.versions("A"), &[v0, v1]);
+    /// assert_eq!(net.find("B"), None);
+    /// ```
+    pub fn find(&self, handle: &str) -> Option<NodeId> {
+        self.versions(handle).last().copied()
+    }
+
+    /// Every version of `handle`, oldest first.
+    pub fn versions(&self, handle: &str) -> &[NodeId] {
+        self.handles.get(handle).map_or(&[], Vec::as_slice)
+    }
+
+    /// The node with key `handle#k`.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let v0 = net.add_node("Solid Material 21", "PxrSurface");
+    /// let v1 = net.add_node("Solid Material 21", "PxrSurface");
+    /// assert_eq!(net.by_key("Solid Material 21#1"), Some(v1));
+    /// assert_eq!(net.by_key("Solid Material 21#0"), Some(v0));
+    /// assert_eq!(net.by_key("Solid Material 21"), None);
+    /// ```
+    pub fn by_key(&self, key: &str) -> Option<NodeId> {
+        let (handle, k) = key.rsplit_once('#')?;
+        let k: usize = k.parse().ok()?;
+        self.versions(handle).get(k).copied()
+    }
+
+    /// All node ids in insertion (file) order.
+    pub fn node_ids(&self) -> impl Iterator<Item = NodeId> + '_ {
+        self.graph.node_indices()
+    }
+
+    /// All node ids sorted by name: by handle (byte-wise), then version. This is the
+    /// deterministic visiting order of resolution (vstruct.md §4.4, D1).
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let b = net.add_node("b", "X");
+    /// let a = net.add_node("a", "X");
+    /// let b1 = net.add_node("b", "X");
+    /// assert_eq!(net.nodes_sorted(), vec![a, b, b1]);
+    /// ```
+    pub fn nodes_sorted(&self) -> Vec<NodeId> {
+        let mut ids: Vec<NodeId> = self.graph.node_indices().collect();
+        ids.sort_by(|&x, &y| {
+            let (nx, ny) = (&self.graph[x], &self.graph[y]);
+            nx.handle.cmp(&ny.handle).then(nx.version.cmp(&ny.version))
+        });
+        ids
+    }
+
+    /// The authored value of `node.name`.
+    pub fn value(&self, node: NodeId, name: &str) -> Option<&Value> {
+        self.graph[node].value(name)
+    }
+
+    /// Set the authored value of `node.name` (creating the parameter if needed); returns the
+    /// previous value. Setting the value it already has is not a change.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// use vstructc::Value;
+    /// let mut net = Network::new();
+    /// let n = net.add_node("L", "PxrLayer");
+    /// assert_eq!(net.set_param(n, "enableClearcoat", Value::Int(0)), None);
+    /// assert_eq!(net.set_param(n, "enableClearcoat", Value::Int(1)), Some(Value::Int(0)));
+    /// assert_eq!(net.value(n, "enableClearcoat"), Some(&Value::Int(1)));
+    /// ```
+    pub fn set_param(&mut self, node: NodeId, name: &str, value: Value) -> Option<Value> {
+        let n = &mut self.graph[node];
+        let i = n.index_or_insert(name);
+        let p = &mut n.params[i];
+        if p.value.as_ref() == Some(&value) {
+            return Some(value);
+        }
+        p.value_touched = true;
+        n.dirty = true;
+        p.value.replace(value)
+    }
+
+    /// Remove the authored value of `node.name`; returns it.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// use vstructc::Value;
+    /// let mut net = Network::new();
+    /// let n = net.add_node("L", "PxrLayer");
+    /// net.set_param(n, "diffuseGain", Value::Float(0.5));
+    /// assert_eq!(net.remove_value(n, "diffuseGain"), Some(Value::Float(0.5)));
+    /// assert_eq!(net.value(n, "diffuseGain"), None);
+    /// ```
+    pub fn remove_value(&mut self, node: NodeId, name: &str) -> Option<Value> {
+        let n = &mut self.graph[node];
+        let i = n.index_of(name)?;
+        let old = n.params[i].value.take();
+        if old.is_some() {
+            n.params[i].value_touched = true;
+            n.dirty = true;
+        }
+        old
+    }
+
+    /// The connections of `node.input` in connection order (empty if none).
+    pub fn connections(&self, node: NodeId, input: &str) -> &[Link] {
+        self.graph[node].connections(input)
+    }
+
+    /// Names of the connected inputs of `node`, sorted byte-wise (a snapshot).
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let up = net.add_node("up", "PxrFractal");
+    /// let down = net.add_node("down", "PxrLayer");
+    /// net.connect(down, "diffuseGain", up, "resultF");
+    /// net.connect(down, "clearcoatRoughness", up, "resultF");
+    /// assert_eq!(net.connected_inputs(down), vec!["clearcoatRoughness", "diffuseGain"]);
+    /// ```
+    pub fn connected_inputs(&self, node: NodeId) -> Vec<String> {
+        self.graph[node]
+            .connected_inputs()
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// Append a connection `up.output → down.input` (after any existing connections of the
+    /// input).
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let a = net.add_node("a", "PxrFractal");
+    /// let b = net.add_node("b", "PxrFractal");
+    /// let m = net.add_node("m", "PxrBlend");
+    /// net.connect(m, "inputs", a, "resultF");
+    /// net.connect(m, "inputs", b, "resultF");
+    /// let ups: Vec<_> = net.connections(m, "inputs").iter().map(|l| l.upstream_node()).collect();
+    /// assert_eq!(ups, vec![Some(a), Some(b)]);
+    /// ```
+    pub fn connect(&mut self, down: NodeId, input: &str, up: NodeId, output: &str) {
+        self.push_link(down, input, Link::node(up, Some(output)));
+    }
+
+    /// Append a whole-node reference `up → down.input` (no output name).
+    pub fn connect_node(&mut self, down: NodeId, input: &str, up: NodeId) {
+        self.push_link(down, input, Link::node(up, None));
+    }
+
+    /// Append a connection (bound or dangling) to `down.input`.
+    ///
+    /// ```
+    /// use vstructc::network::{Link, Network};
+    /// let mut net = Network::new();
+    /// let d = net.add_node("d", "PxrLayerMixer");
+    /// net.push_link(d, "baselayer", Link::missing("NotThere", Some("pxrMaterialOut")));
+    /// assert_eq!(net.connections(d, "baselayer")[0].missing_handle(), Some("NotThere"));
+    /// ```
+    pub fn push_link(&mut self, down: NodeId, input: &str, link: Link) {
+        let i = self.graph[down].index_or_insert(input);
+        let index = self.graph[down].params[i].links.len();
+        let edge = self.add_edge_for(down, input, &link, index);
+        let n = &mut self.graph[down];
+        let p = &mut n.params[i];
+        p.links.push(link);
+        p.edges.push(edge);
+        p.links_touched = true;
+        n.dirty = true;
+    }
+
+    /// Append links read from a file without marking the parameter changed (crate-internal).
+    pub(crate) fn push_source_links(&mut self, down: NodeId, param: usize, links: Vec<Link>) {
+        let input = self.graph[down].params[param].name.clone();
+        for link in links {
+            let index = self.graph[down].params[param].links.len();
+            let edge = self.add_edge_for(down, &input, &link, index);
+            let p = &mut self.graph[down].params[param];
+            p.links.push(link);
+            p.edges.push(edge);
+        }
+    }
+
+    fn add_edge_for(
+        &mut self,
+        down: NodeId,
+        input: &str,
+        link: &Link,
+        index: usize,
+    ) -> Option<EdgeId> {
+        let up = link.upstream_node()?;
+        Some(self.graph.add_edge(
+            up,
+            down,
+            Edge {
+                output: link.output.clone(),
+                input: input.to_string(),
+                index,
+            },
+        ))
+    }
+
+    /// Replace the connections of `down.input` with `links` (in that order); returns the old
+    /// ones. Setting the same list again is not a change.
+    ///
+    /// ```
+    /// use vstructc::network::{Link, Network};
+    /// let mut net = Network::new();
+    /// let u = net.add_node("u", "PxrLayer");
+    /// let m = net.add_node("m", "PxrLayer");
+    /// let d = net.add_node("d", "PxrLayerMixer");
+    /// net.connect(d, "baselayer_diffuseGain", m, "pxrMaterialOut_diffuseGain");
+    /// net.set_connections(d, "baselayer_diffuseGain", vec![Link::node(u, Some("pxrMaterialOut_diffuseGain"))]);
+    /// assert_eq!(net.connections(d, "baselayer_diffuseGain")[0].upstream_node(), Some(u));
+    /// assert_eq!(net.graph().edge_count(), 1);
+    /// ```
+    pub fn set_connections(&mut self, down: NodeId, input: &str, links: Vec<Link>) -> Vec<Link> {
+        let i = match self.graph[down].index_of(input) {
+            Some(i) => i,
+            None if links.is_empty() => return Vec::new(),
+            None => self.graph[down].index_or_insert(input),
+        };
+        if self.graph[down].params[i].links == links {
+            return links;
+        }
+        let old_edges = std::mem::take(&mut self.graph[down].params[i].edges);
+        for e in old_edges.into_iter().flatten() {
+            self.graph.remove_edge(e);
+        }
+        let edges: Vec<Option<EdgeId>> = links
+            .iter()
+            .enumerate()
+            .map(|(index, link)| self.add_edge_for(down, input, link, index))
+            .collect();
+        let n = &mut self.graph[down];
+        let p = &mut n.params[i];
+        p.edges = edges;
+        p.links_touched = true;
+        n.dirty = true;
+        std::mem::replace(&mut p.links, links)
+    }
+
+    /// Remove every connection of `down.input`; returns them.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let u = net.add_node("u", "PxrLayer");
+    /// let d = net.add_node("d", "PxrLayerMixer");
+    /// net.connect(d, "baselayer", u, "pxrMaterialOut");
+    /// assert_eq!(net.clear_connections(d, "baselayer").len(), 1);
+    /// assert!(net.connections(d, "baselayer").is_empty());
+    /// assert_eq!(net.graph().edge_count(), 0);
+    /// ```
+    pub fn clear_connections(&mut self, down: NodeId, input: &str) -> Vec<Link> {
+        self.set_connections(down, input, Vec::new())
+    }
+
+    /// Remove the connection at `index` of `down.input`; later connections move up.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let a = net.add_node("a", "X");
+    /// let b = net.add_node("b", "X");
+    /// let d = net.add_node("d", "Y");
+    /// net.connect(d, "in", a, "out");
+    /// net.connect(d, "in", b, "out");
+    /// net.remove_connection(d, "in", 0);
+    /// assert_eq!(net.connections(d, "in")[0].upstream_node(), Some(b));
+    /// let e = net.graph().edge_indices().next().unwrap();
+    /// assert_eq!(net.graph()[e].index, 0);
+    /// ```
+    pub fn remove_connection(&mut self, down: NodeId, input: &str, index: usize) -> Option<Link> {
+        let i = self.graph[down].index_of(input)?;
+        if index >= self.graph[down].params[i].links.len() {
+            return None;
+        }
+        let n = &mut self.graph[down];
+        let p = &mut n.params[i];
+        let link = p.links.remove(index);
+        let edge = p.edges.remove(index);
+        let later: Vec<(usize, EdgeId)> = p
+            .edges
+            .iter()
+            .enumerate()
+            .skip(index)
+            .filter_map(|(k, e)| e.map(|e| (k, e)))
+            .collect();
+        p.links_touched = true;
+        n.dirty = true;
+        if let Some(e) = edge {
+            self.graph.remove_edge(e);
+        }
+        for (k, e) in later {
+            if let Some(w) = self.graph.edge_weight_mut(e) {
+                w.index = k;
+            }
+        }
+        Some(link)
+    }
+
+    /// Remove both the value and the connections of `node.name` (the parameter is then not
+    /// written).
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// use vstructc::Value;
+    /// let mut net = Network::new();
+    /// let n = net.add_node("n", "PxrLayerMixer");
+    /// net.set_param(n, "baselayer", Value::Float(0.0));
+    /// net.remove_param(n, "baselayer");
+    /// assert!(net[n].params().next().is_none());
+    /// ```
+    pub fn remove_param(&mut self, node: NodeId, name: &str) {
+        self.remove_value(node, name);
+        self.clear_connections(node, name);
+    }
+
+    /// Nodes that feed `node` directly: distinct, in parameter order then connection order.
+    /// Dangling links are skipped.
+    pub fn upstream_nodes(&self, node: NodeId) -> Vec<NodeId> {
+        let mut ups: Vec<NodeId> = Vec::new();
+        for p in &self.graph[node].params {
+            for u in p.links.iter().filter_map(Link::upstream_node) {
+                if !ups.contains(&u) {
+                    ups.push(u);
+                }
+            }
+        }
+        ups
+    }
+
+    /// The transitive upstream closure of `roots` (roots included), in breadth-first order
+    /// from the roots, each node once. Dangling links are not followed.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let a = net.add_node("a", "X");
+    /// let b = net.add_node("b", "X");
+    /// let c = net.add_node("c", "X");
+    /// let lone = net.add_node("lone", "X");
+    /// net.connect(b, "in", a, "out");
+    /// net.connect(c, "in", b, "out");
+    /// assert_eq!(net.upstream_closure(&[c]), vec![c, b, a]);
+    /// assert!(!net.upstream_closure(&[c]).contains(&lone));
+    /// ```
+    pub fn upstream_closure(&self, roots: &[NodeId]) -> Vec<NodeId> {
+        let mut seen = std::collections::HashSet::new();
+        let mut order = Vec::new();
+        let mut queue = std::collections::VecDeque::new();
+        for &r in roots {
+            if self.graph.contains_node(r) && seen.insert(r) {
+                queue.push_back(r);
+            }
+        }
+        while let Some(n) = queue.pop_front() {
+            order.push(n);
+            // Walk inputs in parameter source order so the result is deterministic.
+            for p in &self.graph[n].params {
+                for link in &p.links {
+                    if let Some(u) = link.upstream_node() {
+                        if seen.insert(u) {
+                            queue.push_back(u);
+                        }
+                    }
+                }
+            }
+        }
+        order
+    }
+
+    /// The materials, in definition order.
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Mutable access to the materials.
+    pub fn materials_mut(&mut self) -> &mut Vec<Material> {
+        &mut self.materials
+    }
+
+    /// Add a material with no terminals whose nodes are the upstream closure of its
+    /// terminals; returns its index.
+    ///
+    /// ```
+    /// use vstructc::network::{Network, RequestKind};
+    /// let mut net = Network::new();
+    /// let s = net.add_node_of_kind("S", "PxrSurface", RequestKind::Bxdf);
+    /// let m = net.add_material("MySG");
+    /// net.set_terminal(m, "surface", s, None);
+    /// assert_eq!(net.materials()[m].terminals[0].link.upstream_node(), Some(s));
+    /// assert_eq!(net.material_nodes(m), vec![s]);
+    /// ```
+    pub fn add_material(&mut self, name: &str) -> usize {
+        self.materials.push(Material {
+            name: name.to_string(),
+            terminals: Vec::new(),
+            nodes: MaterialNodes::UpstreamOfTerminals,
+            primvars: Vec::new(),
+            location: None,
+        });
+        self.materials.len() - 1
+    }
+
+    /// Set terminal `name` of material `material` to `node` (output `None`: the whole node),
+    /// replacing a terminal of the same name.
+    pub fn set_terminal(
+        &mut self,
+        material: usize,
+        name: &str,
+        node: NodeId,
+        output: Option<&str>,
+    ) {
+        let link = Link::node(node, output);
+        let m = &mut self.materials[material];
+        match m.terminals.iter_mut().find(|t| t.name == name) {
+            Some(t) => t.link = link,
+            None => m.terminals.push(Terminal {
+                name: name.to_string(),
+                link,
+            }),
+        }
+    }
+
+    /// The node set of material `material`: its explicit node list, or the upstream closure of
+    /// its terminal nodes.
+    pub fn material_nodes(&self, material: usize) -> Vec<NodeId> {
+        let m = &self.materials[material];
+        match &m.nodes {
+            MaterialNodes::Explicit(ids) => ids.clone(),
+            MaterialNodes::UpstreamOfTerminals => {
+                let roots: Vec<NodeId> = m
+                    .terminals
+                    .iter()
+                    .filter_map(|t| t.link.upstream_node())
+                    .collect();
+                self.upstream_closure(&roots)
+            }
+        }
+    }
+
+    /// The change state of `node.name` (`Removed` if the node has no such parameter).
+    pub fn param_change(&self, node: NodeId, name: &str) -> ParamChange {
+        self.graph[node]
+            .param(name)
+            .map_or(ParamChange::Removed, Param::change)
+    }
+
+    /// True if `node` was modified since it was read (see [`Node::is_modified`]).
+    pub fn is_modified(&self, node: NodeId) -> bool {
+        self.graph[node].is_modified()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::BaseType;
+
+    fn sourced_node(net: &mut Network) -> NodeId {
+        let mut node = Node::new_raw("n", "PxrLayer", RequestKind::Pattern);
+        node.set_raw_params(vec![
+            Param::from_source("b".into(), Some(Value::Int(1)), None, None, Some(0)),
+            Param::from_source("a".into(), Some(Value::Float(0.5)), None, None, Some(1)),
+            Param::from_source("c".into(), None, None, None, Some(2)),
+        ]);
+        let id = net.insert_node(node);
+        let up = net.add_node("u", "PxrFractal");
+        net.push_source_links(id, 2, vec![Link::node(up, Some("resultF"))]);
+        id
+    }
+
+    #[test]
+    fn source_params_start_unchanged() {
+        let mut net = Network::new();
+        let n = sourced_node(&mut net);
+        assert!(!net.is_modified(n));
+        for p in net[n].params() {
+            assert_eq!(p.change(), ParamChange::Unchanged, "{}", p.name());
+        }
+        // Setting the same value is not a change.
+        net.set_param(n, "b", Value::Int(1));
+        assert!(!net.is_modified(n));
+    }
+
+    #[test]
+    fn changes_are_classified() {
+        let mut net = Network::new();
+        let n = sourced_node(&mut net);
+        let up = net.find("u").unwrap();
+        net.set_param(n, "b", Value::Int(2));
+        assert_eq!(net.param_change(n, "b"), ParamChange::ValueReplaced);
+        net.connect(n, "a", up, "resultF");
+        assert_eq!(net.param_change(n, "a"), ParamChange::Connected);
+        net.clear_connections(n, "c");
+        assert_eq!(net.param_change(n, "c"), ParamChange::Removed);
+        net.set_param(n, "d", Value::Str("x".into()));
+        assert_eq!(net.param_change(n, "d"), ParamChange::Added);
+        assert!(net.is_modified(n));
+        // Connected parameter keeps its old value (vstruct.md §4.3).
+        assert_eq!(net.value(n, "a"), Some(&Value::Float(0.5)));
+    }
+
+    #[test]
+    fn disconnecting_a_source_connection_with_value_is_value_replaced() {
+        let mut net = Network::new();
+        let n = sourced_node(&mut net);
+        net.set_param(n, "c", Value::Float(1.0));
+        // Still connected: only the unchanged connection is written.
+        assert_eq!(net.param_change(n, "c"), ParamChange::Unchanged);
+        net.clear_connections(n, "c");
+        assert_eq!(net.param_change(n, "c"), ParamChange::ValueReplaced);
+    }
+
+    #[test]
+    fn added_then_removed_does_not_modify() {
+        let mut net = Network::new();
+        let n = sourced_node(&mut net);
+        net.set_param(n, "tmp", Value::Int(1));
+        net.remove_value(n, "tmp");
+        assert_eq!(net.param_change(n, "tmp"), ParamChange::Removed);
+        assert!(!net.is_modified(n));
+    }
+
+    #[test]
+    fn edges_mirror_links() {
+        let mut net = Network::new();
+        let a = net.add_node("a", "X");
+        let b = net.add_node("b", "X");
+        let d = net.add_node("d", "Y");
+        net.connect(d, "x", a, "o1");
+        net.connect(d, "x", b, "o2");
+        net.push_link(d, "x", Link::missing("ghost", None));
+        assert_eq!(net.graph().edge_count(), 2);
+        let mut weights: Vec<_> = net.graph().edge_weights().cloned().collect();
+        weights.sort_by_key(|w| w.index);
+        assert_eq!(weights[0].output.as_deref(), Some("o1"));
+        assert_eq!(weights[1].index, 1);
+        assert_eq!(weights[1].input, "x");
+        net.remove_connection(d, "x", 0);
+        let w: Vec<_> = net.graph().edge_weights().cloned().collect();
+        assert_eq!(w.len(), 1);
+        assert_eq!(w[0].index, 0);
+        assert_eq!(net.connections(d, "x")[1].missing_handle(), Some("ghost"));
+        net.clear_connections(d, "x");
+        assert_eq!(net.graph().edge_count(), 0);
+    }
+
+    #[test]
+    fn lookup_and_order() {
+        let mut net = Network::new();
+        let n = net.add_node("n", "X");
+        for name in ["zeta", "alpha", "mid"] {
+            net.set_param(n, name, Value::Int(0));
+        }
+        let by_name: Vec<_> = net[n].params_by_name().map(Param::name).collect();
+        assert_eq!(by_name, ["alpha", "mid", "zeta"]);
+        let in_order: Vec<_> = net[n].params().map(Param::name).collect();
+        assert_eq!(in_order, ["zeta", "alpha", "mid"]);
+        assert!(net[n].param("nope").is_none());
+        assert_eq!(
+            net.value(n, "mid").map(Value::base_type),
+            Some(BaseType::Int)
+        );
+    }
+
+    #[test]
+    fn self_loop_and_cycles_are_representable() {
+        let mut net = Network::new();
+        let a = net.add_node("a", "X");
+        let b = net.add_node("b", "X");
+        net.connect(a, "in", b, "out");
+        net.connect(b, "in", a, "out");
+        net.connect(a, "self", a, "out");
+        let c = net.upstream_closure(&[a]);
+        assert_eq!(c, vec![a, b]);
+        assert_eq!(net.upstream_nodes(a), vec![b, a]);
+    }
+}

@@ -1,0 +1,141 @@
+//! What the network readers and writers need to know about shader definitions.
+//!
+//! The RIB and JSON readers need declared parameter types (decls without an inline type,
+//! JSON shorthand values, RB016 checks) and the RIB writer needs the declaration order of a
+//! node type's inputs (new parameters are appended in that order). Rather than depending on
+//! the registry directly, they ask through [`ParamTypes`]; the registry implements it, and
+//! [`NoDefinitions`] stands for "no definitions loaded".
+
+use crate::types::{BaseType, Type};
+
+/// Type information about shader definitions, as the network readers and writers need it.
+///
+/// All lookups are by shader id (`PxrLayer`) and property name. Inputs and outputs have
+/// separate namespaces.
+///
+/// # Example
+///
+/// A tiny implementation over a fixed table, as a test might write it:
+///
+/// ```
+/// use vstructc::network::ParamTypes;
+/// use vstructc::{BaseType, Type};
+///
+/// struct OneShader;
+/// impl ParamTypes for OneShader {
+///     fn shader_known(&self, shader: &str) -> bool {
+///         shader == "PxrExposure"
+///     }
+///     fn input_type(&self, shader: &str, input: &str) -> Option<Type> {
+///         match (shader, input) {
+///             ("PxrExposure", "stops") => Some(Type::scalar(BaseType::Float)),
+///             ("PxrExposure", "inputRGB") => Some(Type::scalar(BaseType::Color)),
+///             _ => None,
+///         }
+///     }
+///     fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
+///         (shader == "PxrExposure" && output == "resultRGB").then(|| Type::scalar(BaseType::Color))
+///     }
+/// }
+/// assert!(OneShader.is_output_head("PxrExposure", "resultRGB") == false);
+/// assert_eq!(OneShader.input_position("PxrExposure", "stops"), None);
+/// ```
+pub trait ParamTypes {
+    /// Whether any definitions are available at all. When `false`, checks that compare a
+    /// network against definitions (RB016, RB019) are skipped instead of firing on every
+    /// node. Defaults to `true`.
+    fn has_definitions(&self) -> bool {
+        true
+    }
+
+    /// True if a definition for `shader` exists.
+    fn shader_known(&self, shader: &str) -> bool;
+
+    /// The declared type of input `input` of `shader` (after head normalisation: `Vstruct`
+    /// for input heads), or `None` if the shader or the input is unknown.
+    fn input_type(&self, shader: &str, input: &str) -> Option<Type>;
+
+    /// The declared type of output `output` of `shader`, or `None` if unknown.
+    fn output_type(&self, shader: &str, output: &str) -> Option<Type>;
+
+    /// The position of `input` among `shader`'s inputs in declaration order (0-based), or
+    /// `None` if unknown. The RIB writer appends new parameters in this order; parameters
+    /// without a position follow in the order they were added. Defaults to `None`.
+    fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
+        let _ = (shader, input);
+        None
+    }
+
+    /// True if `input` is an input head (a vstruct placeholder input) of `shader`. Defaults
+    /// to "declared type is `Vstruct`", which is what the registry's head normalisation gives.
+    fn is_input_head(&self, shader: &str, input: &str) -> bool {
+        matches!(
+            self.input_type(shader, input),
+            Some(Type {
+                base: BaseType::Vstruct,
+                ..
+            })
+        )
+    }
+
+    /// True if `output` is an output head of `shader`. Defaults to "declared type is
+    /// `Vstruct`".
+    fn is_output_head(&self, shader: &str, output: &str) -> bool {
+        matches!(
+            self.output_type(shader, output),
+            Some(Type {
+                base: BaseType::Vstruct,
+                ..
+            })
+        )
+    }
+}
+
+/// No definitions: every lookup answers "unknown" and definition checks are skipped.
+///
+/// ```
+/// use vstructc::network::{NoDefinitions, ParamTypes};
+/// assert!(!NoDefinitions.has_definitions());
+/// assert_eq!(NoDefinitions.input_type("PxrSurface", "diffuseGain"), None);
+/// ```
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoDefinitions;
+
+impl ParamTypes for NoDefinitions {
+    fn has_definitions(&self) -> bool {
+        false
+    }
+    fn shader_known(&self, _shader: &str) -> bool {
+        false
+    }
+    fn input_type(&self, _shader: &str, _input: &str) -> Option<Type> {
+        None
+    }
+    fn output_type(&self, _shader: &str, _output: &str) -> Option<Type> {
+        None
+    }
+}
+
+impl<T: ParamTypes + ?Sized> ParamTypes for &T {
+    fn has_definitions(&self) -> bool {
+        (**self).has_definitions()
+    }
+    fn shader_known(&self, shader: &str) -> bool {
+        (**self).shader_known(shader)
+    }
+    fn input_type(&self, shader: &str, input: &str) -> Option<Type> {
+        (**self).input_type(shader, input)
+    }
+    fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
+        (**self).output_type(shader, output)
+    }
+    fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
+        (**self).input_position(shader, input)
+    }
+    fn is_input_head(&self, shader: &str, input: &str) -> bool {
+        (**self).is_input_head(shader, input)
+    }
+    fn is_output_head(&self, shader: &str, output: &str) -> bool {
+        (**self).is_output_head(shader, output)
+    }
+}

@@ -1,0 +1,36 @@
+//! The registry as the source of declared parameter types for the network readers and the
+//! RIB writer ([`crate::network::ParamTypes`]).
+
+use super::Registry;
+use crate::network::ParamTypes;
+use crate::types::Type;
+
+impl ParamTypes for Registry {
+    fn shader_known(&self, shader: &str) -> bool {
+        self.definition(shader).is_some()
+    }
+
+    fn input_type(&self, shader: &str, input: &str) -> Option<Type> {
+        Some(self.definition(shader)?.input(input)?.ty.clone())
+    }
+
+    fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
+        Some(self.definition(shader)?.output(output)?.ty.clone())
+    }
+
+    fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
+        self.definition(shader)?
+            .inputs
+            .iter()
+            .position(|p| p.name == input)
+    }
+
+    fn is_input_head(&self, shader: &str, input: &str) -> bool {
+        self.tables(shader).is_some_and(|t| t.is_input_head(input))
+    }
+
+    fn is_output_head(&self, shader: &str, output: &str) -> bool {
+        self.tables(shader)
+            .is_some_and(|t| t.is_output_head(output))
+    }
+}
