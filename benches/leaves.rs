@@ -1,0 +1,226 @@
+//! Leaf evaluation cost (spec closures.md §6.2 anchors): ns per (V, L) for each anchor lobe
+//! over 4096 random pairs, including the world → local frame transform; once with `prepare`
+//! per pair (every pair has its own V) and once eval-only (V prepared once, as the
+//! interpreter does for many L), plus one GGX dielectric lobe batched SoA over 16 lanes.
+//!
+//! Timings are the benchmark thread's on-CPU time (`/proc/thread-self/schedstat`, Linux), not
+//! wall-clock time: the development machine is shared, and wall-clock numbers there mostly
+//! measure the other processes. One iteration evaluates all 4096 pairs: divide by 4096 for ns
+//! per (V, L).
+
+use criterion::measurement::{Measurement, ValueFormatter};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec3;
+use std::hint::black_box;
+use vstructc::interp::diffuse::{Lambert, OrenNayar, OrenNayarVariant};
+use vstructc::interp::soa::{DielectricRBatch, Vec3x};
+use vstructc::interp::verify::Rng;
+use vstructc::interp::*;
+
+const PAIRS: usize = 4096;
+
+/// On-CPU time of the current thread in ns (0 where `/proc/thread-self/schedstat` is missing).
+fn thread_cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
+        .unwrap_or(0)
+}
+
+/// Criterion measurement: thread CPU time.
+struct CpuTime;
+
+struct NsFormatter;
+
+impl ValueFormatter for NsFormatter {
+    fn scale_values(&self, _typical: f64, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+    fn scale_throughputs(&self, _typical: f64, t: &Throughput, values: &mut [f64]) -> &'static str {
+        if let Throughput::Elements(n) = t {
+            for v in values.iter_mut() {
+                *v /= *n as f64;
+            }
+        }
+        "ns/elem"
+    }
+    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+}
+
+impl Measurement for CpuTime {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        thread_cpu_ns()
+    }
+    fn end(&self, i: u64) -> u64 {
+        thread_cpu_ns().saturating_sub(i)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        &NsFormatter
+    }
+}
+
+fn anchors() -> Vec<(&'static str, Lobe)> {
+    vec![
+        (
+            "lambert",
+            Lobe::Lambert(Lambert {
+                rho: Vec3::splat(0.5),
+            }),
+        ),
+        (
+            "eon_exact",
+            Lobe::OrenNayar(OrenNayar {
+                rho: Vec3::splat(0.5),
+                sigma: 0.5,
+                variant: OrenNayarVariant::Energy,
+            }),
+        ),
+        (
+            "ggx_dielectric_aniso_hc",
+            Lobe::Dielectric(Dielectric::new(
+                Ggx::new(0.2, 0.4),
+                Masking::HeightCorrelated,
+                1.5,
+                DielectricMode::R,
+            )),
+        ),
+        (
+            "ggx_conductor",
+            Lobe::MicrofacetR(MicrofacetR {
+                ggx: Ggx::isotropic(0.3),
+                masking: Masking::HeightCorrelated,
+                fresnel: Fresnel::Conductor {
+                    eta: Vec3::new(0.183, 0.421, 1.373),
+                    kappa: Vec3::new(3.424, 2.346, 1.770),
+                },
+                comp: Compensation::None,
+            }),
+        ),
+        (
+            "sheen_ck",
+            Lobe::SheenCK(SheenCK {
+                r: 0.3,
+                masking: SheenMasking::MaterialX,
+            }),
+        ),
+        ("sheen_ltc", Lobe::SheenLTC(SheenLTC { r: 0.5 })),
+        (
+            "ward_gm",
+            Lobe::Ward(Ward {
+                ax: 0.2,
+                ay: 0.2,
+                rho: Vec3::ONE,
+                variant: WardVariant::Gm,
+            }),
+        ),
+    ]
+}
+
+/// Random (frame, V, L) triples in world space, V and L on the frame's upper side.
+fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
+    let mut rng = Rng::new(42);
+    (0..PAIRS)
+        .map(|_| {
+            let n = rng.sphere();
+            let f = Frame::new(n, rng.sphere());
+            let side = |d: Vec3| if d.dot(n) < 0.0 { -d } else { d };
+            (f, side(rng.sphere()), side(rng.sphere()))
+        })
+        .collect()
+}
+
+fn bench_leaves(c: &mut Criterion<CpuTime>) {
+    tables::init_all();
+    let pairs = pairs();
+    let mut g = c.benchmark_group("leaf_prepare_eval");
+    g.throughput(Throughput::Elements(PAIRS as u64));
+    for (name, lobe) in anchors() {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut acc = Vec3::ZERO;
+                for (f, v, l) in &pairs {
+                    let p = black_box(&lobe).prepare(f.to_local(*v), Sides::Front);
+                    acc += p.eval(f.to_local(*l)).f_cos;
+                }
+                acc
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("leaf_eval");
+    g.throughput(Throughput::Elements(PAIRS as u64));
+    for (name, lobe) in anchors() {
+        let f = pairs[0].0;
+        let p = lobe.prepare(f.to_local(pairs[0].1), Sides::Front);
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut acc = Vec3::ZERO;
+                for (_, _, l) in &pairs {
+                    acc += black_box(&p).eval(f.to_local(*l)).f_cos;
+                }
+                acc
+            })
+        });
+    }
+    g.finish();
+}
+
+fn bench_soa(c: &mut Criterion<CpuTime>) {
+    const W: usize = 16;
+    let pairs = pairs();
+    let batches: Vec<(DielectricRBatch<W>, Vec3x<W>, Vec3x<W>)> = pairs
+        .chunks_exact(W)
+        .map(|ch| {
+            let mut v = Vec3x::<W>::zero();
+            let mut l = Vec3x::<W>::zero();
+            for (k, (f, vw, lw)) in ch.iter().enumerate() {
+                v.set(k, f.to_local(*vw));
+                l.set(k, f.to_local(*lw));
+            }
+            let lobe = DielectricRBatch {
+                ax: [0.2; W],
+                ay: [0.4; W],
+                eta: [1.5; W],
+                tint: Vec3x {
+                    x: [1.0; W],
+                    y: [1.0; W],
+                    z: [1.0; W],
+                },
+            };
+            (lobe, v, l)
+        })
+        .collect();
+    let mut g = c.benchmark_group("soa");
+    g.throughput(Throughput::Elements(PAIRS as u64));
+    g.bench_function("ggx_dielectric_r_16_lanes", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for (lobe, v, l) in &batches {
+                let out = black_box(lobe).eval(v, l);
+                acc += out.x.iter().sum::<f32>();
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().with_measurement(CpuTime);
+    targets = bench_leaves, bench_soa
+}
+criterion_main!(benches);

@@ -1,0 +1,454 @@
+//! Diffuse leaves (spec closures.md §3.1–§3.5, §3.16): Lambert, Translucent, Oren–Nayar
+//! (QON, FON, EON), MiaDiffuse and Burley. All are cosine-sampled.
+//!
+//! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
+
+use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use super::math::{Rgb, pdf_cosine, pow5, sample_cosine};
+use super::tables::{self, TableId};
+use glam::Vec3;
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// `c1 = 1/2 − 2/(3π)` of EON.
+pub const EON_C1: f32 = 0.5 - 2.0 / (3.0 * PI);
+/// `c2 = 2/3 − 28/(15π)` of EON.
+pub const EON_C2: f32 = 2.0 / 3.0 - 28.0 / (15.0 * PI);
+/// Below this σ, EON is evaluated as Lambert (its `f_ms` is 0/0 at σ = 0).
+pub const EON_SIGMA_MIN: f32 = 1e-4;
+
+/// Cosine-samples a reflection lobe given its `f·μ_i` (weight = `f_cos/pdf`).
+#[inline]
+pub(crate) fn cosine_sample(u: [f32; 3], f_cos: impl Fn(Vec3) -> Rgb) -> Option<LobeSample> {
+    let l = sample_cosine(u[0], u[1])?;
+    let pdf = pdf_cosine(l.z);
+    Some(LobeSample {
+        l,
+        weight: f_cos(l) / pdf,
+        pdf,
+        delta: false,
+    })
+}
+
+/// `f = ρ/π` (Lambert); also the subsurface proxy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lambert {
+    /// Albedo ρ.
+    pub rho: Rgb,
+}
+
+/// Prepared Lambert (and Translucent: same data, other hemisphere).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedLambert {
+    rho: Rgb,
+    rho_pi: Rgb,
+}
+
+impl Lambert {
+    /// Precomputes the view-only terms.
+    pub fn prepare(&self) -> PreparedLambert {
+        PreparedLambert {
+            rho: self.rho,
+            rho_pi: self.rho * FRAC_1_PI,
+        }
+    }
+}
+
+impl PreparedLambert {
+    /// `ρ μ_i / π` on the upper hemisphere.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        LobeEval {
+            f_cos: self.rho_pi * l.z,
+            pdf: l.z * FRAC_1_PI,
+        }
+    }
+
+    /// Cosine density.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        pdf_cosine(l.z)
+    }
+
+    /// Cosine sample; weight ρ.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        let l = sample_cosine(u[0], u[1])?;
+        Some(LobeSample {
+            l,
+            weight: self.rho,
+            pdf: pdf_cosine(l.z),
+            delta: false,
+        })
+    }
+
+    /// Albedo ρ.
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(self.rho)
+    }
+
+    /// Translucent: `ρ |μ_i| / π` on the lower hemisphere.
+    #[inline]
+    pub fn eval_translucent(&self, l: Vec3) -> LobeEval {
+        if l.z >= 0.0 {
+            return LobeEval::ZERO;
+        }
+        LobeEval {
+            f_cos: self.rho_pi * -l.z,
+            pdf: -l.z * FRAC_1_PI,
+        }
+    }
+
+    /// Translucent density.
+    #[inline]
+    pub fn pdf_translucent(&self, l: Vec3) -> f32 {
+        pdf_cosine(-l.z)
+    }
+
+    /// Translucent: cosine sample mirrored to the lower hemisphere; weight ρ.
+    pub fn sample_translucent(&self, u: [f32; 3]) -> Option<LobeSample> {
+        let l = sample_cosine(u[0], u[1])?;
+        Some(LobeSample {
+            l: Vec3::new(l.x, l.y, -l.z),
+            weight: self.rho,
+            pdf: pdf_cosine(l.z),
+            delta: false,
+        })
+    }
+
+    /// Translucent albedo: ρ, transmitted (no index change: energy equals radiance).
+    pub fn albedo_translucent(&self) -> LobeAlbedo {
+        LobeAlbedo {
+            reflect: Vec3::ZERO,
+            transmit: self.rho,
+            transmit_energy: self.rho,
+        }
+    }
+}
+
+/// Oren–Nayar variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OrenNayarVariant {
+    /// Qualitative model (Oren & Nayar 1994), albedo from a table.
+    Qualitative,
+    /// Fujii's single-scattering form (the `f_ss` of EON), albedo `ρ Ê(μ_o)`.
+    Fujii,
+    /// Energy-preserving Oren–Nayar (Portsmouth, Kutz & Hill 2025), exact `Ê` (two `acos`).
+    Energy,
+    /// EON with the polynomial `Ê` (max error 4.7e-4; no `acos`).
+    EnergyFast,
+}
+
+/// Oren–Nayar family lobe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrenNayar {
+    /// Albedo colour ρ.
+    pub rho: Rgb,
+    /// Roughness σ ∈ [0, 1] (clamped).
+    pub sigma: f32,
+    /// Which model.
+    pub variant: OrenNayarVariant,
+}
+
+/// EON's `Ê(μ)` (directional albedo of `f_ss` at ρ = 1) by the exact closed form.
+pub fn eon_e_hat(mu: f32, sigma: f32) -> f32 {
+    let af = 1.0 / (1.0 + EON_C1 * sigma);
+    af + sigma * af * FRAC_1_PI * eon_g(mu)
+}
+
+/// EON's `Ê(μ)` by the polynomial fit in `1 − μ`.
+pub fn eon_e_hat_fast(mu: f32, sigma: f32) -> f32 {
+    let m = 1.0 - mu.clamp(0.0, 1.0);
+    let g = m * (0.057_108_53 + m * (0.491_881_87 + m * (-0.332_181_44 + m * 0.071_442_99)));
+    (1.0 + sigma * g) / (1.0 + EON_C1 * sigma)
+}
+
+/// EON's `G(θ)`, `θ = acos μ`, rewritten without the `1/cosθ` singularity:
+/// `(sinθ/cosθ)(1 − sin³θ) = sinθ·μ(1 + s + s²)/(1 + s)` with `s = sinθ`.
+fn eon_g(mu: f32) -> f32 {
+    let mu = mu.clamp(0.0, 1.0);
+    let s = (1.0 - mu * mu).max(0.0).sqrt();
+    let theta = mu.acos();
+    s * (theta - s * mu) + (2.0 / 3.0) * s * (mu * (1.0 + s + s * s) / (1.0 + s) - 1.0)
+}
+
+/// EON's average albedo `Ē = A_F (1 + c2 σ)`.
+pub fn eon_e_avg(sigma: f32) -> f32 {
+    (1.0 + EON_C2 * sigma) / (1.0 + EON_C1 * sigma)
+}
+
+/// Prepared Oren–Nayar lobe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedOrenNayar {
+    v: Vec3,
+    rho_pi: Rgb,
+    /// Constant term (A or A_F).
+    a: f32,
+    /// Coefficient of `s/t` (B or σ A_F).
+    b: f32,
+    /// FON/EON keep negative `s` (QON drops it).
+    keep_negative_s: bool,
+    /// EON: `ρ_ms (1 − Ê(μ_o)) / (π (1 − Ē))`; zero otherwise.
+    ms: Rgb,
+    sigma: f32,
+    fast: bool,
+    albedo: Rgb,
+}
+
+impl OrenNayar {
+    /// Precomputes the view-only terms for view `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedOrenNayar {
+        let sigma = if self.sigma.is_nan() {
+            0.0
+        } else {
+            self.sigma.clamp(0.0, 1.0)
+        };
+        let rho_pi = self.rho * FRAC_1_PI;
+        let mut p = PreparedOrenNayar {
+            v,
+            rho_pi,
+            a: 1.0,
+            b: 0.0,
+            keep_negative_s: false,
+            ms: Vec3::ZERO,
+            sigma,
+            fast: self.variant == OrenNayarVariant::EnergyFast,
+            albedo: self.rho,
+        };
+        match self.variant {
+            OrenNayarVariant::Qualitative => {
+                let s2 = sigma * sigma;
+                p.a = 1.0 - 0.5 * s2 / (s2 + 0.33);
+                p.b = 0.45 * s2 / (s2 + 0.09);
+                p.albedo = self.rho * tables::lookup2(TableId::Qon, v.z, sigma);
+            }
+            OrenNayarVariant::Fujii => {
+                let af = 1.0 / (1.0 + EON_C1 * sigma);
+                (p.a, p.b, p.keep_negative_s) = (af, sigma * af, true);
+                p.albedo = self.rho * eon_e_hat(v.z, sigma);
+            }
+            OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => {
+                if sigma >= EON_SIGMA_MIN {
+                    let af = 1.0 / (1.0 + EON_C1 * sigma);
+                    (p.a, p.b, p.keep_negative_s) = (af, sigma * af, true);
+                    let e_o = p.e_hat(v.z);
+                    let e_avg = eon_e_avg(sigma);
+                    let rho_ms = self.rho * self.rho * e_avg
+                        / (Vec3::ONE - self.rho * (1.0 - e_avg)).max(Vec3::splat(1e-6));
+                    p.ms = rho_ms * ((1.0 - e_o) * FRAC_1_PI / (1.0 - e_avg));
+                    p.albedo = self.rho * e_o + rho_ms * (1.0 - e_o);
+                }
+            }
+        }
+        p
+    }
+}
+
+impl PreparedOrenNayar {
+    #[inline]
+    fn e_hat(&self, mu: f32) -> f32 {
+        if self.fast {
+            eon_e_hat_fast(mu, self.sigma)
+        } else {
+            eon_e_hat(mu, self.sigma)
+        }
+    }
+
+    /// The bracket `A + B·s/t` of the single-scattering term.
+    #[inline]
+    fn ss_factor(&self, l: Vec3) -> f32 {
+        let s = self.v.dot(l) - l.z * self.v.z;
+        let st = if s > 0.0 {
+            s / l.z.max(self.v.z)
+        } else if self.keep_negative_s {
+            s
+        } else {
+            0.0
+        };
+        self.a + self.b * st
+    }
+
+    /// `f·μ_i` and the cosine pdf.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        let mut f = self.rho_pi * (self.ss_factor(l).max(0.0) * l.z);
+        if self.ms != Vec3::ZERO {
+            f += self.ms * ((1.0 - self.e_hat(l.z)) * l.z);
+        }
+        LobeEval {
+            f_cos: f,
+            pdf: l.z * FRAC_1_PI,
+        }
+    }
+
+    /// Cosine density.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        pdf_cosine(l.z)
+    }
+
+    /// Cosine sample.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        cosine_sample(u, |l| self.eval(l).f_cos)
+    }
+
+    /// Directional albedo at this view.
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(self.albedo)
+    }
+}
+
+/// The MiaDiffuse smoothstep terminator `s(μ)`: `μ` for μ ≥ 0.25, `8μ²(1 − 2μ)` below.
+#[inline]
+pub fn mia_terminator(mu: f32) -> f32 {
+    if mu >= 0.25 {
+        mu
+    } else if mu <= 0.0 {
+        0.0
+    } else {
+        8.0 * mu * mu * (1.0 - 2.0 * mu)
+    }
+}
+
+/// mia_material's diffuse: QON with its light-side cosine replaced by [`mia_terminator`].
+/// Not reciprocal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MiaDiffuse {
+    /// Albedo colour ρ.
+    pub rho: Rgb,
+    /// Roughness σ ∈ [0, 1].
+    pub sigma: f32,
+}
+
+/// Prepared MiaDiffuse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedMiaDiffuse {
+    qon: PreparedOrenNayar,
+}
+
+impl MiaDiffuse {
+    /// Precomputes the view-only terms for `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedMiaDiffuse {
+        let on = OrenNayar {
+            rho: self.rho,
+            sigma: self.sigma,
+            variant: OrenNayarVariant::Qualitative,
+        };
+        let mut qon = on.prepare(v);
+        qon.albedo = self.rho * tables::lookup2(TableId::Mia, v.z, qon.sigma);
+        PreparedMiaDiffuse { qon }
+    }
+}
+
+impl PreparedMiaDiffuse {
+    /// `f_QON(V, L)·s(μ_i)` and the cosine pdf.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        LobeEval {
+            f_cos: self.qon.rho_pi * (self.qon.ss_factor(l) * mia_terminator(l.z)),
+            pdf: l.z * FRAC_1_PI,
+        }
+    }
+
+    /// Cosine density.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        pdf_cosine(l.z)
+    }
+
+    /// Cosine sample.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        cosine_sample(u, |l| self.eval(l).f_cos)
+    }
+
+    /// Directional albedo (table).
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(self.qon.albedo)
+    }
+}
+
+/// Burley's diffuse with roughness σ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Burley {
+    /// Albedo colour ρ.
+    pub rho: Rgb,
+    /// Roughness σ ∈ [0, 1].
+    pub sigma: f32,
+}
+
+/// Prepared Burley.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedBurley {
+    v: Vec3,
+    rho_pi: Rgb,
+    sigma: f32,
+    /// `(1 − μ_o)⁵`.
+    w_o: f32,
+    albedo: Rgb,
+}
+
+/// Hill's albedo fit of Burley diffuse (loose; for selection only).
+pub fn burley_albedo_fit(mu: f32, sigma: f32) -> f32 {
+    let a = 0.97619 - 0.488095 * pow5(1.0 - mu);
+    let b = 1.55754 + (-2.02221 + (2.56283 - 1.06244 * mu) * mu) * mu;
+    a + (b - a) * sigma
+}
+
+impl Burley {
+    /// Precomputes the view-only terms for `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedBurley {
+        let sigma = if self.sigma.is_nan() {
+            0.0
+        } else {
+            self.sigma.clamp(0.0, 1.0)
+        };
+        PreparedBurley {
+            v,
+            rho_pi: self.rho * FRAC_1_PI,
+            sigma,
+            w_o: pow5(1.0 - v.z.min(1.0)),
+            albedo: self.rho * burley_albedo_fit(v.z, sigma),
+        }
+    }
+}
+
+impl PreparedBurley {
+    /// `(ρ/π) F_D(μ_i) F_D(μ_o) μ_i` with `F_D90 = 1/2 + 2σ(L·h)²`, `(L·h)² = (1 + V·L)/2`.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        let lh2 = 0.5 * (1.0 + self.v.dot(l));
+        let fd90m1 = 2.0 * self.sigma * lh2 - 0.5;
+        let fd_i = 1.0 + fd90m1 * pow5(1.0 - l.z.min(1.0));
+        let fd_o = 1.0 + fd90m1 * self.w_o;
+        LobeEval {
+            f_cos: self.rho_pi * (fd_i * fd_o * l.z).max(0.0),
+            pdf: l.z * FRAC_1_PI,
+        }
+    }
+
+    /// Cosine density.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        pdf_cosine(l.z)
+    }
+
+    /// Cosine sample.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        cosine_sample(u, |l| self.eval(l).f_cos)
+    }
+
+    /// Directional albedo (Hill's fit).
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(self.albedo)
+    }
+}

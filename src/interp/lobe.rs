@@ -1,0 +1,488 @@
+//! The leaf instruction set: [`Lobe`] (parameters inline, one enum variant per leaf family)
+//! and [`PreparedLobe`] (the same with every view-only term precomputed).
+//!
+//! Everything here works in the lobe's local frame (normal `+z`, spec closures.md §0):
+//! callers transform V and L with a [`super::Frame`]. The interpreter calls
+//! [`Lobe::prepare`] once per (point, V) and then [`PreparedLobe::eval`],
+//! [`PreparedLobe::sample`], [`PreparedLobe::pdf`] and [`PreparedLobe::albedo`] as often as
+//! it likes; none of them allocates, recurses or uses trait objects.
+//!
+//! Hemispheres: reflection lobes return 0 unless `μ_i > 0` and `μ_o > 0`; transmission lobes
+//! need `μ_i μ_o < 0`. With [`Sides::Both`] a lobe seen from below (`μ_o < 0`) flips its
+//! frame (`z → −z`, `y → −y`) first; with [`Sides::Front`] it is inactive (zero) instead.
+//! Lobes with a transmission part (Dielectric, Translucent) and Transparent are always
+//! two-sided. A view exactly on the horizon (`μ_o = 0`) makes every BSDF lobe inactive.
+
+use super::diffuse::{
+    Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant, PreparedBurley, PreparedLambert,
+    PreparedMiaDiffuse, PreparedOrenNayar,
+};
+use super::emission::{Emission, Transparent};
+use super::math::{Rgb, flip};
+use super::microfacet::{
+    Compensation, Dielectric, DielectricMode, MicrofacetR, PreparedDielectric, PreparedMicrofacetR,
+};
+use super::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenLTC, SheenMasking};
+use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward};
+use glam::Vec3;
+
+/// Result of [`PreparedLobe::eval`]: cosine-weighted response and sampling density.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LobeEval {
+    /// `f(V, L)·|μ_i|`, RGB.
+    pub f_cos: Rgb,
+    /// Density of the lobe's sampling routine at L, per unit solid angle.
+    pub pdf: f32,
+}
+
+impl LobeEval {
+    /// No response, zero density.
+    pub const ZERO: LobeEval = LobeEval {
+        f_cos: Vec3::ZERO,
+        pdf: 0.0,
+    };
+}
+
+/// Result of [`PreparedLobe::sample`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LobeSample {
+    /// Sampled direction (local frame, unit).
+    pub l: Vec3,
+    /// `f_cos / pdf` (for delta samples: reflectance or transmittance over the discrete
+    /// probability).
+    pub weight: Rgb,
+    /// Density per solid angle; for delta samples the discrete probability of the choice.
+    pub pdf: f32,
+    /// True for a specular (delta) direction.
+    pub delta: bool,
+}
+
+/// Directional albedo `∫ f |μ_i| dω` at the prepared view, split by hemisphere.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LobeAlbedo {
+    /// Reflected part.
+    pub reflect: Rgb,
+    /// Transmitted part as sampling weights average it (radiance convention).
+    pub transmit: Rgb,
+    /// Transmitted part as energy (`η'² E_T`; equal to `transmit` without an index change).
+    pub transmit_energy: Rgb,
+}
+
+impl LobeAlbedo {
+    /// A reflection-only albedo.
+    pub fn reflect(reflect: Rgb) -> LobeAlbedo {
+        LobeAlbedo {
+            reflect,
+            ..LobeAlbedo::default()
+        }
+    }
+}
+
+/// Layering class of a leaf (spec §2.4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LobeClass {
+    /// Throughput 0.
+    Opaque,
+    /// Throughput from its albedo and the layer's tint mode.
+    Layerable,
+    /// Throughput 1 (emission, transparency).
+    PassThrough,
+}
+
+/// Reciprocity of a leaf (spec §3 summary, §5.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reciprocity {
+    /// `f(V, L) = f(L, V)`.
+    Reciprocal,
+    /// `f(V, L)/η_V² = f(L, V)/η_L²` (dielectric transmission).
+    Generalized,
+    /// Not reciprocal (by construction).
+    NonReciprocal,
+    /// Not a BSDF (emission, transparency).
+    NotApplicable,
+}
+
+/// Whether a reflection lobe also responds when seen from below.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Sides {
+    /// One-sided: zero for `μ_o ≤ 0`.
+    #[default]
+    Front,
+    /// Two-sided: the frame flips for `μ_o < 0`.
+    Both,
+}
+
+/// Names of the leaf kinds (for inspection, AOVs and reports).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LobeKind {
+    /// Lambert.
+    Lambert,
+    /// Lambert on the opposite hemisphere.
+    Translucent,
+    /// Qualitative Oren–Nayar.
+    OrenNayarQ,
+    /// Fujii Oren–Nayar (single scattering of EON).
+    OrenNayarF,
+    /// Energy-preserving Oren–Nayar.
+    OrenNayarE,
+    /// mia_material diffuse.
+    MiaDiffuse,
+    /// Burley diffuse.
+    Burley,
+    /// Lambert standing in for subsurface scattering.
+    SubsurfaceProxy,
+    /// GGX reflection with a Fresnel form.
+    MicrofacetR,
+    /// GGX dielectric interface.
+    Dielectric,
+    /// Ward (classic or GM).
+    Ward,
+    /// mia_material's three-lobe highlight.
+    MiaHighlight3,
+    /// Conty–Kulla sheen.
+    SheenCK,
+    /// LTC sheen.
+    SheenLTC,
+    /// Emission.
+    Emission,
+    /// Straight transparency.
+    Transparent,
+}
+
+impl LobeKind {
+    /// Lower-case name (`lambert`, `microfacet_r`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            LobeKind::Lambert => "lambert",
+            LobeKind::Translucent => "translucent",
+            LobeKind::OrenNayarQ => "oren_nayar_q",
+            LobeKind::OrenNayarF => "oren_nayar_f",
+            LobeKind::OrenNayarE => "oren_nayar_e",
+            LobeKind::MiaDiffuse => "mia_diffuse",
+            LobeKind::Burley => "burley",
+            LobeKind::SubsurfaceProxy => "subsurface_proxy",
+            LobeKind::MicrofacetR => "microfacet_r",
+            LobeKind::Dielectric => "dielectric",
+            LobeKind::Ward => "ward",
+            LobeKind::MiaHighlight3 => "mia_highlight3",
+            LobeKind::SheenCK => "sheen_ck",
+            LobeKind::SheenLTC => "sheen_ltc",
+            LobeKind::Emission => "emission",
+            LobeKind::Transparent => "transparent",
+        }
+    }
+}
+
+/// One leaf with its parameters inline.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Lobe {
+    /// Lambert, `f = ρ/π`.
+    Lambert(Lambert),
+    /// Lambert on the opposite hemisphere (two-sided).
+    Translucent(Lambert),
+    /// Oren–Nayar family (QON, FON, EON).
+    OrenNayar(OrenNayar),
+    /// mia_material's diffuse.
+    MiaDiffuse(MiaDiffuse),
+    /// Burley diffuse.
+    Burley(Burley),
+    /// Lambert standing in for subsurface scattering (flagged for renderers).
+    SubsurfaceProxy(Lambert),
+    /// GGX reflection with a Fresnel form (generalized Schlick, F82, dielectric, conductor).
+    MicrofacetR(MicrofacetR),
+    /// GGX dielectric interface (R, T or RT; two-sided).
+    Dielectric(Dielectric),
+    /// Ward (classic or GM).
+    Ward(Ward),
+    /// mia_material's three-lobe highlight.
+    MiaHighlight3(MiaHighlight3),
+    /// Conty–Kulla sheen.
+    SheenCK(SheenCK),
+    /// LTC sheen.
+    SheenLTC(SheenLTC),
+    /// Emission (not part of the BSDF).
+    Emission(Emission),
+    /// Straight transparency (delta).
+    Transparent(Transparent),
+}
+
+/// A lobe with its view-only terms computed: what `eval`/`sample` run on.
+#[derive(Debug, Clone, Copy)]
+pub struct PreparedLobe {
+    kind: LobeKind,
+    /// The frame was flipped (view below the surface of a two-sided lobe).
+    flipped: bool,
+    state: State,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum State {
+    Inactive,
+    Lambert(PreparedLambert),
+    Translucent(PreparedLambert),
+    OrenNayar(PreparedOrenNayar),
+    MiaDiffuse(PreparedMiaDiffuse),
+    Burley(PreparedBurley),
+    MicrofacetR(PreparedMicrofacetR),
+    Dielectric(PreparedDielectric),
+    Ward(PreparedWard),
+    MiaHighlight3(PreparedMiaHighlight3),
+    SheenCK(PreparedSheenCK),
+    SheenLTC(PreparedSheenLTC),
+    Emission(Rgb),
+    Transparent(Transparent, Vec3),
+}
+
+impl Lobe {
+    /// The leaf's kind.
+    pub fn kind(&self) -> LobeKind {
+        match self {
+            Lobe::Lambert(_) => LobeKind::Lambert,
+            Lobe::Translucent(_) => LobeKind::Translucent,
+            Lobe::OrenNayar(o) => match o.variant {
+                OrenNayarVariant::Qualitative => LobeKind::OrenNayarQ,
+                OrenNayarVariant::Fujii => LobeKind::OrenNayarF,
+                OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => LobeKind::OrenNayarE,
+            },
+            Lobe::MiaDiffuse(_) => LobeKind::MiaDiffuse,
+            Lobe::Burley(_) => LobeKind::Burley,
+            Lobe::SubsurfaceProxy(_) => LobeKind::SubsurfaceProxy,
+            Lobe::MicrofacetR(_) => LobeKind::MicrofacetR,
+            Lobe::Dielectric(_) => LobeKind::Dielectric,
+            Lobe::Ward(_) => LobeKind::Ward,
+            Lobe::MiaHighlight3(_) => LobeKind::MiaHighlight3,
+            Lobe::SheenCK(_) => LobeKind::SheenCK,
+            Lobe::SheenLTC(_) => LobeKind::SheenLTC,
+            Lobe::Emission(_) => LobeKind::Emission,
+            Lobe::Transparent(_) => LobeKind::Transparent,
+        }
+    }
+
+    /// Layering class (spec §2.4).
+    pub fn class(&self) -> LobeClass {
+        match self {
+            Lobe::MicrofacetR(m) if m.fresnel.is_conductor() => LobeClass::Opaque,
+            Lobe::Dielectric(d) if d.mode != DielectricMode::R => LobeClass::Opaque,
+            Lobe::MicrofacetR(_)
+            | Lobe::Dielectric(_)
+            | Lobe::Ward(_)
+            | Lobe::MiaHighlight3(_)
+            | Lobe::SheenCK(_)
+            | Lobe::SheenLTC(_) => LobeClass::Layerable,
+            Lobe::Emission(_) | Lobe::Transparent(_) => LobeClass::PassThrough,
+            _ => LobeClass::Opaque,
+        }
+    }
+
+    /// Reciprocity (spec §3 summary).
+    pub fn reciprocity(&self) -> Reciprocity {
+        let turquin = |k: f32| k > 0.0;
+        match self {
+            Lobe::MiaDiffuse(_) | Lobe::SheenLTC(_) => Reciprocity::NonReciprocal,
+            Lobe::SheenCK(s) if s.masking == SheenMasking::Original => Reciprocity::NonReciprocal,
+            Lobe::MicrofacetR(MicrofacetR {
+                comp: Compensation::Turquin(k),
+                ..
+            }) if turquin(*k) => Reciprocity::NonReciprocal,
+            Lobe::Dielectric(d) if turquin(d.turquin) && d.mode != DielectricMode::T => {
+                Reciprocity::NonReciprocal
+            }
+            Lobe::Dielectric(d) if d.mode != DielectricMode::R => Reciprocity::Generalized,
+            Lobe::Emission(_) | Lobe::Transparent(_) => Reciprocity::NotApplicable,
+            _ => Reciprocity::Reciprocal,
+        }
+    }
+
+    /// True for leaves that may see light from below the surface whatever [`Sides`] says.
+    pub fn is_two_sided(&self) -> bool {
+        matches!(
+            self,
+            Lobe::Translucent(_) | Lobe::Dielectric(_) | Lobe::Transparent(_)
+        )
+    }
+
+    /// Precomputes every view-only term for local view `v` (unit, local frame).
+    pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
+        let kind = self.kind();
+        if let Lobe::Emission(e) = self {
+            return PreparedLobe {
+                kind,
+                flipped: false,
+                state: State::Emission(e.radiance),
+            };
+        }
+        if let Lobe::Transparent(t) = self {
+            return PreparedLobe {
+                kind,
+                flipped: false,
+                state: State::Transparent(*t, v),
+            };
+        }
+        let may_flip = sides == Sides::Both || self.is_two_sided();
+        let flipped = v.z < 0.0 && may_flip;
+        let v = if flipped { flip(v) } else { v };
+        if v.z <= 0.0 || !v.is_finite() {
+            return PreparedLobe {
+                kind,
+                flipped,
+                state: State::Inactive,
+            };
+        }
+        let state = match self {
+            Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l) => State::Lambert(l.prepare()),
+            Lobe::Translucent(l) => State::Translucent(l.prepare()),
+            Lobe::OrenNayar(o) => State::OrenNayar(o.prepare(v)),
+            Lobe::MiaDiffuse(m) => State::MiaDiffuse(m.prepare(v)),
+            Lobe::Burley(b) => State::Burley(b.prepare(v)),
+            Lobe::MicrofacetR(m) => State::MicrofacetR(m.prepare(v)),
+            Lobe::Dielectric(d) => State::Dielectric(d.prepare(v, flipped)),
+            Lobe::Ward(w) => State::Ward(w.prepare(v)),
+            Lobe::MiaHighlight3(m) => State::MiaHighlight3(m.prepare(v)),
+            Lobe::SheenCK(s) => State::SheenCK(s.prepare(v)),
+            Lobe::SheenLTC(s) => State::SheenLTC(s.prepare(v)),
+            Lobe::Emission(_) | Lobe::Transparent(_) => State::Inactive,
+        };
+        PreparedLobe {
+            kind,
+            flipped,
+            state,
+        }
+    }
+}
+
+impl PreparedLobe {
+    /// The leaf's kind.
+    pub fn kind(&self) -> LobeKind {
+        self.kind
+    }
+
+    /// True for the subsurface proxy (renderers may substitute a BSSRDF).
+    pub fn is_subsurface(&self) -> bool {
+        self.kind == LobeKind::SubsurfaceProxy
+    }
+
+    /// True when the view was below the surface and the frame was flipped.
+    pub fn is_flipped(&self) -> bool {
+        self.flipped
+    }
+
+    /// True when the lobe has no response at this view (back-facing one-sided lobe, or a
+    /// view on the horizon).
+    pub fn is_inactive(&self) -> bool {
+        matches!(self.state, State::Inactive)
+    }
+
+    /// True for delta lobes (transparency; GGX lobes below the delta cut-off).
+    pub fn is_delta(&self) -> bool {
+        match &self.state {
+            State::Transparent(..) => true,
+            State::MicrofacetR(m) => m.is_delta(),
+            State::Dielectric(d) => d.is_delta(),
+            _ => false,
+        }
+    }
+
+    /// `f(V, L)·|μ_i|` (RGB) and the pdf of [`PreparedLobe::sample`] at `l` (local frame).
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        let l = if self.flipped { flip(l) } else { l };
+        match &self.state {
+            State::Inactive | State::Emission(_) | State::Transparent(..) => LobeEval::ZERO,
+            State::Lambert(p) => p.eval(l),
+            State::Translucent(p) => p.eval_translucent(l),
+            State::OrenNayar(p) => p.eval(l),
+            State::MiaDiffuse(p) => p.eval(l),
+            State::Burley(p) => p.eval(l),
+            State::MicrofacetR(p) => p.eval(l),
+            State::Dielectric(p) => p.eval(l),
+            State::Ward(p) => p.eval(l),
+            State::MiaHighlight3(p) => p.eval(l),
+            State::SheenCK(p) => p.eval(l),
+            State::SheenLTC(p) => p.eval(l),
+        }
+    }
+
+    /// Density of [`PreparedLobe::sample`] at `l` (0 for delta lobes).
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        let l = if self.flipped { flip(l) } else { l };
+        match &self.state {
+            State::Inactive | State::Emission(_) | State::Transparent(..) => 0.0,
+            State::Lambert(p) => p.pdf(l),
+            State::Translucent(p) => p.pdf_translucent(l),
+            State::OrenNayar(p) => p.pdf(l),
+            State::MiaDiffuse(p) => p.pdf(l),
+            State::Burley(p) => p.pdf(l),
+            State::MicrofacetR(p) => p.pdf(l),
+            State::Dielectric(p) => p.pdf(l),
+            State::Ward(p) => p.pdf(l),
+            State::MiaHighlight3(p) => p.pdf(l),
+            State::SheenCK(p) => p.pdf(l),
+            State::SheenLTC(p) => p.pdf(l),
+        }
+    }
+
+    /// Samples a direction from `u ∈ [0, 1)³` (`u[0]`, `u[1]` drive the direction; `u[2]`
+    /// any discrete choice inside the lobe). `None` when the sample carries no energy.
+    #[inline]
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        let s = match &self.state {
+            State::Inactive | State::Emission(_) => None,
+            State::Transparent(t, v) => return Some(t.sample(*v)),
+            State::Lambert(p) => p.sample(u),
+            State::Translucent(p) => p.sample_translucent(u),
+            State::OrenNayar(p) => p.sample(u),
+            State::MiaDiffuse(p) => p.sample(u),
+            State::Burley(p) => p.sample(u),
+            State::MicrofacetR(p) => p.sample(u),
+            State::Dielectric(p) => p.sample(u),
+            State::Ward(p) => p.sample(u),
+            State::MiaHighlight3(p) => p.sample(u),
+            State::SheenCK(p) => p.sample(u),
+            State::SheenLTC(p) => p.sample(u),
+        }?;
+        if s.pdf.is_nan() || s.pdf <= 0.0 || !s.weight.is_finite() {
+            return None;
+        }
+        Some(if self.flipped {
+            LobeSample { l: flip(s.l), ..s }
+        } else {
+            s
+        })
+    }
+
+    /// Directional albedo at the prepared view (tables or closed forms, §3.17).
+    pub fn albedo(&self) -> LobeAlbedo {
+        match &self.state {
+            State::Inactive | State::Emission(_) => LobeAlbedo::default(),
+            State::Transparent(t, _) => t.albedo(),
+            State::Lambert(p) => p.albedo(),
+            State::Translucent(p) => p.albedo_translucent(),
+            State::OrenNayar(p) => p.albedo(),
+            State::MiaDiffuse(p) => p.albedo(),
+            State::Burley(p) => p.albedo(),
+            State::MicrofacetR(p) => p.albedo(),
+            State::Dielectric(p) => p.albedo(),
+            State::Ward(p) => p.albedo(),
+            State::MiaHighlight3(p) => p.albedo(),
+            State::SheenCK(p) => p.albedo(),
+            State::SheenLTC(p) => p.albedo(),
+        }
+    }
+
+    /// Emitted radiance (emission leaves only).
+    pub fn emission(&self) -> Rgb {
+        match self.state {
+            State::Emission(e) => e,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Straight-through transmittance (transparent leaves only).
+    pub fn transparency(&self) -> Rgb {
+        match self.state {
+            State::Transparent(t, _) => t.tint,
+            _ => Vec3::ZERO,
+        }
+    }
+}

@@ -1,0 +1,615 @@
+//! GGX microfacet leaves (spec closures.md §3.8–§3.10, §3.14): reflection with any Fresnel
+//! form (generalized Schlick, Hoffman F82, exact dielectric, conductor) with optional Turquin
+//! or Kulla–Conty energy compensation, and the dielectric with reflection and/or refraction.
+//!
+//! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
+
+use super::fresnel::{self, Fresnel};
+use super::ggx::{Ggx, Masking, g2};
+use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
+use super::tables::{self, Row, TableId};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// Multiple-scattering energy compensation of a microfacet lobe (spec §3.14).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Compensation {
+    /// Single scattering only.
+    #[default]
+    None,
+    /// Turquin 2019 with strength k ∈ [0, 1] (non-reciprocal).
+    Turquin(f32),
+    /// Kulla & Conty 2017: an added diffuse-like lobe (reciprocal).
+    KullaConty,
+}
+
+/// `E1(μ, α)` (F = 1) for a masking variant.
+#[inline]
+pub fn e1(masking: Masking, mu: f32, alpha: f32) -> f32 {
+    tables::lookup2(e1_table(masking), mu, tables::ggx_axis(alpha))
+}
+
+fn e1_table(masking: Masking) -> TableId {
+    match masking {
+        Masking::HeightCorrelated => TableId::E1Hc,
+        Masking::Separable => TableId::E1Sep,
+    }
+}
+
+/// `E_avg = 2∫E1 μ dμ` for a masking variant.
+pub fn e1_avg(masking: Masking, alpha: f32) -> f32 {
+    let t = match masking {
+        Masking::HeightCorrelated => TableId::EavgE1Hc,
+        Masking::Separable => TableId::EavgE1Sep,
+    };
+    tables::lookup1(t, tables::ggx_axis(alpha))
+}
+
+/// Single-scattering directional albedo of GGX reflection with Fresnel `f` (tables, §3.10):
+/// `F0 E1 + (F90 − F0) S_q − a H82`; conductors through their F82 fit (§3.9); exact
+/// dielectric Fresnel through the dielectric `E_R` table (height-correlated; separable
+/// masking rescales it by `E1_sep/E1_hc`, an approximation).
+pub fn reflection_albedo(f: &Fresnel, masking: Masking, mu: f32, alpha: f32) -> Rgb {
+    let y = tables::ggx_axis(alpha);
+    let (sq, h82) = match masking {
+        Masking::HeightCorrelated => (TableId::SqHc, TableId::H82Hc),
+        Masking::Separable => (TableId::SqSep, TableId::H82Sep),
+    };
+    let e1v = tables::lookup2(e1_table(masking), mu, y);
+    let schlick = |f0: Rgb, f90: Rgb, q: f32| {
+        f0 * e1v + (f90 - f0) * tables::lookup3(sq, mu, y, tables::q_axis(q))
+    };
+    match *f {
+        Fresnel::One => Vec3::splat(e1v),
+        Fresnel::Schlick { f0, f90, q } => schlick(f0, f90, q),
+        Fresnel::F82 { f0, f90, q, a } => {
+            (schlick(f0, f90, q) - a * tables::lookup2(h82, mu, y)).max(Vec3::ZERO)
+        }
+        Fresnel::Dielectric { eta } => Vec3::splat(dielectric_albedos(masking, mu, alpha, eta)[0]),
+        Fresnel::Conductor { eta, kappa } => {
+            let (f0, t) = fresnel::conductor_to_f82(eta, kappa);
+            let a = fresnel::f82_coefficient(f0, Vec3::ONE, 5.0, t);
+            (schlick(f0, Vec3::ONE, 5.0) - a * tables::lookup2(h82, mu, y))
+                .clamp(Vec3::ZERO, Vec3::ONE)
+        }
+    }
+}
+
+/// Dielectric albedos `[E_R, E_T, E_T without (1 − F)]` (transmission in the radiance
+/// convention) from the tables; η outside [1/3, 3] is clamped.
+pub fn dielectric_albedos(masking: Masking, mu: f32, alpha: f32, eta: f32) -> [f32; 3] {
+    dielectric_albedos_masked(masking, mu, alpha, eta, [true; 3])
+}
+
+/// As [`dielectric_albedos`], looking up only the entries selected by `want` (others 0).
+pub fn dielectric_albedos_masked(
+    masking: Masking,
+    mu: f32,
+    alpha: f32,
+    eta: f32,
+    want: [bool; 3],
+) -> [f32; 3] {
+    let (inv, z) = tables::eta_axis(eta);
+    let ids = if inv {
+        [TableId::ErDielInv, TableId::EtDielInv, TableId::EtnDielInv]
+    } else {
+        [TableId::ErDiel, TableId::EtDiel, TableId::EtnDiel]
+    };
+    let y = tables::ggx_axis(alpha);
+    let mut k = 0;
+    let mut out = ids.map(|t| {
+        k += 1;
+        if want[k - 1] {
+            tables::lookup3(t, mu, y, z)
+        } else {
+            0.0
+        }
+    });
+    if masking == Masking::Separable {
+        let r =
+            e1(Masking::Separable, mu, alpha) / e1(Masking::HeightCorrelated, mu, alpha).max(1e-6);
+        out = out.map(|e| e * r);
+    }
+    out
+}
+
+/// Turquin's factor `1 + k F_avg (1 − E_ss)/E_ss`.
+fn turquin_scale(k: f32, f_avg: Rgb, masking: Masking, mu: f32, alpha: f32) -> Rgb {
+    if k <= 0.0 {
+        return Vec3::ONE;
+    }
+    let ess = e1(masking, mu, alpha).max(1e-4);
+    Vec3::ONE + k.min(1.0) * f_avg * ((1.0 - ess) / ess)
+}
+
+/// GGX reflection with a Fresnel form and optional energy compensation. Layerable, except
+/// with a conductor Fresnel (opaque).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MicrofacetR {
+    /// The distribution (a delta when `max(α_x, α_y) < 1e-3`).
+    pub ggx: Ggx,
+    /// Masking–shadowing variant.
+    pub masking: Masking,
+    /// Fresnel factor.
+    pub fresnel: Fresnel,
+    /// Energy compensation.
+    pub comp: Compensation,
+}
+
+/// Prepared [`MicrofacetR`].
+#[derive(Debug, Clone, Copy)]
+pub struct PreparedMicrofacetR {
+    ggx: Ggx,
+    masking: Masking,
+    fresnel: Fresnel,
+    v: Vec3,
+    lambda_v: f32,
+    g1_v: f32,
+    inv_4mu: f32,
+    /// Turquin factor (1 when off).
+    scale: Rgb,
+    /// Kulla–Conty: `F_ms (1 − E(μ_o)) / (π (1 − E_avg))` (0 when off).
+    ms: Rgb,
+    e_row: Option<Row>,
+    /// Probability of sampling the Kulla–Conty part.
+    p_ms: f32,
+    delta: bool,
+    albedo: Rgb,
+}
+
+impl MicrofacetR {
+    /// Precomputes the view-only terms for `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedMicrofacetR {
+        let alpha = self.ggx.lookup_alpha();
+        let lambda_v = self.ggx.lambda(v);
+        let mut p = PreparedMicrofacetR {
+            ggx: self.ggx,
+            masking: self.masking,
+            fresnel: self.fresnel,
+            v,
+            lambda_v,
+            g1_v: 1.0 / (1.0 + lambda_v),
+            inv_4mu: 0.25 / safe_mu(v.z),
+            scale: Vec3::ONE,
+            ms: Vec3::ZERO,
+            e_row: None,
+            p_ms: 0.0,
+            delta: self.ggx.is_delta(),
+            albedo: Vec3::ZERO,
+        };
+        if p.delta {
+            p.albedo = self.fresnel.eval(v.z);
+            return p;
+        }
+        let ess = reflection_albedo(&self.fresnel, self.masking, v.z, alpha);
+        match self.comp {
+            Compensation::None => p.albedo = ess,
+            Compensation::Turquin(k) => {
+                p.scale = turquin_scale(k, self.fresnel.average(), self.masking, v.z, alpha);
+                p.albedo = ess * p.scale;
+            }
+            Compensation::KullaConty => {
+                let f_avg = self.fresnel.average();
+                let e_avg = e1_avg(self.masking, alpha).min(1.0 - 1e-6);
+                let f_ms = f_avg * f_avg * e_avg / (Vec3::ONE - f_avg * (1.0 - e_avg));
+                let e_o = e1(self.masking, v.z, alpha);
+                p.ms = f_ms * ((1.0 - e_o) * FRAC_1_PI / (1.0 - e_avg));
+                p.e_row = Some(Row::new(e1_table(self.masking), tables::ggx_axis(alpha)));
+                let a_ms = f_ms * (1.0 - e_o);
+                let total = lum(ess + a_ms);
+                p.p_ms = if total > 0.0 {
+                    (lum(a_ms) / total).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                p.albedo = ess + a_ms;
+            }
+        }
+        p
+    }
+}
+
+impl PreparedMicrofacetR {
+    /// True when the lobe is a specular delta.
+    pub fn is_delta(&self) -> bool {
+        self.delta
+    }
+
+    /// Single-scattering `f·μ_i` and VNDF pdf at `l` (`l.z > 0`), plus the KC part.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if self.delta || l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        let h = (self.v + l).normalize();
+        let vh = self.v.dot(h).max(0.0);
+        let d = self.ggx.d(h);
+        let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
+        let f = self.fresnel.eval(vh) * (d * g * self.inv_4mu) * self.scale;
+        let pdf = d * self.g1_v * self.inv_4mu;
+        match self.e_row {
+            None => LobeEval { f_cos: f, pdf },
+            Some(row) => LobeEval {
+                f_cos: f + self.ms * ((1.0 - row.at(l.z)) * l.z),
+                pdf: (1.0 - self.p_ms) * pdf + self.p_ms * pdf_cosine(l.z),
+            },
+        }
+    }
+
+    /// Density of [`PreparedMicrofacetR::sample`] at `l`.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        if self.delta || l.z <= 0.0 {
+            return 0.0;
+        }
+        let h = (self.v + l).normalize();
+        let pdf = self.ggx.d(h) * self.g1_v * self.inv_4mu;
+        (1.0 - self.p_ms) * pdf + self.p_ms * pdf_cosine(l.z)
+    }
+
+    /// VNDF sample (`u[0]`, `u[1]`); `u[2]` chooses the Kulla–Conty part when present.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        if self.delta {
+            return Some(LobeSample {
+                l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
+                weight: self.fresnel.eval(self.v.z) * self.scale,
+                pdf: 1.0,
+                delta: true,
+            });
+        }
+        if self.e_row.is_some() {
+            let l = if u[2] < self.p_ms {
+                sample_cosine(u[0], u[1])?
+            } else {
+                reflect(self.v, self.ggx.sample_vndf(self.v, u[0], u[1]))
+            };
+            let e = self.eval(l);
+            if e.pdf <= 0.0 {
+                return None;
+            }
+            return Some(LobeSample {
+                l,
+                weight: e.f_cos / e.pdf,
+                pdf: e.pdf,
+                delta: false,
+            });
+        }
+        let h = self.ggx.sample_vndf(self.v, u[0], u[1]);
+        let vh = self.v.dot(h);
+        let l = reflect(self.v, h);
+        if l.z <= 0.0 || vh <= 0.0 {
+            return None;
+        }
+        let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
+        let pdf = self.ggx.d(h) * self.g1_v * self.inv_4mu;
+        if pdf <= 0.0 {
+            return None;
+        }
+        Some(LobeSample {
+            l,
+            weight: self.fresnel.eval(vh) * self.scale * (g / self.g1_v),
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// Directional albedo (tables; compensation included).
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(self.albedo)
+    }
+}
+
+/// Which hemispheres a dielectric lobe covers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DielectricMode {
+    /// Reflection only (layerable).
+    R,
+    /// Transmission only.
+    T,
+    /// Both (Fresnel-weighted choice when sampling).
+    #[default]
+    RT,
+}
+
+/// GGX dielectric interface with exact Fresnel (spec §3.8). Transmission uses the radiance
+/// convention of Walter et al. 2007.
+///
+/// Choices where the spec is silent or slips:
+/// * The refraction density includes the Jacobian factor `η'²`:
+///   `pdf_T = (1 − P_R) D_V(h) η'² |L·h| / (V·h + η' L·h)²` (Walter 2007 eq. 17; pbrt-v4).
+///   The spec's §3.8 formula omits `η'²`; without it the density does not integrate to one
+///   and the χ² test fails. Sample weights then average to the radiance-convention `E_T`.
+/// * With `t_fresnel = false` the reflection probability uses the transmission factor 1
+///   instead of `1 − F`: `P_R = F lum(T_r) / (F lum(T_r) + lum(T_t))`.
+/// * Delta refraction (α below the cut-off) has weight `T_t (1 − F)/η'²` (radiance
+///   convention, consistent with `E_T`), not `1 − F`.
+/// * `eval`'s Fresnel factor for a refraction pair is computed from the optically denser
+///   side, and `sample` returns `eval`'s density and `f/pdf` for the sampled direction, so
+///   that both are exactly what `pdf(L)` gives (f32 conditioning near the critical angle).
+/// * Separable masking reuses the height-correlated `E_R`/`E_T` tables rescaled by
+///   `E1_sep/E1_hc` (no separable dielectric tables are generated).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dielectric {
+    /// The distribution (a delta when `max(α_x, α_y) < 1e-3`).
+    pub ggx: Ggx,
+    /// Masking–shadowing variant.
+    pub masking: Masking,
+    /// Interior over exterior index (inverted when the view is below the surface).
+    pub eta: f32,
+    /// Which hemispheres.
+    pub mode: DielectricMode,
+    /// Reflection tint `T_r`.
+    pub tint_r: Rgb,
+    /// Transmission tint `T_t`.
+    pub tint_t: Rgb,
+    /// Keep the `(1 − F)` factor of the transmission lobe (default true).
+    pub t_fresnel: bool,
+    /// Turquin compensation strength k of the reflection part (0 = off).
+    pub turquin: f32,
+}
+
+impl Dielectric {
+    /// A dielectric with unit tints, `t_fresnel` on, no compensation.
+    pub fn new(ggx: Ggx, masking: Masking, eta: f32, mode: DielectricMode) -> Dielectric {
+        Dielectric {
+            ggx,
+            masking,
+            eta,
+            mode,
+            tint_r: Vec3::ONE,
+            tint_t: Vec3::ONE,
+            t_fresnel: true,
+            turquin: 0.0,
+        }
+    }
+}
+
+/// Prepared [`Dielectric`].
+#[derive(Debug, Clone, Copy)]
+pub struct PreparedDielectric {
+    ggx: Ggx,
+    masking: Masking,
+    /// Index on L's (transmitted) side over V's side.
+    eta: f32,
+    v: Vec3,
+    lambda_v: f32,
+    g1_v: f32,
+    inv_mu: f32,
+    refl: bool,
+    trans: bool,
+    tint_r: Rgb,
+    tint_t: Rgb,
+    lum_r: f32,
+    lum_t: f32,
+    t_fresnel: bool,
+    delta: bool,
+    albedo: LobeAlbedo,
+}
+
+impl Dielectric {
+    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
+    /// below the surface (the frame was flipped), so η is inverted.
+    pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
+        let eta0 = if self.eta.is_finite() && self.eta > 0.0 {
+            self.eta
+        } else {
+            1.0
+        };
+        let eta = if flipped { 1.0 / eta0 } else { eta0 };
+        let lambda_v = self.ggx.lambda(v);
+        let refl = self.mode != DielectricMode::T;
+        let trans = self.mode != DielectricMode::R;
+        let alpha = self.ggx.lookup_alpha();
+        let scale = turquin_scale(
+            self.turquin,
+            Vec3::splat(fresnel::dielectric_avg(eta)),
+            self.masking,
+            v.z,
+            alpha,
+        );
+        let tint_r = self.tint_r * scale;
+        let mut p = PreparedDielectric {
+            ggx: self.ggx,
+            masking: self.masking,
+            eta,
+            v,
+            lambda_v,
+            g1_v: 1.0 / (1.0 + lambda_v),
+            inv_mu: 1.0 / safe_mu(v.z),
+            refl,
+            trans,
+            tint_r,
+            tint_t: self.tint_t,
+            lum_r: lum(tint_r).max(0.0),
+            lum_t: lum(self.tint_t).max(0.0),
+            t_fresnel: self.t_fresnel,
+            delta: self.ggx.is_delta(),
+            albedo: LobeAlbedo::default(),
+        };
+        let [er, et, etn] = if p.delta {
+            let f = fresnel::dielectric(v.z, eta);
+            let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
+            [f, (1.0 - f) * t, t]
+        } else {
+            let want = [refl, trans && self.t_fresnel, trans && !self.t_fresnel];
+            dielectric_albedos_masked(self.masking, v.z, alpha, eta, want)
+        };
+        if refl {
+            p.albedo.reflect = tint_r * er;
+        }
+        if trans {
+            p.albedo.transmit = self.tint_t * if self.t_fresnel { et } else { etn };
+            p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
+        }
+        p
+    }
+}
+
+impl PreparedDielectric {
+    /// True when the lobe is a specular delta.
+    pub fn is_delta(&self) -> bool {
+        self.delta
+    }
+
+    /// Relative index `η'` of the transmitted side over the view side.
+    pub fn eta(&self) -> f32 {
+        self.eta
+    }
+
+    #[inline]
+    fn t_factor(&self, f: f32) -> f32 {
+        if self.t_fresnel { 1.0 - f } else { 1.0 }
+    }
+
+    /// Probability of choosing reflection for a microfacet with Fresnel `f`.
+    #[inline]
+    fn p_reflect(&self, f: f32) -> f32 {
+        match (self.refl, self.trans) {
+            (true, false) => 1.0,
+            (false, _) => 0.0,
+            (true, true) => {
+                let a = f * self.lum_r;
+                let b = self.t_factor(f) * self.lum_t;
+                if a + b > 0.0 { a / (a + b) } else { f }
+            }
+        }
+    }
+
+    /// The transmission half vector (oriented to `+z`) when `(v, l)` is a valid refraction
+    /// pair: `(h, V·h, L·h, |V + η'L|²)` with `V·h > 0 > L·h`. The last value is the
+    /// squared Walter denominator `(V·h + η' L·h)²`, computed without cancellation.
+    #[inline]
+    fn transmission_half(&self, l: Vec3) -> Option<(Vec3, f32, f32, f32)> {
+        let ht = self.v + self.eta * l;
+        let ht = if ht.z < 0.0 { -ht } else { ht };
+        let len2 = ht.length_squared();
+        if len2 < 1e-20 {
+            return None;
+        }
+        let h = ht / len2.sqrt();
+        let (vh, lh) = (self.v.dot(h), l.dot(h));
+        (vh > 0.0 && lh < 0.0).then_some((h, vh, lh, len2))
+    }
+
+    /// Fresnel reflectance of a refraction pair, computed from the optically denser side:
+    /// `F(V·h, η)` equals `F(|L·h|, 1/η)`, and for η < 1 the latter avoids the cancellation in
+    /// `η² + μ² − 1` near the critical angle (it keeps `1 − F` accurate in f32).
+    #[inline]
+    fn fresnel_t(&self, vh: f32, lh: f32) -> f32 {
+        if self.eta < 1.0 {
+            fresnel::dielectric(-lh, 1.0 / self.eta)
+        } else {
+            fresnel::dielectric(vh, self.eta)
+        }
+    }
+
+    /// `f·|μ_i|` and the pdf of [`PreparedDielectric::sample`].
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if self.delta {
+            return LobeEval::ZERO;
+        }
+        if l.z > 0.0 {
+            if !self.refl {
+                return LobeEval::ZERO;
+            }
+            let h = (self.v + l).normalize();
+            let vh = self.v.dot(h).max(0.0);
+            let f = fresnel::dielectric(vh, self.eta);
+            let d = self.ggx.d(h);
+            let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
+            let q = 0.25 * d * self.inv_mu;
+            LobeEval {
+                f_cos: self.tint_r * (f * g * q),
+                pdf: self.p_reflect(f) * self.g1_v * q,
+            }
+        } else if l.z < 0.0 {
+            if !self.trans {
+                return LobeEval::ZERO;
+            }
+            let Some((h, vh, lh, denom2)) = self.transmission_half(l) else {
+                return LobeEval::ZERO;
+            };
+            let f = self.fresnel_t(vh, lh);
+            let d = self.ggx.d(h);
+            let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
+            let jac = -lh / denom2;
+            let base = d * vh * jac * self.inv_mu;
+            LobeEval {
+                f_cos: self.tint_t * (self.t_factor(f) * g * base),
+                pdf: (1.0 - self.p_reflect(f)) * self.g1_v * base * (self.eta * self.eta),
+            }
+        } else {
+            LobeEval::ZERO
+        }
+    }
+
+    /// Density of [`PreparedDielectric::sample`] at `l`.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        self.eval(l).pdf
+    }
+
+    /// VNDF sample (`u[0]`, `u[1]`), reflection or refraction chosen with `u[2]`.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        if self.delta {
+            return self.sample_delta(u[2]);
+        }
+        let h = self.ggx.sample_vndf(self.v, u[0], u[1]);
+        let vh = self.v.dot(h);
+        if vh <= 0.0 {
+            return None;
+        }
+        let p_r = self.p_reflect(fresnel::dielectric(vh, self.eta));
+        let l = if u[2] < p_r {
+            let l = reflect(self.v, h);
+            if l.z <= 0.0 {
+                return None;
+            }
+            l
+        } else {
+            let l = refract(self.v, h, self.eta)?;
+            if l.z >= 0.0 {
+                return None;
+            }
+            l
+        };
+        // The Fresnel factor is ill-conditioned in f32 near the critical angle and refraction
+        // near grazing, so density and weight are those `eval` gives for the returned
+        // direction (bit-consistent with `pdf(L)`, as MIS needs).
+        let e = self.eval(l);
+        (e.pdf > 0.0).then(|| LobeSample {
+            l,
+            weight: e.f_cos / e.pdf,
+            pdf: e.pdf,
+            delta: false,
+        })
+    }
+
+    fn sample_delta(&self, u: f32) -> Option<LobeSample> {
+        let f = fresnel::dielectric(self.v.z, self.eta);
+        let p_r = self.p_reflect(f);
+        if u < p_r {
+            return Some(LobeSample {
+                l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
+                weight: self.tint_r * (f / p_r),
+                pdf: p_r,
+                delta: true,
+            });
+        }
+        let l = refract(self.v, Vec3::Z, self.eta)?;
+        let p_t = 1.0 - p_r;
+        (p_t > 0.0).then(|| LobeSample {
+            l,
+            weight: self.tint_t * (self.t_factor(f) / (self.eta * self.eta * p_t)),
+            pdf: p_t,
+            delta: true,
+        })
+    }
+
+    /// Reflected and transmitted albedos (transmission also as energy, `η'² E_T`).
+    pub fn albedo(&self) -> LobeAlbedo {
+        self.albedo
+    }
+}

@@ -1,0 +1,253 @@
+//! Sheen leaves (spec closures.md §3.13): Conty–Kulla "Charlie" sheen with MaterialX or
+//! original masking, and Zeltner, Burley & Chiang's LTC sheen.
+//!
+//! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
+
+use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use super::math::{sample_cosine, sample_uniform_hemisphere};
+use super::tables::{self, TableId};
+use glam::Vec3;
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// Masking of the Conty–Kulla sheen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SheenMasking {
+    /// `f = D / (4(μ_i + μ_o − μ_i μ_o))` (MaterialX, OSL BSDL; reciprocal).
+    #[default]
+    MaterialX,
+    /// The paper's fitted Λ with light-side terminator softening (non-reciprocal).
+    Original,
+}
+
+/// Smallest Conty–Kulla roughness.
+pub const SHEEN_CK_MIN_R: f32 = 0.005;
+
+/// Conty–Kulla sheen (layerable).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SheenCK {
+    /// Roughness r, clamped to [0.005, 1].
+    pub r: f32,
+    /// Masking variant.
+    pub masking: SheenMasking,
+}
+
+/// Coefficients `(a, b, c, d, e)` of the original masking's `L(x)`.
+fn ck_coefficients(r: f32) -> [f32; 5] {
+    let p0 = [21.5473, 3.82987, 0.19823, -1.97760, -4.32054];
+    let p1 = [25.3245, 3.32435, 0.16801, -1.27393, -4.85967];
+    let t = (1.0 - r) * (1.0 - r);
+    [0, 1, 2, 3, 4].map(|k| p0[k] + (p1[k] - p0[k]) * t)
+}
+
+/// `ln Λ(μ)` of the original masking.
+fn ck_ln_lambda(c: &[f32; 5], mu: f32) -> f32 {
+    let big_l = |x: f32| c[0] / (1.0 + c[1] * x.max(0.0).powf(c[2])) + c[3] * x + c[4];
+    if mu < 0.5 {
+        big_l(mu)
+    } else {
+        2.0 * big_l(0.5) - big_l(1.0 - mu)
+    }
+}
+
+/// Prepared [`SheenCK`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedSheenCK {
+    v: Vec3,
+    half_inv_r: f32,
+    norm: f32,
+    masking: SheenMasking,
+    coef: [f32; 5],
+    lambda_o: f32,
+    inv_4mu: f32,
+    albedo: f32,
+}
+
+impl SheenCK {
+    /// Precomputes the view-only terms for `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
+        let r = if self.r.is_nan() {
+            1.0
+        } else {
+            self.r.clamp(SHEEN_CK_MIN_R, 1.0)
+        };
+        let coef = ck_coefficients(r);
+        let table = match self.masking {
+            SheenMasking::MaterialX => TableId::SheenMx,
+            SheenMasking::Original => TableId::SheenOrig,
+        };
+        PreparedSheenCK {
+            v,
+            half_inv_r: 0.5 / r,
+            norm: (2.0 + 1.0 / r) * 0.5 * FRAC_1_PI,
+            masking: self.masking,
+            coef,
+            lambda_o: ck_ln_lambda(&coef, v.z).exp(),
+            inv_4mu: 0.25 / v.z.max(1e-7),
+            albedo: tables::lookup2(table, v.z, tables::sheen_axis(r)),
+        }
+    }
+}
+
+impl PreparedSheenCK {
+    /// `f·μ_i` and the uniform-hemisphere pdf.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        let hh = self.v + l;
+        let sin2 = ((hh.x * hh.x + hh.y * hh.y) / hh.length_squared()).min(1.0);
+        let d = self.norm * sin2.powf(self.half_inv_r);
+        let (mi, mo) = (l.z, self.v.z);
+        let f = match self.masking {
+            SheenMasking::MaterialX => d * mi / (4.0 * (mi + mo - mi * mo)),
+            SheenMasking::Original => {
+                let m = 1.0 - mi;
+                let m2 = m * m;
+                let m8 = m2 * m2 * m2 * m2;
+                let lambda_i = (ck_ln_lambda(&self.coef, mi) * (1.0 + 2.0 * m8)).exp();
+                d * self.inv_4mu / (1.0 + lambda_i + self.lambda_o)
+            }
+        };
+        LobeEval {
+            f_cos: Vec3::splat(f),
+            pdf: 0.5 * FRAC_1_PI,
+        }
+    }
+
+    /// Uniform-hemisphere density.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        if l.z > 0.0 { 0.5 * FRAC_1_PI } else { 0.0 }
+    }
+
+    /// Uniform-hemisphere sample.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        let l = sample_uniform_hemisphere(u[0], u[1]);
+        let e = self.eval(l);
+        (e.pdf > 0.0).then(|| LobeSample {
+            l,
+            weight: e.f_cos * (2.0 * PI),
+            pdf: e.pdf,
+            delta: false,
+        })
+    }
+
+    /// Directional albedo (table).
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(Vec3::splat(self.albedo))
+    }
+}
+
+/// Zeltner–Burley–Chiang LTC sheen (OpenPBR fuzz; layerable; non-reciprocal).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SheenLTC {
+    /// Roughness r, clamped to [0.01, 1].
+    pub r: f32,
+}
+
+/// The LTC sheen's fitted directional albedo `Ê(μ_o, r)` (clamped at 0).
+pub fn sheen_ltc_albedo(x: f32, y: f32) -> f32 {
+    let s = y * (0.0206607 + 1.58491 * y) / (0.0379424 + y * (1.32227 + y));
+    let m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y);
+    let o = y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y));
+    let q = (x - m) / s;
+    ((-0.5 * q * q).exp() / (s * (2.0 * PI).sqrt()) + o).max(0.0)
+}
+
+/// The LTC coefficients `(a, b)` at `(μ_o, r)`.
+pub fn sheen_ltc_coefficients(x: f32, y: f32) -> (f32, f32) {
+    let a = (2.58126 * x + 0.813703 * y) * y / (1.0 + 0.310327 * x * x + 2.60994 * x * y);
+    let b = (1.0 - x).max(0.0).sqrt() * (y - 1.0) * y * y * y
+        / (0.0000254053 + 1.71228 * x - 1.71506 * x * y + 1.34174 * y * y);
+    (a, b)
+}
+
+/// Prepared [`SheenLTC`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedSheenLTC {
+    /// LTC frame axes in the lobe's local frame (`X` toward V's tangential part).
+    ax_x: Vec3,
+    ax_y: Vec3,
+    a: f32,
+    b: f32,
+    e_hat: f32,
+}
+
+impl SheenLTC {
+    /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
+        let y = if self.r.is_nan() {
+            1.0
+        } else {
+            self.r.clamp(0.01, 1.0)
+        };
+        let x = v.z.clamp(0.0, 1.0);
+        let t = Vec3::new(v.x, v.y, 0.0);
+        let ax_x = if t.length_squared() > 1e-14 {
+            t.normalize()
+        } else {
+            Vec3::X
+        };
+        let (a, b) = sheen_ltc_coefficients(x, y);
+        PreparedSheenLTC {
+            ax_x,
+            ax_y: Vec3::Z.cross(ax_x),
+            a: a.max(1e-7),
+            b,
+            e_hat: sheen_ltc_albedo(x, y),
+        }
+    }
+}
+
+impl PreparedSheenLTC {
+    /// The LTC density `D(w)` of a direction with `l.z > 0`.
+    #[inline]
+    fn density(&self, l: Vec3) -> f32 {
+        let (wx, wy, wz) = (l.dot(self.ax_x), l.dot(self.ax_y), l.z);
+        let wp = Vec3::new(self.a * wx + self.b * wz, self.a * wy, wz);
+        let k = self.a / wp.length_squared().max(1e-30);
+        wz.max(0.0) * FRAC_1_PI * k * k
+    }
+
+    /// `Ê·D(w)` and the exact pdf `D(w)`.
+    #[inline]
+    pub fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z <= 0.0 {
+            return LobeEval::ZERO;
+        }
+        let d = self.density(l);
+        LobeEval {
+            f_cos: Vec3::splat(self.e_hat * d),
+            pdf: d,
+        }
+    }
+
+    /// Exact pdf `D(w)`.
+    #[inline]
+    pub fn pdf(&self, l: Vec3) -> f32 {
+        if l.z <= 0.0 { 0.0 } else { self.density(l) }
+    }
+
+    /// Exact LTC sample: cosine-sample `w'`, map by the LTC matrix; weight `Ê`.
+    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        let wp = sample_cosine(u[0], u[1])?;
+        let w = Vec3::new((wp.x - self.b * wp.z) / self.a, wp.y / self.a, wp.z).normalize();
+        let l = self.ax_x * w.x + self.ax_y * w.y + Vec3::Z * w.z;
+        if l.z <= 0.0 {
+            return None;
+        }
+        let pdf = self.density(l);
+        (pdf > 0.0).then(|| LobeSample {
+            l,
+            weight: Vec3::splat(self.e_hat),
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// Directional albedo: exactly `Ê` (the LTC has unit mass).
+    pub fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo::reflect(Vec3::splat(self.e_hat))
+    }
+}
