@@ -210,7 +210,10 @@ fn deeply_nested_conditional_and_json() {
 
 /// A JSON network (formats.md §4) with the given nodes; each node is
 /// `(handle, type, [(input, upstream, output)])`; the material's bxdf terminal is `s`.
-fn json_net(nodes: &[(String, &str, Vec<(String, String, &str)>)]) -> String {
+/// A JSON node for generated networks: name, shader, connections (input, upstream, output).
+type JsonNode<'a> = (String, &'a str, Vec<(String, String, &'a str)>);
+
+fn json_net(nodes: &[JsonNode<'_>]) -> String {
     let mut out = String::from("{\"vstructcNetwork\": 1, \"materials\": {\"m\": {\"nodes\": {");
     for (i, (handle, ty, conns)) in nodes.iter().enumerate() {
         if i > 0 {
@@ -243,7 +246,7 @@ fn json_net(nodes: &[(String, &str, Vec<(String, String, &str)>)]) -> String {
 
 /// A ring of `n` mixers, each `baselayer` fed by the next one's `pxrMaterialOut`.
 fn mixer_ring(n: usize) -> String {
-    let mut nodes: Vec<(String, &str, Vec<(String, String, &str)>)> = (0..n)
+    let mut nodes: Vec<JsonNode<'_>> = (0..n)
         .map(|i| {
             let up = format!("m{}", (i + 1) % n);
             (
@@ -272,7 +275,7 @@ fn cycles_of_length_1_2_and_1000() {
 
 #[test]
 fn ten_thousand_connections_on_one_head() {
-    let mut nodes: Vec<(String, &str, Vec<(String, String, &str)>)> = Vec::new();
+    let mut nodes: Vec<JsonNode<'_>> = Vec::new();
     let mut conns = Vec::new();
     for i in 0..10_000 {
         nodes.push((format!("l{i}"), "PxrLayer", Vec::new()));
