@@ -17,7 +17,14 @@ use vstructc::resolve::{ResolveOptions, resolve};
 
 static REGISTRY: LazyLock<Registry> = LazyLock::new(Registry::embedded);
 
-const SHADERS: &[&str] = &["PxrLayer", "PxrLayerMixer", "PxrLayerSurface", "PxrSurface", "PxrDiffuse", "Unknown"];
+const SHADERS: &[&str] = &[
+    "PxrLayer",
+    "PxrLayerMixer",
+    "PxrLayerSurface",
+    "PxrSurface",
+    "PxrDiffuse",
+    "Unknown",
+];
 const INPUTS: &[(&str, &str)] = &[
     ("struct", "baselayer"),
     ("struct", "layer1"),
@@ -30,7 +37,13 @@ const INPUTS: &[(&str, &str)] = &[
     ("color", "baselayer_diffuseColor"),
     ("vstruct", "baselayer"),
 ];
-const OUTPUTS: &[&str] = &["pxrMaterialOut", "pxrMaterialOut_diffuseColor", "resultF", "bxdf_out", ""];
+const OUTPUTS: &[&str] = &[
+    "pxrMaterialOut",
+    "pxrMaterialOut_diffuseColor",
+    "resultF",
+    "bxdf_out",
+    "",
+];
 
 #[derive(Debug, Arbitrary)]
 struct Net {
@@ -64,13 +77,21 @@ fn rib(net: &Net) -> String {
     let n = net.nodes.len().min(64);
     for (i, node) in net.nodes.iter().take(n).enumerate() {
         let shader = pick(SHADERS, node.shader);
-        let request = if shader.contains("Surface") || shader == "PxrDiffuse" { "Bxdf" } else { "Pattern" };
+        let request = if shader.contains("Surface") || shader == "PxrDiffuse" {
+            "Bxdf"
+        } else {
+            "Pattern"
+        };
         let _ = write!(out, "{request} \"{shader}\" \"n{i}\"");
         for (input, v) in node.values.iter().take(8) {
             let (ty, name) = pick(INPUTS, *input);
             match ty {
-                "float" | "int" => { let _ = write!(out, " \"{ty} {name}\" [{v}]"); }
-                "color" => { let _ = write!(out, " \"color {name}\" [{v} 0 1]"); }
+                "float" | "int" => {
+                    let _ = write!(out, " \"{ty} {name}\" [{v}]");
+                }
+                "color" => {
+                    let _ = write!(out, " \"color {name}\" [{v} 0 1]");
+                }
                 _ => {}
             }
         }
@@ -86,7 +107,11 @@ fn rib(net: &Net) -> String {
                     }
                 })
                 .collect();
-            let decl = if fan > 1 { format!("{ty}[{fan}]") } else { ty.to_string() };
+            let decl = if fan > 1 {
+                format!("{ty}[{fan}]")
+            } else {
+                ty.to_string()
+            };
             let _ = write!(out, " \"reference {decl} {name}\" [{}]", targets.join(" "));
         }
         out.push('\n');
@@ -98,14 +123,24 @@ fn rib(net: &Net) -> String {
 fn resolved(text: &[u8], options: &ResolveOptions) -> Option<Vec<u8>> {
     let registry: &Registry = &REGISTRY;
     let mut diags = Diagnostics::new();
-    let mut net = parse_rib(text, "fuzz.rib", registry, &RibOptions::default(), &mut diags).ok()?;
+    let mut net = parse_rib(
+        text,
+        "fuzz.rib",
+        registry,
+        &RibOptions::default(),
+        &mut diags,
+    )
+    .ok()?;
     let _ = resolve(&mut net, registry, options);
     write_rib_to_vec(text, &net, registry).ok()
 }
 
 fuzz_target!(|net: Net| {
     let text = rib(&net);
-    let options = ResolveOptions { conditions: !net.no_conditions, ..ResolveOptions::default() };
+    let options = ResolveOptions {
+        conditions: !net.no_conditions,
+        ..ResolveOptions::default()
+    };
     let first = resolved(text.as_bytes(), &options);
     let second = resolved(text.as_bytes(), &options);
     assert_eq!(first, second, "resolution is not deterministic");

@@ -14,7 +14,13 @@ static REGISTRY: LazyLock<Registry> = LazyLock::new(Registry::embedded);
 fuzz_target!(|data: &[u8]| {
     let mut diags = Diagnostics::new();
     let registry: &Registry = &REGISTRY;
-    if let Ok(net) = parse_rib(data, "fuzz.rib", registry, &RibOptions::default(), &mut diags) {
+    if let Ok(net) = parse_rib(
+        data,
+        "fuzz.rib",
+        registry,
+        &RibOptions::default(),
+        &mut diags,
+    ) {
         let _ = write_rib_to_vec(data, &net, registry);
     }
 });
