@@ -318,8 +318,12 @@ where
                 let d = Vec3::new((st * cp) as f32, (st * sp) as f32, ct as f32);
                 pdf(d) * st
             };
+            // θ limits are pulled in by 1e-9 rad: at θ = π/2 exactly, cos θ = 6e-17 > 0 puts
+            // the horizon endpoint of a lower-hemisphere cell on the upper side, and Simpson's
+            // endpoint weight would give that cell a spurious expected count.
             let (t0, p0) = (i as f64 * dt, j as f64 * dp);
-            n * adaptive_simpson_2d(&f, t0, p0, t0 + dt, p0 + dp, cfg.eps, cfg.depth)
+            const EPS: f64 = 1e-9;
+            n * adaptive_simpson_2d(&f, t0 + EPS, p0, t0 + dt - EPS, p0 + dp, cfg.eps, cfg.depth)
         })
         .collect();
     pearson(&observed, &expected, cfg, failed)
