@@ -392,7 +392,7 @@ impl Resolver<'_> {
             });
             match matched {
                 Some((name, output)) => self.apply_member(&ctx, name, output),
-                None => self.no_counterpart(&ctx, &member.names, &up_tables),
+                None => self.no_counterpart(&ctx, &member.names),
             }
         }
     }
@@ -617,7 +617,7 @@ impl Resolver<'_> {
         self.record(event);
     }
 
-    fn no_counterpart(&mut self, ctx: &MemberCtx<'_>, names: &[String], _up: &Arc<VstructTables>) {
+    fn no_counterpart(&mut self, ctx: &MemberCtx<'_>, names: &[String]) {
         if self.options.verbose {
             let d = Diagnostic::note(
                 "VS021",
