@@ -5,10 +5,9 @@
 //! The lobe list's numeric weights use [`SimpleAlbedo`] (table-free estimates) until the
 //! interpreter's albedo tables are plugged in.
 
-use super::input::{load_network, report_error};
-use super::resolve::resolve_options;
-use super::{CommonOptions, info::registry_for};
-use crate::diag::{Diagnostics, Error};
+use super::CommonOptions;
+use super::input::{Prepared, prepare, report_error};
+use crate::diag::Error;
 use crate::ir::{MaterialIr, SimpleAlbedo, print};
 use crate::lower::network::{lower_terminal, report_placeholders, terminals};
 use crate::resolve::resolve;
@@ -58,21 +57,14 @@ pub fn render(ir: &MaterialIr, emit: Emit) -> String {
 
 /// Run `vstructc compile`.
 pub fn run(args: &CompileArgs, common: &CommonOptions) -> ExitCode {
-    let options = match resolve_options(args.no_conditions, common) {
-        Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let registry = registry_for(common);
-    let mut diags = Diagnostics::new();
-    let mut loaded = match load_network(&args.input, &registry, args.strict_rib, &mut diags) {
-        Ok(l) => l,
-        Err(e) => {
-            super::report(&diags, common);
-            return report_error(&e, common);
-        }
+    let Prepared {
+        options,
+        registry,
+        mut loaded,
+        mut diags,
+    } = match prepare(&args.input, args.no_conditions, args.strict_rib, common) {
+        Ok(p) => p,
+        Err(status) => return status,
     };
     let res = resolve(&mut loaded.network, &registry, &options);
     diags.extend(registry.diagnostics());

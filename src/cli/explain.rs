@@ -1,9 +1,7 @@
 //! `vstructc explain HANDLE.INPUT INPUT`: the story of one member input's value.
 
-use super::input::{load_network, report_error};
-use super::resolve::resolve_options;
-use super::{CommonOptions, info::registry_for};
-use crate::diag::Diagnostics;
+use super::CommonOptions;
+use super::input::{Prepared, prepare};
 use crate::network::Network;
 use crate::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 use std::fmt::Write as _;
@@ -29,23 +27,16 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         eprintln!("error: expected HANDLE.INPUT, got `{}`", args.target);
         return ExitCode::from(2);
     };
-    let mut options = match resolve_options(args.no_conditions, common) {
-        Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
+    let Prepared {
+        mut options,
+        registry,
+        mut loaded,
+        ..
+    } = match prepare(&args.input, args.no_conditions, false, common) {
+        Ok(p) => p,
+        Err(status) => return status,
     };
     options.record_events = true;
-    let registry = registry_for(common);
-    let mut diags = Diagnostics::new();
-    let mut loaded = match load_network(&args.input, &registry, false, &mut diags) {
-        Ok(l) => l,
-        Err(e) => {
-            super::report(&diags, common);
-            return report_error(&e, common);
-        }
-    };
     let Some(node) = loaded.network.find(handle) else {
         eprintln!("error: no node `{handle}` in {}", loaded.name);
         return ExitCode::from(2);

@@ -139,3 +139,45 @@ pub fn report_error(err: &Error, common: &CommonOptions) -> std::process::ExitCo
     diags.push(d);
     super::report(&diags, common)
 }
+
+/// What every network command starts from: resolution options, the registry, the network
+/// read from the input, and the diagnostics so far.
+pub struct Prepared {
+    /// Resolution options from the command line.
+    pub options: crate::resolve::ResolveOptions,
+    /// The registry of the common options.
+    pub registry: Registry,
+    /// The input and its network.
+    pub loaded: LoadedInput,
+    /// Reader diagnostics.
+    pub diags: Diagnostics,
+}
+
+/// The shared start of `resolve`, `explain` and `compile`: check the options, build the
+/// registry and read the input. On failure the diagnostics are printed and the exit status to
+/// return is given (2 for usage errors, 1 for input errors).
+pub fn prepare(
+    input: &Path,
+    no_conditions: bool,
+    strict_rib: bool,
+    common: &CommonOptions,
+) -> Result<Prepared, std::process::ExitCode> {
+    let options = super::resolve::resolve_options(no_conditions, common).map_err(|e| {
+        eprintln!("error: {e}");
+        std::process::ExitCode::from(2)
+    })?;
+    let registry = super::info::registry_for(common);
+    let mut diags = Diagnostics::new();
+    match load_network(input, &registry, strict_rib, &mut diags) {
+        Ok(loaded) => Ok(Prepared {
+            options,
+            registry,
+            loaded,
+            diags,
+        }),
+        Err(e) => {
+            super::report(&diags, common);
+            Err(report_error(&e, common))
+        }
+    }
+}

@@ -1,11 +1,11 @@
 //! `vstructc resolve`: expand the vstruct connections of a network and write it back.
 
-use super::input::{NetFormat, load_network, report_error, write_output};
-use super::{CommonOptions, info::registry_for};
+use super::CommonOptions;
+use super::input::{NetFormat, Prepared, prepare, report_error, write_output};
 use crate::back::json::write_json;
 use crate::back::rib::write_rib_to_vec;
 use crate::cond::Extensions;
-use crate::diag::{Diagnostics, Error};
+use crate::diag::Error;
 use crate::network::Network;
 use crate::registry::Registry;
 use crate::resolve::{ResolveOptions, resolve, unsupported_extensions};
@@ -75,21 +75,14 @@ pub fn drop_unresolved(net: &mut Network, registry: &Registry) {
 
 /// Run `vstructc resolve`.
 pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
-    let options = match resolve_options(args.no_conditions, common) {
-        Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let registry = registry_for(common);
-    let mut diags = Diagnostics::new();
-    let mut loaded = match load_network(&args.input, &registry, args.strict_rib, &mut diags) {
-        Ok(l) => l,
-        Err(e) => {
-            super::report(&diags, common);
-            return report_error(&e, common);
-        }
+    let Prepared {
+        options,
+        registry,
+        mut loaded,
+        mut diags,
+    } = match prepare(&args.input, args.no_conditions, args.strict_rib, common) {
+        Ok(p) => p,
+        Err(status) => return status,
     };
     let res = resolve(&mut loaded.network, &registry, &options);
     if args.drop_unresolved {

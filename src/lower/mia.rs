@@ -15,7 +15,7 @@
 
 use super::{Graph, Lower};
 use crate::diag::{Diagnostic, Error};
-use crate::ir::{Cl, DielectricMode, FrameSlot, Leaf, LeafKind, Masking, OpCode, Reg, WardVariant};
+use crate::ir::{Cl, DielectricMode, FrameSlot, Leaf, LeafKind, OpCode, Reg, WardVariant};
 use crate::types::{BaseType, Value};
 
 /// Built-in defaults (§4.5 table).
@@ -169,22 +169,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         let ior = p(cx, n, "refr_ior")?;
         let g = p(cx, n, "refr_gloss")?;
         let alpha = gloss_to_alpha(cx, g);
-        cx.b.leaf(Leaf {
-            kind: LeafKind::Dielectric {
-                alpha_x: alpha,
-                alpha_y: alpha,
-                eta: ior,
-                mode: DielectricMode::T,
-                refl_tint: one,
-                trans_tint: one,
-                t_fresnel: false,
-                masking: Masking::HeightCorrelated,
-            },
-            tint: one,
-            ttint: one,
-            frame: 0,
-            label: "refraction".into(),
-        })
+        cx.dielectric(DielectricMode::T, alpha, ior, one, one, "refraction")
     };
     let refr = cx.b.mul(refr, w.refract);
 

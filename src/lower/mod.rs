@@ -412,6 +412,39 @@ impl<'a, G: Graph> Lower<'a, G> {
         Ok(r)
     }
 
+    /// An isotropic height-correlated GGX dielectric leaf with untinted Fresnel colours, as
+    /// every recipe uses it: `R` mode for a coat (with `ttint` filtering what lies below) and
+    /// `T` mode without the `(1 − F)` factor, for refraction under a separate reflection layer
+    /// that already removes the reflected energy.
+    pub fn dielectric(
+        &mut self,
+        mode: crate::ir::closure::DielectricMode,
+        alpha: Reg,
+        eta: Reg,
+        tint: Reg,
+        ttint: Reg,
+        label: &str,
+    ) -> crate::ir::Cl {
+        use crate::ir::closure::{DielectricMode, Leaf, LeafKind};
+        let one = self.constf(1.0);
+        self.b.leaf(Leaf {
+            kind: LeafKind::Dielectric {
+                alpha_x: alpha,
+                alpha_y: alpha,
+                eta,
+                mode,
+                refl_tint: one,
+                trans_tint: one,
+                t_fresnel: matches!(mode, DielectricMode::R),
+                masking: crate::ir::closure::Masking::HeightCorrelated,
+            },
+            tint,
+            ttint,
+            frame: 0,
+            label: label.into(),
+        })
+    }
+
     /// A constant register.
     pub fn constf(&mut self, x: f32) -> Reg {
         self.b.prog.constf(x)

@@ -180,22 +180,14 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     } else {
         let tr = p(cx, n, "trans_roughness")?;
         let ta = cx.b.prog.mul(tr, tr);
-        cx.b.leaf(Leaf {
-            kind: LeafKind::Dielectric {
-                alpha_x: ta,
-                alpha_y: ta,
-                eta: trans_ior,
-                mode: DielectricMode::T,
-                refl_tint: one,
-                trans_tint: one,
-                t_fresnel: false,
-                masking: Masking::HeightCorrelated,
-            },
-            tint: trans_color,
-            ttint: one,
-            frame: 0,
-            label: "transmission".into(),
-        })
+        cx.dielectric(
+            DielectricMode::T,
+            ta,
+            trans_ior,
+            trans_color,
+            one,
+            "transmission",
+        )
     };
     if cx.static_scalar(n, "trans_depth", 0.0) != Some(0.0) {
         cx.diag(
@@ -212,22 +204,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let cior = p(cx, n, "coat_ior")?;
     let ca = cx.b.prog.mul(coat_rough, coat_rough);
     let ccolor = p(cx, n, "coat_color")?;
-    let coat = cx.b.leaf(Leaf {
-        kind: LeafKind::Dielectric {
-            alpha_x: ca,
-            alpha_y: ca,
-            eta: cior,
-            mode: DielectricMode::R,
-            refl_tint: one,
-            trans_tint: one,
-            t_fresnel: true,
-            masking: Masking::HeightCorrelated,
-        },
-        tint: one,
-        ttint: ccolor,
-        frame: 0,
-        label: "coat".into(),
-    });
+    let coat = cx.dielectric(DielectricMode::R, ca, cior, one, ccolor, "coat");
     let coat = cx.b.mul(coat, w_c);
     let coated = cx.b.layer(coat, body, TintMode::Gray);
 

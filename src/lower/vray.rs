@@ -124,19 +124,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         let ior = p(cx, n, "refract_ior")?;
         let g = p(cx, n, "refract_glossiness")?;
         let a = gloss_alpha(cx, g);
-        cx.b.simple_leaf(
-            LeafKind::Dielectric {
-                alpha_x: a,
-                alpha_y: a,
-                eta: ior,
-                mode: DielectricMode::T,
-                refl_tint: one,
-                trans_tint: one,
-                t_fresnel: false,
-                masking: Masking::HeightCorrelated,
-            },
-            "refraction",
-        )
+        cx.dielectric(DielectricMode::T, a, ior, one, one, "refraction")
     };
     let refract = p(cx, n, "refract")?;
     let under = cx.b.mix(side, refraction, refract);
@@ -200,22 +188,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let cg = p(cx, n, "coat_glossiness")?;
     let ca = gloss_alpha(cx, cg);
     let ccolor = p(cx, n, "coat_color")?;
-    let coat = cx.b.leaf(Leaf {
-        kind: LeafKind::Dielectric {
-            alpha_x: ca,
-            alpha_y: ca,
-            eta: cior,
-            mode: DielectricMode::R,
-            refl_tint: one,
-            trans_tint: one,
-            t_fresnel: true,
-            masking: Masking::HeightCorrelated,
-        },
-        tint: one,
-        ttint: ccolor,
-        frame: 0,
-        label: "coat".into(),
-    });
+    let coat = cx.dielectric(DielectricMode::R, ca, cior, one, ccolor, "coat");
     let amount = p(cx, n, "coat_amount")?;
     let coat = cx.b.mul(coat, amount);
     let coated = cx.b.layer(coat, reflstack, TintMode::Rgb);
