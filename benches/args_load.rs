@@ -8,6 +8,10 @@ use vstructc::Diagnostics;
 use vstructc::front::args::parse_args;
 use vstructc::registry::VstructTables;
 
+// The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn bench_args_load(c: &mut Criterion) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),

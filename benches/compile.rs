@@ -13,6 +13,10 @@ use vstructc::lower::{NoDefinitions, lower_many, scene::layered_scene};
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
 
+// The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const N: usize = 10_000;
 
 fn bench(c: &mut Criterion) {

@@ -10,6 +10,10 @@ use vstructc::network::testgen::layered_scene;
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
 
+// The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn bench(c: &mut Criterion) {
     let reg = Registry::embedded();
     let mut group = c.benchmark_group("scene");

@@ -11,6 +11,10 @@ use vstructc::back::rib::write_rib_to_vec;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::network::{NoDefinitions, testgen};
 
+// The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn parse(scene: &[u8]) -> vstructc::network::Network {
     let mut d = Diagnostics::new();
     parse_rib(

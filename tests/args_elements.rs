@@ -74,11 +74,11 @@ fn node_level_elements() {
 <param name="a" type="float"/>"#,
     );
     let (def, d) = parse(&text);
-    let keys: Vec<&str> = def.metadata.iter().map(|(k, _)| k.as_str()).collect();
+    let keys: Vec<&str> = def.metadata.iter().map(|(k, _)| k).collect();
     assert_eq!(keys, ["help", "primvars", "rfmdata"]);
-    assert_eq!(def.metadata[0].1, "Top <b>level</b> help.");
+    assert_eq!(def.metadata.entry(0).unwrap().1, "Top <b>level</b> help.");
     assert_eq!(
-        def.metadata[1].1,
+        def.metadata.entry(1).unwrap().1,
         r#"<primvars><primvar name="st"/></primvars>"#
     );
     assert_eq!(one(&d, "AR021"), (Severity::Info, 6, 1));
@@ -239,7 +239,7 @@ fn options_help_label_widget_and_pages() {
         .collect();
     assert_eq!(opts, [("Off", "0"), ("On", "1"), ("extra", "extra")]);
     // Attributes first, in document order, then raw hints that are not options.
-    let keys: Vec<&str> = m.metadata.iter().map(|(k, _)| k.as_str()).collect();
+    let keys: Vec<&str> = m.metadata.iter().map(|(k, _)| k).collect();
     assert_eq!(
         keys,
         [

@@ -206,15 +206,15 @@ fn typed_fields_and_verbatim_metadata() {
     assert_eq!(p.label.as_deref(), Some("Color"));
     assert_eq!(p.widget.as_deref(), Some("color"));
     assert_eq!(p.help.as_deref(), Some("Diffuse color of this layer."));
-    let keys: Vec<&str> = p.metadata.iter().map(|(k, _)| k.as_str()).collect();
+    let keys: Vec<&str> = p.metadata.iter().map(|(k, _)| k).collect();
     assert_eq!(keys, ["name", "type", "label", "widget", "default"]);
     let o = def.output("pxrMaterialOut_diffuseGain").unwrap();
-    let keys: Vec<&str> = o.metadata.iter().map(|(k, _)| k.as_str()).collect();
+    let keys: Vec<&str> = o.metadata.iter().map(|(k, _)| k).collect();
     assert_eq!(keys, ["name", "vstructmember", "vstructConditionalExpr"]);
     assert_eq!(o.ty.base, BaseType::Float, "output type from its first tag");
     assert!(o.connectable);
     // Node-level raw elements.
-    let (_, rfc) = def.metadata.iter().find(|(k, _)| k == "rfcdata").unwrap();
+    let (_, rfc) = def.metadata.iter().find(|(k, _)| *k == "rfcdata").unwrap();
     assert!(
         rfc.starts_with("<rfcdata") && rfc.contains("nodeid=\"1037674\""),
         "{rfc}"

@@ -35,7 +35,7 @@ fn definition() -> Definition {
             Direction::Out,
             Type::scalar(BaseType::Float),
         )],
-        metadata: Vec::new(),
+        metadata: Default::default(),
     }
 }
 

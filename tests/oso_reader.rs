@@ -58,10 +58,10 @@ fn openusd_properties_fixture_loads_with_the_vstruct_member() {
     assert_eq!(def.inputs.len(), 32);
     assert_eq!(def.outputs.len(), 1);
     assert_eq!(
-        def.metadata,
+        def.metadata.iter().collect::<Vec<_>>(),
         vec![(
-            "help".to_string(),
-            "This node is used for testing shader property typecorrectness".to_string()
+            "help",
+            "This node is used for testing shader property typecorrectness"
         )]
     );
 
@@ -172,7 +172,7 @@ fn openusd_test_node_fixture_loads_with_typed_fields() {
     assert_eq!(def.kind, "pattern");
     assert_eq!(def.inputs.len(), 17);
     assert_eq!(def.outputs.len(), 8);
-    let keys: Vec<&str> = def.metadata.iter().map(|(k, _)| k.as_str()).collect();
+    let keys: Vec<&str> = def.metadata.iter().map(|(k, _)| k).collect();
     assert_eq!(
         keys,
         [
@@ -255,8 +255,8 @@ fn vectors_load_without_diagnostics_and_stop_at_local() {
     );
     assert!(def.input("notAProperty").is_none());
     assert_eq!(
-        def.metadata[0],
-        ("help".to_string(), "node help, with {braces}".to_string())
+        def.metadata.entry(0),
+        Some(("help", "node help, with {braces}"))
     );
 }
 

@@ -92,7 +92,7 @@ fn oso_twin(id: &str) -> Definition {
         path: Arc::from(format!("<memory>/{id}.oso")),
         inputs: Vec::new(),
         outputs: Vec::new(),
-        metadata: Vec::new(),
+        metadata: Default::default(),
     }
 }
 

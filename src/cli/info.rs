@@ -88,7 +88,7 @@ pub fn render_human(
             let _ = writeln!(out, "  also found: {other} (not used)");
         }
     }
-    if let Some((_, help)) = def.metadata.iter().find(|(k, _)| k == "help")
+    if let Some((_, help)) = def.metadata.iter().find(|(k, _)| *k == "help")
         && let Some(first) = help.lines().map(str::trim).find(|l| !l.is_empty())
     {
         let _ = writeln!(out, "  help: {first}");

@@ -23,13 +23,16 @@
 //!   returned.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
-use crate::registry::{CondSource, Definition, Direction, MemberDecl, Property, SourceKind};
+use crate::registry::{
+    CondSource, Definition, Direction, MemberDecl, MetaKey, Metadata, Property, SourceKind,
+    meta_key,
+};
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use quick_xml::XmlVersion;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::reader::Reader;
+use rustc_hash::FxHashMap as HashMap;
 use std::borrow::Cow;
-use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Options of the `.args` reader.
@@ -103,6 +106,11 @@ fn decode_utf8<'a>(bytes: &'a [u8], file: &Arc<str>) -> Result<&'a str, Error> {
     })
 }
 
+/// How many times `needle` occurs in `text`.
+fn count_occurrences(text: &str, needle: &str) -> usize {
+    memchr::memmem::find_iter(text.as_bytes(), needle.as_bytes()).count()
+}
+
 /// Byte offsets of line starts, for fast offset → line:column mapping.
 struct LineIndex {
     starts: Vec<usize>,
@@ -111,12 +119,7 @@ struct LineIndex {
 impl LineIndex {
     fn new(text: &str) -> Self {
         let mut starts = vec![0];
-        starts.extend(
-            text.bytes()
-                .enumerate()
-                .filter(|(_, b)| *b == b'\n')
-                .map(|(i, _)| i + 1),
-        );
+        starts.extend(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1));
         LineIndex { starts }
     }
 
@@ -158,7 +161,7 @@ struct PropertyChildren {
     help: Option<String>,
     tags: Vec<String>,
     options: Vec<(String, String)>,
-    raw_hints: Vec<(String, String)>,
+    raw_hints: Vec<(MetaKey, String)>,
     child_meta: Vec<ChildMeta>,
 }
 
@@ -218,8 +221,13 @@ struct ArgsParser<'a> {
     page_path: Option<String>,
     kind: Option<String>,
     uses_sdr_definition_name: bool,
-    input_names: HashMap<String, Location>,
-    output_names: HashMap<String, Location>,
+    /// Spare attribute vectors (see [`Self::attributes`]).
+    attr_pool: Vec<Vec<Attr<'a>>>,
+    /// Input names seen so far → index in `def.inputs` (names borrow from the file text
+    /// unless entity decoding produced a new string).
+    input_names: HashMap<Cow<'a, str>, usize>,
+    /// Output names seen so far → index in `def.outputs`.
+    output_names: HashMap<Cow<'a, str>, usize>,
 }
 
 type PResult<T> = Result<T, Error>;
@@ -241,9 +249,11 @@ impl<'a> ArgsParser<'a> {
                 kind: "unknown".to_string(),
                 source: SourceKind::Args,
                 path: file.clone(),
-                inputs: Vec::new(),
-                outputs: Vec::new(),
-                metadata: Vec::new(),
+                // An upper bound of the property counts (a `<param` inside a comment also
+                // counts), so that the property vectors never regrow.
+                inputs: Vec::with_capacity(count_occurrences(text, "<param")),
+                outputs: Vec::with_capacity(count_occurrences(text, "<output")),
+                metadata: Metadata::new(),
             },
             file,
             diags: Vec::new(),
@@ -251,8 +261,9 @@ impl<'a> ArgsParser<'a> {
             page_path: None,
             kind: None,
             uses_sdr_definition_name: false,
-            input_names: HashMap::new(),
-            output_names: HashMap::new(),
+            attr_pool: Vec::new(),
+            input_names: HashMap::default(),
+            output_names: HashMap::default(),
         }
     }
 
@@ -340,10 +351,13 @@ impl<'a> ArgsParser<'a> {
         Ok(self.text.get(start..end).unwrap_or(""))
     }
 
-    /// Decoded attributes of a start tag at `start`, in document order.
-    fn attributes(&self, start: usize, e: &BytesStart<'_>) -> PResult<Vec<Attr<'a>>> {
-        let mut out = Vec::new();
-        for a in e.attributes() {
+    /// Decoded attributes of a start tag at `start`, in document order. The vector comes from
+    /// a small pool; give it back with [`Self::recycle`] on hot paths.
+    fn attributes(&mut self, start: usize, e: &BytesStart<'_>) -> PResult<Vec<Attr<'a>>> {
+        let mut out = self.attr_pool.pop().unwrap_or_default();
+        // quick-xml's own duplicate check allocates per element; ours scans the few
+        // attributes already read.
+        for a in e.attributes().with_checks(false) {
             let a = a.map_err(|err| {
                 let rel = attr_error_position(&err);
                 self.reject(
@@ -352,6 +366,17 @@ impl<'a> ArgsParser<'a> {
                     start + 1 + rel,
                 )
             })?;
+            let key_offset = self.offset_of(a.key.as_ref()).unwrap_or(start);
+            if out.iter().any(|prev: &Attr<'a>| prev.key == a.key.as_ref()) {
+                return Err(self.reject(
+                    "AR001",
+                    format!(
+                        "not well-formed XML: duplicate attribute `{}`",
+                        a.key.as_ref()
+                    ),
+                    key_offset,
+                ));
+            }
             let offset = self.offset_of(&a.value).unwrap_or(start);
             let value = a.normalized_value(XmlVersion::Implicit1_0).map_err(|err| {
                 let at = offset + escape_error_position(&err);
@@ -375,6 +400,12 @@ impl<'a> ArgsParser<'a> {
             out.push(Attr { key, value, offset });
         }
         Ok(out)
+    }
+
+    /// Returns an attribute vector to the pool.
+    fn recycle(&mut self, mut attrs: Vec<Attr<'a>>) {
+        attrs.clear();
+        self.attr_pool.push(attrs);
     }
 
     // ---- document ------------------------------------------------------------------------
@@ -551,9 +582,7 @@ impl<'a> ArgsParser<'a> {
             "page" => self.parse_page(pos, e, empty),
             "help" if !in_page => {
                 let raw = self.inner_raw(e, empty)?;
-                self.def
-                    .metadata
-                    .push(("help".into(), raw.trim().to_string()));
+                self.def.metadata.push("help", raw.trim());
                 Ok(())
             }
             "help" => self.inner_raw(e, empty).map(|_| ()),
@@ -570,7 +599,7 @@ impl<'a> ArgsParser<'a> {
             }
             n if RAW_NODE_ELEMENTS.contains(&n) => {
                 let raw = self.element_raw(pos, e, empty)?;
-                self.def.metadata.push((name.to_string(), raw.to_string()));
+                self.def.metadata.push(meta_key(name), raw);
                 Ok(())
             }
             _ => {
@@ -714,15 +743,28 @@ impl<'a> ArgsParser<'a> {
             ));
         };
         let name = name_attr.value.clone();
-        let location = self.loc(pos);
-        self.check_duplicate(&name, direction, &location, pos)?;
+        self.check_duplicate(&name, direction, pos)?;
 
-        let mut prop = Property::new(
-            name,
+        // Built field by field rather than with `Property::new`, which formats the type into
+        // `declared_type`; `resolve_type` sets it from the attribute text below.
+        let mut prop = Property {
+            name: name.into_owned(),
             direction,
-            Type::scalar(BaseType::Unknown(String::new())),
-            location,
-        );
+            ty: Type::scalar(BaseType::Unknown(String::new())),
+            declared_type: String::new(),
+            default: None,
+            metadata: Metadata::new(),
+            typed_metadata: Vec::new(),
+            connection_types: Vec::new(),
+            page: None,
+            label: None,
+            help: None,
+            widget: None,
+            options: Vec::new(),
+            connectable: true,
+            vstruct: None,
+            location: self.loc(pos),
+        };
         prop.page = match &self.page_path {
             Some(p) => Some(p.clone()),
             None => attr(&attrs, "page").map(|a| a.value.to_string()),
@@ -774,12 +816,23 @@ impl<'a> ArgsParser<'a> {
         // Metadata: every attribute in document order, then raw hints, then child metadata
         // (extension) that `resolve_vstruct` accepted.
         let accepted_child_meta = std::mem::take(&mut prop.metadata);
-        prop.metadata = attrs
-            .into_iter()
-            .map(|a| (a.key.into_owned(), a.value.into_owned()))
-            .chain(raw_hints)
-            .chain(accepted_child_meta)
-            .collect();
+        let entries = attrs.len() + raw_hints.len() + accepted_child_meta.len();
+        let bytes: usize = attrs.iter().map(|a| a.value.len()).sum::<usize>()
+            + raw_hints.iter().map(|(_, v)| v.len()).sum::<usize>()
+            + accepted_child_meta
+                .iter()
+                .map(|(_, v)| v.len())
+                .sum::<usize>();
+        let mut metadata = Metadata::with_capacity(entries, bytes);
+        for a in &attrs {
+            metadata.push(meta_key(&a.key), &a.value);
+        }
+        for (k, v) in raw_hints {
+            metadata.push(k, &v);
+        }
+        metadata.extend_from(&accepted_child_meta);
+        prop.metadata = metadata;
+        self.recycle(attrs);
 
         match direction {
             Direction::In => self.def.inputs.push(prop),
@@ -788,24 +841,25 @@ impl<'a> ArgsParser<'a> {
         Ok(())
     }
 
+    /// AR004 if a property of the same direction was declared before; otherwise records it
+    /// (at the index it is about to take).
     fn check_duplicate(
         &mut self,
-        name: &str,
+        name: &Cow<'a, str>,
         direction: Direction,
-        location: &Location,
         pos: usize,
     ) -> PResult<()> {
-        let seen = match direction {
-            Direction::In => &mut self.input_names,
-            Direction::Out => &mut self.output_names,
+        let (seen, declared) = match direction {
+            Direction::In => (&mut self.input_names, &self.def.inputs),
+            Direction::Out => (&mut self.output_names, &self.def.outputs),
         };
-        if let Some(first) = seen.get(name) {
+        if let Some(&first) = seen.get(name.as_ref()) {
             let what = if direction == Direction::In {
                 "parameter"
             } else {
                 "output"
             };
-            let first = first.clone();
+            let first = declared[first].location.clone();
             return Err(
                 Diagnostic::error("AR004", format!("duplicate {what} `{name}`"))
                     .at(self.loc(pos))
@@ -813,7 +867,7 @@ impl<'a> ArgsParser<'a> {
                     .into(),
             );
         }
-        seen.insert(name.to_string(), location.clone());
+        seen.insert(name.clone(), declared.len());
         Ok(())
     }
 
@@ -902,6 +956,7 @@ impl<'a> ArgsParser<'a> {
                 if let Some(v) = attr(&attrs, "value") {
                     tags.push(v.value.to_string());
                 }
+                self.recycle(attrs);
             } else {
                 self.report(
                     Severity::Info,
@@ -932,7 +987,7 @@ impl<'a> ArgsParser<'a> {
         if name != "options" {
             let raw = self.element_raw(pos, c, empty)?;
             out.raw_hints
-                .push((format!("{element}:{name}"), raw.to_string()));
+                .push((format!("{element}:{name}").into(), raw.to_string()));
             return Ok(());
         }
         if empty {
@@ -1113,8 +1168,8 @@ impl<'a> ArgsParser<'a> {
         attrs: &[Attr<'_>],
         child_meta: &[ChildMeta],
     ) {
-        let mut get = |key: &str, me: &mut Self| -> Option<(String, usize)> {
-            let from_attr = attr(attrs, key).map(|a| (a.value.to_string(), a.offset));
+        let mut get = |key: &'static str, me: &mut Self| -> Option<(&str, usize)> {
+            let from_attr = attr(attrs, key).map(|a| (a.value.as_ref(), a.offset));
             let from_child = child_meta.iter().find(|c| c.key == key);
             match (from_attr, from_child) {
                 (Some(a), Some(c)) => {
@@ -1128,8 +1183,8 @@ impl<'a> ArgsParser<'a> {
                 }
                 (Some(a), None) => Some(a),
                 (None, Some(c)) => {
-                    prop.metadata.push((key.to_string(), c.value.clone()));
-                    Some((c.value.clone(), c.offset))
+                    prop.metadata.push(key, &c.value);
+                    Some((c.value.as_str(), c.offset))
                 }
                 (None, None) => None,
             }
@@ -1138,7 +1193,7 @@ impl<'a> ArgsParser<'a> {
         let cond = get("vstructConditionalExpr", self);
         let alias = get("vstructmemberaliases", self);
 
-        let split = member.as_ref().and_then(|(m, _)| split_member(m));
+        let split = member.and_then(|(m, _)| split_member(m));
         let Some((head, member_name)) = split else {
             if let Some((c, off)) = cond
                 && !c.is_empty()
@@ -1158,13 +1213,15 @@ impl<'a> ArgsParser<'a> {
         let cond = cond
             .filter(|(c, _)| !c.is_empty())
             .map(|(text, off)| CondSource {
-                text,
+                text: text.to_string(),
                 location: self.loc(off),
             });
         prop.vstruct = Some(MemberDecl {
             head,
             member: member_name,
-            alias: alias.map(|(a, _)| a).filter(|a| !a.is_empty()),
+            alias: alias
+                .filter(|(a, _)| !a.is_empty())
+                .map(|(a, _)| a.to_string()),
             cond,
         });
     }
@@ -1387,9 +1444,30 @@ fn parse_int_token(tok: &str, issues: &mut Issues) -> i32 {
 
 /// Splits a default into tokens on runs of whitespace and commas.
 fn default_tokens(text: &str) -> Vec<&str> {
+    token_iter(text).collect()
+}
+
+/// The whitespace- or comma-separated tokens of a default.
+fn token_iter(text: &str) -> impl Iterator<Item = &str> {
     text.split(|c: char| c.is_whitespace() || c == ',')
         .filter(|t| !t.is_empty())
-        .collect()
+}
+
+/// The most numbers a scalar (non-array) default can need: a matrix.
+const MAX_SCALAR_TOKENS: usize = 16;
+
+/// The first [`MAX_SCALAR_TOKENS`] tokens of a scalar default and the total token count,
+/// without allocating (scalar defaults are parsed for almost every parameter).
+fn scalar_tokens(text: &str) -> ([&str; MAX_SCALAR_TOKENS], usize) {
+    let mut out = [""; MAX_SCALAR_TOKENS];
+    let mut count = 0;
+    for t in token_iter(text) {
+        if let Some(slot) = out.get_mut(count) {
+            *slot = t;
+        }
+        count += 1;
+    }
+    (out, count)
 }
 
 /// Builds one element of `base` from exactly `base.components()` numbers.
@@ -1427,30 +1505,42 @@ fn default_value(ty: &Type, text: Option<&str>, issues: &mut Issues) -> Option<V
     if *base == BaseType::String {
         return Some(Value::Str(text.to_string()));
     }
-    let tokens = default_tokens(text);
-    if tokens.is_empty() {
+    let (tokens, count) = scalar_tokens(text);
+    if count == 0 {
         return Value::zero_of(base); // step 8 (None for hpoint / matrix)
     }
     let c = base.components();
-    if tokens.len() != c {
+    if count != c {
         issues.add(
             Severity::Warning,
-            format!(
-                "default `{text}` has {} values, {base} needs {c}",
-                tokens.len()
-            ),
+            format!("default `{text}` has {count} values, {base} needs {c}"),
         );
         return match base {
-            BaseType::Int | BaseType::Float => {
-                let (nums, ints) = numbers(base, &tokens[..1], issues);
-                element(base, &nums, &ints)
-            }
+            BaseType::Int | BaseType::Float => scalar_element(base, &tokens[..1], issues),
             BaseType::Matrix => None,
             _ => Value::zero_of(base),
         };
     }
-    let (nums, ints) = numbers(base, &tokens, issues);
-    element(base, &nums, &ints)
+    scalar_element(base, &tokens[..c], issues)
+}
+
+/// One element of `base` from its tokens, converted into fixed buffers (no allocation).
+fn scalar_element(base: &BaseType, tokens: &[&str], issues: &mut Issues) -> Option<Value> {
+    let mut nums = [0.0f32; MAX_SCALAR_TOKENS];
+    let mut ints = [0i32; MAX_SCALAR_TOKENS];
+    let n = tokens.len().min(MAX_SCALAR_TOKENS);
+    for (i, t) in tokens[..n].iter().enumerate() {
+        if *base == BaseType::Int {
+            ints[i] = parse_int_token(t, issues);
+        } else {
+            nums[i] = parse_float_token(t, issues);
+        }
+    }
+    if *base == BaseType::Int {
+        element(base, &[], &ints[..n])
+    } else {
+        element(base, &nums[..n], &[])
+    }
 }
 
 /// Converts tokens to numbers per the element type (ints with `atoi`, others with `atof`).

@@ -29,7 +29,9 @@
 //!   (`label:value` pairs or plain values).
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-use crate::registry::{CondSource, Definition, Direction, MemberDecl, Property, SourceKind};
+use crate::registry::{
+    CondSource, Definition, Direction, MemberDecl, Metadata, Property, SourceKind, meta_key,
+};
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -745,14 +747,14 @@ impl Reader<'_> {
             path: self.path.clone(),
             inputs: Vec::new(),
             outputs: Vec::new(),
-            metadata: Vec::new(),
+            metadata: Metadata::new(),
         };
         for tok in &toks[2..] {
             let TokenKind::Hint(hint) = &tok.kind else {
                 return Err(self.fail("OS001", "unexpected text on the shader line", tok.pos));
             };
             if let Some(meta) = self.meta(hint, tok.pos, diags) {
-                def.metadata.push((meta.name, meta.text));
+                def.metadata.push(meta_key(&meta.name), &meta.text);
             }
         }
         Ok(def)
@@ -1151,7 +1153,7 @@ fn apply_meta(prop: &mut Property, meta: Meta) {
         }
         _ => {}
     }
-    prop.metadata.push((meta.name.clone(), meta.text));
+    prop.metadata.push(meta_key(&meta.name), &meta.text);
     prop.typed_metadata.push((meta.name, meta.value));
 }
 

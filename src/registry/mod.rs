@@ -27,7 +27,10 @@ pub mod model;
 mod param_types;
 pub mod tables;
 
-pub use model::{CondSource, Definition, Direction, MemberDecl, Property, SourceKind};
+pub use model::{
+    CondSource, Definition, Direction, MemberDecl, MetaKey, Metadata, Property, SourceKind,
+    meta_key,
+};
 pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, VstructTables};
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};

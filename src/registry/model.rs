@@ -14,6 +14,135 @@ pub enum SourceKind {
     Oso,
 }
 
+/// A metadata key. Keys of the attribute vocabulary (formats.md §2.3) are static strings, so
+/// reading a definition does not allocate one string per attribute; any other key is owned.
+pub type MetaKey = std::borrow::Cow<'static, str>;
+
+/// Metadata keys that occur on most properties of real `.args` / `.oso` files.
+const KNOWN_META_KEYS: &[&str] = &[
+    "name",
+    "type",
+    "default",
+    "label",
+    "widget",
+    "connectable",
+    "min",
+    "max",
+    "slider",
+    "slidermin",
+    "slidermax",
+    "digits",
+    "sensitivity",
+    "vstructmember",
+    "vstructConditionalExpr",
+    "vstructmemberaliases",
+    "options",
+    "isDynamicArray",
+    "arraySize",
+    "help",
+    "page",
+    "readOnly",
+    "tag",
+    "renderType",
+    "sdrDefinitionName",
+    "conditionalVisOp",
+    "conditionalVisPath",
+    "conditionalVisValue",
+    "input",
+    "hidden",
+    "format",
+];
+
+/// The [`MetaKey`] for `key`: static when it is a known vocabulary word, owned otherwise.
+pub fn meta_key(key: &str) -> MetaKey {
+    match KNOWN_META_KEYS.iter().find(|k| **k == key) {
+        Some(k) => MetaKey::Borrowed(k),
+        None => MetaKey::Owned(key.to_string()),
+    }
+}
+
+/// Key/value metadata in document order (a key may repeat).
+///
+/// Stored compactly: the values share one string buffer, so a property with eight attributes
+/// costs two allocations instead of sixteen (definitions are read for every shader a scene
+/// uses). Serialises as a list of `[key, value]` pairs.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Metadata {
+    /// Every value, concatenated.
+    text: String,
+    /// Each entry's key and the end of its value in `text` (it starts where the previous ends).
+    entries: Vec<(MetaKey, usize)>,
+}
+
+impl Metadata {
+    /// Empty metadata.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Empty metadata with room for `entries` entries and `bytes` bytes of values.
+    pub fn with_capacity(entries: usize, bytes: usize) -> Self {
+        Metadata {
+            text: String::with_capacity(bytes),
+            entries: Vec::with_capacity(entries),
+        }
+    }
+
+    /// Appends an entry.
+    pub fn push(&mut self, key: impl Into<MetaKey>, value: &str) {
+        self.text.push_str(value);
+        self.entries.push((key.into(), self.text.len()));
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// True when there are no entries.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The `index`-th entry in document order.
+    pub fn entry(&self, index: usize) -> Option<(&str, &str)> {
+        let (key, end) = self.entries.get(index)?;
+        let start = match index {
+            0 => 0,
+            i => self.entries[i - 1].1,
+        };
+        Some((key.as_ref(), &self.text[start..*end]))
+    }
+
+    /// Entries in document order.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, &str)> + '_ {
+        let mut start = 0;
+        self.entries.iter().map(move |(key, end)| {
+            let value = &self.text[start..*end];
+            start = *end;
+            (key.as_ref(), value)
+        })
+    }
+
+    /// The first value stored under `key`.
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.iter().find(|(k, _)| *k == key).map(|(_, v)| v)
+    }
+
+    /// Appends every entry of `other`.
+    pub fn extend_from(&mut self, other: &Metadata) {
+        for (k, v) in other.iter() {
+            self.push(meta_key(k), v);
+        }
+    }
+}
+
+impl serde::Serialize for Metadata {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(self.iter())
+    }
+}
+
 /// Direction of a property: inputs and outputs have separate namespaces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -64,7 +193,7 @@ pub struct Property {
     /// Typed default value, if any.
     pub default: Option<Value>,
     /// Every attribute / `%meta` entry verbatim, in document order.
-    pub metadata: Vec<(String, String)>,
+    pub metadata: Metadata,
     /// Typed `%meta` values of `.oso` properties (`int`, `float`, `string` and their arrays),
     /// in document order, under the same keys as [`Property::metadata`]. Empty for `.args`.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -103,7 +232,7 @@ impl Property {
             declared_type: ty.to_string(),
             ty,
             default: None,
-            metadata: Vec::new(),
+            metadata: Metadata::new(),
             typed_metadata: Vec::new(),
             connection_types: Vec::new(),
             page: None,
@@ -119,10 +248,7 @@ impl Property {
 
     /// The first metadata value stored under `key`.
     pub fn meta(&self, key: &str) -> Option<&str> {
-        self.metadata
-            .iter()
-            .find(|(k, _)| k == key)
-            .map(|(_, v)| v.as_str())
+        self.metadata.get(key)
     }
 
     /// True if the property has a connection type (tag) equal to `tag`.
@@ -147,7 +273,7 @@ pub struct Definition {
     /// Outputs in declaration order.
     pub outputs: Vec<Property>,
     /// Node-level metadata (help, rfmdata, …) in document order.
-    pub metadata: Vec<(String, String)>,
+    pub metadata: Metadata,
 }
 
 impl Definition {
