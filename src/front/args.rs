@@ -743,7 +743,7 @@ impl<'a> ArgsParser<'a> {
             ));
         };
         let name = name_attr.value.clone();
-        self.check_duplicate(&name, direction, pos)?;
+        self.check_duplicate(name.clone(), direction, pos)?;
 
         // Built field by field rather than with `Property::new`, which formats the type into
         // `declared_type`; `resolve_type` sets it from the attribute text below.
@@ -845,7 +845,7 @@ impl<'a> ArgsParser<'a> {
     /// (at the index it is about to take).
     fn check_duplicate(
         &mut self,
-        name: &Cow<'a, str>,
+        name: Cow<'a, str>,
         direction: Direction,
         pos: usize,
     ) -> PResult<()> {
@@ -867,7 +867,7 @@ impl<'a> ArgsParser<'a> {
                     .into(),
             );
         }
-        seen.insert(name.clone(), declared.len());
+        seen.insert(name, declared.len());
         Ok(())
     }
 
