@@ -15,7 +15,7 @@ use crate::network::{Link, Network, NodeId};
 use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
 use crate::registry::{Definition, Property, Registry};
 use crate::types::Value;
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
 
 /// Options of one resolution run.
@@ -131,10 +131,10 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         registry,
         options,
         out: Resolution::default(),
-        visited: HashSet::new(),
-        on_stack: HashSet::new(),
-        types: HashMap::new(),
-        memo: HashMap::new(),
+        visited: HashSet::default(),
+        on_stack: HashSet::default(),
+        types: HashMap::default(),
+        memo: HashMap::default(),
     };
     r.run();
     r.remove_head_values();
@@ -313,9 +313,10 @@ impl Resolver<'_> {
     /// Steps 3b–3c: the first connection of the head must come from an output head of a known
     /// upstream type. Diagnostics are produced on the first visit only.
     fn check_head(&mut self, node: NodeId, head: &str, report: bool) -> Option<HeadSource> {
-        let links = self.net.connections(node, head).to_vec();
+        let links = self.net.connections(node, head);
         let first = links.first()?.clone();
         if report && links.len() > 1 {
+            let links = links.to_vec();
             self.report_extra_connections(node, head, &links);
         }
         let problem = match (&first.upstream_node(), first.output()) {
@@ -398,31 +399,40 @@ impl Resolver<'_> {
     }
 
     fn apply_member(&mut self, ctx: &MemberCtx<'_>, name: &str, output: &OutputMember) {
-        let mut event = self.event(ctx, Some((output.property.clone(), name.to_string())));
-        match (&output.cond, self.options.conditions) {
+        // The explain story is built only when asked for: it costs several strings per member.
+        let mut event = self
+            .options
+            .record_events
+            .then(|| self.event(ctx, Some((output.property.clone(), name.to_string()))));
+        let outcome = match (&output.cond, self.options.conditions) {
             (None, _) => {
                 self.connect(ctx, &output.property);
-                event.outcome = Outcome::Connected;
+                Outcome::Connected
             }
             (Some(entry), false) => {
                 self.connect(ctx, &output.property);
                 if !always_connects(entry) {
                     self.no_conditions_info(ctx, &output.property, entry);
                 }
-                event.outcome = Outcome::Connected;
+                Outcome::Connected
             }
             (Some(entry), true) => {
-                event.expression = Some(entry.source.text.clone());
+                if let Some(e) = event.as_mut() {
+                    e.expression = Some(entry.source.text.clone());
+                }
                 match entry.statement() {
-                    Some(stmt) => self.evaluate(ctx, &output.property, entry, stmt, &mut event),
+                    Some(stmt) => self.evaluate(ctx, &output.property, entry, stmt, event.as_mut()),
                     None => {
                         self.unparsable(ctx, &output.property, entry);
-                        event.outcome = Outcome::Unparsable;
+                        Outcome::Unparsable
                     }
                 }
             }
+        };
+        if let Some(mut e) = event {
+            e.outcome = outcome;
+            self.out.events.push(e);
         }
-        self.record(event);
     }
 
     /// §4.1 steps 3–5: evaluate the conditional against U and apply the chosen action to D.M.
@@ -432,8 +442,8 @@ impl Resolver<'_> {
         output: &str,
         entry: &CondEntry,
         stmt: &Statement,
-        event: &mut MemberEvent,
-    ) {
+        event: Option<&mut MemberEvent>,
+    ) -> Outcome {
         let key = Arc::as_ptr(&entry.parsed) as usize;
         let cacheable = ctx.node != ctx.source.upstream;
         let view = NodeView {
@@ -452,7 +462,7 @@ impl Resolver<'_> {
                 result
             }
         };
-        if self.options.record_events {
+        if let Some(event) = event {
             event.reads = stmt
                 .param_names()
                 .into_iter()
@@ -463,7 +473,7 @@ impl Resolver<'_> {
         for report in &reports {
             self.comparison_warning(ctx, output, entry, report);
         }
-        event.outcome = match &action.kind {
+        match &action.kind {
             ActionKind::Connect => {
                 self.connect(ctx, output);
                 Outcome::Connected
@@ -490,7 +500,7 @@ impl Resolver<'_> {
                 }
             }
             ActionKind::Copy { param } => self.copy(ctx, &param.name, &action),
-        };
+        }
     }
 
     fn copy(&mut self, ctx: &MemberCtx<'_>, param: &str, action: &Action) -> Outcome {
@@ -612,9 +622,7 @@ impl Resolver<'_> {
             ),
         );
         self.push(d, ctx.node, Some(ctx.member));
-        let mut event = self.event(ctx, None);
-        event.outcome = Outcome::DirectConnectionWins;
-        self.record(event);
+        self.record_unexpanded(ctx, Outcome::DirectConnectionWins);
     }
 
     fn no_counterpart(&mut self, ctx: &MemberCtx<'_>, names: &[String]) {
@@ -635,9 +643,7 @@ impl Resolver<'_> {
             );
             self.push(d, ctx.node, Some(ctx.member));
         }
-        let mut event = self.event(ctx, None);
-        event.outcome = Outcome::NoCounterpart;
-        self.record(event);
+        self.record_unexpanded(ctx, Outcome::NoCounterpart);
     }
 
     fn unparsable(&mut self, ctx: &MemberCtx<'_>, output: &str, entry: &CondEntry) {
@@ -828,8 +834,11 @@ impl Resolver<'_> {
         }
     }
 
-    fn record(&mut self, event: MemberEvent) {
+    /// Records the story of a member that was not expanded (explain), if asked for.
+    fn record_unexpanded(&mut self, ctx: &MemberCtx<'_>, outcome: Outcome) {
         if self.options.record_events {
+            let mut event = self.event(ctx, None);
+            event.outcome = outcome;
             self.out.events.push(event);
         }
     }

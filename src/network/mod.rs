@@ -48,9 +48,12 @@ pub use param_types::{NoDefinitions, ParamTypes};
 
 use crate::diag::Location;
 use crate::types::{Type, Value};
+use hashbrown::HashTable;
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
+use rustc_hash::FxBuildHasher;
 use std::collections::HashMap;
 use std::fmt;
+use std::hash::BuildHasher;
 use std::ops::{Index, Range};
 
 /// Identifies a node of a [`Network`] (a petgraph node index; stable across edits).
@@ -431,7 +434,7 @@ pub struct SourceParam {
 }
 
 /// One shader node (one RIB request, one JSON node).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Node {
     key: String,
     handle: String,
@@ -439,10 +442,32 @@ pub struct Node {
     shader: String,
     kind: RequestKind,
     params: Vec<Param>,
-    by_name: Vec<u32>,
+    /// Indices into `params`, hashed by parameter name. Resolution looks parameters up by
+    /// name several times per member; nodes such as PxrLayerMixer have hundreds of them.
+    by_name: HashTable<u32>,
     location: Option<Location>,
     source: Option<NodeSource>,
     dirty: bool,
+}
+
+/// The hash of a parameter name in [`Node`]'s index.
+fn name_hash(name: &str) -> u64 {
+    FxBuildHasher.hash_one(name)
+}
+
+impl PartialEq for Node {
+    /// Compares everything but the name index (which is derived from `params`).
+    fn eq(&self, other: &Node) -> bool {
+        self.key == other.key
+            && self.handle == other.handle
+            && self.version == other.version
+            && self.shader == other.shader
+            && self.kind == other.kind
+            && self.params == other.params
+            && self.location == other.location
+            && self.source == other.source
+            && self.dirty == other.dirty
+    }
 }
 
 impl Node {
@@ -455,7 +480,7 @@ impl Node {
             shader: shader.to_string(),
             kind,
             params: Vec::new(),
-            by_name: Vec::new(),
+            by_name: HashTable::new(),
             location: None,
             source: None,
             dirty: false,
@@ -465,13 +490,14 @@ impl Node {
     /// Replace the parameters (crate-internal: readers). Names must be unique.
     pub(crate) fn set_raw_params(&mut self, params: Vec<Param>) {
         self.params = params;
-        let mut order: Vec<u32> = (0..self.params.len() as u32).collect();
-        order.sort_by(|&a, &b| {
-            self.params[a as usize]
-                .name
-                .cmp(&self.params[b as usize].name)
-        });
-        self.by_name = order;
+        let params = &self.params;
+        let mut by_name = HashTable::with_capacity(params.len());
+        for (i, p) in params.iter().enumerate() {
+            by_name.insert_unique(name_hash(&p.name), i as u32, |&j: &u32| {
+                name_hash(&params[j as usize].name)
+            });
+        }
+        self.by_name = by_name;
     }
 
     /// Set where the node came from (crate-internal: readers).
@@ -535,25 +561,33 @@ impl Node {
     }
 
     fn index_of(&self, name: &str) -> Option<usize> {
+        let params = &self.params;
         self.by_name
-            .binary_search_by(|&i| self.params[i as usize].name.as_str().cmp(name))
-            .ok()
-            .map(|pos| self.by_name[pos] as usize)
+            .find(name_hash(name), |&i| params[i as usize].name == name)
+            .map(|&i| i as usize)
     }
 
     fn index_or_insert(&mut self, name: &str) -> usize {
-        match self
-            .by_name
-            .binary_search_by(|&i| self.params[i as usize].name.as_str().cmp(name))
-        {
-            Ok(pos) => self.by_name[pos] as usize,
-            Err(pos) => {
-                let idx = self.params.len();
-                self.params.push(Param::empty(name));
-                self.by_name.insert(pos, idx as u32);
-                idx
-            }
+        if let Some(i) = self.index_of(name) {
+            return i;
         }
+        let idx = self.params.len();
+        self.params.push(Param::empty(name));
+        let params = &self.params;
+        self.by_name
+            .insert_unique(name_hash(name), idx as u32, |&i| {
+                name_hash(&params[i as usize].name)
+            });
+        idx
+    }
+
+    /// Indices of `params` in byte-wise name order.
+    fn sorted_indices(&self, keep: impl Fn(&Param) -> bool) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..self.params.len())
+            .filter(|&i| keep(&self.params[i]))
+            .collect();
+        order.sort_unstable_by(|&a, &b| self.params[a].name.cmp(&self.params[b].name));
+        order
     }
 
     /// The parameter named `name`, if it exists (live or not).
@@ -574,10 +608,9 @@ impl Node {
 
     /// Live parameters sorted by name (byte-wise).
     pub fn params_by_name(&self) -> impl Iterator<Item = &Param> + '_ {
-        self.by_name
-            .iter()
-            .map(|&i| &self.params[i as usize])
-            .filter(|p| p.is_live())
+        self.sorted_indices(Param::is_live)
+            .into_iter()
+            .map(|i| &self.params[i])
     }
 
     /// The authored value of `name`.
@@ -592,11 +625,9 @@ impl Node {
 
     /// Names of connected inputs, sorted byte-wise.
     pub fn connected_inputs(&self) -> impl Iterator<Item = &str> + '_ {
-        self.by_name
-            .iter()
-            .map(|&i| &self.params[i as usize])
-            .filter(|p| p.is_connected())
-            .map(|p| p.name.as_str())
+        self.sorted_indices(Param::is_connected)
+            .into_iter()
+            .map(|i| self.params[i].name.as_str())
     }
 
     /// The `string __materialid` value, if authored.
