@@ -16,8 +16,10 @@ pub mod fresnel;
 pub mod ggx;
 pub mod lobe;
 pub mod lutgen;
+pub mod material;
 pub mod math;
 pub mod microfacet;
+pub mod reference;
 pub mod sheen;
 pub mod soa;
 pub mod tables;
@@ -31,6 +33,10 @@ pub use fresnel::Fresnel;
 pub use ggx::{Ggx, Masking};
 pub use lobe::{
     Lobe, LobeAlbedo, LobeClass, LobeEval, LobeKind, LobeSample, PreparedLobe, Reciprocity, Sides,
+};
+pub use material::{
+    ActiveLobe, Albedo, Eval, Material, PrepareOptions, Prepared, Sample, Scratch, ShadingPoint,
+    TableAlbedo,
 };
 pub use math::Rgb;
 pub use microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR};
