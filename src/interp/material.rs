@@ -860,10 +860,10 @@ impl AlbedoSource for TableAlbedo {
 /// their frames, emission and transparency. Plain data; `eval` and `sample` do not allocate.
 #[derive(Debug, Clone, Copy)]
 pub struct Prepared {
-    lobes: [ActiveLobe; MAX_LOBES],
-    count: usize,
-    frames: [Frame; MAX_LOBES],
-    frame_count: usize,
+    pub(super) lobes: [ActiveLobe; MAX_LOBES],
+    pub(super) count: usize,
+    pub(super) frames: [Frame; MAX_LOBES],
+    pub(super) frame_count: usize,
     v: Vec3,
     emission: Rgb,
     transparency: Rgb,
@@ -872,7 +872,7 @@ pub struct Prepared {
 }
 
 impl Prepared {
-    fn empty(v: Vec3) -> Prepared {
+    pub(super) fn empty(v: Vec3) -> Prepared {
         let placeholder = ActiveLobe {
             lobe: Lobe::Lambert(Lambert { rho: Vec3::ZERO }).prepare(Vec3::Z, Sides::Front),
             weight: Vec3::ZERO,

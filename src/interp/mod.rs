@@ -9,6 +9,7 @@
 //! verification matrix (χ² sampling test, quadrature), and [`soa`] a batched
 //! structure-of-arrays evaluation of the GGX dielectric lobe.
 
+pub mod batch;
 pub mod diffuse;
 pub mod emission;
 pub mod frame;
@@ -19,6 +20,7 @@ pub mod lutgen;
 pub mod material;
 pub mod math;
 pub mod microfacet;
+pub mod preview;
 pub mod reference;
 pub mod sheen;
 pub mod soa;
@@ -26,6 +28,7 @@ pub mod tables;
 pub mod verify;
 pub mod ward;
 
+pub use batch::{PreparedBatch, ShadingBatch};
 pub use diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
 pub use emission::{Emission, Transparent};
 pub use frame::Frame;
