@@ -273,10 +273,12 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
             .iter()
             .any(|c| find_leaf(&c.material, name).is_some())
         {
-            let known: Vec<String> = materials
+            let mut known: Vec<String> = materials
                 .iter()
                 .flat_map(|c| c.material.leaves().iter().map(|l| l.leaf.label.clone()))
                 .collect();
+            known.sort();
+            known.dedup();
             return usage(format!(
                 "--aov lobe:{name}: no lobe with this label, kind or node id (lobes: {})",
                 known.join(", ")
