@@ -258,6 +258,8 @@ pub struct Material {
     layout: Vec<(usize, usize)>,
     /// Some frame has its own normal and the program reads `ViewMu`.
     rerun_for_mu: bool,
+    /// The register file when the program reads no input, global or view (computed once).
+    const_regs: Option<Vec<Vec3>>,
     options: PrepareOptions,
 }
 
@@ -383,7 +385,15 @@ impl Material {
         }
         let rerun_for_mu = frames.iter().any(|f| f.normal.is_some())
             && ir.program.ops.iter().any(|op| op.code == OpCode::ViewMu);
+        let const_regs = ir.program.ops.iter().all(|op| op.code.is_pure()).then(|| {
+            ir.program.run(&RunContext {
+                inputs: &[],
+                mu_o: &[],
+                globals: Globals::default(),
+            })
+        });
         Ok(Material {
+            const_regs,
             ir: ir.clone(),
             nodes,
             need,
@@ -449,24 +459,20 @@ impl Material {
     pub fn prepare_with(&self, p: &ShadingPoint, s: &mut Scratch) -> Prepared {
         let v = p.v.normalize_or(Vec3::Z);
         let mut out = Prepared::empty(v);
-        // Step 1: the program, with the point's inputs (fallbacks where missing).
-        self.unpack_inputs(p.inputs, &mut s.slots);
-        let n_frames = self.ir.frames.len().max(1);
-        let mu0 = p.n.normalize_or(Vec3::Z).dot(v);
-        s.mu.clear();
-        s.mu.resize(n_frames, mu0);
-        let globals = Globals {
-            p: p.p,
-            n: p.n,
-            t: p.t,
-            i: v,
-            u: p.uv.x,
-            v: p.uv.y,
-        };
-        self.run(s, globals);
+        // Step 1: the program, with the point's inputs (fallbacks where missing). A program
+        // of constants was run once at compile time.
+        let run = self.const_regs.is_none();
+        if run {
+            self.unpack_inputs(p.inputs, &mut s.slots);
+            let n_frames = self.ir.frames.len().max(1);
+            let mu0 = p.n.normalize_or(Vec3::Z).dot(v);
+            s.mu.clear();
+            s.mu.resize(n_frames, mu0);
+            self.run(s, self.globals(p, v));
+        }
         // Step 2: frames and μ_o.
-        self.build_frames(p, s, &mut out);
-        if self.rerun_for_mu {
+        self.build_frames(p, self.regs(s), &mut out);
+        if run && self.rerun_for_mu {
             let mut changed = false;
             for (k, &fi) in self.frame_ids.iter().enumerate() {
                 let fi = fi as usize;
@@ -477,56 +483,73 @@ impl Material {
                 }
             }
             if changed {
-                self.run(s, globals);
-                self.build_frames(p, s, &mut out);
+                self.run(s, self.globals(p, v));
+                self.build_frames(p, &s.regs, &mut out);
             }
         }
         if self.nodes.is_empty() {
             return out;
         }
-        // Leaves prepared in their frames; those inside some layer top first (step 3 needs
-        // their E_k(μ_o)), the others only when their weight turns out non-zero.
-        let mut prepared: [Option<PreparedLobe>; MAX_LOBES] = [None; MAX_LOBES];
+        // Leaves are prepared in place, at their leaf index, in their frames: those inside
+        // some layer top first (step 3 needs their E_k(μ_o)), the others only when their
+        // weight turns out non-zero. Step 6 then compacts the array.
+        let mut ready = [false; MAX_LOBES];
         for (k, info) in self.leaves.iter().enumerate() {
             if self.need[info.node.index()] != 0 {
-                prepared[k] = Some(self.prepare_leaf(info, &s.regs, &out));
+                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), &out);
+                ready[k] = true;
             }
         }
         // Step 3: throughput, bottom-up, only in the modes that are read.
-        self.throughput(s, &prepared);
+        self.throughput(s, &out, &ready);
         // Step 4: weights, top-down; emission and transparency accumulate.
         let mut weights = [Vec3::ZERO; MAX_LOBES];
         self.weights(s, &mut weights, &mut out);
         // Step 5: V-only terms and albedos of the weighted lobes; step 6: drop.
         let threshold = self.options.drop_threshold;
+        let mut count = 0;
         for (k, info) in self.leaves.iter().enumerate() {
             let w = weights[k];
             if w == Vec3::ZERO {
                 continue;
             }
-            let lobe = match prepared[k] {
-                Some(l) => l,
-                None => self.prepare_leaf(info, &s.regs, &out),
-            };
-            let la = lobe.albedo();
-            let albedo = Albedo::scaled(&la, w);
+            if !ready[k] {
+                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), &out);
+            }
+            let albedo = Albedo::scaled(&out.lobes[k].lobe.albedo(), w);
             let a_max = albedo.reflect + albedo.transmit.max(albedo.transmit_radiance);
             if threshold > 0.0 && a_max.max_element() <= threshold {
                 continue;
             }
-            out.lobes[out.count] = ActiveLobe {
-                lobe,
-                weight: w,
-                albedo,
-                prob: 0.0,
-                frame: info.frame_slot,
-                leaf: k as u8,
-            };
-            out.count += 1;
+            if count != k {
+                out.lobes[count].lobe = out.lobes[k].lobe;
+            }
+            let a = &mut out.lobes[count];
+            a.weight = w;
+            a.albedo = albedo;
+            a.frame = info.frame_slot;
+            a.leaf = k as u8;
+            count += 1;
         }
+        out.count = count;
         // Step 7: selection probabilities.
         out.select();
         out
+    }
+
+    fn regs<'s>(&'s self, s: &'s Scratch) -> &'s [Vec3] {
+        self.const_regs.as_deref().unwrap_or(&s.regs)
+    }
+
+    fn globals(&self, p: &ShadingPoint, v: Vec3) -> Globals {
+        Globals {
+            p: p.p,
+            n: p.n,
+            t: p.t,
+            i: v,
+            u: p.uv.x,
+            v: p.uv.y,
+        }
     }
 
     fn unpack_inputs(&self, packed: &[f32], slots: &mut Vec<Vec3>) {
@@ -550,9 +573,9 @@ impl Material {
         self.ir.program.run_into(&ctx, &mut s.regs);
     }
 
-    fn build_frames(&self, p: &ShadingPoint, s: &Scratch, out: &mut Prepared) {
+    fn build_frames(&self, p: &ShadingPoint, regs: &[Vec3], out: &mut Prepared) {
         let reg = |r: Option<Reg>| {
-            r.and_then(|r| s.regs.get(r.index()).copied())
+            r.and_then(|r| regs.get(r.index()).copied())
                 .filter(|v| *v != Vec3::ZERO && v.is_finite())
         };
         for (k, slot) in self.frames.iter().enumerate() {
@@ -572,11 +595,11 @@ impl Material {
         leaf_lobe(&info.leaf.kind, regs).prepare(frame.to_local(out.v), self.options.sides)
     }
 
-    fn throughput(&self, s: &mut Scratch, prepared: &[Option<PreparedLobe>; MAX_LOBES]) {
+    fn throughput(&self, s: &mut Scratch, out: &Prepared, ready: &[bool; MAX_LOBES]) {
         let n = self.nodes.len();
         s.thr.clear();
         s.thr.resize(n, [Vec3::ONE; 4]);
-        let regs = &s.regs;
+        let regs = self.const_regs.as_deref().unwrap_or(&s.regs);
         let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
         for i in (0..n).rev() {
             let need = self.need[i];
@@ -587,9 +610,9 @@ impl Material {
             let t = match self.nodes[i] {
                 CNode::Leaf(k) => {
                     let info = &self.leaves[k as usize];
-                    match prepared[k as usize] {
-                        Some(p) if info.layerable => {
-                            let a = p.albedo();
+                    match ready[k as usize] {
+                        true if info.layerable => {
+                            let a = out.lobes[k as usize].lobe.albedo();
                             let e = a.reflect + a.transmit_energy;
                             let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
                             per_mode(need, |m| {
@@ -633,7 +656,7 @@ impl Material {
         s.w.clear();
         s.w.resize(n, Vec3::ZERO);
         s.w[0] = Vec3::ONE;
-        let regs = &s.regs;
+        let regs = self.const_regs.as_deref().unwrap_or(&s.regs);
         let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
         let w = &mut s.w;
         for i in 0..n {
@@ -936,6 +959,18 @@ impl Prepared {
     /// contribute nothing.
     #[inline]
     pub fn eval(&self, l: Vec3) -> Eval {
+        if self.frame_count == 1 {
+            // One frame (the common case): one transform, no frame table.
+            let l = self.frames[0].to_local(l);
+            let mut f_cos = Vec3::ZERO;
+            let mut pdf = 0.0;
+            for lobe in &self.lobes[..self.count] {
+                let e = lobe.lobe.eval(l);
+                f_cos += lobe.weight * e.f_cos;
+                pdf += lobe.prob * e.pdf;
+            }
+            return Eval { f_cos, pdf };
+        }
         let mut local = [Vec3::ZERO; MAX_LOBES];
         for (loc, f) in local.iter_mut().zip(&self.frames[..self.frame_count]) {
             *loc = f.to_local(l);
