@@ -270,10 +270,11 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     });
     g.bench_function("interp_prepare_eval", |b| {
         let mut scratch = Scratch::default();
+        let mut p = Prepared::new();
         b.iter(|| {
             let mut acc = Vec3::ZERO;
             for (f, v, l) in &pairs {
-                let p = black_box(&m).prepare_with(&point(f, *v), &mut scratch);
+                black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut p);
                 let e = p.eval(*l);
                 acc += e.f_cos + Vec3::splat(e.pdf);
             }

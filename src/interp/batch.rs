@@ -106,7 +106,7 @@ impl Material {
         out: &mut PreparedBatch<W>,
     ) {
         for k in 0..W {
-            out.lanes[k] = self.prepare_with(&p.lane(k), scratch);
+            self.prepare_into(&p.lane(k), scratch, &mut out.lanes[k]);
         }
         out.transpose();
     }

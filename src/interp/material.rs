@@ -229,6 +229,8 @@ pub struct LeafInfo {
     frame_slot: u8,
     /// Layerable (§2.4).
     layerable: bool,
+    /// The lobe, when every parameter register is a constant (built once at compile time).
+    const_lobe: Option<Lobe>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -336,11 +338,25 @@ impl Material {
                             frames.len() - 1
                         }
                     };
+                    let consts: Option<Vec<(Reg, Vec3)>> = leaf
+                        .kind
+                        .params()
+                        .into_iter()
+                        .map(|(_, r)| ir.program.constant(r).map(|c| (r, c)))
+                        .collect();
+                    let const_lobe = consts.map(|c| {
+                        let mut regs = vec![Vec3::ZERO; nregs];
+                        for (r, v) in c {
+                            regs[r.index()] = v;
+                        }
+                        leaf_lobe(&leaf.kind, &regs)
+                    });
                     leaves.push(LeafInfo {
                         node: NodeId(i as u32),
                         leaf: leaf.clone(),
                         frame_slot: fs as u8,
                         layerable: leaf.kind.is_layerable(kappa_zero),
+                        const_lobe,
                     });
                     CNode::Leaf((leaves.len() - 1) as u8)
                 }
@@ -457,8 +473,16 @@ impl Material {
 
     /// Prepare for one point and view (§1.4 steps 1–7) with caller-supplied scratch memory.
     pub fn prepare_with(&self, p: &ShadingPoint, s: &mut Scratch) -> Prepared {
+        let mut out = Prepared::empty(Vec3::Z);
+        self.prepare_into(p, s, &mut out);
+        out
+    }
+
+    /// As [`Material::prepare_with`], overwriting `out` (whatever it held): the cheapest
+    /// form when many points are prepared in a row, since a [`Prepared`] is a few KB.
+    pub fn prepare_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let v = p.v.normalize_or(Vec3::Z);
-        let mut out = Prepared::empty(v);
+        out.reset(v);
         // Step 1: the program, with the point's inputs (fallbacks where missing). A program
         // of constants was run once at compile time.
         let run = self.const_regs.is_none();
@@ -471,7 +495,7 @@ impl Material {
             self.run(s, self.globals(p, v));
         }
         // Step 2: frames and μ_o.
-        self.build_frames(p, self.regs(s), &mut out);
+        self.build_frames(p, self.regs(s), out);
         if run && self.rerun_for_mu {
             let mut changed = false;
             for (k, &fi) in self.frame_ids.iter().enumerate() {
@@ -484,11 +508,11 @@ impl Material {
             }
             if changed {
                 self.run(s, self.globals(p, v));
-                self.build_frames(p, &s.regs, &mut out);
+                self.build_frames(p, &s.regs, out);
             }
         }
         if self.nodes.is_empty() {
-            return out;
+            return;
         }
         // Leaves are prepared in place, at their leaf index, in their frames: those inside
         // some layer top first (step 3 needs their E_k(μ_o)), the others only when their
@@ -496,15 +520,15 @@ impl Material {
         let mut ready = [false; MAX_LOBES];
         for (k, info) in self.leaves.iter().enumerate() {
             if self.need[info.node.index()] != 0 {
-                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), &out);
+                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), out);
                 ready[k] = true;
             }
         }
         // Step 3: throughput, bottom-up, only in the modes that are read.
-        self.throughput(s, &out, &ready);
+        self.throughput(s, out, &ready);
         // Step 4: weights, top-down; emission and transparency accumulate.
         let mut weights = [Vec3::ZERO; MAX_LOBES];
-        self.weights(s, &mut weights, &mut out);
+        self.weights(s, &mut weights, out);
         // Step 5: V-only terms and albedos of the weighted lobes; step 6: drop.
         let threshold = self.options.drop_threshold;
         let mut count = 0;
@@ -514,7 +538,7 @@ impl Material {
                 continue;
             }
             if !ready[k] {
-                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), &out);
+                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), out);
             }
             let albedo = Albedo::scaled(&out.lobes[k].lobe.albedo(), w);
             let a_max = albedo.reflect + albedo.transmit.max(albedo.transmit_radiance);
@@ -534,7 +558,6 @@ impl Material {
         out.count = count;
         // Step 7: selection probabilities.
         out.select();
-        out
     }
 
     fn regs<'s>(&'s self, s: &'s Scratch) -> &'s [Vec3] {
@@ -592,7 +615,11 @@ impl Material {
 
     fn prepare_leaf(&self, info: &LeafInfo, regs: &[Vec3], out: &Prepared) -> PreparedLobe {
         let frame = &out.frames[info.frame_slot as usize];
-        leaf_lobe(&info.leaf.kind, regs).prepare(frame.to_local(out.v), self.options.sides)
+        let v = frame.to_local(out.v);
+        match &info.const_lobe {
+            Some(lobe) => lobe.prepare(v, self.options.sides),
+            None => leaf_lobe(&info.leaf.kind, regs).prepare(v, self.options.sides),
+        }
     }
 
     fn throughput(&self, s: &mut Scratch, out: &Prepared, ready: &[bool; MAX_LOBES]) {
@@ -894,6 +921,12 @@ pub struct Prepared {
     p_transparency: f32,
 }
 
+impl Default for Prepared {
+    fn default() -> Self {
+        Prepared::new()
+    }
+}
+
 impl Prepared {
     pub(super) fn empty(v: Vec3) -> Prepared {
         let placeholder = ActiveLobe {
@@ -914,6 +947,21 @@ impl Prepared {
             transparency: Vec3::ZERO,
             p_transparency: 0.0,
         }
+    }
+
+    /// Forget everything but the storage: no lobes, no frames, no emission.
+    pub(super) fn reset(&mut self, v: Vec3) {
+        self.count = 0;
+        self.frame_count = 0;
+        self.v = v;
+        self.emission = Vec3::ZERO;
+        self.transparency = Vec3::ZERO;
+        self.p_transparency = 0.0;
+    }
+
+    /// An empty preparation (no lobes), e.g. as the target of [`Material::prepare_into`].
+    pub fn new() -> Prepared {
+        Prepared::empty(Vec3::Z)
     }
 
     /// Step 7: `p_k = lum(A_k)/Σ lum(A_j)` (straight transmission takes part with

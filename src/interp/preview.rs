@@ -18,7 +18,7 @@
 //! with the scalar or the batched interpreter.
 
 use super::batch::{PreparedBatch, ShadingBatch};
-use super::material::{Material, Scratch, ShadingPoint};
+use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -163,13 +163,14 @@ pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut
     let size = out.len();
     let l = opts.light_dir.normalize_or(Vec3::Z);
     let mut scratch = Scratch::default();
+    let mut prep = Prepared::new();
     for (i, px) in out.iter_mut().enumerate() {
         let (x, y) = pixel_xy(i, j, size);
         let Some(p) = sphere_point(x, y) else {
             continue;
         };
         let p = p.with_inputs(&opts.inputs);
-        let prep = material.prepare_with(&p, &mut scratch);
+        material.prepare_into(&p, &mut scratch, &mut prep);
         let direct = if opts.light == Vec3::ZERO {
             Vec3::ZERO
         } else {
