@@ -49,7 +49,9 @@ fn prepare_eval_and_sample_do_not_allocate() {
     let points: Vec<(Vec3, Vec3, [f32; 3])> = (0..200)
         .map(|_| (rng.cosine(), rng.cosine(), rng.u3()))
         .collect();
-    // Warm-up: tables, scratch, the per-thread scratch of `prepare`.
+    // Warm-up: the albedo tables (decoded once per process, on first use), the scratch, the
+    // per-thread scratch of `prepare`.
+    vstructc::interp::tables::init_all();
     let p0 = ShadingPoint::new(Vec3::Z, Vec3::X, Vec3::Z);
     let _ = m.prepare_with(&p0, &mut scratch);
     let _ = m.prepare(&p0);

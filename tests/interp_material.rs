@@ -117,8 +117,8 @@ fn quadrature(p: &Prepared, n: usize) -> [f64; 3] {
                 ((i * n + j) as f32 * 0.618_034).fract(),
             ];
             if let Some(s) = p.sample(u) {
-                for c in 0..3 {
-                    acc[c] += f64::from(s.weight[c]);
+                for (a, w) in acc.iter_mut().zip(s.weight.to_array()) {
+                    *a += f64::from(w);
                 }
             }
         }

@@ -971,7 +971,7 @@ impl Prepared {
         let a_lum = |l: &ActiveLobe| lum(l.albedo.reflect + l.albedo.transmit_radiance).max(0.0);
         let tau = lum(self.transparency).max(0.0);
         let mut sum: f32 = self.lobes[..n].iter().map(a_lum).sum::<f32>() + tau;
-        let by_weight = !(sum > 0.0);
+        let by_weight = sum.is_nan() || sum <= 0.0;
         if by_weight {
             sum = self.lobes[..n].iter().map(|l| lum(l.weight).max(0.0)).sum();
         }
@@ -1083,7 +1083,7 @@ impl Prepared {
             });
         }
         let e = self.eval(l);
-        if !(e.pdf > 0.0) || !e.pdf.is_finite() {
+        if e.pdf.is_nan() || e.pdf <= 0.0 || e.pdf.is_infinite() {
             return None;
         }
         Some(Sample {

@@ -8,6 +8,13 @@
 //! `vstructc-lutgen` ([`lutgen`]). [`verify`] holds the statistical harness of the spec's
 //! verification matrix (χ² sampling test, quadrature), and [`soa`] a batched
 //! structure-of-arrays evaluation of the GGX dielectric lobe.
+//!
+//! Over whole materials (§1.4–§1.6): [`Material`] compiles a [`crate::ir::MaterialIr`] once;
+//! [`Material::prepare`] runs its program and the closure algebra for one point and view and
+//! returns a [`Prepared`] (at most `MAX_LOBES` weighted lobes, no heap allocation) with
+//! `eval`, `sample`, `albedo`, `emission` and `transparency`; [`batch`] prepares and evaluates
+//! many points at once; [`preview`] renders the material ball; [`reference`] builds the
+//! spec's 10-lobe benchmark material.
 
 pub mod batch;
 pub mod diffuse;
