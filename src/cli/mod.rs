@@ -10,10 +10,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 pub mod compile;
+pub mod eval;
 pub mod explain;
 pub mod expr;
 pub mod info;
 pub mod input;
+pub mod render;
 pub mod resolve;
 
 /// Top-level command line.
@@ -89,6 +91,10 @@ pub enum Command {
     Explain(explain::ExplainArgs),
     /// Lower each material of a network to the closure IR and print it.
     Compile(compile::CompileArgs),
+    /// Render a material-ball preview (PNG or PFM).
+    Render(render::RenderArgs),
+    /// Evaluate each lobe of a material for one pair of directions.
+    Eval(eval::EvalArgs),
 }
 
 /// Parse the process arguments and run; the binary's whole `main`.
@@ -116,6 +122,8 @@ pub fn run(cli: Cli) -> ExitCode {
         Command::Resolve(a) => resolve::run(a, common),
         Command::Explain(a) => explain::run(a, common),
         Command::Compile(a) => compile::run(a, common),
+        Command::Render(a) => render::run(a, common),
+        Command::Eval(a) => eval::run(a, common),
     }
 }
 

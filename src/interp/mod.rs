@@ -8,7 +8,15 @@
 //! `vstructc-lutgen` ([`lutgen`]). [`verify`] holds the statistical harness of the spec's
 //! verification matrix (χ² sampling test, quadrature), and [`soa`] a batched
 //! structure-of-arrays evaluation of the GGX dielectric lobe.
+//!
+//! Over whole materials (§1.4–§1.6): [`Material`] compiles a [`crate::ir::MaterialIr`] once;
+//! [`Material::prepare`] runs its program and the closure algebra for one point and view and
+//! returns a [`Prepared`] (at most `MAX_LOBES` weighted lobes, no heap allocation) with
+//! `eval`, `sample`, `albedo`, `emission` and `transparency`; [`batch`] prepares and evaluates
+//! many points at once; [`preview`] renders the material ball; [`reference`] builds the
+//! spec's 10-lobe benchmark material.
 
+pub mod batch;
 pub mod diffuse;
 pub mod emission;
 pub mod frame;
@@ -16,14 +24,18 @@ pub mod fresnel;
 pub mod ggx;
 pub mod lobe;
 pub mod lutgen;
+pub mod material;
 pub mod math;
 pub mod microfacet;
+pub mod preview;
+pub mod reference;
 pub mod sheen;
 pub mod soa;
 pub mod tables;
 pub mod verify;
 pub mod ward;
 
+pub use batch::{PreparedBatch, ShadingBatch};
 pub use diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
 pub use emission::{Emission, Transparent};
 pub use frame::Frame;
@@ -31,6 +43,10 @@ pub use fresnel::Fresnel;
 pub use ggx::{Ggx, Masking};
 pub use lobe::{
     Lobe, LobeAlbedo, LobeClass, LobeEval, LobeKind, LobeSample, PreparedLobe, Reciprocity, Sides,
+};
+pub use material::{
+    ActiveLobe, Albedo, Eval, Material, PrepareOptions, Prepared, Sample, Scratch, ShadingPoint,
+    TableAlbedo,
 };
 pub use math::Rgb;
 pub use microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR};

@@ -1,0 +1,349 @@
+//! Interpreter cost on the spec's reference 10-lobe material `ref10` (closures.md §6.2,
+//! budgets §6.4), with a hand-written native evaluation of the same ten lobes as the limit:
+//!
+//! * `ref10/interp_eval`: `Prepared::eval` per (V, L), V prepared once (4096 L);
+//! * `ref10/native_eval`: the ten leaves called directly (concrete types, no dispatch, fixed
+//!   weights), same L, including the world → local transform;
+//! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
+//!   (V, L) pair (4096 pairs); the native prepare prepares the ten leaves with fixed weights
+//!   (no program, no throughput pass);
+//! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;
+//! * `preview512/{scalar,batched}`: a 512² material ball of `ref10`, one light, one thread.
+//!
+//! Times are the thread's on-CPU time (`/proc/thread-self/schedstat`), as in `leaves.rs`:
+//! the machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"
+//! throughput does it) for ns per evaluation.
+
+use criterion::measurement::{Measurement, ValueFormatter};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec3;
+use std::hint::black_box;
+use vstructc::interp::diffuse::{
+    Lambert, OrenNayar, OrenNayarVariant, PreparedLambert, PreparedOrenNayar,
+};
+use vstructc::interp::microfacet::{PreparedDielectric, PreparedMicrofacetR};
+use vstructc::interp::preview::{PreviewOptions, render_ball};
+use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA, ref10_ir};
+use vstructc::interp::sheen::{PreparedSheenCK, PreparedSheenLTC};
+use vstructc::interp::verify::Rng;
+use vstructc::interp::ward::PreparedWard;
+use vstructc::interp::*;
+
+const PAIRS: usize = 4096;
+
+fn thread_cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
+        .unwrap_or(0)
+}
+
+/// Criterion measurement: the current thread's CPU time.
+struct CpuTime;
+struct NsFormatter;
+
+impl ValueFormatter for NsFormatter {
+    fn scale_values(&self, _typical: f64, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+    fn scale_throughputs(&self, _typical: f64, t: &Throughput, values: &mut [f64]) -> &'static str {
+        if let Throughput::Elements(n) = t {
+            for v in values.iter_mut() {
+                *v /= *n as f64;
+            }
+        }
+        "ns/elem"
+    }
+    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+}
+
+impl Measurement for CpuTime {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        thread_cpu_ns()
+    }
+    fn end(&self, i: u64) -> u64 {
+        thread_cpu_ns().saturating_sub(i)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        &NsFormatter
+    }
+}
+
+/// The ten leaves of ref10 as concrete lobes, in the interpreter's leaf order.
+struct Leaves {
+    metal: MicrofacetR,
+    ward: [Ward; 3],
+    eon: OrenNayar,
+    lambert: Lambert,
+    sheen: SheenCK,
+    spec: Dielectric,
+    coat: Dielectric,
+    fuzz: SheenLTC,
+}
+
+fn leaves() -> Leaves {
+    let ward = |a: f32| Ward {
+        ax: a,
+        ay: a,
+        rho: Vec3::ONE,
+        variant: WardVariant::Gm,
+    };
+    Leaves {
+        metal: MicrofacetR {
+            ggx: Ggx::isotropic(0.3),
+            masking: Masking::HeightCorrelated,
+            fresnel: Fresnel::Conductor {
+                eta: GOLD_ETA,
+                kappa: GOLD_KAPPA,
+            },
+            comp: Compensation::None,
+        },
+        ward: [ward(0.4), ward(0.2), ward(0.1)],
+        eon: OrenNayar {
+            rho: Vec3::splat(0.5),
+            sigma: 0.5,
+            variant: OrenNayarVariant::Energy,
+        },
+        lambert: Lambert {
+            rho: Vec3::splat(0.5),
+        },
+        sheen: SheenCK {
+            r: 0.3,
+            masking: SheenMasking::MaterialX,
+        },
+        spec: Dielectric::new(
+            Ggx::new(0.2, 0.4),
+            Masking::HeightCorrelated,
+            1.5,
+            DielectricMode::R,
+        ),
+        coat: Dielectric::new(
+            Ggx::isotropic(0.05),
+            Masking::HeightCorrelated,
+            1.5,
+            DielectricMode::R,
+        ),
+        fuzz: SheenLTC { r: 0.5 },
+    }
+}
+
+/// The hand-written form: concrete prepared leaves and fixed weights.
+struct Native {
+    frame: Frame,
+    metal: PreparedMicrofacetR,
+    ward: [PreparedWard; 3],
+    eon: PreparedOrenNayar,
+    lambert: PreparedLambert,
+    sheen: PreparedSheenCK,
+    spec: PreparedDielectric,
+    coat: PreparedDielectric,
+    fuzz: PreparedSheenLTC,
+    w: [Vec3; 10],
+    p: [f32; 10],
+}
+
+impl Native {
+    #[inline(always)]
+    fn prepare(l: &Leaves, frame: Frame, v: Vec3, w: [Vec3; 10], p: [f32; 10]) -> Native {
+        let v = frame.to_local(v);
+        Native {
+            frame,
+            metal: l.metal.prepare(v),
+            ward: [
+                l.ward[0].prepare(v),
+                l.ward[1].prepare(v),
+                l.ward[2].prepare(v),
+            ],
+            eon: l.eon.prepare(v),
+            lambert: l.lambert.prepare(),
+            sheen: l.sheen.prepare(v),
+            spec: l.spec.prepare(v, false),
+            coat: l.coat.prepare(v, false),
+            fuzz: l.fuzz.prepare(v),
+            w,
+            p,
+        }
+    }
+
+    /// `f_cos` and the mixture pdf (fixed probabilities): the same outputs as
+    /// `Prepared::eval`.
+    #[inline(always)]
+    fn eval(&self, l: Vec3) -> (Vec3, f32) {
+        let l = self.frame.to_local(l);
+        let (w, p) = (&self.w, &self.p);
+        let e = [
+            self.metal.eval(l),
+            self.ward[0].eval(l),
+            self.ward[1].eval(l),
+            self.ward[2].eval(l),
+            self.eon.eval(l),
+            self.lambert.eval(l),
+            self.sheen.eval(l),
+            self.spec.eval(l),
+            self.coat.eval(l),
+            self.fuzz.eval(l),
+        ];
+        let mut f = Vec3::ZERO;
+        let mut pdf = 0.0;
+        for k in 0..10 {
+            f += w[k] * e[k].f_cos;
+            pdf += p[k] * e[k].pdf;
+        }
+        (f, pdf)
+    }
+}
+
+/// Random (frame, V, L) triples, V and L on the normal's side.
+fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
+    let mut rng = Rng::new(7);
+    (0..PAIRS)
+        .map(|_| {
+            let n = rng.sphere();
+            let f = Frame::new(n, rng.sphere());
+            let side = |d: Vec3| if d.dot(n) < 0.0 { -d } else { d };
+            (f, side(rng.sphere()), side(rng.sphere()))
+        })
+        .collect()
+}
+
+fn bench_ref10(c: &mut Criterion<CpuTime>) {
+    tables::init_all();
+    let m = Material::new(&ref10_ir()).expect("ref10 compiles");
+    let lv = leaves();
+    let pairs = pairs();
+    let (f0, v0, _) = pairs[0];
+    let point = |f: &Frame, v: Vec3| ShadingPoint::new(f.z, f.x, v);
+    let prep = m.prepare(&point(&f0, v0));
+    assert_eq!(prep.lobes().len(), 10, "every ref10 lobe is live");
+    // Fixed weights: the interpreter's at the first view (the values do not affect cost).
+    let w: [Vec3; 10] = std::array::from_fn(|k| prep.lobes()[k].weight);
+    let pr: [f32; 10] = std::array::from_fn(|k| prep.lobes()[k].prob);
+    let native = Native::prepare(&lv, f0, v0, w, pr);
+    // The same L for both, on the first frame's upper side.
+    let ls: Vec<Vec3> = pairs
+        .iter()
+        .map(|(_, _, l)| if l.dot(f0.z) < 0.0 { -*l } else { *l })
+        .collect();
+    // Sanity: the two agree.
+    for l in ls.iter().take(64) {
+        let a = prep.eval(*l);
+        let (b, pdf) = native.eval(*l);
+        assert!((a.f_cos - b).abs().max_element() <= 1e-4 * b.max_element().max(1e-3));
+        assert!((a.pdf - pdf).abs() <= 1e-4 * pdf.max(1e-3));
+    }
+    let mut g = c.benchmark_group("ref10");
+    g.throughput(Throughput::Elements(PAIRS as u64));
+    g.bench_function("interp_eval", |b| {
+        b.iter(|| {
+            let p = black_box(&prep);
+            let mut acc = Vec3::ZERO;
+            for l in &ls {
+                let e = p.eval(*l);
+                acc += e.f_cos + Vec3::splat(e.pdf);
+            }
+            acc
+        })
+    });
+    g.bench_function("native_eval", |b| {
+        b.iter(|| {
+            let p = black_box(&native);
+            let mut acc = Vec3::ZERO;
+            for l in &ls {
+                let (f, pdf) = p.eval(*l);
+                acc += f + Vec3::splat(pdf);
+            }
+            acc
+        })
+    });
+    g.bench_function("interp_prepare_eval", |b| {
+        let mut scratch = Scratch::default();
+        let mut p = Prepared::new();
+        b.iter(|| {
+            let mut acc = Vec3::ZERO;
+            for (f, v, l) in &pairs {
+                black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut p);
+                let e = p.eval(*l);
+                acc += e.f_cos + Vec3::splat(e.pdf);
+            }
+            acc
+        })
+    });
+    g.bench_function("native_prepare_eval", |b| {
+        b.iter(|| {
+            let mut acc = Vec3::ZERO;
+            for (f, v, l) in &pairs {
+                let p = Native::prepare(black_box(&lv), *f, *v, w, pr);
+                let (f, pdf) = p.eval(*l);
+                acc += f + Vec3::splat(pdf);
+            }
+            acc
+        })
+    });
+    // Batched: 16 points (the first 16 pairs' frames and views), 256 light sets.
+    const W: usize = 16;
+    let batch = ShadingBatch::<W>::new(
+        std::array::from_fn(|k| pairs[k].0.z),
+        std::array::from_fn(|k| pairs[k].0.x),
+        std::array::from_fn(|k| pairs[k].1),
+    );
+    let pb = m.prepare_batch(&batch);
+    let lsets: Vec<[Vec3; W]> = (0..PAIRS / W)
+        .map(|j| {
+            std::array::from_fn(|k| {
+                let (f, _, l) = pairs[j * W + k];
+                let _ = f;
+                let n = pairs[k].0.z;
+                if l.dot(n) < 0.0 { -l } else { l }
+            })
+        })
+        .collect();
+    g.bench_function("batch16_eval", |b| {
+        b.iter(|| {
+            let p = black_box(&pb);
+            let mut acc = Vec3::ZERO;
+            for ls in &lsets {
+                for e in p.eval(ls) {
+                    acc += e.f_cos + Vec3::splat(e.pdf);
+                }
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+fn bench_preview(c: &mut Criterion<CpuTime>) {
+    let m = Material::new(&ref10_ir()).expect("ref10 compiles");
+    let mut g = c.benchmark_group("preview512");
+    g.sample_size(10);
+    for (name, batched) in [("scalar", false), ("batched", true)] {
+        let opts = PreviewOptions {
+            size: 512,
+            batched,
+            parallel: false,
+            ..PreviewOptions::default()
+        };
+        g.bench_function(name, |b| b.iter(|| render_ball(&m, &opts, &|_| {})));
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().with_measurement(CpuTime);
+    targets = bench_ref10, bench_preview
+}
+criterion_main!(benches);

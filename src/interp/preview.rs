@@ -1,0 +1,268 @@
+//! Material preview images (spec closures.md §1.6): a deterministic, sampling-free render of
+//! a unit sphere under one directional light and a uniform environment.
+//!
+//! * Pixels: an `N × N` image covers `[−1.1, 1.1]²`; pixel `(i, j)` (row 0 at the top) is
+//!   shaded at its centre `x = −1.1 + 2.2 (i + ½)/N`, `y = 1.1 − 2.2 (j + ½)/N`. Pixels with
+//!   `x² + y² < 1` lie on the sphere; the others show the environment.
+//! * On the sphere: `N = (x, y, √(1 − x² − y²))`, `V = (0, 0, 1)`,
+//!   `T = normalize((0, 1, 0) × N)` (`(1, 0, 0)` when `|N_y| > 0.999`). The program's
+//!   globals: `P = N` (a unit sphere at the origin), `u = ½ + atan2(N_x, N_z)/2π`,
+//!   `v = ½ + asin(N_y)/π` (vstructc's choice; the spec names none).
+//! * Radiance: `eval(L_light).f_cos ⊙ E_light + env ⊙ (albedo().reflect + albedo().transmit)
+//!   + emission() + transparency() ⊙ env`; defaults `L_light = normalize(1, 1, 1)`,
+//!   `E_light = π`, `env = 0.05`. Furnace mode: no light, `env = 1`.
+//! * AOV of one lobe: the same formula restricted to that lobe (its weighted response and
+//!   its albedo `A_k`), without emission and transparency.
+//!
+//! Rows are independent; [`render_ball`] shades them in parallel with rayon (or serially),
+//! with the scalar or the batched interpreter.
+
+use super::batch::{PreparedBatch, ShadingBatch};
+use super::material::{Material, Prepared, Scratch, ShadingPoint};
+use super::math::Rgb;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::f32::consts::{PI, TAU};
+
+/// Lanes of the batched preview path.
+pub const PREVIEW_LANES: usize = 16;
+
+/// A linear RGB image, rows top to bottom.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `width × height` pixels, row-major, top row first.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    /// An image filled with one colour.
+    pub fn filled(width: usize, height: usize, c: Rgb) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![c; width * height],
+        }
+    }
+
+    /// The pixel at column `x`, row `y` (row 0 at the top).
+    pub fn at(&self, x: usize, y: usize) -> Rgb {
+        self.pixels[y * self.width + x]
+    }
+}
+
+/// What the preview shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreviewOptions {
+    /// Image side in pixels (default 256).
+    pub size: usize,
+    /// Direction toward the light (normalised when used).
+    pub light_dir: Vec3,
+    /// Light irradiance `E_light` (RGB).
+    pub light: Rgb,
+    /// Uniform environment radiance (also the background).
+    pub env: Rgb,
+    /// Only this lobe's contribution (index into [`Material::leaves`]).
+    pub aov_leaf: Option<usize>,
+    /// Packed external inputs (see [`Material::input_layout`]); missing slots take their
+    /// fallbacks.
+    pub inputs: Vec<f32>,
+    /// Use the batched interpreter ([`PREVIEW_LANES`] points at a time).
+    pub batched: bool,
+    /// Shade rows in parallel (rayon's global pool).
+    pub parallel: bool,
+}
+
+impl Default for PreviewOptions {
+    fn default() -> Self {
+        PreviewOptions {
+            size: 256,
+            light_dir: Vec3::ONE.normalize(),
+            light: Vec3::splat(PI),
+            env: Vec3::splat(0.05),
+            aov_leaf: None,
+            inputs: Vec::new(),
+            batched: false,
+            parallel: true,
+        }
+    }
+}
+
+impl PreviewOptions {
+    /// White-furnace settings: no light, `env = 1`.
+    pub fn furnace(mut self) -> Self {
+        self.light = Vec3::ZERO;
+        self.env = Vec3::ONE;
+        self
+    }
+}
+
+/// The geometry of one sphere pixel: normal, tangent, globals.
+fn sphere_point(x: f32, y: f32) -> Option<ShadingPoint<'static>> {
+    let r2 = x * x + y * y;
+    if r2 >= 1.0 {
+        return None;
+    }
+    let n = Vec3::new(x, y, (1.0 - r2).sqrt());
+    let t = if n.y.abs() > 0.999 {
+        Vec3::X
+    } else {
+        Vec3::Y.cross(n).normalize()
+    };
+    let uv = Vec2::new(
+        0.5 + n.x.atan2(n.z) / TAU,
+        0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
+    );
+    Some(
+        ShadingPoint::new(n, t, Vec3::Z)
+            .with_position(n)
+            .with_uv(uv),
+    )
+}
+
+/// Pixel centre of column `i` / row `j` in an image of side `size`.
+fn pixel_xy(i: usize, j: usize, size: usize) -> (f32, f32) {
+    let s = size as f32;
+    (
+        -1.1 + 2.2 * (i as f32 + 0.5) / s,
+        1.1 - 2.2 * (j as f32 + 0.5) / s,
+    )
+}
+
+/// Render the material ball. `progress` is called with the number of rows finished so far
+/// (from worker threads, in any order).
+pub fn render_ball(
+    material: &Material,
+    opts: &PreviewOptions,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Image {
+    let size = opts.size.max(1);
+    let mut img = Image::filled(size, size, opts.env);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let row = |(j, out): (usize, &mut [Rgb])| {
+        if opts.batched {
+            shade_row_batched(material, opts, j, out);
+        } else {
+            shade_row(material, opts, j, out);
+        }
+        progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+    };
+    if opts.parallel {
+        img.pixels.par_chunks_mut(size).enumerate().for_each(row);
+    } else {
+        img.pixels.chunks_mut(size).enumerate().for_each(row);
+    }
+    img
+}
+
+/// Shade row `j` with the scalar interpreter.
+pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+    let size = out.len();
+    let l = opts.light_dir.normalize_or(Vec3::Z);
+    let mut scratch = Scratch::default();
+    let mut prep = Prepared::new();
+    for (i, px) in out.iter_mut().enumerate() {
+        let (x, y) = pixel_xy(i, j, size);
+        let Some(p) = sphere_point(x, y) else {
+            continue;
+        };
+        let p = p.with_inputs(&opts.inputs);
+        material.prepare_into(&p, &mut scratch, &mut prep);
+        let direct = if opts.light == Vec3::ZERO {
+            Vec3::ZERO
+        } else {
+            match opts.aov_leaf {
+                None => prep.eval(l).f_cos,
+                Some(leaf) => prep
+                    .lobes()
+                    .iter()
+                    .position(|a| a.leaf as usize == leaf)
+                    .map_or(Vec3::ZERO, |k| prep.eval_lobe(k, l).f_cos),
+            }
+        };
+        *px = match opts.aov_leaf {
+            None => {
+                direct * opts.light
+                    + opts.env * prep.albedo().total()
+                    + prep.emission()
+                    + prep.transparency() * opts.env
+            }
+            Some(leaf) => {
+                let a = prep
+                    .lobes()
+                    .iter()
+                    .find(|a| a.leaf as usize == leaf)
+                    .map_or(Vec3::ZERO, |a| a.albedo.total());
+                direct * opts.light + opts.env * a
+            }
+        };
+    }
+}
+
+/// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
+pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+    const W: usize = PREVIEW_LANES;
+    if opts.aov_leaf.is_some() {
+        return shade_row(material, opts, j, out);
+    }
+    let size = out.len();
+    let l = opts.light_dir.normalize_or(Vec3::Z);
+    let mut scratch = Scratch::default();
+    let mut batch = PreparedBatch::<W>::new_boxed();
+    // Sphere pixels of this row, in order.
+    let xs: Vec<(usize, ShadingPoint)> = (0..size)
+        .filter_map(|i| {
+            let (x, y) = pixel_xy(i, j, size);
+            sphere_point(x, y).map(|p| (i, p.with_inputs(&opts.inputs)))
+        })
+        .collect();
+    for chunk in xs.chunks(W) {
+        let lane = |k: usize| chunk[k.min(chunk.len() - 1)].1;
+        let pts = ShadingBatch::<W> {
+            n: std::array::from_fn(|k| lane(k).n),
+            t: std::array::from_fn(|k| lane(k).t),
+            v: std::array::from_fn(|k| lane(k).v),
+            inputs: std::array::from_fn(|k| lane(k).inputs),
+            p: std::array::from_fn(|k| lane(k).p),
+            uv: std::array::from_fn(|k| lane(k).uv),
+        };
+        material.prepare_batch_into(&pts, &mut scratch, &mut batch);
+        let direct = if opts.light == Vec3::ZERO {
+            None
+        } else {
+            Some(batch.eval(&[l; W]))
+        };
+        for (k, (i, _)) in chunk.iter().enumerate() {
+            let prep = batch.lane(k);
+            let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
+            out[*i] = d * opts.light
+                + opts.env * prep.albedo().total()
+                + prep.emission()
+                + prep.transparency() * opts.env;
+        }
+    }
+}
+
+/// Arrange images of equal size in a grid (`⌈√n⌉` columns), filling empty cells with
+/// `background`.
+pub fn contact_sheet(images: &[Image], background: Rgb) -> Image {
+    let Some(first) = images.first() else {
+        return Image::filled(1, 1, background);
+    };
+    let (w, h) = (first.width, first.height);
+    let cols = (images.len() as f64).sqrt().ceil().max(1.0) as usize;
+    let rows = images.len().div_ceil(cols);
+    let mut sheet = Image::filled(cols * w, rows * h, background);
+    for (k, img) in images.iter().enumerate() {
+        let (cx, cy) = ((k % cols) * w, (k / cols) * h);
+        for y in 0..img.height.min(h) {
+            for x in 0..img.width.min(w) {
+                sheet.pixels[(cy + y) * sheet.width + cx + x] = img.at(x, y);
+            }
+        }
+    }
+    sheet
+}
