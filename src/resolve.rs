@@ -403,7 +403,7 @@ impl Resolver<'_> {
         let mut event = self
             .options
             .record_events
-            .then(|| self.event(ctx, Some((output.property.clone(), name.to_string()))));
+            .then(|| self.event(ctx, Some((output.property.to_string(), name.to_string()))));
         let outcome = match (&output.cond, self.options.conditions) {
             (None, _) => {
                 self.connect(ctx, &output.property);
@@ -439,7 +439,7 @@ impl Resolver<'_> {
     fn evaluate(
         &mut self,
         ctx: &MemberCtx<'_>,
-        output: &str,
+        output: &Arc<str>,
         entry: &CondEntry,
         stmt: &Statement,
         event: Option<&mut MemberEvent>,
@@ -545,7 +545,7 @@ impl Resolver<'_> {
         }
     }
 
-    fn connect(&mut self, ctx: &MemberCtx<'_>, output: &str) {
+    fn connect(&mut self, ctx: &MemberCtx<'_>, output: &Arc<str>) {
         if self.net.value(ctx.node, ctx.member).is_some() {
             let d = Diagnostic::info(
                 "VS018",
@@ -557,11 +557,8 @@ impl Resolver<'_> {
             );
             self.push(d, ctx.node, Some(ctx.member));
         }
-        self.net.set_connections(
-            ctx.node,
-            ctx.member,
-            vec![Link::node(ctx.source.upstream, Some(output))],
-        );
+        self.net
+            .connect_only(ctx.node, ctx.member, ctx.source.upstream, output);
     }
 
     fn write(&mut self, ctx: &MemberCtx<'_>, value: Value, action: &Action) {
@@ -848,7 +845,7 @@ impl Resolver<'_> {
 struct MemberCtx<'c> {
     node: NodeId,
     head: &'c str,
-    member: &'c str,
+    member: &'c Arc<str>,
     source: &'c HeadSource,
     down_def: Option<&'c IndexedDef>,
     up_def: Option<&'c IndexedDef>,

@@ -89,7 +89,7 @@ fn pxr_layer_has_83_inputs_and_79_conditional_output_members() {
     // Member names are the text after the head, found through the reverse table.
     for m in members {
         assert_eq!(m.names.len(), 1);
-        assert_eq!(m.property, format!("pxrMaterialOut_{}", m.names[0]));
+        assert_eq!(&*m.property, format!("pxrMaterialOut_{}", m.names[0]));
         let found = t.reverse_out("pxrMaterialOut", &m.names[0]).unwrap();
         assert_eq!(found.property, m.property);
     }
@@ -126,7 +126,7 @@ fn pxr_layer_mixer_has_5_input_heads_of_79_and_one_output_head() {
         let members = t.members_in(h);
         assert_eq!(members.len(), 79, "{h}");
         for m in members {
-            assert_eq!(m.property, format!("{h}_{}", m.names[0]));
+            assert_eq!(&*m.property, format!("{h}_{}", m.names[0]));
         }
         // Encoding E2: `type="vstruct" default=""`; kind vstruct, no default.
         let p = def.input(h).unwrap();
@@ -316,7 +316,7 @@ fn every_oso_fixture_loads() {
     let t = reg.tables("TestShaderPropertiesNodeOSL").unwrap();
     let m = t.members_in("inputVstruct");
     assert_eq!(m.len(), 1);
-    assert_eq!(m[0].property, "inputVstruct_parameter");
+    assert_eq!(&*m[0].property, "inputVstruct_parameter");
     assert_eq!(m[0].names, ["parameter"]);
 }
 

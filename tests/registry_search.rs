@@ -140,7 +140,7 @@ fn in_memory_definitions_come_first_and_replace_cached_ones() {
     assert_eq!(&*def.path, "<memory>/Dup.args");
     assert_eq!(def.kind, "bxdf");
     let t = reg.tables("Dup").unwrap();
-    assert_eq!(t.members_in("inputMaterial")[0].property, "gain");
+    assert_eq!(&*t.members_in("inputMaterial")[0].property, "gain");
     // Bad text is refused with its diagnostic and leaves the registry unchanged.
     let err = reg
         .add_args_text("Other", "<args><param/></args>")

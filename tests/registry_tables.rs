@@ -38,10 +38,10 @@ fn aliases_extend_name_lists_on_both_sides() {
         .map(|m| m.names.iter().map(String::as_str).collect())
         .collect();
     assert_eq!(names, [vec!["a", "alpha"], vec!["b"], vec!["c", "x y"]]);
-    assert_eq!(members[0].property, "in_a");
+    assert_eq!(&*members[0].property, "in_a");
     // The alias is entered in the reverse table like a primary name.
-    assert_eq!(t.reverse_out("out", "alpha").unwrap().property, "out_a");
-    assert_eq!(t.reverse_out("out", "a").unwrap().property, "out_a");
+    assert_eq!(&*t.reverse_out("out", "alpha").unwrap().property, "out_a");
+    assert_eq!(&*t.reverse_out("out", "a").unwrap().property, "out_a");
     assert!(t.reverse_out("out", "c").is_none());
 }
 
@@ -86,10 +86,10 @@ fn heads_are_normalised_to_vstruct_without_default() {
 #[test]
 fn later_output_member_wins_with_vs004() {
     let (_, t, diags) = load("later_wins");
-    assert_eq!(t.reverse_out("out", "x").unwrap().property, "out_x2");
+    assert_eq!(&*t.reverse_out("out", "x").unwrap().property, "out_x2");
     // An alias colliding with an earlier primary name also takes it over.
-    assert_eq!(t.reverse_out("out", "p").unwrap().property, "out_q");
-    assert_eq!(t.reverse_out("out", "q").unwrap().property, "out_q");
+    assert_eq!(&*t.reverse_out("out", "p").unwrap().property, "out_q");
+    assert_eq!(&*t.reverse_out("out", "q").unwrap().property, "out_q");
     // Every member stays in the declaration-order list.
     assert_eq!(t.members_out("out").len(), 4);
     let vs004 = codes(&diags, "VS004");
@@ -106,8 +106,8 @@ fn later_output_member_wins_with_vs004() {
 fn head_with_input_and_output_members_is_vs005_and_split() {
     let (_, t, diags) = load("mixed_heads");
     assert!(t.is_input_head("h") && t.is_output_head("h"));
-    assert_eq!(t.members_in("h")[0].property, "h_a");
-    assert_eq!(t.reverse_out("h", "a").unwrap().property, "h_a_out");
+    assert_eq!(&*t.members_in("h")[0].property, "h_a");
+    assert_eq!(&*t.reverse_out("h", "a").unwrap().property, "h_a_out");
     let vs005 = codes(&diags, "VS005");
     assert_eq!(vs005.len(), 1, "{diags:?}");
     assert_eq!(line_col(vs005[0]), (3, 3));
@@ -123,7 +123,7 @@ fn nested_head_is_vs008_and_not_flattened() {
     let outer: Vec<&str> = t
         .members_in("outer")
         .iter()
-        .map(|m| m.property.as_str())
+        .map(|m| &*m.property)
         .collect();
     assert_eq!(outer, ["inner", "outer_y"]);
     assert_eq!(
@@ -131,7 +131,7 @@ fn nested_head_is_vs008_and_not_flattened() {
         ["a.b.c"],
         "member names may contain dots"
     );
-    assert_eq!(t.members_in("inner")[0].property, "inner_x");
+    assert_eq!(&*t.members_in("inner")[0].property, "inner_x");
     let vs008 = codes(&diags, "VS008");
     assert_eq!(vs008.len(), 1, "{diags:?}");
     assert_eq!(line_col(vs008[0]), (4, 3));

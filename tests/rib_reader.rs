@@ -415,7 +415,7 @@ Pattern "PxrBlend" "b"
     assert_eq!(edges.len(), 3);
     assert_eq!(
         (
-            edges[0].input.as_str(),
+            &*edges[0].input,
             edges[0].index,
             edges[0].output.as_deref()
         ),

@@ -55,6 +55,7 @@ use std::collections::HashMap;
 use std::fmt;
 use std::hash::BuildHasher;
 use std::ops::{Index, Range};
+use std::sync::Arc;
 
 /// Identifies a node of a [`Network`] (a petgraph node index; stable across edits).
 pub type NodeId = NodeIndex;
@@ -192,8 +193,9 @@ pub struct Link {
     /// The upstream node or missing handle.
     pub upstream: Upstream,
     /// The upstream output; `None` for a whole-node reference (RIB string without `:`,
-    /// JSON `upstreamOutputName: ""`).
-    pub output: Option<String>,
+    /// JSON `upstreamOutputName: ""`). Shared with the graph edge (and, during resolution,
+    /// with the definition's tables), so a connection does not copy the name.
+    pub output: Option<Arc<str>>,
 }
 
 impl Link {
@@ -210,7 +212,15 @@ impl Link {
     pub fn node(node: NodeId, output: Option<&str>) -> Link {
         Link {
             upstream: Upstream::Node(node),
-            output: output.map(str::to_string),
+            output: output.map(Arc::from),
+        }
+    }
+
+    /// A connection to output `output` of node `node`, sharing the name.
+    pub fn node_shared(node: NodeId, output: Arc<str>) -> Link {
+        Link {
+            upstream: Upstream::Node(node),
+            output: Some(output),
         }
     }
 
@@ -225,7 +235,7 @@ impl Link {
     pub fn missing(handle: &str, output: Option<&str>) -> Link {
         Link {
             upstream: Upstream::Missing(handle.to_string()),
-            output: output.map(str::to_string),
+            output: output.map(Arc::from),
         }
     }
 
@@ -256,9 +266,9 @@ impl Link {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Edge {
     /// Upstream output (`None`: whole-node reference).
-    pub output: Option<String>,
+    pub output: Option<Arc<str>>,
     /// Downstream input.
-    pub input: String,
+    pub input: Arc<str>,
     /// Element index: position in the downstream input's ordered connection list.
     pub index: usize,
 }
@@ -284,7 +294,7 @@ pub enum ParamChange {
 /// One parameter of a node: authored value, connections, declaration and change state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Param {
-    name: String,
+    name: Arc<str>,
     value: Option<Value>,
     links: Vec<Link>,
     edges: Vec<Option<EdgeId>>,
@@ -296,9 +306,9 @@ pub struct Param {
 }
 
 impl Param {
-    fn empty(name: &str) -> Param {
+    fn empty(name: Arc<str>) -> Param {
         Param {
-            name: name.to_string(),
+            name,
             value: None,
             links: Vec::new(),
             edges: Vec::new(),
@@ -319,7 +329,7 @@ impl Param {
         origin: Option<u32>,
     ) -> Param {
         Param {
-            name,
+            name: Arc::from(name),
             value,
             links: Vec::new(),
             edges: Vec::new(),
@@ -563,21 +573,33 @@ impl Node {
     fn index_of(&self, name: &str) -> Option<usize> {
         let params = &self.params;
         self.by_name
-            .find(name_hash(name), |&i| params[i as usize].name == name)
+            .find(name_hash(name), |&i| &*params[i as usize].name == name)
             .map(|&i| i as usize)
     }
 
     fn index_or_insert(&mut self, name: &str) -> usize {
-        if let Some(i) = self.index_of(name) {
-            return i;
+        match self.index_of(name) {
+            Some(i) => i,
+            None => self.insert_param(Arc::from(name)),
         }
+    }
+
+    /// [`Self::index_or_insert`] for a name the caller already shares.
+    fn index_or_insert_shared(&mut self, name: &Arc<str>) -> usize {
+        match self.index_of(name) {
+            Some(i) => i,
+            None => self.insert_param(name.clone()),
+        }
+    }
+
+    fn insert_param(&mut self, name: Arc<str>) -> usize {
         let idx = self.params.len();
+        let hash = name_hash(&name);
         self.params.push(Param::empty(name));
         let params = &self.params;
-        self.by_name
-            .insert_unique(name_hash(name), idx as u32, |&i| {
-                name_hash(&params[i as usize].name)
-            });
+        self.by_name.insert_unique(hash, idx as u32, |&i| {
+            name_hash(&params[i as usize].name)
+        });
         idx
     }
 
@@ -627,7 +649,7 @@ impl Node {
     pub fn connected_inputs(&self) -> impl Iterator<Item = &str> + '_ {
         self.sorted_indices(Param::is_connected)
             .into_iter()
-            .map(|i| self.params[i].name.as_str())
+            .map(|i| &*self.params[i].name)
     }
 
     /// The `string __materialid` value, if authored.
@@ -937,7 +959,7 @@ impl Network {
     pub fn push_link(&mut self, down: NodeId, input: &str, link: Link) {
         let i = self.graph[down].index_or_insert(input);
         let index = self.graph[down].params[i].links.len();
-        let edge = self.add_edge_for(down, input, &link, index);
+        let edge = self.add_edge_for(down, i, &link, index);
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         p.links.push(link);
@@ -948,30 +970,32 @@ impl Network {
 
     /// Append links read from a file without marking the parameter changed (crate-internal).
     pub(crate) fn push_source_links(&mut self, down: NodeId, param: usize, links: Vec<Link>) {
-        let input = self.graph[down].params[param].name.clone();
         for link in links {
             let index = self.graph[down].params[param].links.len();
-            let edge = self.add_edge_for(down, &input, &link, index);
+            let edge = self.add_edge_for(down, param, &link, index);
             let p = &mut self.graph[down].params[param];
             p.links.push(link);
             p.edges.push(edge);
         }
     }
 
+    /// The graph edge of `link`, the `index`-th connection of parameter `param` of `down`
+    /// (none for a dangling link). The edge shares the parameter and output names.
     fn add_edge_for(
         &mut self,
         down: NodeId,
-        input: &str,
+        param: usize,
         link: &Link,
         index: usize,
     ) -> Option<EdgeId> {
         let up = link.upstream_node()?;
+        let input = self.graph[down].params[param].name.clone();
         Some(self.graph.add_edge(
             up,
             down,
             Edge {
                 output: link.output.clone(),
-                input: input.to_string(),
+                input,
                 index,
             },
         ))
@@ -997,6 +1021,28 @@ impl Network {
             None if links.is_empty() => return Vec::new(),
             None => self.graph[down].index_or_insert(input),
         };
+        self.replace_links(down, i, links)
+    }
+
+    /// Make `up.output` the only connection of `down.input`, sharing both names (the fast
+    /// path of resolution, which connects hundreds of members per material).
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let u = net.add_node("u", "PxrLayer");
+    /// let d = net.add_node("d", "PxrLayerMixer");
+    /// let (input, output): (Arc<str>, Arc<str>) = ("baselayer_diffuseGain".into(), "pxrMaterialOut_diffuseGain".into());
+    /// net.connect_only(d, &input, u, &output);
+    /// assert_eq!(net.connections(d, "baselayer_diffuseGain")[0].output(), Some("pxrMaterialOut_diffuseGain"));
+    /// ```
+    pub fn connect_only(&mut self, down: NodeId, input: &Arc<str>, up: NodeId, output: &Arc<str>) {
+        let i = self.graph[down].index_or_insert_shared(input);
+        self.replace_links(down, i, vec![Link::node_shared(up, output.clone())]);
+    }
+
+    fn replace_links(&mut self, down: NodeId, i: usize, links: Vec<Link>) -> Vec<Link> {
         if self.graph[down].params[i].links == links {
             return links;
         }
@@ -1007,7 +1053,7 @@ impl Network {
         let edges: Vec<Option<EdgeId>> = links
             .iter()
             .enumerate()
-            .map(|(index, link)| self.add_edge_for(down, input, link, index))
+            .map(|(index, link)| self.add_edge_for(down, i, link, index))
             .collect();
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
@@ -1315,7 +1361,7 @@ mod tests {
         weights.sort_by_key(|w| w.index);
         assert_eq!(weights[0].output.as_deref(), Some("o1"));
         assert_eq!(weights[1].index, 1);
-        assert_eq!(weights[1].input, "x");
+        assert_eq!(&*weights[1].input, "x");
         net.remove_connection(d, "x", 0);
         let w: Vec<_> = net.graph().edge_weights().cloned().collect();
         assert_eq!(w.len(), 1);

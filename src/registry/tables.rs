@@ -40,8 +40,9 @@ impl CondEntry {
 /// One input member of an input head.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InputMember {
-    /// The member property (an input of the node type).
-    pub property: String,
+    /// The member property (an input of the node type); shared with the networks it is
+    /// connected in.
+    pub property: Arc<str>,
     /// Names tried in order: `[primary]` or `[primary, alias]`.
     pub names: Vec<String>,
 }
@@ -49,8 +50,9 @@ pub struct InputMember {
 /// One output member of an output head.
 #[derive(Debug, Clone)]
 pub struct OutputMember {
-    /// The member property (an output of the node type).
-    pub property: String,
+    /// The member property (an output of the node type); shared with the connections
+    /// resolution makes from it.
+    pub property: Arc<str>,
     /// Names it is found by: `[primary]` or `[primary, alias]`.
     pub names: Vec<String>,
     /// Its conditional, if it has a non-empty one.
@@ -277,7 +279,7 @@ impl Builder<'_, '_> {
                 );
             }
             let member = InputMember {
-                property: p.name.clone(),
+                property: Arc::from(p.name.as_str()),
                 names: member_names(p),
             };
             match heads.iter_mut().find(|h| h.name == m.head) {
@@ -333,7 +335,7 @@ impl Builder<'_, '_> {
                 }
             }
             head.members.push(OutputMember {
-                property: p.name.clone(),
+                property: Arc::from(p.name.as_str()),
                 names,
                 cond,
             });
