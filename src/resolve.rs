@@ -171,7 +171,7 @@ struct Resolver<'a> {
     /// Results of the conditionals evaluated during the current head expansion, keyed by the
     /// shared parse result: members with the same expression text share one evaluation, which
     /// is exact because expanding D never changes U (unless D is U, when nothing is cached).
-    memo: HashMap<usize, (Action, Vec<ComparisonReport>)>,
+    memo: HashMap<usize, Arc<(Action, Vec<ComparisonReport>)>>,
 }
 
 #[derive(Clone)]
@@ -373,6 +373,9 @@ impl Resolver<'_> {
         let up_def = self.definition(&up_shader);
         self.net.clear_connections(node, head);
         self.memo.clear();
+        // Most members get a connection or a value: make room for them at once.
+        self.net
+            .reserve_params(node, down_tables.members_in(head).len());
         for member in down_tables.members_in(head) {
             let ctx = MemberCtx {
                 node,
@@ -451,17 +454,18 @@ impl Resolver<'_> {
             node: ctx.source.upstream,
             def: ctx.up_def,
         };
-        let (action, reports) = match self.memo.get(&key).filter(|_| cacheable) {
+        let result = match self.memo.get(&key).filter(|_| cacheable) {
             Some(hit) => hit.clone(),
             None => {
                 let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
-                let result = (evaluation.action.clone(), evaluation.reports);
+                let result = Arc::new((evaluation.action.clone(), evaluation.reports));
                 if cacheable {
                     self.memo.insert(key, result.clone());
                 }
                 result
             }
         };
+        let (action, reports) = &*result;
         if let Some(event) = event {
             event.reads = stmt
                 .param_names()
@@ -470,7 +474,7 @@ impl Resolver<'_> {
                 .collect();
             event.action = Some(action.to_string());
         }
-        for report in &reports {
+        for report in reports {
             self.comparison_warning(ctx, output, entry, report);
         }
         match &action.kind {
@@ -487,19 +491,19 @@ impl Resolver<'_> {
                 match cond::set_value(literal, dest, &self.options.extensions) {
                     Ok(set) => {
                         if set.saturated {
-                            self.saturated_warning(ctx, &action);
+                            self.saturated_warning(ctx, action);
                         }
-                        self.write(ctx, set.value.clone(), &action);
+                        self.write(ctx, set.value.clone(), action);
                         Outcome::Written(set.value)
                     }
                     Err(why) => {
                         let msg = why.to_string();
-                        self.not_applied(ctx, "VS013", &msg, &action);
+                        self.not_applied(ctx, "VS013", &msg, action);
                         Outcome::NotApplied(msg)
                     }
                 }
             }
-            ActionKind::Copy { param } => self.copy(ctx, &param.name, &action),
+            ActionKind::Copy { param } => self.copy(ctx, &param.name, action),
         }
     }
 

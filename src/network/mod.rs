@@ -298,11 +298,19 @@ pub struct Param {
     value: Option<Value>,
     links: Vec<Link>,
     edges: Vec<Option<EdgeId>>,
+    /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
+    /// a smaller `Param` keeps nodes with hundreds of members compact.
+    source: Option<Box<ParamSource>>,
+    value_touched: bool,
+    links_touched: bool,
+}
+
+/// Where a parameter read from a file came from.
+#[derive(Debug, Clone, PartialEq)]
+struct ParamSource {
     decl: Option<Decl>,
     location: Option<Location>,
     origin: Option<u32>,
-    value_touched: bool,
-    links_touched: bool,
 }
 
 impl Param {
@@ -312,9 +320,7 @@ impl Param {
             value: None,
             links: Vec::new(),
             edges: Vec::new(),
-            decl: None,
-            location: None,
-            origin: None,
+            source: None,
             value_touched: false,
             links_touched: false,
         }
@@ -333,9 +339,13 @@ impl Param {
             value,
             links: Vec::new(),
             edges: Vec::new(),
-            decl,
-            location,
-            origin,
+            source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
+                Box::new(ParamSource {
+                    decl,
+                    location,
+                    origin,
+                })
+            }),
             value_touched: false,
             links_touched: false,
         }
@@ -369,18 +379,18 @@ impl Param {
 
     /// The declaration read from the source, if any.
     pub fn decl(&self) -> Option<&Decl> {
-        self.decl.as_ref()
+        self.source.as_ref()?.decl.as_ref()
     }
 
     /// Where the parameter was declared (RIB decl string; JSON pointer), if known.
     pub fn location(&self) -> Option<&Location> {
-        self.location.as_ref()
+        self.source.as_ref()?.location.as_ref()
     }
 
     /// The index of this parameter's occurrence in [`NodeSource::items`], if it was read from
     /// a RIB request.
     pub fn source_item(&self) -> Option<usize> {
-        self.origin.map(|o| o as usize)
+        self.source.as_ref()?.origin.map(|o| o as usize)
     }
 
     /// How the parameter differs from the source (see [`ParamChange`]).
@@ -397,7 +407,7 @@ impl Param {
         if !self.is_live() {
             return ParamChange::Removed;
         }
-        if self.origin.is_none() {
+        if self.source_item().is_none() {
             return ParamChange::Added;
         }
         if self.links_touched && !self.links.is_empty() {
@@ -666,7 +676,7 @@ impl Node {
         self.dirty
             && self.params.iter().any(|p| match p.change() {
                 ParamChange::Unchanged => false,
-                ParamChange::Removed => p.origin.is_some(),
+                ParamChange::Removed => p.source_item().is_some(),
                 _ => true,
             })
     }
@@ -899,6 +909,15 @@ impl Network {
             n.dirty = true;
         }
         old
+    }
+
+    /// Make room for `additional` more parameters on `node` (a hint; nothing changes).
+    pub fn reserve_params(&mut self, node: NodeId, additional: usize) {
+        let n = &mut self.graph[node];
+        n.params.reserve(additional);
+        let params = &n.params;
+        n.by_name
+            .reserve(additional, |&i| name_hash(&params[i as usize].name));
     }
 
     /// The connections of `node.input` in connection order (empty if none).

@@ -17,7 +17,7 @@ use super::model::{CondSource, Definition, Direction, Property};
 use crate::cond::{self, ParseError, Statement};
 use crate::diag::{Diagnostic, Location};
 use crate::types::BaseType;
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
 
 /// A member conditional: its source text and the parse result (shared between members with
@@ -149,7 +149,7 @@ impl VstructTables {
         let mut b = Builder {
             def,
             diags,
-            parsed: HashMap::new(),
+            parsed: HashMap::default(),
         };
         b.check_malformed_members();
         let inputs = b.input_heads();
@@ -161,7 +161,7 @@ impl VstructTables {
 
 /// The distinct head names of the members among `props`, in order of first appearance.
 fn head_names(props: &[Property]) -> Vec<&str> {
-    let mut seen = HashSet::new();
+    let mut seen = HashSet::default();
     props
         .iter()
         .filter_map(|p| p.vstruct.as_ref().map(|m| m.head.as_str()))
@@ -308,7 +308,7 @@ impl Builder<'_, '_> {
                     heads.push(OutputHead {
                         name: m.head.clone(),
                         members: Vec::new(),
-                        reverse: HashMap::new(),
+                        reverse: HashMap::default(),
                     });
                     heads.len() - 1
                 }
@@ -345,7 +345,7 @@ impl Builder<'_, '_> {
 
     /// VS009: names read by an output member's conditional that are not inputs of the type.
     fn check_cond_names(&mut self, p: &Property, src: Option<&CondSource>, stmt: &Statement) {
-        let mut reported = HashSet::new();
+        let mut reported = HashSet::default();
         for name in stmt.param_names() {
             if self.def.input(name).is_none() && reported.insert(name.to_string()) {
                 let loc = src.map_or_else(|| p.location.clone(), |s| s.location.clone());
