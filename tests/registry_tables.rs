@@ -120,11 +120,7 @@ fn head_with_input_and_output_members_is_vs005_and_split() {
 #[test]
 fn nested_head_is_vs008_and_not_flattened() {
     let (def, t, diags) = load("nested");
-    let outer: Vec<&str> = t
-        .members_in("outer")
-        .iter()
-        .map(|m| &*m.property)
-        .collect();
+    let outer: Vec<&str> = t.members_in("outer").iter().map(|m| &*m.property).collect();
     assert_eq!(outer, ["inner", "outer_y"]);
     assert_eq!(
         t.members_in("outer")[1].names,

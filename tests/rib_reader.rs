@@ -414,11 +414,7 @@ Pattern "PxrBlend" "b"
     edges.sort_by_key(|e| (e.input.clone(), e.index));
     assert_eq!(edges.len(), 3);
     assert_eq!(
-        (
-            &*edges[0].input,
-            edges[0].index,
-            edges[0].output.as_deref()
-        ),
+        (&*edges[0].input, edges[0].index, edges[0].output.as_deref()),
         ("inputs", 0, Some("resultF"))
     );
     assert_eq!(

@@ -93,10 +93,19 @@ fn detect_format(path: &Path, bytes: &[u8]) -> NetFormat {
 /// failure never leaves a partial file (and reading and writing the same path is safe, since
 /// the input was read completely before). `-` writes to standard output.
 pub fn write_output(path: Option<&Path>, data: &[u8]) -> Result<(), Error> {
+    stream_output(path, |out| out.write_all(data))
+}
+
+/// [`write_output`] for output produced piece by piece: `produce` writes into the destination
+/// (a buffered temporary file renamed into place only when everything succeeded, or stdout),
+/// so a large scene is never held in memory a second time.
+pub fn stream_output(
+    path: Option<&Path>,
+    produce: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), Error> {
     let Some(path) = path.filter(|p| p.as_os_str() != "-") else {
-        let mut out = std::io::stdout().lock();
-        return out
-            .write_all(data)
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        return produce(&mut out)
             .and_then(|_| out.flush())
             .map_err(|source| Error::Io {
                 path: PathBuf::from("<stdout>"),
@@ -117,7 +126,11 @@ pub fn write_output(path: Option<&Path>, data: &[u8]) -> Result<(), Error> {
         .unwrap_or_else(|| "output".to_string());
     let tmp = dir.join(format!(".{file_name}.vstructc-{}.tmp", std::process::id()));
     let result = std::fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(data).and_then(|_| f.sync_all()))
+        .and_then(|f| {
+            let mut out = std::io::BufWriter::with_capacity(1 << 16, f);
+            produce(&mut out)?;
+            out.into_inner().map_err(|e| e.into_error())?.sync_all()
+        })
         .and_then(|_| std::fs::rename(&tmp, path));
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);

@@ -1,9 +1,9 @@
 //! `vstructc resolve`: expand the vstruct connections of a network and write it back.
 
 use super::CommonOptions;
-use super::input::{NetFormat, Prepared, prepare, report_error, write_output};
+use super::input::{NetFormat, Prepared, prepare, report_error, stream_output, write_output};
 use crate::back::json::write_json;
-use crate::back::rib::write_rib_to_vec;
+use crate::back::rib::write_rib;
 use crate::cond::Extensions;
 use crate::diag::Error;
 use crate::network::Network;
@@ -95,26 +95,22 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     if status != ExitCode::SUCCESS {
         return status;
     }
-    let data = match args.format.unwrap_or(loaded.format) {
-        NetFormat::Json => write_json(&loaded.network).into_bytes(),
+    let output = args.output.as_deref();
+    let written = match args.format.unwrap_or(loaded.format) {
+        NetFormat::Json => write_output(output, write_json(&loaded.network).as_bytes()),
         NetFormat::Rib => {
+            // Streamed: the untouched parts of a large scene are copied from the source
+            // straight into the output file.
             let source = match loaded.format {
                 NetFormat::Rib => loaded.bytes.as_slice(),
                 NetFormat::Json => &[],
             };
-            match write_rib_to_vec(source, &loaded.network, &registry) {
-                Ok(v) => v,
-                Err(source) => {
-                    let e = Error::Io {
-                        path: PathBuf::from("<output>"),
-                        source,
-                    };
-                    return report_error(&e, common);
-                }
-            }
+            stream_output(output, |out| {
+                write_rib(source, &loaded.network, &registry, out)
+            })
         }
     };
-    match write_output(args.output.as_deref(), &data) {
+    match written {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => report_error(&e, common),
     }

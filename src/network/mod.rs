@@ -607,9 +607,8 @@ impl Node {
         let hash = name_hash(&name);
         self.params.push(Param::empty(name));
         let params = &self.params;
-        self.by_name.insert_unique(hash, idx as u32, |&i| {
-            name_hash(&params[i as usize].name)
-        });
+        self.by_name
+            .insert_unique(hash, idx as u32, |&i| name_hash(&params[i as usize].name));
         idx
     }
 
