@@ -2,13 +2,15 @@
 //! RIB or JSON network, resolve it (a no-op when it holds no placeholders), lower each
 //! material (or only `--material`) and print its IR, flat lobe list or closure tree.
 //!
-//! The lobe list's numeric weights use [`SimpleAlbedo`] (table-free estimates) until the
-//! interpreter's albedo tables are plugged in.
+//! The lobe list's numeric weights use the interpreter's albedo tables
+//! ([`TableAlbedo`]); the snapshot tests print with `SimpleAlbedo` (smooth-surface estimates)
+//! so that their numbers can be checked by hand.
 
 use super::CommonOptions;
 use super::input::{Prepared, prepare, report_error};
 use crate::diag::Error;
-use crate::ir::{MaterialIr, SimpleAlbedo, print};
+use crate::interp::TableAlbedo;
+use crate::ir::{MaterialIr, print};
 use crate::lower::network::{lower_terminal, report_placeholders, terminals};
 use crate::resolve::resolve;
 use clap::ValueEnum;
@@ -50,7 +52,7 @@ pub struct CompileArgs {
 pub fn render(ir: &MaterialIr, emit: Emit) -> String {
     match emit {
         Emit::Ir => print::ir_text(ir),
-        Emit::Lobes => print::lobes_text(ir, &SimpleAlbedo),
+        Emit::Lobes => print::lobes_text(ir, &TableAlbedo),
         Emit::Dot => crate::back::dot::to_dot(ir),
     }
 }
