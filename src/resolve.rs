@@ -135,6 +135,7 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         on_stack: HashSet::default(),
         types: HashMap::default(),
         memo: HashMap::default(),
+        plans: HashMap::default(),
     };
     r.run();
     r.remove_head_values();
@@ -172,7 +173,13 @@ struct Resolver<'a> {
     /// shared parse result: members with the same expression text share one evaluation, which
     /// is exact because expanding D never changes U (unless D is U, when nothing is cached).
     memo: HashMap<usize, Arc<(Action, Vec<ComparisonReport>)>>,
+    /// Member matches per (downstream tables, input head, upstream tables, output head).
+    plans: HashMap<(usize, String, usize, String), MatchPlan>,
 }
+
+/// For each member of an input head: the index of the name it matched by and the upstream
+/// output member, or `None` when the upstream head has no counterpart.
+type MatchPlan = Arc<Vec<Option<(usize, OutputMember)>>>;
 
 #[derive(Clone)]
 struct TypeInfo {
@@ -376,7 +383,8 @@ impl Resolver<'_> {
         // Most members get a connection or a value: make room for them at once.
         self.net
             .reserve_params(node, down_tables.members_in(head).len());
-        for member in down_tables.members_in(head) {
+        let plan = self.match_plan(&down_tables, head, &up_tables, &source.head);
+        for (member, matched) in down_tables.members_in(head).iter().zip(plan.iter()) {
             let ctx = MemberCtx {
                 node,
                 head,
@@ -389,16 +397,43 @@ impl Resolver<'_> {
                 self.direct_connection_wins(&ctx);
                 continue;
             }
-            let matched = member.names.iter().find_map(|name| {
-                up_tables
-                    .reverse_out(&source.head, name)
-                    .map(|p| (name.as_str(), p))
-            });
             match matched {
-                Some((name, output)) => self.apply_member(&ctx, name, output),
+                Some((name, output)) => self.apply_member(&ctx, &member.names[*name], output),
                 None => self.no_counterpart(&ctx, &member.names),
             }
         }
+    }
+
+    /// Member matching (step 3f: by member name, then alias) depends only on the two types
+    /// and heads, so it is worked out once per pair of heads rather than once per material.
+    fn match_plan(
+        &mut self,
+        down: &Arc<VstructTables>,
+        head: &str,
+        up: &Arc<VstructTables>,
+        up_head: &str,
+    ) -> MatchPlan {
+        let key = (
+            Arc::as_ptr(down) as usize,
+            head.to_string(),
+            Arc::as_ptr(up) as usize,
+            up_head.to_string(),
+        );
+        if let Some(plan) = self.plans.get(&key) {
+            return plan.clone();
+        }
+        let plan: MatchPlan = Arc::new(
+            down.members_in(head)
+                .iter()
+                .map(|member| {
+                    member.names.iter().enumerate().find_map(|(i, name)| {
+                        up.reverse_out(up_head, name).map(|out| (i, out.clone()))
+                    })
+                })
+                .collect(),
+        );
+        self.plans.insert(key, plan.clone());
+        plan
     }
 
     fn apply_member(&mut self, ctx: &MemberCtx<'_>, name: &str, output: &OutputMember) {

@@ -295,7 +295,8 @@ pub enum ParamChange {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Param {
     name: Arc<str>,
-    value: Option<Value>,
+    /// Boxed, like `source`: most members of a resolved scene are connections, not values.
+    value: Option<Box<Value>>,
     links: Vec<Link>,
     edges: Vec<Option<EdgeId>>,
     /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
@@ -336,7 +337,7 @@ impl Param {
     ) -> Param {
         Param {
             name: Arc::from(name),
-            value,
+            value: value.map(Box::new),
             links: Vec::new(),
             edges: Vec::new(),
             source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
@@ -359,7 +360,7 @@ impl Param {
     /// The authored value, if any. A connected parameter may still hold a value (vstruct.md
     /// §4.3: `connect` keeps the old value); the connection takes precedence.
     pub fn value(&self) -> Option<&Value> {
-        self.value.as_ref()
+        self.value.as_deref()
     }
 
     /// The connections, in connection order.
@@ -880,12 +881,12 @@ impl Network {
         let n = &mut self.graph[node];
         let i = n.index_or_insert(name);
         let p = &mut n.params[i];
-        if p.value.as_ref() == Some(&value) {
+        if p.value.as_deref() == Some(&value) {
             return Some(value);
         }
         p.value_touched = true;
         n.dirty = true;
-        p.value.replace(value)
+        p.value.replace(Box::new(value)).map(|old| *old)
     }
 
     /// Remove the authored value of `node.name`; returns it.
@@ -902,7 +903,7 @@ impl Network {
     pub fn remove_value(&mut self, node: NodeId, name: &str) -> Option<Value> {
         let n = &mut self.graph[node];
         let i = n.index_of(name)?;
-        let old = n.params[i].value.take();
+        let old = n.params[i].value.take().map(|old| *old);
         if old.is_some() {
             n.params[i].value_touched = true;
             n.dirty = true;
