@@ -345,3 +345,49 @@ fn self_connection_in_json_is_a_cycle_of_one() {
     let o = run_file("missing.json", json_net(&nodes));
     check("missing.json", &o, 0, "warning[JS010]");
 }
+
+/// The later stages on the same hostile networks: lowering (`compile`) and the interpreter
+/// (`render`, `eval`) may refuse a network or report problems in it, but exit 0 or 1, never
+/// panic, and stay quick. Whatever `resolve` rejects they reject too (they read the same way).
+#[test]
+fn hostile_networks_through_compile_render_and_eval() {
+    let scratch = std::env::temp_dir().join(format!("vstructc-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).expect("scratch dir");
+    for c in CORPUS {
+        let path = corpus_dir().join(c.file);
+        let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("");
+        if ext == "args" || ext == "oso" {
+            continue;
+        }
+        let p = path.display().to_string();
+        let png = scratch.join(format!("{}.png", c.file)).display().to_string();
+        let commands: [Vec<String>; 3] = [
+            vec!["compile".into(), "--emit".into(), "lobes".into(), p.clone()],
+            vec!["render".into(), "--size".into(), "16".into(), p.clone(), "-o".into(), png],
+            vec![
+                "eval".into(),
+                p.clone(),
+                "--wo".into(),
+                "0,0,1".into(),
+                "--wi".into(),
+                "0.5,0.5,0.7".into(),
+            ],
+        ];
+        let resolves = run(&command_for(&path)).status == Some(0);
+        for args in &commands {
+            let o = run(args);
+            let name = format!("{} {}", args[0], c.file);
+            assert!(
+                matches!(o.status, Some(0) | Some(1)),
+                "{name}: exit status {:?}\n{}",
+                o.status,
+                o.stderr
+            );
+            assert!(o.elapsed <= LIMIT, "{name}: took {:?}", o.elapsed);
+            if !resolves {
+                assert_eq!(o.status, Some(1), "{name}: accepted what resolve rejects");
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+}
