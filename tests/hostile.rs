@@ -360,10 +360,20 @@ fn hostile_networks_through_compile_render_and_eval() {
             continue;
         }
         let p = path.display().to_string();
-        let png = scratch.join(format!("{}.png", c.file)).display().to_string();
+        let png = scratch
+            .join(format!("{}.png", c.file))
+            .display()
+            .to_string();
         let commands: [Vec<String>; 3] = [
             vec!["compile".into(), "--emit".into(), "lobes".into(), p.clone()],
-            vec!["render".into(), "--size".into(), "16".into(), p.clone(), "-o".into(), png],
+            vec![
+                "render".into(),
+                "--size".into(),
+                "16".into(),
+                p.clone(),
+                "-o".into(),
+                png,
+            ],
             vec![
                 "eval".into(),
                 p.clone(),

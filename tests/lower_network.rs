@@ -185,3 +185,38 @@ fn compile_command_emits_ir_lobes_and_dot() {
     let absent = vstructc(&["compile", "examples/does-not-exist.rib"]);
     assert_eq!(absent.status.code(), Some(1));
 }
+
+/// §4.0: constants outside the documented range (`min` / `max` of the definition) are clamped
+/// with LW022; the clamped value is what the lobes use.
+#[test]
+fn out_of_range_constants_are_clamped_with_lw022() {
+    let out = vstructc(&[
+        "compile",
+        "--emit",
+        "lobes",
+        "tests/data/lower/out_of_range.rib",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("info[LW022]: `layer.diffuseGain` = 2 is outside its documented range [0, 1]; clamped to 1"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("`layer.specularRoughness` = -0.5"),
+        "{stderr}"
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    // The diffuse lobe's weight is the clamped gain 1, not 2.
+    assert!(
+        stdout.contains("lobe #0 lambert \"diffuse\"\n  weight = 1\n"),
+        "{stdout}"
+    );
+    // In-range values give no LW022.
+    let plain = vstructc(&["compile", "examples/override.rib"]);
+    assert!(!String::from_utf8_lossy(&plain.stderr).contains("LW022"));
+}

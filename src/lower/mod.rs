@@ -268,6 +268,7 @@ impl<'a, G: Graph> Lower<'a, G> {
                 return Ok(r);
             }
             let fallback = self.static_value(n, param, &builtin);
+            let fallback = self.clamp_to_range(n, param, fallback);
             let origin = if output.is_empty() {
                 self.graph.handle(up).to_string()
             } else {
@@ -291,7 +292,51 @@ impl<'a, G: Graph> Lower<'a, G> {
             return Ok(self.b.input_slot(&origin, ty, fallback));
         }
         let v = self.static_value(n, param, &builtin);
+        let v = self.clamp_to_range(n, param, v);
         Ok(self.b.prog.constant3(value_to_vec3(&v)))
+    }
+
+    /// §4.0: a constant outside the parameter's documented range (the definition's `min` /
+    /// `max` metadata) is clamped to it (LW022, info). Connected values are not clamped: they
+    /// are only known per shading point.
+    fn clamp_to_range(&mut self, n: G::Id, param: &str, v: Value) -> Value {
+        let bound = |text: Option<&str>| text.and_then(|t| t.trim().parse::<f32>().ok());
+        let Some((lo, hi)) = self
+            .definition(n)
+            .and_then(|d| {
+                d.input(param)
+                    .map(|p| (bound(p.meta("min")), bound(p.meta("max"))))
+            })
+            .filter(|(lo, hi)| lo.is_some() || hi.is_some())
+        else {
+            return v;
+        };
+        let clamp = |x: f32| {
+            let x = lo.map_or(x, |l| x.max(l));
+            hi.map_or(x, |h| x.min(h))
+        };
+        let clamped = match &v {
+            Value::Float(x) => Value::Float(clamp(*x)),
+            Value::Int(i) => Value::Int(clamp(*i as f32).round() as i32),
+            Value::Triple(b, c) => Value::Triple(b.clone(), c.map(clamp)),
+            _ => return v,
+        };
+        if clamped != v {
+            let range = |b: Option<f32>, open: &str| b.map_or(open.to_string(), |x| x.to_string());
+            self.diag(
+                n,
+                Diagnostic::info(
+                    "LW022",
+                    format!(
+                        "`{}.{param}` = {v} is outside its documented range [{}, {}]; clamped to {clamped}",
+                        self.graph.handle(n),
+                        range(lo, "-inf"),
+                        range(hi, "inf")
+                    ),
+                ),
+            );
+        }
+        clamped
     }
 
     /// A float parameter.
