@@ -1,5 +1,6 @@
 //! Determinism (issue 7): `resolve` gives byte-identical output (stdout and stderr) across
-//! runs and across rayon thread counts, in RIB and JSON.
+//! runs and across rayon thread counts, in RIB and JSON; so do the stages after it, `compile`
+//! (IR and lobe listings) and `render` (the preview image, rendered in parallel by rows).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -52,6 +53,60 @@ fn same_input_same_bytes_across_runs_and_thread_counts() {
                 );
             }
         }
+    }
+}
+
+/// stdout and stderr of `vstructc ARGS...` with `threads` rayon threads (exit status 0).
+fn run(args: &[&str], threads: &str) -> (Vec<u8>, Vec<u8>) {
+    let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
+        .args(args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .expect("the vstructc binary runs");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.stdout, out.stderr)
+}
+
+#[test]
+fn compile_and_render_are_deterministic_across_thread_counts() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("determinism-render");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    for file in inputs() {
+        let path = file.display().to_string();
+        for emit in ["ir", "lobes"] {
+            let args = ["compile", "--emit", emit, path.as_str()];
+            let first = run(&args, "1");
+            assert_eq!(run(&args, "2"), first, "compile --emit {emit} {path}");
+        }
+        let mut images = Vec::new();
+        for threads in ["1", "2"] {
+            let png = dir
+                .join(format!("ball-{threads}.pfm"))
+                .display()
+                .to_string();
+            run(
+                &[
+                    "render",
+                    "--size",
+                    "32",
+                    "--pfm",
+                    path.as_str(),
+                    "-o",
+                    png.as_str(),
+                ],
+                threads,
+            );
+            images.push(std::fs::read(&png).expect("rendered image"));
+        }
+        assert_eq!(
+            images[0], images[1],
+            "render {path}: image depends on the thread count"
+        );
     }
 }
 
