@@ -431,3 +431,40 @@ fn generated_scene_lowers_in_parallel_like_sequentially() {
         assert_eq!(ia.lobe_count(), 3, "{}", print::ir_text(ia));
     }
 }
+
+/// The diffuse albedo register of the (only) Lambert leaf, evaluated with `μ_o = mu`.
+fn lambert_albedo_at(ir: &MaterialIr, mu: f32) -> Vec3 {
+    let regs = ir.run_program(None, mu);
+    let albedo = ir
+        .leaves()
+        .find_map(|(_, l)| match l.kind {
+            LeafKind::Lambert { albedo } => Some(albedo),
+            _ => None,
+        })
+        .expect("a Lambert leaf");
+    regs[albedo.index()]
+}
+
+/// §4.1: a double-sided diffuse seen from below uses `diffuseBackColor` unless
+/// `diffuseBackUseDiffuseColor` is set; one-sided, the back colour never applies.
+#[test]
+fn double_sided_diffuse_uses_the_back_colour_from_below() {
+    let front = [0.8, 0.2, 0.1];
+    let back = [0.1, 0.3, 0.9];
+    let surface = |double: i32, use_front: i32| {
+        let mut g = SimpleGraph::new();
+        let s = g.node("S", "PxrSurface");
+        g.seti(s, "diffuseDoubleSided", double)
+            .seti(s, "diffuseBackUseDiffuseColor", use_front);
+        g.setc(s, "diffuseColor", front)
+            .setc(s, "diffuseBackColor", back);
+        lower(&g, s).0
+    };
+    let ir = surface(1, 0);
+    assert_eq!(lambert_albedo_at(&ir, 0.7), Vec3::from(front));
+    assert_eq!(lambert_albedo_at(&ir, -0.7), Vec3::from(back));
+    let ir = surface(1, 1);
+    assert_eq!(lambert_albedo_at(&ir, -0.7), Vec3::from(front));
+    let ir = surface(0, 0);
+    assert_eq!(lambert_albedo_at(&ir, -0.7), Vec3::from(front));
+}

@@ -5,8 +5,10 @@
 //! * a diffuse roughness that is connected (not a constant) selects EON, which evaluates as
 //!   Lambert below σ = 1e-4 (§3.3), so the choice never changes a constant-0 result;
 //! * a Fresnel mode that is connected is lowered as artistic (LW020);
-//! * `diffuseDoubleSided`, `*DoubleSided` other than for the transmission gain: the lobes are
-//!   two-sided in the interpreter; the back colour is not modelled (LW020 when it differs);
+//! * `*DoubleSided`: the lobes are two-sided when the interpreter is asked for both sides
+//!   (`PrepareOptions::sides`); the diffuse back colour (`diffuseBackColor` /
+//!   `diffuseBackUseDiffuseColor`) is chosen in the program by the sign of `μ_o` in the diffuse
+//!   frame;
 //! * LW020 for `<p>ModelType ≠ 1` and LW021 for iridescence and single scattering are
 //!   reported only for lobes that survive constant folding.
 
@@ -348,6 +350,29 @@ fn specular_lobe<G: Graph>(
     Ok((leaf, frame, fresnel))
 }
 
+/// §4.1: a double-sided diffuse seen from below (`μ_o < 0` in its frame) has the albedo
+/// `diffuseColor` when `diffuseBackUseDiffuseColor` is set, else `diffuseBackColor`. Nothing
+/// changes (and the program stays constant) when `diffuseDoubleSided` is a constant 0.
+fn back_side_colour<G: Graph>(
+    cx: &mut Lower<'_, G>,
+    n: G::Id,
+    front_colour: Reg,
+    frame: u32,
+) -> Result<Reg, Error> {
+    let double = p(cx, n, "diffuseDoubleSided")?;
+    if cx.b.prog.constant(double) == Some(glam::Vec3::ZERO) {
+        return Ok(front_colour);
+    }
+    let use_front = p(cx, n, "diffuseBackUseDiffuseColor")?;
+    let back_colour = p(cx, n, "diffuseBackColor")?;
+    let back = cx.b.prog.select(use_front, front_colour, back_colour);
+    let back = cx.b.prog.select(double, back, front_colour);
+    let mu = cx.b.prog.view_mu(frame);
+    let zero = cx.constf(0.0);
+    let front = cx.b.prog.bin(OpCode::CmpGe, mu, zero);
+    Ok(cx.b.prog.select(front, front_colour, back))
+}
+
 /// The PxrSurface / PxrLayerSurface recipe (§4.1).
 pub fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let one = cx.constf(1.0);
@@ -358,6 +383,7 @@ pub fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Er
     let dgain = p(cx, n, "diffuseGain")?;
     let drough = p(cx, n, "diffuseRoughness")?;
     let dframe = frame_for(cx, n, "diffuse")?;
+    let dcolor = back_side_colour(cx, n, dcolor, dframe)?;
     let dkind = if cx.b.prog.constant(drough) == Some(glam::Vec3::ZERO) {
         LeafKind::Lambert { albedo: dcolor }
     } else {
