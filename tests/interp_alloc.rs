@@ -4,24 +4,28 @@
 
 use glam::Vec3;
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::{Material, Scratch, ShadingPoint};
 
 struct Counting;
 
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
 thread_local! {
-    /// Count only on threads that asked for it (the test harness runs tests in parallel).
+    /// Count only on threads that asked for it, and per thread: the test harness runs tests
+    /// in parallel, and a shared counter would see the other test's allocations.
     static COUNTING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    static ALLOCS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
 fn count() {
     if COUNTING.with(|c| c.get()) {
-        ALLOCS.fetch_add(1, Ordering::SeqCst);
+        ALLOCS.with(|a| a.set(a.get() + 1));
     }
+}
+
+/// Allocations counted on this thread so far.
+fn allocations() -> usize {
+    ALLOCS.with(|a| a.get())
 }
 
 unsafe impl GlobalAlloc for Counting {
@@ -56,7 +60,7 @@ fn prepare_eval_and_sample_do_not_allocate() {
     let _ = m.prepare_with(&p0, &mut scratch);
     let _ = m.prepare(&p0);
     COUNTING.with(|c| c.set(true));
-    let before = ALLOCS.load(Ordering::SeqCst);
+    let before = allocations();
     let mut acc = Vec3::ZERO;
     for (v, l, u) in &points {
         let p = m.prepare_with(&ShadingPoint::new(Vec3::Z, Vec3::X, *v), &mut scratch);
@@ -68,7 +72,7 @@ fn prepare_eval_and_sample_do_not_allocate() {
         let q = m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, *l));
         acc += q.eval(*v).f_cos;
     }
-    let after = ALLOCS.load(Ordering::SeqCst);
+    let after = allocations();
     COUNTING.with(|c| c.set(false));
     assert!(acc.is_finite());
     assert_eq!(after - before, 0, "heap allocations in prepare/eval/sample");
@@ -78,9 +82,9 @@ fn prepare_eval_and_sample_do_not_allocate() {
 fn the_counter_counts() {
     // The check above must be able to fail.
     COUNTING.with(|c| c.set(true));
-    let before = ALLOCS.load(Ordering::SeqCst);
+    let before = allocations();
     let v: Vec<u64> = std::hint::black_box(vec![1, 2, 3]);
-    let after = ALLOCS.load(Ordering::SeqCst);
+    let after = allocations();
     COUNTING.with(|c| c.set(false));
     assert!(after > before);
     drop(v);
