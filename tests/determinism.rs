@@ -2,24 +2,13 @@
 //! runs and across rayon thread counts, in RIB and JSON; so do the stages after it, `compile`
 //! (IR and lobe listings) and `render` (the preview image, rendered in parallel by rows).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// stdout and stderr of `vstructc resolve FILE --format FORMAT` with `threads` rayon threads.
-fn resolve(file: &PathBuf, format: &str, threads: &str) -> (Vec<u8>, Vec<u8>) {
-    let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
-        .args(["resolve", "--format", format])
-        .arg(file)
-        .env("RAYON_NUM_THREADS", threads)
-        .output()
-        .expect("the vstructc binary runs");
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (out.stdout, out.stderr)
+fn resolve(file: &Path, format: &str, threads: &str) -> (Vec<u8>, Vec<u8>) {
+    let path = file.display().to_string();
+    run(&["resolve", "--format", format, path.as_str()], threads)
 }
 
 fn inputs() -> Vec<PathBuf> {

@@ -745,26 +745,13 @@ impl<'a> ArgsParser<'a> {
         let name = name_attr.value.clone();
         self.check_duplicate(name.clone(), direction, pos)?;
 
-        // Built field by field rather than with `Property::new`, which formats the type into
-        // `declared_type`; `resolve_type` sets it from the attribute text below.
-        let mut prop = Property {
-            name: name.into_owned(),
+        // The type (and `declared_type`) is set from the attributes by `resolve_type` below.
+        let mut prop = Property::new(
+            name.into_owned(),
             direction,
-            ty: Type::scalar(BaseType::Unknown(String::new())),
-            declared_type: String::new(),
-            default: None,
-            metadata: Metadata::new(),
-            typed_metadata: Vec::new(),
-            connection_types: Vec::new(),
-            page: None,
-            label: None,
-            help: None,
-            widget: None,
-            options: Vec::new(),
-            connectable: true,
-            vstruct: None,
-            location: self.loc(pos),
-        };
+            Type::scalar(BaseType::Unknown(String::new())),
+            self.loc(pos),
+        );
         prop.page = match &self.page_path {
             Some(p) => Some(p.clone()),
             None => attr(&attrs, "page").map(|a| a.value.to_string()),
