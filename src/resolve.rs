@@ -13,7 +13,7 @@ use crate::cond::{
 use crate::diag::{Diagnostic, Diagnostics, Location};
 use crate::network::{Link, Network, NodeId};
 use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
-use crate::registry::{Definition, Property, Registry};
+use crate::registry::{IndexedDefinition, Registry};
 use crate::types::Value;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
@@ -183,31 +183,8 @@ type MatchPlan = Arc<Vec<Option<(usize, OutputMember)>>>;
 
 #[derive(Clone)]
 struct TypeInfo {
-    def: Option<Arc<IndexedDef>>,
+    def: Option<Arc<IndexedDefinition>>,
     tables: Option<Arc<VstructTables>>,
-}
-
-/// A definition with a name index over its inputs: definitions such as PxrLayerMixer declare
-/// hundreds of inputs, and conditionals look several of them up for every member.
-struct IndexedDef {
-    def: Arc<Definition>,
-    inputs: HashMap<String, usize>,
-}
-
-impl IndexedDef {
-    fn new(def: Arc<Definition>) -> Self {
-        let inputs = def
-            .inputs
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.name.clone(), i))
-            .collect();
-        IndexedDef { def, inputs }
-    }
-
-    fn input(&self, name: &str) -> Option<&Property> {
-        self.inputs.get(name).map(|&i| &self.def.inputs[i])
-    }
 }
 
 impl Resolver<'_> {
@@ -219,7 +196,7 @@ impl Resolver<'_> {
             def: self
                 .registry
                 .definition(shader)
-                .map(|d| Arc::new(IndexedDef::new(d))),
+                .map(|d| Arc::new(IndexedDefinition::new(d))),
             tables: self.registry.tables(shader),
         };
         self.types.insert(shader.to_string(), info.clone());
@@ -230,7 +207,7 @@ impl Resolver<'_> {
         self.type_info(shader).tables
     }
 
-    fn definition(&mut self, shader: &str) -> Option<Arc<IndexedDef>> {
+    fn definition(&mut self, shader: &str) -> Option<Arc<IndexedDefinition>> {
         self.type_info(shader).def
     }
 
@@ -886,8 +863,8 @@ struct MemberCtx<'c> {
     head: &'c str,
     member: &'c Arc<str>,
     source: &'c HeadSource,
-    down_def: Option<&'c IndexedDef>,
-    up_def: Option<&'c IndexedDef>,
+    down_def: Option<&'c IndexedDefinition>,
+    up_def: Option<&'c IndexedDefinition>,
 }
 
 /// True if every branch of the conditional connects (so `--no-conditions` changes nothing
@@ -910,7 +887,7 @@ fn always_connects(entry: &CondEntry) -> bool {
 struct NodeView<'v> {
     net: &'v Network,
     node: NodeId,
-    def: Option<&'v IndexedDef>,
+    def: Option<&'v IndexedDefinition>,
 }
 
 impl NodeView<'_> {

@@ -23,7 +23,7 @@ pub mod vray;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::ir::{IrBuilder, MaterialIr, Reg, value_to_vec3};
-use crate::registry::Definition;
+use crate::registry::{Definition, IndexedDefinition};
 use crate::types::{BaseType, Type, Value};
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
@@ -222,7 +222,7 @@ pub struct Lower<'a, G: Graph> {
     pub(crate) mixer_gates: HashMap<(G::Id, &'static str), MixerGates>,
     visiting: Vec<G::Id>,
     warned_no_def: HashSet<String>,
-    def_cache: HashMap<String, Option<Arc<Definition>>>,
+    def_cache: HashMap<String, Option<Arc<IndexedDefinition>>>,
 }
 
 impl<'a, G: Graph> Lower<'a, G> {
@@ -241,13 +241,16 @@ impl<'a, G: Graph> Lower<'a, G> {
         }
     }
 
-    /// The definition of a node's shader (cached).
-    pub fn definition(&mut self, n: G::Id) -> Option<Arc<Definition>> {
+    /// The definition of a node's shader, with its inputs indexed by name (cached).
+    pub fn definition(&mut self, n: G::Id) -> Option<Arc<IndexedDefinition>> {
         let shader = self.graph.shader(n);
         if let Some(d) = self.def_cache.get(shader) {
             return d.clone();
         }
-        let d = self.defs.definition(shader);
+        let d = self
+            .defs
+            .definition(shader)
+            .map(|d| Arc::new(IndexedDefinition::new(d)));
         self.def_cache.insert(shader.to_string(), d.clone());
         d
     }
@@ -403,8 +406,11 @@ impl<'a, G: Graph> Lower<'a, G> {
     }
 
     fn param_type(&mut self, n: G::Id, param: &str, builtin: &Value) -> Type {
-        if let Some(p) = self.definition(n).and_then(|d| d.input(param).cloned()) {
-            return p.ty;
+        if let Some(ty) = self
+            .definition(n)
+            .and_then(|d| d.input(param).map(|p| p.ty.clone()))
+        {
+            return ty;
         }
         Type::scalar(builtin.base_type())
     }

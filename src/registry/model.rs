@@ -292,3 +292,33 @@ impl Definition {
         all
     }
 }
+
+/// A definition with a name index over its inputs. `Definition::input` scans the inputs;
+/// definitions such as PxrLayerMixer declare hundreds of them, and resolution and lowering
+/// look several up for every member or parameter binding.
+#[derive(Debug, Clone)]
+pub struct IndexedDefinition {
+    def: Arc<Definition>,
+    inputs: rustc_hash::FxHashMap<String, usize>,
+}
+
+impl IndexedDefinition {
+    /// Indexes `def`'s inputs (the first of duplicate names wins, as `Definition::input`).
+    pub fn new(def: Arc<Definition>) -> Self {
+        let mut inputs = rustc_hash::FxHashMap::default();
+        for (i, p) in def.inputs.iter().enumerate() {
+            inputs.entry(p.name.clone()).or_insert(i);
+        }
+        IndexedDefinition { def, inputs }
+    }
+
+    /// The input named `name`.
+    pub fn input(&self, name: &str) -> Option<&Property> {
+        self.inputs.get(name).map(|&i| &self.def.inputs[i])
+    }
+
+    /// The definition.
+    pub fn definition(&self) -> &Arc<Definition> {
+        &self.def
+    }
+}
