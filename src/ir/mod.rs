@@ -22,7 +22,7 @@ pub use program::{Global, Globals, Op, OpCode, Program, ProgramBuilder, Reg, Run
 
 use crate::types::{Type, Value};
 use glam::Vec3;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Maximum number of BSDF lobes of one material (§1.2). `Emission` and `Transparent` leaves
 /// do not count; the mia three-Ward highlight counts as one.
@@ -79,6 +79,14 @@ impl InputSlot {
 
 /// A value as a register: scalars broadcast, triples as they are, anything else 0.
 pub fn value_to_vec3(v: &Value) -> Vec3 {
+    // The common scalar and triple cases without collecting the numbers.
+    match v {
+        Value::Int(i) => return Vec3::splat(*i as f32),
+        Value::Float(x) => return Vec3::splat(*x),
+        Value::Bool(b) => return Vec3::splat(if *b { 1.0 } else { 0.0 }),
+        Value::Triple(_, c) => return Vec3::from_array(*c),
+        _ => {}
+    }
     let n = v.numbers();
     match n.len() {
         0 => Vec3::ZERO,

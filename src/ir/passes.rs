@@ -8,7 +8,7 @@ use super::program::{OpCode, ProgramBuilder, Reg};
 use super::{Cl, FrameSlot, IrBuilder, MAX_LOBES, MaterialIr};
 use crate::diag::Diagnostic;
 use glam::Vec3;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// The nodes reachable from `root`, renumbered so that the root is node 0 and every node
 /// precedes its children (reverse post-order of a depth-first walk).
@@ -178,7 +178,7 @@ pub(super) fn optimize_with(
     let root = if ir.nodes.is_empty() {
         None
     } else {
-        let mut memo = HashMap::new();
+        let mut memo = HashMap::default();
         replay(&ir, NodeId(0), &mut b, &regs, &frames, &mut memo)
     };
     let nodes = match root {
@@ -239,7 +239,7 @@ pub(super) fn optimize_with(
             }
         }
     }
-    let mut slot_index = HashMap::new();
+    let mut slot_index = HashMap::default();
     let mut inputs = Vec::new();
     for (i, s) in b.inputs.into_iter().enumerate() {
         if used_slots[i] {

@@ -7,39 +7,10 @@
 //! ([`Program::rebuild`]).
 
 use glam::Vec3;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
-/// A small multiplicative hasher for the value-numbering table (keys are a few integers;
-/// SipHash's DoS resistance is not needed and costs most of the builder's time).
-#[derive(Debug, Default, Clone, Copy)]
-pub struct FastHasher(u64);
-
-impl Hasher for FastHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u8(&mut self, x: u8) {
-        self.write_u64(u64::from(x));
-    }
-    fn write_u32(&mut self, x: u32) {
-        self.write_u64(u64::from(x));
-    }
-    fn write_usize(&mut self, x: usize) {
-        self.write_u64(x as u64);
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-/// `HashMap` with [`FastHasher`].
-pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
+use rustc_hash::FxHashMap as HashMap;
+/// The value-numbering table's map: keys are a few integers, so SipHash's DoS resistance is
+/// not needed (and cost most of the builder's time); Fx hashing is.
+pub type FastMap<K, V> = HashMap<K, V>;
 
 /// A register: the index of the op that defines it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -430,7 +401,7 @@ impl Program {
     pub fn rebuild(&self, roots: &[Reg]) -> (Program, HashMap<Reg, Reg>) {
         let live = self.liveness(roots);
         let mut b = ProgramBuilder::new();
-        let mut map: HashMap<Reg, Reg> = HashMap::new();
+        let mut map: HashMap<Reg, Reg> = HashMap::default();
         for (i, op) in self.ops.iter().enumerate() {
             if !live[i] {
                 continue;

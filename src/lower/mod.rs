@@ -23,10 +23,11 @@ pub mod vray;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::ir::{IrBuilder, MaterialIr, Reg, value_to_vec3};
-use crate::registry::{Definition, IndexedDefinition};
+use crate::registry::{Definition, IndexedDefinition, NumericRange};
 use crate::types::{BaseType, Type, Value};
 use glam::Vec3;
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap, FxHashSet};
+use std::collections::HashMap;
 use std::fmt::Debug;
 use std::hash::Hash;
 use std::sync::Arc;
@@ -43,9 +44,26 @@ pub trait Graph {
     fn value(&self, n: Self::Id, param: &str) -> Option<&Value>;
     /// The first connection into an input: upstream node and output name (empty when the
     /// connection names no output).
-    fn connection(&self, n: Self::Id, param: &str) -> Option<(Self::Id, String)>;
+    fn connection(&self, n: Self::Id, param: &str) -> Option<(Self::Id, &str)>;
+    /// [`Graph::value`] and [`Graph::connection`] of one input, in one look-up where the
+    /// graph can do that.
+    fn input(&self, n: Self::Id, param: &str) -> Binding<'_, Self::Id> {
+        Binding {
+            value: self.value(n, param),
+            connection: self.connection(n, param),
+        }
+    }
     /// Where the node is defined, for diagnostics.
     fn location(&self, n: Self::Id) -> Option<Location>;
+}
+
+/// What a graph holds for one input: its authored value and its first connection.
+#[derive(Debug, Clone, Copy)]
+pub struct Binding<'g, Id> {
+    /// The authored value, if any.
+    pub value: Option<&'g Value>,
+    /// The first connection: upstream node and output name (empty when none is named).
+    pub connection: Option<(Id, &'g str)>,
 }
 
 /// Shader definitions by id.
@@ -140,8 +158,11 @@ impl Graph for SimpleGraph {
     fn value(&self, n: usize, param: &str) -> Option<&Value> {
         self.nodes[n].values.get(param)
     }
-    fn connection(&self, n: usize, param: &str) -> Option<(usize, String)> {
-        self.nodes[n].conns.get(param).map(|(u, o)| (*u, o.clone()))
+    fn connection(&self, n: usize, param: &str) -> Option<(usize, &str)> {
+        self.nodes[n]
+            .conns
+            .get(param)
+            .map(|(u, o)| (*u, o.as_str()))
     }
     fn location(&self, _n: usize) -> Option<Location> {
         None
@@ -169,7 +190,48 @@ pub fn lower_node<G: Graph>(
     name: &str,
     diags: &mut Diagnostics,
 ) -> Result<MaterialIr, Error> {
-    let shader = graph.shader(node).to_string();
+    lower_node_cached(
+        graph,
+        defs,
+        &mut DefinitionCache::default(),
+        node,
+        name,
+        diags,
+    )
+}
+
+/// Indexed definitions by shader type, kept across the materials one thread lowers: indexing
+/// a definition such as PxrLayerMixer (hundreds of inputs) costs more than lowering a
+/// material, and a per-thread cache keeps threads off each other's reference counts.
+#[derive(Debug, Default)]
+pub struct DefinitionCache {
+    by_shader: FxHashMap<String, Option<Arc<IndexedDefinition>>>,
+}
+
+impl DefinitionCache {
+    fn get(&mut self, defs: &dyn Definitions, shader: &str) -> Option<Arc<IndexedDefinition>> {
+        // `get` before `entry`: the hit path then hashes once and allocates nothing.
+        if let Some(d) = self.by_shader.get(shader) {
+            return d.clone();
+        }
+        let d = defs
+            .definition(shader)
+            .map(|d| Arc::new(IndexedDefinition::new(d)));
+        self.by_shader.insert(shader.to_string(), d.clone());
+        d
+    }
+}
+
+/// [`lower_node`] with a definition cache shared across calls (see [`lower_many`]).
+pub fn lower_node_cached<G: Graph>(
+    graph: &G,
+    defs: &dyn Definitions,
+    cache: &mut DefinitionCache,
+    node: G::Id,
+    name: &str,
+    diags: &mut Diagnostics,
+) -> Result<MaterialIr, Error> {
+    let shader = graph.shader(node);
     let Some(recipe) = recipe_for(&shader) else {
         let mut d = Diagnostic::error(
             "LW001",
@@ -184,7 +246,7 @@ pub fn lower_node<G: Graph>(
         }
         return Err(d.into());
     };
-    let mut cx = Lower::new(graph, defs, diags);
+    let mut cx = Lower::with_cache(graph, defs, cache, diags);
     let root = match recipe {
         crate::ir::RecipeId::PxrSurface => pxr::lower_surface(&mut cx, node),
         crate::ir::RecipeId::VRayMtl => vray::lower(&mut cx, node),
@@ -203,6 +265,22 @@ pub fn lower_node<G: Graph>(
     })
 }
 
+/// A reusable buffer for parameter names built from parts: `format!` allocates for every
+/// binding, and a PxrLayerMixer builds hundreds of names per material.
+#[derive(Debug, Default)]
+pub(crate) struct NameBuf(String);
+
+impl NameBuf {
+    /// The concatenation of `parts`, valid until the next call.
+    pub(crate) fn join(&mut self, parts: &[&str]) -> &str {
+        self.0.clear();
+        for p in parts {
+            self.0.push_str(p);
+        }
+        &self.0
+    }
+}
+
 /// Gate and compositing factor of mixer layers 1–4 for one lobe group.
 pub(crate) type MixerGates = [(Reg, Reg); 4];
 
@@ -216,43 +294,82 @@ pub struct Lower<'a, G: Graph> {
     pub b: IrBuilder,
     /// Diagnostics sink.
     pub diags: &'a mut Diagnostics,
-    outputs: HashMap<(G::Id, String), Reg>,
+    cache: CacheRef<'a>,
+    /// The definition of the node looked up last: bindings come in runs per node.
+    last_definition: Option<(G::Id, Option<Arc<IndexedDefinition>>)>,
+    outputs: FxHashMap<(G::Id, String), Reg>,
     /// Per PxrLayerMixer node and lobe group: gates and compositing factors (see
     /// `pxr::mixer_gates`).
-    pub(crate) mixer_gates: HashMap<(G::Id, &'static str), MixerGates>,
+    pub(crate) mixer_gates: FxHashMap<(G::Id, &'static str), MixerGates>,
     visiting: Vec<G::Id>,
-    warned_no_def: HashSet<String>,
-    def_cache: HashMap<String, Option<Arc<IndexedDefinition>>>,
+    warned_no_def: FxHashSet<String>,
+}
+
+/// The lowering context's definition cache: its own, or one shared across materials.
+enum CacheRef<'a> {
+    Own(DefinitionCache),
+    Shared(&'a mut DefinitionCache),
+}
+
+impl CacheRef<'_> {
+    fn get(&mut self) -> &mut DefinitionCache {
+        match self {
+            CacheRef::Own(c) => c,
+            CacheRef::Shared(c) => c,
+        }
+    }
 }
 
 impl<'a, G: Graph> Lower<'a, G> {
     /// A fresh context.
     pub fn new(graph: &'a G, defs: &'a dyn Definitions, diags: &'a mut Diagnostics) -> Self {
+        Self::build(
+            graph,
+            defs,
+            CacheRef::Own(DefinitionCache::default()),
+            diags,
+        )
+    }
+
+    /// A fresh context that looks definitions up through `cache`.
+    pub fn with_cache(
+        graph: &'a G,
+        defs: &'a dyn Definitions,
+        cache: &'a mut DefinitionCache,
+        diags: &'a mut Diagnostics,
+    ) -> Self {
+        Self::build(graph, defs, CacheRef::Shared(cache), diags)
+    }
+
+    fn build(
+        graph: &'a G,
+        defs: &'a dyn Definitions,
+        cache: CacheRef<'a>,
+        diags: &'a mut Diagnostics,
+    ) -> Self {
         Lower {
             graph,
             defs,
             b: IrBuilder::new(),
             diags,
-            outputs: HashMap::new(),
-            mixer_gates: HashMap::new(),
+            cache,
+            last_definition: None,
+            outputs: FxHashMap::default(),
+            mixer_gates: FxHashMap::default(),
             visiting: Vec::new(),
-            warned_no_def: HashSet::new(),
-            def_cache: HashMap::new(),
+            warned_no_def: FxHashSet::default(),
         }
     }
 
     /// The definition of a node's shader, with its inputs indexed by name (cached).
-    pub fn definition(&mut self, n: G::Id) -> Option<Arc<IndexedDefinition>> {
-        let shader = self.graph.shader(n);
-        if let Some(d) = self.def_cache.get(shader) {
-            return d.clone();
+    pub fn definition(&mut self, n: G::Id) -> Option<&IndexedDefinition> {
+        if self.last_definition.as_ref().is_none_or(|(id, _)| *id != n) {
+            let d = self.cache.get().get(self.defs, self.graph.shader(n));
+            self.last_definition = Some((n, d));
         }
-        let d = self
-            .defs
-            .definition(shader)
-            .map(|d| Arc::new(IndexedDefinition::new(d)));
-        self.def_cache.insert(shader.to_string(), d.clone());
-        d
+        self.last_definition
+            .as_ref()
+            .and_then(|(_, d)| d.as_deref())
     }
 
     /// Emit a diagnostic located at node `n`.
@@ -266,18 +383,19 @@ impl<'a, G: Graph> Lower<'a, G> {
 
     /// Bind parameter `param` of node `n` (§4.0) with `builtin` as the recipe's default.
     pub fn param(&mut self, n: G::Id, param: &str, builtin: Value) -> Result<Reg, Error> {
-        if let Some((up, output)) = self.graph.connection(n, param) {
-            if let Some(r) = self.pattern_output(up, &output)? {
+        let graph = self.graph;
+        let input = graph.input(n, param);
+        if let Some((up, output)) = input.connection {
+            if let Some(r) = self.pattern_output(up, output)? {
                 return Ok(r);
             }
-            let fallback = self.static_value(n, param, &builtin);
-            let fallback = self.clamp_to_range(n, param, fallback);
+            let (fallback, range, ty) = self.static_binding(n, param, input.value, &builtin);
+            let fallback = self.clamp_to_range(n, param, fallback, range);
             let origin = if output.is_empty() {
-                self.graph.handle(up).to_string()
+                graph.handle(up).to_string()
             } else {
-                format!("{}.{}", self.graph.handle(up), output)
+                format!("{}.{}", graph.handle(up), output)
             };
-            let ty = self.param_type(n, param, &builtin);
             let known = self.b.inputs().iter().any(|s| s.origin == origin);
             if !known {
                 self.diag(
@@ -294,26 +412,46 @@ impl<'a, G: Graph> Lower<'a, G> {
             }
             return Ok(self.b.input_slot(&origin, ty, fallback));
         }
-        let v = self.static_value(n, param, &builtin);
-        let v = self.clamp_to_range(n, param, v);
+        let (v, range, _) = self.static_binding(n, param, input.value, &builtin);
+        let v = self.clamp_to_range(n, param, v, range);
         Ok(self.b.prog.constant3(value_to_vec3(&v)))
+    }
+
+    /// For an unconnected binding, in one definition lookup: the static value (authored,
+    /// definition default or `builtin`), the documented range and the parameter's type.
+    fn static_binding(
+        &mut self,
+        n: G::Id,
+        param: &str,
+        authored: Option<&Value>,
+        builtin: &Value,
+    ) -> (Value, NumericRange, Type) {
+        let Some(def) = self.definition(n) else {
+            let ty = Type::scalar(builtin.base_type());
+            let v = self.static_value(n, param, builtin);
+            return (v, NumericRange::default(), ty);
+        };
+        match def.input_with_range(param) {
+            Some((p, range)) => {
+                let v = authored.or(p.default.as_ref()).unwrap_or(builtin).clone();
+                (v, range, p.ty.clone())
+            }
+            None => (
+                authored.unwrap_or(builtin).clone(),
+                NumericRange::default(),
+                Type::scalar(builtin.base_type()),
+            ),
+        }
     }
 
     /// §4.0: a constant outside the parameter's documented range (the definition's `min` /
     /// `max` metadata) is clamped to it (LW022, info). Connected values are not clamped: they
     /// are only known per shading point.
-    fn clamp_to_range(&mut self, n: G::Id, param: &str, v: Value) -> Value {
-        let bound = |text: Option<&str>| text.and_then(|t| t.trim().parse::<f32>().ok());
-        let Some((lo, hi)) = self
-            .definition(n)
-            .and_then(|d| {
-                d.input(param)
-                    .map(|p| (bound(p.meta("min")), bound(p.meta("max"))))
-            })
-            .filter(|(lo, hi)| lo.is_some() || hi.is_some())
-        else {
+    fn clamp_to_range(&mut self, n: G::Id, param: &str, v: Value, range: NumericRange) -> Value {
+        if range.is_open() {
             return v;
-        };
+        }
+        let NumericRange { min: lo, max: hi } = range;
         let clamp = |x: f32| {
             let x = lo.map_or(x, |l| x.max(l));
             hi.map_or(x, |h| x.min(h))
@@ -386,7 +524,8 @@ impl<'a, G: Graph> Lower<'a, G> {
                 None => builtin.clone(),
             },
             None => {
-                let shader = self.graph.shader(n);
+                let graph = self.graph;
+                let shader = graph.shader(n);
                 if !self.warned_no_def.contains(shader) {
                     let shader = shader.to_string();
                     self.warned_no_def.insert(shader.clone());
@@ -405,21 +544,12 @@ impl<'a, G: Graph> Lower<'a, G> {
         }
     }
 
-    fn param_type(&mut self, n: G::Id, param: &str, builtin: &Value) -> Type {
-        if let Some(ty) = self
-            .definition(n)
-            .and_then(|d| d.input(param).map(|p| p.ty.clone()))
-        {
-            return ty;
-        }
-        Type::scalar(builtin.base_type())
-    }
-
     /// The program expression of `up.output` when `up` is a pattern the lowering interprets
     /// (memoised); `None` when it is not interpreted. LW011 on a cycle.
     pub fn pattern_output(&mut self, up: G::Id, output: &str) -> Result<Option<Reg>, Error> {
-        let shader = self.graph.shader(up).to_string();
-        if !is_interpreted(&shader) {
+        let graph = self.graph;
+        let shader = graph.shader(up);
+        if !is_interpreted(shader) {
             return Ok(None);
         }
         let key = (up, output.to_string());
@@ -450,7 +580,7 @@ impl<'a, G: Graph> Lower<'a, G> {
             return Err(d.into());
         }
         self.visiting.push(up);
-        let r = match shader.as_str() {
+        let r = match shader {
             "PxrLayer" => pxr::layer_output(self, up, output),
             "PxrLayerMixer" => pxr::mixer_output(self, up, output),
             _ => patterns::output(self, up, output),
@@ -550,15 +680,19 @@ pub fn lower_many<G: Graph + Sync>(
 where
     G::Id: Send + Sync,
 {
-    let one = |(name, id): &(String, G::Id)| {
+    let one = |cache: &mut DefinitionCache, (name, id): &(String, G::Id)| {
         let mut d = Diagnostics::new();
-        let r = lower_node(graph, defs, *id, name, &mut d);
+        let r = lower_node_cached(graph, defs, cache, *id, name, &mut d);
         (r, d)
     };
     if parallel {
         use rayon::prelude::*;
-        terminals.par_iter().map(one).collect()
+        terminals
+            .par_iter()
+            .map_init(DefinitionCache::default, one)
+            .collect()
     } else {
-        terminals.iter().map(one).collect()
+        let mut cache = DefinitionCache::default();
+        terminals.iter().map(|t| one(&mut cache, t)).collect()
     }
 }

@@ -1,7 +1,7 @@
 //! Adapters from the crate's network model and registry to the lowering's [`Graph`] and
 //! [`Definitions`] traits, and the per-material entry point used by `vstructc compile`.
 
-use super::{Definitions, Graph, lower_node};
+use super::{Binding, Definitions, Graph, lower_node};
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::ir::MaterialIr;
 use crate::network::{Network, NodeId};
@@ -20,11 +20,21 @@ impl Graph for Network {
     fn value(&self, n: NodeId, param: &str) -> Option<&Value> {
         Network::value(self, n, param)
     }
-    fn connection(&self, n: NodeId, param: &str) -> Option<(NodeId, String)> {
-        self.connections(n, param).iter().find_map(|l| {
-            l.upstream_node()
-                .map(|u| (u, l.output().unwrap_or("").to_string()))
-        })
+    fn connection(&self, n: NodeId, param: &str) -> Option<(NodeId, &str)> {
+        self.connections(n, param)
+            .iter()
+            .find_map(|l| l.upstream_node().map(|u| (u, l.output().unwrap_or(""))))
+    }
+    fn input(&self, n: NodeId, param: &str) -> Binding<'_, NodeId> {
+        let p = self[n].param(param);
+        Binding {
+            value: p.and_then(|p| p.value()),
+            connection: p.and_then(|p| {
+                p.connections()
+                    .iter()
+                    .find_map(|l| l.upstream_node().map(|u| (u, l.output().unwrap_or(""))))
+            }),
+        }
     }
     fn location(&self, n: NodeId) -> Option<Location> {
         self[n].location().cloned()

@@ -12,7 +12,7 @@
 //! * LW020 for `<p>ModelType ≠ 1` and LW021 for iridescence and single scattering are
 //!   reported only for lobes that survive constant folding.
 
-use super::{Graph, Lower, aniso_alpha};
+use super::{Graph, Lower, NameBuf, aniso_alpha};
 use crate::diag::{Diagnostic, Error};
 use crate::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, Leaf, LeafKind, Masking, OpCode, Reg, SheenMasking,
@@ -144,7 +144,7 @@ pub fn layer_output<G: Graph>(
     };
     let v = cx.param(n, source, builtin_default(source))?;
     for p in ["roughSpecular", "specular", "clearcoat"] {
-        if m == format!("{p}FaceColor") || m == format!("{p}EdgeColor") {
+        if matches!(m.strip_prefix(p), Some("FaceColor" | "EdgeColor")) {
             let gain_name = format!("{p}Gain");
             let gain = cx.param(n, &gain_name, Value::Float(0.0))?;
             return Ok(Some(cx.b.prog.mul(v, gain)));
@@ -170,8 +170,9 @@ pub fn mixer_output<G: Graph>(
         let one = cx.constf(1.0);
         // OR of the five `<prefix>_enableX == 1`.
         let mut acc = zero;
+        let mut name = NameBuf::default();
         for p in MIXER_PREFIXES {
-            let e = cx.pi(n, &format!("{p}_enable{x}"), 0)?;
+            let e = cx.pi(n, name.join(&[p, "_enable", x]), 0)?;
             let on = cx.b.prog.bin(OpCode::CmpEq, e, one);
             acc = cx.b.prog.bin(OpCode::Or, acc, on);
         }
@@ -180,7 +181,8 @@ pub fn mixer_output<G: Graph>(
     let lobe = member_lobe(m);
     let normal = is_normal_member(m);
     let dflt = mixer_member_default(m);
-    let base = cx.param(n, &format!("baselayer_{m}"), dflt.clone())?;
+    let mut name = NameBuf::default();
+    let base = cx.param(n, name.join(&["baselayer_", m]), dflt.clone())?;
     let mut acc = if normal {
         cx.b.prog.un(OpCode::NormalOrDefault, base)
     } else {
@@ -190,7 +192,7 @@ pub fn mixer_output<G: Graph>(
     let gates = mixer_gates(cx, n, lobe)?;
     for (i, p) in MIXER_PREFIXES.iter().enumerate().skip(1) {
         let (gate, t) = gates[i - 1];
-        let v = cx.param(n, &format!("{p}_{m}"), dflt.clone())?;
+        let v = cx.param(n, name.join(&[p, "_", m]), dflt.clone())?;
         let v = if normal {
             let nz = nonzero(cx, v);
             let both = cx.b.prog.bin(OpCode::And, gate, nz);
@@ -223,21 +225,22 @@ fn mixer_gates<G: Graph>(
     let zero = cx.constf(0.0);
     let one = cx.constf(1.0);
     let mut out = [(zero, zero); 4];
+    let mut name = NameBuf::default();
     for (i, p) in MIXER_PREFIXES.iter().enumerate().skip(1) {
-        let enabled = cx.pi(n, &format!("layer{i}Enabled"), 1)?;
+        let enabled = cx.pi(n, name.join(&[p, "Enabled"]), 1)?;
         let part = cx.b.prog.bin(OpCode::CmpEq, enabled, one);
         let gate_flag = match lobe {
             Some(x) => {
-                let e = cx.pi(n, &format!("{p}_enable{x}"), 0)?;
+                let e = cx.pi(n, name.join(&[p, "_enable", x]), 0)?;
                 cx.b.prog.bin(OpCode::CmpEq, e, one)
             }
             None => {
-                let bump = cx.pv(n, &format!("{p}_bumpNormal"), [0.0; 3])?;
+                let bump = cx.pv(n, name.join(&[p, "_bumpNormal"]), [0.0; 3])?;
                 nonzero(cx, bump)
             }
         };
         let gate = cx.b.prog.bin(OpCode::And, part, gate_flag);
-        let mask = cx.pf(n, &format!("layer{i}Mask"), 1.0)?;
+        let mask = cx.pf(n, name.join(&[p, "Mask"]), 1.0)?;
         let mask = cx.b.prog.saturate(mask);
         out[i - 1] = (gate, cx.b.prog.select(gate, mask, zero));
     }

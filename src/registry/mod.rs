@@ -28,8 +28,8 @@ mod param_types;
 pub mod tables;
 
 pub use model::{
-    CondSource, Definition, Direction, IndexedDefinition, MemberDecl, MetaKey, Metadata, Property,
-    SourceKind, meta_key,
+    CondSource, Definition, Direction, IndexedDefinition, MemberDecl, MetaKey, Metadata,
+    NumericRange, Property, SourceKind, meta_key,
 };
 pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, VstructTables};
 

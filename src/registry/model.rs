@@ -300,6 +300,32 @@ impl Definition {
 pub struct IndexedDefinition {
     def: Arc<Definition>,
     inputs: rustc_hash::FxHashMap<String, usize>,
+    /// Per input (same order as `def.inputs`): the documented `min` / `max`, parsed once.
+    ranges: Vec<NumericRange>,
+}
+
+/// A parameter's documented numeric range (`min` / `max` metadata); either end may be open.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct NumericRange {
+    /// Lower bound, if documented.
+    pub min: Option<f32>,
+    /// Upper bound, if documented.
+    pub max: Option<f32>,
+}
+
+impl NumericRange {
+    fn of(p: &Property) -> Self {
+        let bound = |key: &str| p.meta(key).and_then(|t| t.trim().parse::<f32>().ok());
+        NumericRange {
+            min: bound("min"),
+            max: bound("max"),
+        }
+    }
+
+    /// True when neither end is documented.
+    pub fn is_open(&self) -> bool {
+        self.min.is_none() && self.max.is_none()
+    }
 }
 
 impl IndexedDefinition {
@@ -309,12 +335,24 @@ impl IndexedDefinition {
         for (i, p) in def.inputs.iter().enumerate() {
             inputs.entry(p.name.clone()).or_insert(i);
         }
-        IndexedDefinition { def, inputs }
+        let ranges = def.inputs.iter().map(NumericRange::of).collect();
+        IndexedDefinition {
+            def,
+            inputs,
+            ranges,
+        }
     }
 
     /// The input named `name`.
     pub fn input(&self, name: &str) -> Option<&Property> {
         self.inputs.get(name).map(|&i| &self.def.inputs[i])
+    }
+
+    /// The input named `name` with its documented range.
+    pub fn input_with_range(&self, name: &str) -> Option<(&Property, NumericRange)> {
+        self.inputs
+            .get(name)
+            .map(|&i| (&self.def.inputs[i], self.ranges[i]))
     }
 
     /// The definition.
