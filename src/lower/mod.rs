@@ -232,7 +232,7 @@ pub fn lower_node_cached<G: Graph>(
     diags: &mut Diagnostics,
 ) -> Result<MaterialIr, Error> {
     let shader = graph.shader(node);
-    let Some(recipe) = recipe_for(&shader) else {
+    let Some(recipe) = recipe_for(shader) else {
         let mut d = Diagnostic::error(
             "LW001",
             format!(
