@@ -126,6 +126,7 @@ pub struct MemberEvent {
 /// upstream node has been resolved completely. Afterwards authored values on input heads are
 /// removed (§4.7, VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
+    let order = net.nodes_sorted();
     let mut r = Resolver {
         net,
         registry,
@@ -136,6 +137,7 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         types: HashMap::default(),
         memo: HashMap::default(),
         plans: HashMap::default(),
+        order,
     };
     r.run();
     r.remove_head_values();
@@ -175,6 +177,9 @@ struct Resolver<'a> {
     memo: HashMap<usize, Arc<(Action, Vec<ComparisonReport>)>>,
     /// Member matches per (downstream tables, input head, upstream tables, output head).
     plans: HashMap<(usize, String, usize, String), MatchPlan>,
+    /// Every node in handle order (resolution adds no nodes): the order of the walk and of
+    /// the final head-value clean-up.
+    order: Vec<NodeId>,
 }
 
 /// For each member of an input head: the index of the name it matched by and the upstream
@@ -213,7 +218,8 @@ impl Resolver<'_> {
 
     fn run(&mut self) {
         let mut stack: Vec<Frame> = Vec::new();
-        for start in self.net.nodes_sorted() {
+        let order = std::mem::take(&mut self.order);
+        for &start in &order {
             if let Some(frame) = self.enter(start) {
                 self.on_stack.insert(frame.node);
                 stack.push(frame);
@@ -232,6 +238,7 @@ impl Resolver<'_> {
                 }
             }
         }
+        self.order = order;
     }
 
     /// Step 1–3 entry: mark visited and snapshot the connected input heads. `None` if the
@@ -362,15 +369,18 @@ impl Resolver<'_> {
             .reserve_params(node, down_tables.members_in(head).len());
         let plan = self.match_plan(&down_tables, head, &up_tables, &source.head);
         for (member, matched) in down_tables.members_in(head).iter().zip(plan.iter()) {
+            // One look-up per member; connecting or writing then works by position.
+            let slot = self.net.param_slot(node, &member.property);
             let ctx = MemberCtx {
                 node,
                 head,
                 member: &member.property,
+                slot,
                 source,
                 down_def: down_def.as_deref(),
                 up_def: up_def.as_deref(),
             };
-            if !self.net.connections(node, &member.property).is_empty() {
+            if slot.is_some_and(|i| self.net.param_at(node, i).is_connected()) {
                 self.direct_connection_wins(&ctx);
                 continue;
             }
@@ -562,7 +572,10 @@ impl Resolver<'_> {
     }
 
     fn connect(&mut self, ctx: &MemberCtx<'_>, output: &Arc<str>) {
-        if self.net.value(ctx.node, ctx.member).is_some() {
+        let authored = ctx
+            .slot
+            .is_some_and(|i| self.net.param_at(ctx.node, i).value().is_some());
+        if authored {
             let d = Diagnostic::info(
                 "VS018",
                 format!(
@@ -574,11 +587,11 @@ impl Resolver<'_> {
             self.push(d, ctx.node, Some(ctx.member));
         }
         self.net
-            .connect_only(ctx.node, ctx.member, ctx.source.upstream, output);
+            .connect_slot(ctx.node, ctx.slot, ctx.member, ctx.source.upstream, output);
     }
 
     fn write(&mut self, ctx: &MemberCtx<'_>, value: Value, action: &Action) {
-        let previous = self.net.set_param(ctx.node, ctx.member, value);
+        let previous = self.net.set_slot(ctx.node, ctx.slot, ctx.member, value);
         if let Some(old) = previous {
             let d = Diagnostic::info(
                 "VS018",
@@ -593,7 +606,7 @@ impl Resolver<'_> {
 
     /// §4.7: authored values on input heads are never meaningful; remove them (VS017).
     fn remove_head_values(&mut self) {
-        for node in self.net.nodes_sorted() {
+        for node in std::mem::take(&mut self.order) {
             let shader = self.net[node].shader().to_string();
             let Some(tables) = self.tables(&shader) else {
                 continue;
@@ -862,6 +875,8 @@ struct MemberCtx<'c> {
     node: NodeId,
     head: &'c str,
     member: &'c Arc<str>,
+    /// The member's position among the node's parameters when it exists already.
+    slot: Option<usize>,
     source: &'c HeadSource,
     down_def: Option<&'c IndexedDefinition>,
     up_def: Option<&'c IndexedDefinition>,

@@ -51,6 +51,7 @@ use crate::types::{Type, Value};
 use hashbrown::HashTable;
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
 use rustc_hash::FxBuildHasher;
+use smallvec::SmallVec;
 use std::collections::HashMap;
 use std::fmt;
 use std::hash::BuildHasher;
@@ -291,14 +292,19 @@ pub enum ParamChange {
     Added,
 }
 
+/// A parameter's connections, in order.
+type Links = SmallVec<[Link; 1]>;
+
 /// One parameter of a node: authored value, connections, declaration and change state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Param {
     name: Arc<str>,
     /// Boxed, like `source`: most members of a resolved scene are connections, not values.
     value: Option<Box<Value>>,
-    links: Vec<Link>,
-    edges: Vec<Option<EdgeId>>,
+    /// Inline for the usual single connection: a resolved scene has millions of member
+    /// connections, and a heap block each for links and edge ids was most of their cost.
+    links: Links,
+    edges: SmallVec<[Option<EdgeId>; 1]>,
     /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
     /// a smaller `Param` keeps nodes with hundreds of members compact.
     source: Option<Box<ParamSource>>,
@@ -319,8 +325,8 @@ impl Param {
         Param {
             name,
             value: None,
-            links: Vec::new(),
-            edges: Vec::new(),
+            links: Links::new(),
+            edges: SmallVec::new(),
             source: None,
             value_touched: false,
             links_touched: false,
@@ -338,8 +344,8 @@ impl Param {
         Param {
             name: Arc::from(name),
             value: value.map(Box::new),
-            links: Vec::new(),
-            edges: Vec::new(),
+            links: Links::new(),
+            edges: SmallVec::new(),
             source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
                 Box::new(ParamSource {
                     decl,
@@ -596,13 +602,6 @@ impl Node {
     }
 
     /// [`Self::index_or_insert`] for a name the caller already shares.
-    fn index_or_insert_shared(&mut self, name: &Arc<str>) -> usize {
-        match self.index_of(name) {
-            Some(i) => i,
-            None => self.insert_param(name.clone()),
-        }
-    }
-
     fn insert_param(&mut self, name: Arc<str>) -> usize {
         let idx = self.params.len();
         let hash = name_hash(&name);
@@ -878,15 +877,9 @@ impl Network {
     /// assert_eq!(net.value(n, "enableClearcoat"), Some(&Value::Int(1)));
     /// ```
     pub fn set_param(&mut self, node: NodeId, name: &str, value: Value) -> Option<Value> {
-        let n = &mut self.graph[node];
-        let i = n.index_or_insert(name);
-        let p = &mut n.params[i];
-        if p.value.as_deref() == Some(&value) {
-            return Some(value);
-        }
-        p.value_touched = true;
-        n.dirty = true;
-        p.value.replace(Box::new(value)).map(|old| *old)
+        let slot = self.graph[node].index_or_insert(name);
+        let name = self.graph[node].params[slot].name.clone();
+        self.set_slot(node, Some(slot), &name, value)
     }
 
     /// Remove the authored value of `node.name`; returns it.
@@ -1040,7 +1033,8 @@ impl Network {
             None if links.is_empty() => return Vec::new(),
             None => self.graph[down].index_or_insert(input),
         };
-        self.replace_links(down, i, links)
+        self.replace_links(down, i, Links::from_vec(links))
+            .into_vec()
     }
 
     /// Make `up.output` the only connection of `down.input`, sharing both names (the fast
@@ -1057,11 +1051,57 @@ impl Network {
     /// assert_eq!(net.connections(d, "baselayer_diffuseGain")[0].output(), Some("pxrMaterialOut_diffuseGain"));
     /// ```
     pub fn connect_only(&mut self, down: NodeId, input: &Arc<str>, up: NodeId, output: &Arc<str>) {
-        let i = self.graph[down].index_or_insert_shared(input);
-        self.replace_links(down, i, vec![Link::node_shared(up, output.clone())]);
+        let slot = self.graph[down].index_of(input);
+        self.connect_slot(down, slot, input, up, output);
     }
 
-    fn replace_links(&mut self, down: NodeId, i: usize, links: Vec<Link>) -> Vec<Link> {
+    /// The position of `node.name` among the node's parameters (live or not), for the
+    /// `*_slot` operations: resolution looks each member up once and then works by position.
+    pub(crate) fn param_slot(&self, node: NodeId, name: &str) -> Option<usize> {
+        self.graph[node].index_of(name)
+    }
+
+    /// The parameter at `slot` (from [`Network::param_slot`]).
+    pub(crate) fn param_at(&self, node: NodeId, slot: usize) -> &Param {
+        &self.graph[node].params[slot]
+    }
+
+    /// [`Network::connect_only`] for a member whose position is known: `slot` is
+    /// `param_slot(down, input)`, `None` when the parameter does not exist yet.
+    pub(crate) fn connect_slot(
+        &mut self,
+        down: NodeId,
+        slot: Option<usize>,
+        input: &Arc<str>,
+        up: NodeId,
+        output: &Arc<str>,
+    ) {
+        let i = slot.unwrap_or_else(|| self.graph[down].insert_param(input.clone()));
+        let link = Link::node_shared(up, output.clone());
+        self.replace_links(down, i, smallvec::smallvec![link]);
+    }
+
+    /// [`Network::set_param`] for a member whose position is known (see
+    /// [`Network::connect_slot`]).
+    pub(crate) fn set_slot(
+        &mut self,
+        node: NodeId,
+        slot: Option<usize>,
+        name: &Arc<str>,
+        value: Value,
+    ) -> Option<Value> {
+        let n = &mut self.graph[node];
+        let i = slot.unwrap_or_else(|| n.insert_param(name.clone()));
+        let p = &mut n.params[i];
+        if p.value.as_deref() == Some(&value) {
+            return Some(value);
+        }
+        p.value_touched = true;
+        n.dirty = true;
+        p.value.replace(Box::new(value)).map(|old| *old)
+    }
+
+    fn replace_links(&mut self, down: NodeId, i: usize, links: Links) -> Links {
         if self.graph[down].params[i].links == links {
             return links;
         }
@@ -1069,7 +1109,7 @@ impl Network {
         for e in old_edges.into_iter().flatten() {
             self.graph.remove_edge(e);
         }
-        let edges: Vec<Option<EdgeId>> = links
+        let edges = links
             .iter()
             .enumerate()
             .map(|(index, link)| self.add_edge_for(down, i, link, index))
