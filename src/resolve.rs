@@ -7,6 +7,7 @@
 //! is one node being resolved, with the snapshot of its connected input heads and the position
 //! reached in it.
 
+use crate::cond::Choice;
 use crate::cond::{
     self, Action, ActionKind, ComparisonReport, CopyOutcome, Extension, Extensions, Statement,
 };
@@ -174,7 +175,8 @@ struct Resolver<'a> {
     /// Results of the conditionals evaluated during the current head expansion, keyed by the
     /// shared parse result: members with the same expression text share one evaluation, which
     /// is exact because expanding D never changes U (unless D is U, when nothing is cached).
-    memo: HashMap<usize, Arc<(Action, Vec<ComparisonReport>)>>,
+    /// The choice is kept rather than the action: it is `Copy`, so a hit allocates nothing.
+    memo: HashMap<usize, (Choice, Vec<ComparisonReport>)>,
     /// Member matches per (downstream tables, input head, upstream tables, output head).
     plans: HashMap<(usize, String, usize, String), MatchPlan>,
     /// Every node in handle order (resolution adds no nodes): the order of the walk and of
@@ -476,18 +478,19 @@ impl Resolver<'_> {
             node: ctx.source.upstream,
             def: ctx.up_def,
         };
-        let result = match self.memo.get(&key).filter(|_| cacheable) {
+        let (choice, reports) = match self.memo.get(&key).filter(|_| cacheable) {
             Some(hit) => hit.clone(),
             None => {
                 let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
-                let result = Arc::new((evaluation.action.clone(), evaluation.reports));
+                let result = (evaluation.choice, evaluation.reports);
                 if cacheable {
                     self.memo.insert(key, result.clone());
                 }
                 result
             }
         };
-        let (action, reports) = &*result;
+        let action = cond::eval::chosen_action(stmt, choice);
+        let reports = &reports;
         if let Some(event) = event {
             event.reads = stmt
                 .param_names()

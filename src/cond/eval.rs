@@ -200,28 +200,33 @@ pub fn evaluate<'s, U: Upstream + ?Sized>(
         ext,
         reports: Vec::new(),
     };
-    let (action, choice) = match &stmt.condition {
-        None => (&stmt.action, Choice::Unconditional),
-        Some(c) if ev.expr(c) => (&stmt.action, Choice::Condition),
-        Some(_) => {
-            let link = stmt
-                .else_ifs
-                .iter()
-                .enumerate()
-                .find(|(_, l)| ev.expr(&l.condition));
-            match (link, &stmt.fallback) {
-                (Some((i, l)), _) => (&l.action, Choice::ElseIf(i)),
-                (None, Some(fb)) => (fb, Choice::Fallback),
-                // Not produced by the parser (hand-built AST): apply the desugaring of
-                // `A if C` (§3.4).
-                (None, None) => (implied_fallback(&stmt.action), Choice::Fallback),
-            }
-        }
+    let choice = match &stmt.condition {
+        None => Choice::Unconditional,
+        Some(c) if ev.expr(c) => Choice::Condition,
+        Some(_) => match stmt.else_ifs.iter().position(|l| ev.expr(&l.condition)) {
+            Some(i) => Choice::ElseIf(i),
+            None => Choice::Fallback,
+        },
     };
     Evaluation {
-        action,
+        action: chosen_action(stmt, choice),
         choice,
         reports: ev.reports,
+    }
+}
+
+/// The action of `stmt` that `choice` names (so a caller may keep the choice, which is
+/// `Copy`, instead of the action).
+pub fn chosen_action(stmt: &Statement, choice: Choice) -> &Action {
+    match choice {
+        Choice::Unconditional | Choice::Condition => &stmt.action,
+        Choice::ElseIf(i) => stmt.else_ifs.get(i).map_or(&stmt.action, |l| &l.action),
+        Choice::Fallback => match &stmt.fallback {
+            Some(fb) => fb,
+            // Not produced by the parser (hand-built AST): apply the desugaring of `A if C`
+            // (§3.4).
+            None => implied_fallback(&stmt.action),
+        },
     }
 }
 
