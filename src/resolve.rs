@@ -366,7 +366,8 @@ impl Resolver<'_> {
         let up_def = self.definition(&up_shader);
         self.net.clear_connections(node, head);
         self.memo.clear();
-        // Most members get a connection or a value: make room for them at once.
+        // Most members get a connection or a value: make room for them at once. (Reserving
+        // for all heads when the node is entered moves less but measured ~25 % more memory.)
         self.net
             .reserve_params(node, down_tables.members_in(head).len());
         let plan = self.match_plan(&down_tables, head, &up_tables, &source.head);
@@ -479,6 +480,8 @@ impl Resolver<'_> {
             def: ctx.up_def,
         };
         let (choice, reports) = match self.memo.get(&key).filter(|_| cacheable) {
+            // Reports are rare: clone the vector only when there are some.
+            Some((choice, reports)) if reports.is_empty() => (*choice, Vec::new()),
             Some(hit) => hit.clone(),
             None => {
                 let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
