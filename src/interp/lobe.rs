@@ -18,6 +18,7 @@ use super::diffuse::{
     PreparedMiaDiffuse, PreparedOrenNayar,
 };
 use super::emission::{Emission, Transparent};
+use super::fresnel::Fresnel;
 use super::math::{Rgb, flip};
 use super::microfacet::{
     Compensation, Dielectric, DielectricMode, MicrofacetR, PreparedDielectric, PreparedMicrofacetR,
@@ -209,14 +210,14 @@ pub enum Lobe {
 /// A lobe with its view-only terms computed: what `eval`/`sample` run on.
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedLobe {
-    kind: LobeKind,
+    pub(super) kind: LobeKind,
     /// The frame was flipped (view below the surface of a two-sided lobe).
-    flipped: bool,
-    state: State,
+    pub(super) flipped: bool,
+    pub(super) state: State,
 }
 
 #[derive(Debug, Clone, Copy)]
-enum State {
+pub(super) enum State {
     Inactive,
     Lambert(PreparedLambert),
     Translucent(PreparedLambert),
@@ -303,6 +304,23 @@ impl Lobe {
 
     /// Precomputes every view-only term for local view `v` (unit, local frame).
     pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
+        self.prepare_aux(v, sides, None)
+    }
+
+    /// This lobe with its view-independent precomputation done once ([`BoundLobe`]).
+    pub fn bind(&self) -> BoundLobe {
+        let albedo_fresnel = match self {
+            Lobe::MicrofacetR(m) if m.fresnel.is_conductor() => Some(m.albedo_fresnel()),
+            _ => None,
+        };
+        BoundLobe {
+            lobe: *self,
+            albedo_fresnel,
+        }
+    }
+
+    #[inline]
+    fn prepare_aux(&self, v: Vec3, sides: Sides, albedo_fresnel: Option<&Fresnel>) -> PreparedLobe {
         let kind = self.kind();
         if let Lobe::Emission(e) = self {
             return PreparedLobe {
@@ -334,7 +352,10 @@ impl Lobe {
             Lobe::OrenNayar(o) => State::OrenNayar(o.prepare(v)),
             Lobe::MiaDiffuse(m) => State::MiaDiffuse(m.prepare(v)),
             Lobe::Burley(b) => State::Burley(b.prepare(v)),
-            Lobe::MicrofacetR(m) => State::MicrofacetR(m.prepare(v)),
+            Lobe::MicrofacetR(m) => State::MicrofacetR(match albedo_fresnel {
+                Some(af) => m.prepare_bound(v, af),
+                None => m.prepare(v),
+            }),
             Lobe::Dielectric(d) => State::Dielectric(d.prepare(v, flipped)),
             Lobe::Ward(w) => State::Ward(w.prepare(v)),
             Lobe::MiaHighlight3(m) => State::MiaHighlight3(m.prepare(v)),
@@ -347,6 +368,29 @@ impl Lobe {
             flipped,
             state,
         }
+    }
+}
+
+/// A [`Lobe`] with the part of `prepare` that depends on neither the point nor the view
+/// computed once (a conductor's F82 fit, §3.9): what a compiled material keeps for leaves
+/// whose parameters are constants. [`BoundLobe::prepare`] equals [`Lobe::prepare`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundLobe {
+    lobe: Lobe,
+    albedo_fresnel: Option<Fresnel>,
+}
+
+impl BoundLobe {
+    /// The lobe.
+    pub fn lobe(&self) -> &Lobe {
+        &self.lobe
+    }
+
+    /// [`Lobe::prepare`] without redoing the view-independent part.
+    #[inline]
+    pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
+        self.lobe
+            .prepare_aux(v, sides, self.albedo_fresnel.as_ref())
     }
 }
 

@@ -140,27 +140,55 @@ pub struct MicrofacetR {
 /// Prepared [`MicrofacetR`].
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedMicrofacetR {
-    ggx: Ggx,
-    masking: Masking,
-    fresnel: Fresnel,
-    v: Vec3,
-    lambda_v: f32,
-    g1_v: f32,
-    inv_4mu: f32,
+    pub(super) ggx: Ggx,
+    pub(super) masking: Masking,
+    pub(super) fresnel: Fresnel,
+    pub(super) v: Vec3,
+    pub(super) lambda_v: f32,
+    pub(super) g1_v: f32,
+    pub(super) inv_4mu: f32,
     /// Turquin factor (1 when off).
-    scale: Rgb,
+    pub(super) scale: Rgb,
     /// Kulla–Conty: `F_ms (1 − E(μ_o)) / (π (1 − E_avg))` (0 when off).
-    ms: Rgb,
-    e_row: Option<Row>,
+    pub(super) ms: Rgb,
+    pub(super) e_row: Option<Row>,
     /// Probability of sampling the Kulla–Conty part.
-    p_ms: f32,
-    delta: bool,
-    albedo: Rgb,
+    pub(super) p_ms: f32,
+    pub(super) delta: bool,
+    pub(super) albedo: Rgb,
 }
 
 impl MicrofacetR {
+    /// The Fresnel form the albedo tables read: a conductor through its F82 fit (§3.9),
+    /// any other form as it is. The fit costs two complex Fresnel evaluations, so a compiled
+    /// material computes it once per constant leaf ([`MicrofacetR::prepare_bound`]).
+    pub fn albedo_fresnel(&self) -> Fresnel {
+        match self.fresnel {
+            Fresnel::Conductor { eta, kappa } => {
+                let (f0, t) = fresnel::conductor_to_f82(eta, kappa);
+                Fresnel::F82 {
+                    f0,
+                    f90: Vec3::ONE,
+                    q: 5.0,
+                    a: fresnel::f82_coefficient(f0, Vec3::ONE, 5.0, t),
+                }
+            }
+            f => f,
+        }
+    }
+
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedMicrofacetR {
+        self.prepare_bound(v, &self.albedo_fresnel())
+    }
+
+    /// As [`MicrofacetR::prepare`], with `albedo_fresnel` the result of
+    /// [`MicrofacetR::albedo_fresnel`] (computed once by the caller).
+    pub fn prepare_bound(&self, v: Vec3, albedo_fresnel: &Fresnel) -> PreparedMicrofacetR {
+        // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
+        let conductor = self.fresnel.is_conductor();
+        let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
+        let f_average = || clamp1(albedo_fresnel.average());
         let alpha = self.ggx.lookup_alpha();
         let lambda_v = self.ggx.lambda(v);
         let mut p = PreparedMicrofacetR {
@@ -182,15 +210,15 @@ impl MicrofacetR {
             p.albedo = self.fresnel.eval(v.z);
             return p;
         }
-        let ess = reflection_albedo(&self.fresnel, self.masking, v.z, alpha);
+        let ess = clamp1(reflection_albedo(albedo_fresnel, self.masking, v.z, alpha));
         match self.comp {
             Compensation::None => p.albedo = ess,
             Compensation::Turquin(k) => {
-                p.scale = turquin_scale(k, self.fresnel.average(), self.masking, v.z, alpha);
+                p.scale = turquin_scale(k, f_average(), self.masking, v.z, alpha);
                 p.albedo = ess * p.scale;
             }
             Compensation::KullaConty => {
-                let f_avg = self.fresnel.average();
+                let f_avg = f_average();
                 let e_avg = e1_avg(self.masking, alpha).min(1.0 - 1e-6);
                 let f_ms = f_avg * f_avg * e_avg / (Vec3::ONE - f_avg * (1.0 - e_avg));
                 let e_o = e1(self.masking, v.z, alpha);
@@ -368,23 +396,23 @@ impl Dielectric {
 /// Prepared [`Dielectric`].
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedDielectric {
-    ggx: Ggx,
-    masking: Masking,
+    pub(super) ggx: Ggx,
+    pub(super) masking: Masking,
     /// Index on L's (transmitted) side over V's side.
-    eta: f32,
-    v: Vec3,
-    lambda_v: f32,
-    g1_v: f32,
-    inv_mu: f32,
-    refl: bool,
-    trans: bool,
-    tint_r: Rgb,
-    tint_t: Rgb,
-    lum_r: f32,
-    lum_t: f32,
-    t_fresnel: bool,
-    delta: bool,
-    albedo: LobeAlbedo,
+    pub(super) eta: f32,
+    pub(super) v: Vec3,
+    pub(super) lambda_v: f32,
+    pub(super) g1_v: f32,
+    pub(super) inv_mu: f32,
+    pub(super) refl: bool,
+    pub(super) trans: bool,
+    pub(super) tint_r: Rgb,
+    pub(super) tint_t: Rgb,
+    pub(super) lum_r: f32,
+    pub(super) lum_t: f32,
+    pub(super) t_fresnel: bool,
+    pub(super) delta: bool,
+    pub(super) albedo: LobeAlbedo,
 }
 
 impl Dielectric {
@@ -401,14 +429,13 @@ impl Dielectric {
         let refl = self.mode != DielectricMode::T;
         let trans = self.mode != DielectricMode::R;
         let alpha = self.ggx.lookup_alpha();
-        let scale = turquin_scale(
-            self.turquin,
-            Vec3::splat(fresnel::dielectric_avg(eta)),
-            self.masking,
-            v.z,
-            alpha,
-        );
-        let tint_r = self.tint_r * scale;
+        // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
+        let tint_r = if self.turquin > 0.0 {
+            let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
+            self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha)
+        } else {
+            self.tint_r
+        };
         let mut p = PreparedDielectric {
             ggx: self.ggx,
             masking: self.masking,

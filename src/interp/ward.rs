@@ -42,15 +42,15 @@ pub fn ward_albedo(variant: WardVariant, mu: f32, ax: f32, ay: f32) -> f32 {
 
 /// One Ward core: widths and normalisation, with the view fixed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct WardCore {
-    inv_ax2: f32,
-    inv_ay2: f32,
-    ax: f32,
-    ay: f32,
+pub(super) struct WardCore {
+    pub(super) inv_ax2: f32,
+    pub(super) inv_ay2: f32,
+    pub(super) ax: f32,
+    pub(super) ay: f32,
     /// Classic: `1/(4π α_x α_y √μ_o)`; GM: `1/(π α_x α_y)`.
-    norm: f32,
+    pub(super) norm: f32,
     /// `1/(4π α_x α_y)` for the pdf.
-    pdf_norm: f32,
+    pub(super) pdf_norm: f32,
 }
 
 impl WardCore {
@@ -116,11 +116,11 @@ pub struct Ward {
 /// Prepared [`Ward`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedWard {
-    core: WardCore,
-    variant: WardVariant,
-    rho: Rgb,
-    v: Vec3,
-    albedo: Rgb,
+    pub(super) core: WardCore,
+    pub(super) variant: WardVariant,
+    pub(super) rho: Rgb,
+    pub(super) v: Vec3,
+    pub(super) albedo: Rgb,
 }
 
 impl Ward {
