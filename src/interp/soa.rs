@@ -426,6 +426,13 @@ fn conductor_ok(p: &super::microfacet::PreparedMicrofacetR) -> bool {
     p.fresnel.is_conductor() && !p.delta && p.e_row.is_none()
 }
 
+/// `x` where `c` holds, else 0: a select on two computed values, which the vectoriser
+/// handles (a conditional tuple of computations stops it).
+#[inline(always)]
+fn keep(c: bool, x: f32) -> f32 {
+    if c { x } else { 0.0 }
+}
+
 /// `acc += w ⊙ f_rgb`, `pdf += p·pdf` for lane `k`.
 #[inline(always)]
 fn add_rgb<const W: usize>(acc: &mut Acc<W>, lw: &LaneWeights<W>, k: usize, f: [f32; 3], pdf: f32) {
@@ -478,12 +485,8 @@ impl<const W: usize> OrenNayarX<W> {
                 self.rho_pi.y[k] * ss + self.ms.y[k] * ms,
                 self.rho_pi.z[k] * ss + self.ms.z[k] * ms,
             ];
-            let (f, pdf) = if valid {
-                (f, lz * FRAC_1_PI)
-            } else {
-                ([0.0; 3], 0.0)
-            };
-            add_rgb(acc, lw, k, f, pdf);
+            let f = f.map(|c| keep(valid, c));
+            add_rgb(acc, lw, k, f, keep(valid, lz * FRAC_1_PI));
         }
     }
 }
@@ -592,8 +595,8 @@ impl<const W: usize> ConductorX<W> {
                 fr[2] * q * self.scale.z[k],
             ];
             let pdf = d * self.g.g1_v[k] * self.inv_4mu[k];
-            let (f, pdf) = if lz > 0.0 { (f, pdf) } else { ([0.0; 3], 0.0) };
-            add_rgb(acc, lw, k, f, pdf);
+            let valid = lz > 0.0;
+            add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
         }
     }
 }
@@ -610,8 +613,8 @@ impl<const W: usize> DielectricX<W> {
             let s = fr * g * q;
             let f = [self.tint_r.x[k] * s, self.tint_r.y[k] * s, self.tint_r.z[k] * s];
             let pdf = self.g.g1_v[k] * q;
-            let (f, pdf) = if lz > 0.0 { (f, pdf) } else { ([0.0; 3], 0.0) };
-            add_rgb(acc, lw, k, f, pdf);
+            let valid = lz > 0.0;
+            add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
         }
     }
 }
@@ -633,8 +636,8 @@ impl<const W: usize> WardX<W> {
             let f_gm = self.norm[k] * hh2 / (hz2 * hz2) * ex * lz;
             let f = if self.gm[k] > 0.0 { f_gm } else { f_classic };
             let pdf = self.pdf_norm[k] * ex * hh2 * hh2 / (hz2 * hz * vhh);
-            let valid = lz > 0.0 && ex > 0.0;
-            let (f, pdf) = if valid { (f, pdf) } else { (0.0, 0.0) };
+            let valid = (lz > 0.0) & (ex > 0.0);
+            let (f, pdf) = (keep(valid, f), keep(valid, pdf));
             let rgb = [self.rho.x[k] * f, self.rho.y[k] * f, self.rho.z[k] * f];
             add_rgb(acc, lw, k, rgb, pdf);
         }
@@ -653,11 +656,8 @@ impl<const W: usize> SheenCKX<W> {
             let d = self.norm[k] * vmath::pow_pos(sin2, self.half_inv_r[k]);
             let (mi, mo) = (lz, vz);
             let f = d * mi / (4.0 * (mi + mo - mi * mo));
-            let (f, pdf) = if lz > 0.0 {
-                (f, 0.5 * FRAC_1_PI)
-            } else {
-                (0.0, 0.0)
-            };
+            let valid = lz > 0.0;
+            let (f, pdf) = (keep(valid, f), keep(valid, 0.5 * FRAC_1_PI));
             add_rgb(acc, lw, k, [f; 3], pdf);
         }
     }
@@ -675,11 +675,8 @@ impl<const W: usize> SheenLTCX<W> {
             let (px, py, pz) = (a * wx + b * lz, a * wy, lz);
             let kk = a / (px * px + py * py + pz * pz).max(1e-30);
             let d = lz.max(0.0) * FRAC_1_PI * kk * kk;
-            let (f, pdf) = if lz > 0.0 {
-                (self.e_hat[k] * d, d)
-            } else {
-                (0.0, 0.0)
-            };
+            let valid = lz > 0.0;
+            let (f, pdf) = (keep(valid, self.e_hat[k] * d), keep(valid, d));
             add_rgb(acc, lw, k, [f; 3], pdf);
         }
     }
