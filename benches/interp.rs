@@ -13,6 +13,14 @@
 //! Times are the thread's on-CPU time (`/proc/thread-self/schedstat`), as in `leaves.rs`:
 //! the machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"
 //! throughput does it) for ns per evaluation.
+//!
+//! §6.4 asks for both builds. Baseline x86-64: `cargo bench --bench interp`. Native (AVX-512
+//! on the reference machine), in its own target directory so the baseline artefacts are
+//! not rebuilt:
+//!
+//! ```text
+//! RUSTFLAGS="-C target-cpu=native" CARGO_TARGET_DIR=target/native cargo bench --bench interp
+//! ```
 
 use criterion::measurement::{Measurement, ValueFormatter};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};

@@ -18,10 +18,11 @@ use super::diffuse::{
     PreparedMiaDiffuse, PreparedOrenNayar,
 };
 use super::emission::{Emission, Transparent};
-use super::fresnel::Fresnel;
+use super::tables::MuCurve;
 use super::math::{Rgb, flip};
 use super::microfacet::{
-    Compensation, Dielectric, DielectricMode, MicrofacetR, PreparedDielectric, PreparedMicrofacetR,
+    Compensation, Dielectric, DielectricBound, DielectricMode, MicrofacetBound, MicrofacetR,
+    PreparedDielectric, PreparedMicrofacetR,
 };
 use super::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenLTC, SheenMasking};
 use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward};
@@ -304,23 +305,23 @@ impl Lobe {
 
     /// Precomputes every view-only term for local view `v` (unit, local frame).
     pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
-        self.prepare_aux(v, sides, None)
+        self.prepare_aux(v, sides, &Aux::None)
     }
 
     /// This lobe with its view-independent precomputation done once ([`BoundLobe`]).
     pub fn bind(&self) -> BoundLobe {
-        let albedo_fresnel = match self {
-            Lobe::MicrofacetR(m) if m.fresnel.is_conductor() => Some(m.albedo_fresnel()),
-            _ => None,
+        let aux = match self {
+            Lobe::MicrofacetR(m) => Aux::Microfacet(m.bind()),
+            Lobe::Dielectric(d) => Aux::Dielectric(d.bind()),
+            Lobe::Ward(w) => Aux::Ward(w.albedo_curve()),
+            Lobe::SheenCK(s) => Aux::SheenCK(s.albedo_curve()),
+            _ => Aux::None,
         };
-        BoundLobe {
-            lobe: *self,
-            albedo_fresnel,
-        }
+        BoundLobe { lobe: *self, aux }
     }
 
     #[inline]
-    fn prepare_aux(&self, v: Vec3, sides: Sides, albedo_fresnel: Option<&Fresnel>) -> PreparedLobe {
+    fn prepare_aux(&self, v: Vec3, sides: Sides, aux: &Aux) -> PreparedLobe {
         let kind = self.kind();
         if let Lobe::Emission(e) = self {
             return PreparedLobe {
@@ -352,14 +353,23 @@ impl Lobe {
             Lobe::OrenNayar(o) => State::OrenNayar(o.prepare(v)),
             Lobe::MiaDiffuse(m) => State::MiaDiffuse(m.prepare(v)),
             Lobe::Burley(b) => State::Burley(b.prepare(v)),
-            Lobe::MicrofacetR(m) => State::MicrofacetR(match albedo_fresnel {
-                Some(af) => m.prepare_bound(v, af),
-                None => m.prepare(v),
+            Lobe::MicrofacetR(m) => State::MicrofacetR(match aux {
+                Aux::Microfacet(b) => m.prepare_bound(v, b),
+                _ => m.prepare(v),
             }),
-            Lobe::Dielectric(d) => State::Dielectric(d.prepare(v, flipped)),
-            Lobe::Ward(w) => State::Ward(w.prepare(v)),
+            Lobe::Dielectric(d) => State::Dielectric(match aux {
+                Aux::Dielectric(b) => d.prepare_bound(v, flipped, b),
+                _ => d.prepare(v, flipped),
+            }),
+            Lobe::Ward(w) => State::Ward(match aux {
+                Aux::Ward(c) => w.prepare_bound(v, c),
+                _ => w.prepare(v),
+            }),
             Lobe::MiaHighlight3(m) => State::MiaHighlight3(m.prepare(v)),
-            Lobe::SheenCK(s) => State::SheenCK(s.prepare(v)),
+            Lobe::SheenCK(s) => State::SheenCK(match aux {
+                Aux::SheenCK(c) => s.prepare_bound(v, c),
+                _ => s.prepare(v),
+            }),
             Lobe::SheenLTC(s) => State::SheenLTC(s.prepare(v)),
             Lobe::Emission(_) | Lobe::Transparent(_) => State::Inactive,
         };
@@ -372,12 +382,23 @@ impl Lobe {
 }
 
 /// A [`Lobe`] with the part of `prepare` that depends on neither the point nor the view
-/// computed once (a conductor's F82 fit, §3.9): what a compiled material keeps for leaves
-/// whose parameters are constants. [`BoundLobe::prepare`] equals [`Lobe::prepare`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// computed once (a conductor's F82 fit, §3.9; the albedo tables at the lobe's roughness,
+/// index and exponent): what a compiled material keeps for leaves whose parameters are
+/// constants. [`BoundLobe::prepare`] equals [`Lobe::prepare`].
+#[derive(Debug, Clone, Copy)]
 pub struct BoundLobe {
     lobe: Lobe,
-    albedo_fresnel: Option<Fresnel>,
+    aux: Aux,
+}
+
+/// The per-family view-independent data of a [`BoundLobe`].
+#[derive(Debug, Clone, Copy)]
+enum Aux {
+    None,
+    Microfacet(MicrofacetBound),
+    Dielectric(DielectricBound),
+    Ward(MuCurve),
+    SheenCK(MuCurve),
 }
 
 impl BoundLobe {
@@ -389,8 +410,7 @@ impl BoundLobe {
     /// [`Lobe::prepare`] without redoing the view-independent part.
     #[inline]
     pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
-        self.lobe
-            .prepare_aux(v, sides, self.albedo_fresnel.as_ref())
+        self.lobe.prepare_aux(v, sides, &self.aux)
     }
 }
 

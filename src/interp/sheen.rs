@@ -5,7 +5,7 @@
 
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{sample_cosine, sample_uniform_hemisphere};
-use super::tables::{self, TableId};
+use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -65,16 +65,31 @@ pub struct PreparedSheenCK {
 impl SheenCK {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
-        let r = if self.r.is_nan() {
+        self.prepare_bound(v, &self.albedo_curve())
+    }
+
+    /// The roughness clamped to its range (NaN → 1).
+    fn clamped_r(&self) -> f32 {
+        if self.r.is_nan() {
             1.0
         } else {
             self.r.clamp(SHEEN_CK_MIN_R, 1.0)
-        };
-        let coef = ck_coefficients(r);
+        }
+    }
+
+    /// The albedo table at this lobe's roughness, for [`SheenCK::prepare_bound`].
+    pub fn albedo_curve(&self) -> MuCurve {
         let table = match self.masking {
             SheenMasking::MaterialX => TableId::SheenMx,
             SheenMasking::Original => TableId::SheenOrig,
         };
+        MuCurve::new2(table, tables::sheen_axis(self.clamped_r()))
+    }
+
+    /// [`SheenCK::prepare`] with the albedo curve computed once ([`SheenCK::albedo_curve`]).
+    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedSheenCK {
+        let r = self.clamped_r();
+        let coef = ck_coefficients(r);
         PreparedSheenCK {
             v,
             half_inv_r: 0.5 / r,
@@ -87,7 +102,7 @@ impl SheenCK {
                 SheenMasking::MaterialX => 0.0,
             },
             inv_4mu: 0.25 / v.z.max(1e-7),
-            albedo: tables::lookup2(table, v.z, tables::sheen_axis(r)),
+            albedo: albedo.at(v.z),
         }
     }
 }

@@ -426,11 +426,18 @@ fn conductor_ok(p: &super::microfacet::PreparedMicrofacetR) -> bool {
     p.fresnel.is_conductor() && !p.delta && p.e_row.is_none()
 }
 
-/// `x` where `c` holds, else 0: a select on two computed values, which the vectoriser
-/// handles (a conditional tuple of computations stops it).
+/// `x` where `c` holds, else +0, as a bit mask: a plain `if` lets LLVM turn the select
+/// back into a branch around the computation of `x`, which stops the loop vectoriser on
+/// baseline x86-64 (SSE2); the mask keeps every lane's arithmetic unconditional.
 #[inline(always)]
 fn keep(c: bool, x: f32) -> f32 {
-    if c { x } else { 0.0 }
+    f32::from_bits(x.to_bits() & u32::from(c).wrapping_neg())
+}
+
+/// `a` where `c` holds, else `b` (bit-mask blend; see [`keep`]).
+#[inline(always)]
+fn pick(c: bool, a: f32, b: f32) -> f32 {
+    vmath::select(c, a, b)
 }
 
 /// `acc += w ⊙ f_rgb`, `pdf += p·pdf` for lane `k`.
@@ -453,28 +460,34 @@ fn lane_l<const W: usize>(l: &Vec3x<W>, lw: &LaneWeights<W>, k: usize) -> (f32, 
 fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
-        let c = if lz > 0.0 { lz } else { 0.0 };
+        let c = keep(lz > 0.0, lz);
         let f = [rho_pi.x[k] * c, rho_pi.y[k] * c, rho_pi.z[k] * c];
         add_rgb(acc, lw, k, f, c * FRAC_1_PI);
     }
 }
 
 impl<const W: usize> OrenNayarX<W> {
-    #[allow(clippy::needless_range_loop)]
     #[inline]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+        // The `Ê` form is the same for every lane: one loop per form, no branch inside.
+        if self.fast {
+            self.run::<true>(l, lw, acc)
+        } else {
+            self.run::<false>(l, lw, acc)
+        }
+    }
+
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn run<const FAST: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
             let (vx, vy, vz) = (self.v.x[k], self.v.y[k], self.v.z[k]);
             let valid = lz > 0.0;
             let s = (vx * lx + vy * ly + vz * lz) - lz * vz;
-            let st = if s > 0.0 {
-                s / lz.max(vz)
-            } else {
-                s * self.keep_negative_s[k]
-            };
+            let st = pick(s > 0.0, s / lz.max(vz), s * self.keep_negative_s[k]);
             let ss = (self.a[k] + self.b[k] * st).max(0.0) * lz;
-            let e_hat = if self.fast {
+            let e_hat = if FAST {
                 super::diffuse::eon_e_hat_fast(lz, self.sigma[k])
             } else {
                 self.af[k] + self.c[k] * eon_g(lz)
@@ -541,7 +554,7 @@ impl<const W: usize> GgxX<W> {
         let lv = self.lambda_v[k];
         let g_hc = 1.0 / (1.0 + lv + lambda_l);
         let g_sep = 1.0 / ((1.0 + lv) * (1.0 + lambda_l));
-        let g = if self.separable[k] > 0.0 { g_sep } else { g_hc };
+        let g = pick(self.separable[k] > 0.0, g_sep, g_hc);
         (vh, d, g)
     }
 }
@@ -573,7 +586,7 @@ fn dielectric1(mu: f32, eta: f32) -> f32 {
     let a = (g - mu) / (g + mu).max(1e-30);
     let b = (mu * (g + mu) - 1.0) / (mu * (g - mu) + 1.0);
     let f = (0.5 * a * a * (1.0 + b * b)).min(1.0);
-    if g2 < 0.0 { 1.0 } else { f }
+    pick(g2 < 0.0, 1.0, f)
 }
 
 impl<const W: usize> ConductorX<W> {
@@ -634,7 +647,7 @@ impl<const W: usize> WardX<W> {
             let ex = vmath::exp(-e);
             let f_classic = self.norm[k] * ex * lz.max(0.0).sqrt();
             let f_gm = self.norm[k] * hh2 / (hz2 * hz2) * ex * lz;
-            let f = if self.gm[k] > 0.0 { f_gm } else { f_classic };
+            let f = pick(self.gm[k] > 0.0, f_gm, f_classic);
             let pdf = self.pdf_norm[k] * ex * hh2 * hh2 / (hz2 * hz * vhh);
             let valid = (lz > 0.0) & (ex > 0.0);
             let (f, pdf) = (keep(valid, f), keep(valid, pdf));

@@ -6,7 +6,7 @@
 
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, reflect};
-use super::tables::{self, TableId};
+use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -126,13 +126,27 @@ pub struct PreparedWard {
 impl Ward {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedWard {
-        let core = WardCore::new(self.ax, self.ay, self.variant, v.z);
+        self.prepare_bound(v, &self.albedo_curve())
+    }
+
+    /// The albedo table at this lobe's (clamped) widths, for [`Ward::prepare_bound`].
+    pub fn albedo_curve(&self) -> MuCurve {
+        let (ax, ay) = (clamp_alpha(self.ax), clamp_alpha(self.ay));
+        let t = match self.variant {
+            WardVariant::Classic => TableId::WardClassic,
+            WardVariant::Gm => TableId::WardGm,
+        };
+        MuCurve::new2(t, tables::ward_axis((ax * ay).sqrt()))
+    }
+
+    /// [`Ward::prepare`] with the albedo curve computed once ([`Ward::albedo_curve`]).
+    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedWard {
         PreparedWard {
-            core,
+            core: WardCore::new(self.ax, self.ay, self.variant, v.z),
             variant: self.variant,
             rho: self.rho,
             v,
-            albedo: self.rho * ward_albedo(self.variant, v.z, core.ax, core.ay),
+            albedo: self.rho * albedo.at(v.z),
         }
     }
 }
