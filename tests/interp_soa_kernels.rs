@@ -64,7 +64,11 @@ fn check(
             // Half the directions on the normal's side, so most lanes respond.
             let ls: [Vec3; W] = std::array::from_fn(|k| {
                 let l = rng.sphere();
-                if l.dot(frames[k].z) < 0.0 && round % 2 == 0 { -l } else { l }
+                if l.dot(frames[k].z) < 0.0 && round % 2 == 0 {
+                    -l
+                } else {
+                    l
+                }
             });
             let out = pb.eval(&ls);
             for k in 0..W {
@@ -153,7 +157,11 @@ fn conductor_kernel_equals_scalar() {
             |r, _| {
                 let a = 0.01 + 0.99 * r.f32();
                 // Isotropic in half the lanes.
-                let b = if r.f32() < 0.5 { a } else { 0.01 + 0.99 * r.f32() };
+                let b = if r.f32() < 0.5 {
+                    a
+                } else {
+                    0.01 + 0.99 * r.f32()
+                };
                 let eta = rgb(r).map(|x| 0.1 + 2.0 * x);
                 let kappa = rgb(r).map(|x| 4.0 * x);
                 [vec![a, b], eta.to_vec(), kappa.to_vec()].concat()
@@ -187,7 +195,11 @@ fn dielectric_r_kernel_equals_scalar() {
         },
         |r, k| {
             let a = 0.01 + 0.99 * r.f32();
-            let b = if r.f32() < 0.5 { a } else { 0.01 + 0.99 * r.f32() };
+            let b = if r.f32() < 0.5 {
+                a
+            } else {
+                0.01 + 0.99 * r.f32()
+            };
             // η < 1 too: total internal reflection inside the lobe.
             let eta = 0.5 + 2.5 * r.f32();
             // Two-sided: views from below flip the frame instead of masking the lane, so
@@ -218,7 +230,11 @@ fn ward_kernels_equal_scalar() {
             },
             |r, _| {
                 let a = 0.02 + 0.98 * r.f32();
-                let b = if r.f32() < 0.5 { a } else { 0.02 + 0.98 * r.f32() };
+                let b = if r.f32() < 0.5 {
+                    a
+                } else {
+                    0.02 + 0.98 * r.f32()
+                };
                 [vec![a, b], rgb(r).to_vec()].concat()
             },
             5,

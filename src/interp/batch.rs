@@ -109,7 +109,7 @@ impl<const W: usize> FrameX<W> {
 
     /// World → local for every lane (the same arithmetic as [`Frame::to_local`]).
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
-    fn to_local(&self, w: &Vec3x<W>) -> Vec3x<W> {
+    fn local(&self, w: &Vec3x<W>) -> Vec3x<W> {
         let mut out = Vec3x::zero();
         let dot = |a: &Vec3x<W>, k: usize| w.x[k] * a.x[k] + w.y[k] * a.y[k] + w.z[k] * a.z[k];
         for k in 0..W {
@@ -246,7 +246,7 @@ impl<const W: usize> PreparedBatch<W> {
         let world = Vec3x::from_vecs(l);
         let mut local = [Vec3x::zero(); MAX_LOBES];
         for (loc, frames) in local.iter_mut().zip(&self.frames[..self.frame_count]) {
-            *loc = frames.to_local(&world);
+            *loc = frames.local(&world);
         }
         let mut acc = Acc {
             f: Vec3x::zero(),

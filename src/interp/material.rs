@@ -810,7 +810,13 @@ fn sat(v: Vec3) -> Vec3 {
 /// Non-negative and finite (NaN and infinities become 0).
 fn clean(v: Vec3) -> Vec3 {
     // `&`, not `&&`: no branch per channel.
-    let c = |x: f32| if (x > 0.0) & (x < f32::INFINITY) { x } else { 0.0 };
+    let c = |x: f32| {
+        if (x > 0.0) & (x < f32::INFINITY) {
+            x
+        } else {
+            0.0
+        }
+    };
     Vec3::new(c(v.x), c(v.y), c(v.z))
 }
 

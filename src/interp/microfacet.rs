@@ -184,7 +184,9 @@ impl ReflectionCurves {
         let schlick = |f0: Rgb, f90: Rgb| f0 * e1v + (f90 - f0) * sq(&self.sq);
         match *f {
             Fresnel::Schlick { f0, f90, .. } => schlick(f0, f90),
-            Fresnel::F82 { f0, f90, a, .. } => (schlick(f0, f90) - a * sq(&self.h82)).max(Vec3::ZERO),
+            Fresnel::F82 { f0, f90, a, .. } => {
+                (schlick(f0, f90) - a * sq(&self.h82)).max(Vec3::ZERO)
+            }
             _ => Vec3::splat(e1v),
         }
     }
@@ -225,7 +227,9 @@ impl MicrofacetR {
         };
         let curves = match albedo_fresnel {
             Fresnel::One => Some((None, None)),
-            Fresnel::Schlick { q, .. } => Some((Some(MuCurve::new3(sq, y, tables::q_axis(q))), None)),
+            Fresnel::Schlick { q, .. } => {
+                Some((Some(MuCurve::new3(sq, y, tables::q_axis(q))), None))
+            }
             Fresnel::F82 { q, .. } => Some((
                 Some(MuCurve::new3(sq, y, tables::q_axis(q))),
                 Some(MuCurve::new2(h82, y)),
@@ -525,7 +529,12 @@ impl Dielectric {
     }
 
     /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
-    pub fn prepare_bound(&self, v: Vec3, flipped: bool, bound: &DielectricBound) -> PreparedDielectric {
+    pub fn prepare_bound(
+        &self,
+        v: Vec3,
+        flipped: bool,
+        bound: &DielectricBound,
+    ) -> PreparedDielectric {
         let eta0 = self.eta0();
         let eta = if flipped { 1.0 / eta0 } else { eta0 };
         let lambda_v = self.ggx.lambda(v);

@@ -43,7 +43,8 @@ pub use frame::Frame;
 pub use fresnel::Fresnel;
 pub use ggx::{Ggx, Masking};
 pub use lobe::{
-    BoundLobe, Lobe, LobeAlbedo, LobeClass, LobeEval, LobeKind, LobeSample, PreparedLobe, Reciprocity, Sides,
+    BoundLobe, Lobe, LobeAlbedo, LobeClass, LobeEval, LobeKind, LobeSample, PreparedLobe,
+    Reciprocity, Sides,
 };
 pub use material::{
     ActiveLobe, Albedo, Eval, Material, PrepareOptions, Prepared, Sample, Scratch, ShadingPoint,

@@ -273,7 +273,9 @@ impl<const W: usize> Kernel<W> {
                 }
                 Kernel::Lambert { rho_pi }
             }
-            State::OrenNayar(p0) if same(&|s| matches!(s, State::OrenNayar(p) if p.fast == p0.fast)) => {
+            State::OrenNayar(p0)
+                if same(&|s| matches!(s, State::OrenNayar(p) if p.fast == p0.fast)) =>
+            {
                 let mut x = OrenNayarX {
                     v: Vec3x::zero(),
                     rho_pi: Vec3x::zero(),
@@ -302,7 +304,9 @@ impl<const W: usize> Kernel<W> {
                 }
                 Kernel::OrenNayar(x)
             }
-            State::MicrofacetR(_) if same(&|s| matches!(s, State::MicrofacetR(p) if conductor_ok(p))) => {
+            State::MicrofacetR(_)
+                if same(&|s| matches!(s, State::MicrofacetR(p) if conductor_ok(p))) =>
+            {
                 let mut x = ConductorX {
                     g: GgxX::zero(),
                     inv_4mu: [0.0; W],
@@ -323,7 +327,11 @@ impl<const W: usize> Kernel<W> {
                 }
                 Kernel::Conductor(x)
             }
-            State::Dielectric(_) if same(&|s| matches!(s, State::Dielectric(p) if p.refl && !p.trans && !p.delta)) => {
+            State::Dielectric(_)
+                if same(
+                    &|s| matches!(s, State::Dielectric(p) if p.refl && !p.trans && !p.delta),
+                ) =>
+            {
                 let mut x = DielectricX {
                     g: GgxX::zero(),
                     eta: [0.0; W],
@@ -357,14 +365,20 @@ impl<const W: usize> Kernel<W> {
                         x.inv_ay2[k] = p.core.inv_ay2;
                         x.norm[k] = p.core.norm;
                         x.pdf_norm[k] = p.core.pdf_norm;
-                        x.gm[k] = if p.variant == WardVariant::Gm { 1.0 } else { 0.0 };
+                        x.gm[k] = if p.variant == WardVariant::Gm {
+                            1.0
+                        } else {
+                            0.0
+                        };
                         x.rho.set(k, p.rho);
                     }
                 }
                 Kernel::Ward(x)
             }
             State::SheenCK(_)
-                if same(&|s| matches!(s, State::SheenCK(p) if p.masking == SheenMasking::MaterialX)) =>
+                if same(
+                    &|s| matches!(s, State::SheenCK(p) if p.masking == SheenMasking::MaterialX),
+                ) =>
             {
                 let mut x = SheenCKX {
                     v: Vec3x::zero(),
@@ -624,7 +638,11 @@ impl<const W: usize> DielectricX<W> {
             let fr = dielectric1(vh, self.eta[k]);
             let q = 0.25 * d * self.inv_mu[k];
             let s = fr * g * q;
-            let f = [self.tint_r.x[k] * s, self.tint_r.y[k] * s, self.tint_r.z[k] * s];
+            let f = [
+                self.tint_r.x[k] * s,
+                self.tint_r.y[k] * s,
+                self.tint_r.z[k] * s,
+            ];
             let pdf = self.g.g1_v[k] * q;
             let valid = lz > 0.0;
             add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));

@@ -28,7 +28,10 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 #[inline(always)]
 fn round_i(x: f32) -> (f32, i32) {
     let t = x + ROUND_MAGIC;
-    (t - ROUND_MAGIC, t.to_bits() as i32 - ROUND_MAGIC.to_bits() as i32)
+    (
+        t - ROUND_MAGIC,
+        t.to_bits() as i32 - ROUND_MAGIC.to_bits() as i32,
+    )
 }
 
 /// `2ⁿ` for an integer n in [−126, 127].
@@ -52,7 +55,7 @@ pub fn exp(x: f32) -> f32 {
     let p = p * r + 8.333_452e-3;
     let p = p * r + 4.166_579_6e-2;
     let p = p * r + 1.666_666_5e-1;
-    let p = p * r + 5.000_000_1e-1;
+    let p = p * r + 0.5;
     let e = p * (r * r) + r + 1.0;
     let y = e * pow2i(ni);
     select(x < -87.0, 0.0, y)
@@ -119,7 +122,7 @@ pub fn acos(x: f32) -> f32 {
     let z = select(far, 0.5 * (1.0 - a), a * a);
     let s = select(far, z.sqrt(), a);
     let p = 4.216_32e-2;
-    let p = p * z + 2.418_131_1e-2;
+    let p = p * z + 2.418_131e-2;
     let p = p * z + 4.547_002_6e-2;
     let p = p * z + 7.495_300_3e-2;
     let p = p * z + 1.666_675_2e-1;
@@ -140,7 +143,12 @@ mod tests {
     fn exp_matches_std() {
         for k in 0..=20_000 {
             let x = -87.0 + 175.0 * k as f32 / 20_000.0;
-            assert!(rel(exp(x), x.exp()) < 4e-7, "exp({x}): {} vs {}", exp(x), x.exp());
+            assert!(
+                rel(exp(x), x.exp()) < 4e-7,
+                "exp({x}): {} vs {}",
+                exp(x),
+                x.exp()
+            );
         }
         assert_eq!(exp(-100.0), 0.0);
         assert_eq!(exp(0.0), 1.0);
