@@ -15,7 +15,6 @@
 //! polynomial `exp`/`pow`/`acos`; everything else is the scalar formula in the same order).
 
 use super::frame::Frame;
-use super::lobe::PreparedLobe;
 use super::material::{Eval, Material, Prepared, Scratch, ShadingPoint};
 use super::soa::{Acc, Kernel, LaneWeights, Vec3x};
 use crate::ir::MAX_LOBES;
@@ -68,7 +67,8 @@ impl<'a, const W: usize> ShadingBatch<'a, W> {
 /// One leaf across the lanes.
 #[derive(Debug, Clone, Copy)]
 struct Slot<const W: usize> {
-    lobes: [PreparedLobe; W],
+    /// Where lane `k`'s lobe is in that lane's [`Prepared::lobes`] (meaningful where live).
+    index: [u8; W],
     /// Weights and probabilities (0 where not live) and flip signs, SoA.
     lw: LaneWeights<W>,
     /// Lane is live (the lobe survived prepare there).
@@ -165,9 +165,8 @@ impl<const W: usize> PreparedBatch<W> {
     }
 
     fn from_lanes(lanes: [Prepared; W]) -> PreparedBatch<W> {
-        let first = lanes[0].lobes[0].lobe;
         let empty = Slot {
-            lobes: [first; W],
+            index: [0; W],
             lw: LaneWeights {
                 w: Vec3x::zero(),
                 p: [0.0; W],
@@ -216,9 +215,9 @@ impl<const W: usize> PreparedBatch<W> {
         }
         self.frame_count = 0;
         for (k, lane) in self.lanes.iter().enumerate() {
-            for l in lane.lobes() {
+            for (j, l) in lane.lobes().iter().enumerate() {
                 let slot = &mut self.slots[leaf_slot[l.leaf as usize] as usize];
-                slot.lobes[k] = l.lobe;
+                slot.index[k] = j as u8;
                 // An inactive lobe evaluates to zero: it stays masked.
                 if l.lobe.is_inactive() {
                     continue;
@@ -235,7 +234,9 @@ impl<const W: usize> PreparedBatch<W> {
             self.frame_count = self.frame_count.max(lane.frame_count);
         }
         for slot in &mut self.slots[..count] {
-            slot.kernel = Kernel::build(&slot.lobes, &slot.live);
+            let lanes = &self.lanes;
+            let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
+            slot.kernel = Kernel::build(lobe, &slot.live);
         }
         self.count = count;
     }
@@ -259,7 +260,9 @@ impl<const W: usize> PreparedBatch<W> {
             }
             for k in 0..W {
                 if slot.live[k] {
-                    let e = slot.lobes[k].eval(loc.get(k));
+                    let e = self.lanes[k].lobes[slot.index[k] as usize]
+                        .lobe
+                        .eval(loc.get(k));
                     let f = slot.lw.w.get(k) * e.f_cos;
                     acc.f.set(k, acc.f.get(k) + f);
                     acc.pdf[k] += slot.lw.p[k] * e.pdf;

@@ -81,7 +81,7 @@ impl<const W: usize> DielectricRBatch<W> {
             let (ax, ay) = (self.ax[k], self.ay[k]);
             let (vx, vy, vz) = (v.x[k], v.y[k], v.z[k]);
             let (lx, ly, lz) = (l.x[k], l.y[k], l.z[k]);
-            let valid = vz > 0.0 && lz > 0.0;
+            let valid = (vz > 0.0) & (lz > 0.0);
             // Half vector.
             let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
             let inv_len = 1.0 / (hx * hx + hy * hy + hz * hz).max(1e-30).sqrt();
@@ -105,7 +105,7 @@ impl<const W: usize> DielectricRBatch<W> {
             let b = (vh * (gg + vh) - 1.0) / (vh * (gg - vh) + 1.0);
             let f = (0.5 * a * a * (1.0 + b * b)).min(1.0);
             let value = f * d * g * 0.25 / vz.max(1e-7);
-            scalar[k] = if valid { value } else { 0.0 };
+            scalar[k] = keep(valid, value);
         }
         for k in 0..W {
             out.x[k] = scalar[k] * self.tint.x[k];
@@ -254,16 +254,20 @@ use super::lobe::{PreparedLobe, State};
 use super::vmath;
 
 impl<const W: usize> Kernel<W> {
-    /// The kernel for one slot's lanes (`live[k]`: the lobe is live in lane `k`), or
+    /// The kernel for one slot's lanes (`lobes(k)`: lane `k`'s lobe; `live[k]`: it is live
+    /// there), or
     /// [`Kernel::Scalar`] when the lanes mix families or configurations no kernel covers.
-    pub(super) fn build(lobes: &[PreparedLobe; W], live: &[bool; W]) -> Kernel<W> {
+    pub(super) fn build<'a>(
+        lobes: impl Fn(usize) -> &'a PreparedLobe,
+        live: &[bool; W],
+    ) -> Kernel<W> {
         let Some(first) = (0..W).find(|&k| live[k]) else {
             return Kernel::Scalar;
         };
         // Dead lanes borrow the first live lane's parameters.
-        let lane = |k: usize| if live[k] { &lobes[k] } else { &lobes[first] };
+        let lane = |k: usize| if live[k] { lobes(k) } else { lobes(first) };
         let same = |f: &dyn Fn(&State) -> bool| (0..W).all(|k| f(&lane(k).state));
-        match &lobes[first].state {
+        match &lobes(first).state {
             State::Lambert(_) if same(&|s| matches!(s, State::Lambert(_))) => {
                 let mut rho_pi = Vec3x::zero();
                 for k in 0..W {
