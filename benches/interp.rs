@@ -10,9 +10,17 @@
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;
 //! * `preview512/{scalar,batched}`: a 512² material ball of `ref10`, one light, one thread.
 //!
-//! Times are the thread's on-CPU time (`/proc/thread-self/schedstat`), as in `leaves.rs`:
-//! the machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"
+//! Times are the thread's on-CPU time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`): the
+//! machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"
 //! throughput does it) for ns per evaluation.
+//!
+//! §6.4 asks for both builds. Baseline x86-64: `cargo bench --bench interp`. Native (AVX-512
+//! on the reference machine), in its own target directory so the baseline artefacts are
+//! not rebuilt:
+//!
+//! ```text
+//! RUSTFLAGS="-C target-cpu=native" CARGO_TARGET_DIR=target/native cargo bench --bench interp
+//! ```
 
 use criterion::measurement::{Measurement, ValueFormatter};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -31,7 +39,32 @@ use vstructc::interp::*;
 
 const PAIRS: usize = 4096;
 
+/// The C library's `struct timespec` on 64-bit Linux.
+#[repr(C)]
+struct Timespec {
+    tv_sec: i64,
+    tv_nsec: i64,
+}
+
+unsafe extern "C" {
+    fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
+}
+
+/// Linux's `CLOCK_THREAD_CPUTIME_ID`.
+const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+
+/// The current thread's CPU time in ns. `clock_gettime` is exact to the nanosecond;
+/// `/proc/thread-self/schedstat` (the fallback) only advances at scheduler ticks, which
+/// made short iterations read as zero (criterion then refuses the sample).
 fn thread_cpu_ns() -> u64 {
+    let mut ts = Timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; the call writes only into it.
+    if unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0 {
+        return ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64;
+    }
     std::fs::read_to_string("/proc/thread-self/schedstat")
         .ok()
         .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))

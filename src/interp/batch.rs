@@ -3,22 +3,20 @@
 //! A material's IR fixes the lobe structure; only parameter values differ between points. A
 //! [`PreparedBatch`] therefore has one *slot* per leaf that is live in at least one lane,
 //! in leaf order, and each slot stores its per-lane state side by side (structure of arrays
-//! over lanes: `[PreparedLobe; W]`, `[Vec3; W]` weights, `[f32; W]` probabilities). A lobe
-//! dropped in some lanes is masked there (weight 0), not removed; a leaf dropped in every
-//! lane has no slot.
+//! over lanes). A lobe dropped in some lanes is masked there (weight 0), not removed; a leaf
+//! dropped in every lane has no slot.
 //!
-//! `eval` is lobe-major: for each slot it runs the same leaf code over all `W` lanes, so one
-//! dispatch serves `W` evaluations and the leaf's code and parameters stay hot. Per lane it
-//! performs exactly the scalar operations in the scalar order, so results equal
-//! [`Prepared::eval`] (the spec allows relative 1e-5; they are in fact identical).
-//!
-//! What this is not (yet): the leaves' arithmetic is still scalar per lane. Vectorising it
-//! needs per-family SoA kernels like [`super::soa::DielectricRBatch`] for every leaf; the
-//! batch layout (one slot per leaf, lanes contiguous) is the one those kernels need.
+//! `eval` is lobe-major: L is transformed into each frame once for all lanes, then each
+//! slot runs its family's SoA kernel ([`super::soa`]: Lambert, Oren–Nayar, GGX conductor,
+//! GGX dielectric R, Ward, both sheens) over all `W` lanes in straight-line code the
+//! compiler vectorises. Slots whose lanes mix families or use a configuration no kernel
+//! covers (transmission, Kulla–Conty compensation, mia leaves, ...) run the scalar leaf per
+//! lane. Per lane the result equals [`Prepared::eval`] to relative 1e-5 (the kernels use
+//! polynomial `exp`/`pow`/`acos`; everything else is the scalar formula in the same order).
 
 use super::frame::Frame;
-use super::lobe::PreparedLobe;
 use super::material::{Eval, Material, Prepared, Scratch, ShadingPoint};
+use super::soa::{Acc, Kernel, LaneWeights, Vec3x};
 use crate::ir::MAX_LOBES;
 use glam::{Vec2, Vec3};
 
@@ -69,13 +67,58 @@ impl<'a, const W: usize> ShadingBatch<'a, W> {
 /// One leaf across the lanes.
 #[derive(Debug, Clone, Copy)]
 struct Slot<const W: usize> {
-    lobes: [PreparedLobe; W],
-    weight: [Vec3; W],
-    prob: [f32; W],
+    /// Where lane `k`'s lobe is in that lane's [`Prepared::lobes`] (meaningful where live).
+    index: [u8; W],
+    /// Weights and probabilities (0 where not live) and flip signs, SoA.
+    lw: LaneWeights<W>,
     /// Lane is live (the lobe survived prepare there).
     live: [bool; W],
     /// Frame slot (the same for every lane: it is the leaf's).
     frame: u8,
+    /// The family's SoA kernel ([`Kernel::Scalar`]: lane by lane).
+    kernel: Kernel<W>,
+}
+
+/// `W` frames, structure of arrays.
+#[derive(Debug, Clone, Copy)]
+struct FrameX<const W: usize> {
+    x: Vec3x<W>,
+    y: Vec3x<W>,
+    z: Vec3x<W>,
+}
+
+impl<const W: usize> FrameX<W> {
+    fn identity() -> Self {
+        let f = Frame::default();
+        let mut out = FrameX {
+            x: Vec3x::zero(),
+            y: Vec3x::zero(),
+            z: Vec3x::zero(),
+        };
+        for k in 0..W {
+            out.set(k, &f);
+        }
+        out
+    }
+
+    fn set(&mut self, k: usize, f: &Frame) {
+        self.x.set(k, f.x);
+        self.y.set(k, f.y);
+        self.z.set(k, f.z);
+    }
+
+    /// World → local for every lane (the same arithmetic as [`Frame::to_local`]).
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    fn local(&self, w: &Vec3x<W>) -> Vec3x<W> {
+        let mut out = Vec3x::zero();
+        let dot = |a: &Vec3x<W>, k: usize| w.x[k] * a.x[k] + w.y[k] * a.y[k] + w.z[k] * a.z[k];
+        for k in 0..W {
+            out.x[k] = dot(&self.x, k);
+            out.y[k] = dot(&self.y, k);
+            out.z[k] = dot(&self.z, k);
+        }
+        out
+    }
 }
 
 /// A material prepared for `W` points (§1.5).
@@ -83,7 +126,7 @@ struct Slot<const W: usize> {
 pub struct PreparedBatch<const W: usize> {
     slots: [Slot<W>; MAX_LOBES],
     count: usize,
-    frames: [[Frame; W]; MAX_LOBES],
+    frames: [FrameX<W>; MAX_LOBES],
     frame_count: usize,
     /// The scalar preparations, kept for `albedo`, `emission`, `sample` per lane.
     lanes: [Prepared; W],
@@ -122,18 +165,21 @@ impl<const W: usize> PreparedBatch<W> {
     }
 
     fn from_lanes(lanes: [Prepared; W]) -> PreparedBatch<W> {
-        let first = lanes[0].lobes[0].lobe;
         let empty = Slot {
-            lobes: [first; W],
-            weight: [Vec3::ZERO; W],
-            prob: [0.0; W],
+            index: [0; W],
+            lw: LaneWeights {
+                w: Vec3x::zero(),
+                p: [0.0; W],
+                sign: [1.0; W],
+            },
             live: [false; W],
             frame: 0,
+            kernel: Kernel::Scalar,
         };
         let mut b = PreparedBatch {
             slots: [empty; MAX_LOBES],
             count: 0,
-            frames: [[Frame::default(); W]; MAX_LOBES],
+            frames: [FrameX::identity(); MAX_LOBES],
             frame_count: 0,
             lanes,
         };
@@ -163,51 +209,79 @@ impl<const W: usize> PreparedBatch<W> {
         }
         for slot in &mut self.slots[..count] {
             slot.live = [false; W];
-            slot.weight = [Vec3::ZERO; W];
-            slot.prob = [0.0; W];
+            slot.lw.w = Vec3x::zero();
+            slot.lw.p = [0.0; W];
+            slot.lw.sign = [1.0; W];
         }
         self.frame_count = 0;
         for (k, lane) in self.lanes.iter().enumerate() {
-            for l in lane.lobes() {
+            for (j, l) in lane.lobes().iter().enumerate() {
                 let slot = &mut self.slots[leaf_slot[l.leaf as usize] as usize];
-                slot.lobes[k] = l.lobe;
-                slot.weight[k] = l.weight;
-                slot.prob[k] = l.prob;
+                slot.index[k] = j as u8;
+                // An inactive lobe evaluates to zero: it stays masked.
+                if l.lobe.is_inactive() {
+                    continue;
+                }
+                slot.lw.w.set(k, l.weight);
+                slot.lw.p[k] = l.prob;
+                slot.lw.sign[k] = if l.lobe.is_flipped() { -1.0 } else { 1.0 };
                 slot.live[k] = true;
                 slot.frame = l.frame;
             }
             for f in 0..lane.frame_count {
-                self.frames[f][k] = lane.frames[f];
+                self.frames[f].set(k, &lane.frames[f]);
             }
             self.frame_count = self.frame_count.max(lane.frame_count);
+        }
+        for slot in &mut self.slots[..count] {
+            let lanes = &self.lanes;
+            let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
+            slot.kernel = Kernel::build(lobe, &slot.live);
         }
         self.count = count;
     }
 
-    /// `eval` per lane at world directions `l` (equal to the scalar [`Prepared::eval`]).
+    /// `eval` per lane at world directions `l` (equal to the scalar [`Prepared::eval`] to
+    /// relative 1e-5).
     pub fn eval(&self, l: &[Vec3; W]) -> [Eval; W] {
-        let mut local = [[Vec3::ZERO; W]; MAX_LOBES];
+        let world = Vec3x::from_vecs(l);
+        let mut local = [Vec3x::zero(); MAX_LOBES];
         for (loc, frames) in local.iter_mut().zip(&self.frames[..self.frame_count]) {
-            for k in 0..W {
-                loc[k] = frames[k].to_local(l[k]);
-            }
+            *loc = frames.local(&world);
         }
-        let mut f = [Vec3::ZERO; W];
-        let mut pdf = [0.0f32; W];
+        let mut acc = Acc {
+            f: Vec3x::zero(),
+            pdf: [0.0f32; W],
+        };
         for slot in &self.slots[..self.count] {
             let loc = &local[slot.frame as usize];
+            if slot.kernel.accumulate(loc, &slot.lw, &mut acc) {
+                continue;
+            }
             for k in 0..W {
                 if slot.live[k] {
-                    let e = slot.lobes[k].eval(loc[k]);
-                    f[k] += slot.weight[k] * e.f_cos;
-                    pdf[k] += slot.prob[k] * e.pdf;
+                    let e = self.lanes[k].lobes[slot.index[k] as usize]
+                        .lobe
+                        .eval(loc.get(k));
+                    let f = slot.lw.w.get(k) * e.f_cos;
+                    acc.f.set(k, acc.f.get(k) + f);
+                    acc.pdf[k] += slot.lw.p[k] * e.pdf;
                 }
             }
         }
         std::array::from_fn(|k| Eval {
-            f_cos: f[k],
-            pdf: pdf[k],
+            f_cos: acc.f.get(k),
+            pdf: acc.pdf[k],
         })
+    }
+
+    /// Number of slots that run a vectorised kernel (the others run the scalar leaf per
+    /// lane).
+    pub fn kernel_count(&self) -> usize {
+        self.slots[..self.count]
+            .iter()
+            .filter(|s| !matches!(s.kernel, Kernel::Scalar))
+            .count()
     }
 
     /// The scalar preparation of lane `k` (for `albedo`, `emission`, `sample`).

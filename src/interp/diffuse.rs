@@ -39,8 +39,8 @@ pub struct Lambert {
 /// Prepared Lambert (and Translucent: same data, other hemisphere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedLambert {
-    rho: Rgb,
-    rho_pi: Rgb,
+    pub(super) rho: Rgb,
+    pub(super) rho_pi: Rgb,
 }
 
 impl Lambert {
@@ -181,19 +181,19 @@ pub fn eon_e_avg(sigma: f32) -> f32 {
 /// Prepared Oren–Nayar lobe.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedOrenNayar {
-    v: Vec3,
-    rho_pi: Rgb,
+    pub(super) v: Vec3,
+    pub(super) rho_pi: Rgb,
     /// Constant term (A or A_F).
-    a: f32,
+    pub(super) a: f32,
     /// Coefficient of `s/t` (B or σ A_F).
-    b: f32,
+    pub(super) b: f32,
     /// FON/EON keep negative `s` (QON drops it).
-    keep_negative_s: bool,
+    pub(super) keep_negative_s: bool,
     /// EON: `ρ_ms (1 − Ê(μ_o)) / (π (1 − Ē))`; zero otherwise.
-    ms: Rgb,
-    sigma: f32,
-    fast: bool,
-    albedo: Rgb,
+    pub(super) ms: Rgb,
+    pub(super) sigma: f32,
+    pub(super) fast: bool,
+    pub(super) albedo: Rgb,
 }
 
 impl OrenNayar {

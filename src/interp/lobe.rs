@@ -20,9 +20,11 @@ use super::diffuse::{
 use super::emission::{Emission, Transparent};
 use super::math::{Rgb, flip};
 use super::microfacet::{
-    Compensation, Dielectric, DielectricMode, MicrofacetR, PreparedDielectric, PreparedMicrofacetR,
+    Compensation, Dielectric, DielectricBound, DielectricMode, MicrofacetBound, MicrofacetR,
+    PreparedDielectric, PreparedMicrofacetR,
 };
 use super::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenLTC, SheenMasking};
+use super::tables::MuCurve;
 use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward};
 use glam::Vec3;
 
@@ -209,14 +211,14 @@ pub enum Lobe {
 /// A lobe with its view-only terms computed: what `eval`/`sample` run on.
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedLobe {
-    kind: LobeKind,
+    pub(super) kind: LobeKind,
     /// The frame was flipped (view below the surface of a two-sided lobe).
-    flipped: bool,
-    state: State,
+    pub(super) flipped: bool,
+    pub(super) state: State,
 }
 
 #[derive(Debug, Clone, Copy)]
-enum State {
+pub(super) enum State {
     Inactive,
     Lambert(PreparedLambert),
     Translucent(PreparedLambert),
@@ -303,6 +305,23 @@ impl Lobe {
 
     /// Precomputes every view-only term for local view `v` (unit, local frame).
     pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
+        self.prepare_aux(v, sides, &Aux::None)
+    }
+
+    /// This lobe with its view-independent precomputation done once ([`BoundLobe`]).
+    pub fn bind(&self) -> BoundLobe {
+        let aux = match self {
+            Lobe::MicrofacetR(m) => Aux::Microfacet(m.bind()),
+            Lobe::Dielectric(d) => Aux::Dielectric(d.bind()),
+            Lobe::Ward(w) => Aux::Ward(w.albedo_curve()),
+            Lobe::SheenCK(s) => Aux::SheenCK(s.albedo_curve()),
+            _ => Aux::None,
+        };
+        BoundLobe { lobe: *self, aux }
+    }
+
+    #[inline]
+    fn prepare_aux(&self, v: Vec3, sides: Sides, aux: &Aux) -> PreparedLobe {
         let kind = self.kind();
         if let Lobe::Emission(e) = self {
             return PreparedLobe {
@@ -334,11 +353,23 @@ impl Lobe {
             Lobe::OrenNayar(o) => State::OrenNayar(o.prepare(v)),
             Lobe::MiaDiffuse(m) => State::MiaDiffuse(m.prepare(v)),
             Lobe::Burley(b) => State::Burley(b.prepare(v)),
-            Lobe::MicrofacetR(m) => State::MicrofacetR(m.prepare(v)),
-            Lobe::Dielectric(d) => State::Dielectric(d.prepare(v, flipped)),
-            Lobe::Ward(w) => State::Ward(w.prepare(v)),
+            Lobe::MicrofacetR(m) => State::MicrofacetR(match aux {
+                Aux::Microfacet(b) => m.prepare_bound(v, b),
+                _ => m.prepare(v),
+            }),
+            Lobe::Dielectric(d) => State::Dielectric(match aux {
+                Aux::Dielectric(b) => d.prepare_bound(v, flipped, b),
+                _ => d.prepare(v, flipped),
+            }),
+            Lobe::Ward(w) => State::Ward(match aux {
+                Aux::Ward(c) => w.prepare_bound(v, c),
+                _ => w.prepare(v),
+            }),
             Lobe::MiaHighlight3(m) => State::MiaHighlight3(m.prepare(v)),
-            Lobe::SheenCK(s) => State::SheenCK(s.prepare(v)),
+            Lobe::SheenCK(s) => State::SheenCK(match aux {
+                Aux::SheenCK(c) => s.prepare_bound(v, c),
+                _ => s.prepare(v),
+            }),
             Lobe::SheenLTC(s) => State::SheenLTC(s.prepare(v)),
             Lobe::Emission(_) | Lobe::Transparent(_) => State::Inactive,
         };
@@ -347,6 +378,42 @@ impl Lobe {
             flipped,
             state,
         }
+    }
+}
+
+/// A [`Lobe`] with the part of `prepare` that depends on neither the point nor the view
+/// computed once (a conductor's F82 fit, §3.9; the albedo tables at the lobe's roughness,
+/// index and exponent): what a compiled material keeps for leaves whose parameters are
+/// constants. [`BoundLobe::prepare`] equals [`Lobe::prepare`].
+#[derive(Debug, Clone, Copy)]
+pub struct BoundLobe {
+    lobe: Lobe,
+    aux: Aux,
+}
+
+/// The per-family view-independent data of a [`BoundLobe`]. One per constant leaf, built
+/// at compile time; the size difference between variants is harmless there, and boxing
+/// would add an indirection to every prepare.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy)]
+enum Aux {
+    None,
+    Microfacet(MicrofacetBound),
+    Dielectric(DielectricBound),
+    Ward(MuCurve),
+    SheenCK(MuCurve),
+}
+
+impl BoundLobe {
+    /// The lobe.
+    pub fn lobe(&self) -> &Lobe {
+        &self.lobe
+    }
+
+    /// [`Lobe::prepare`] without redoing the view-independent part.
+    #[inline]
+    pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
+        self.lobe.prepare_aux(v, sides, &self.aux)
     }
 }
 

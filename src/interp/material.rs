@@ -43,7 +43,7 @@ use super::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
 use super::frame::Frame;
 use super::fresnel::Fresnel as LobeFresnel;
 use super::ggx::{Ggx, Masking as LobeMasking};
-use super::lobe::{Lobe, LobeAlbedo, PreparedLobe, Sides};
+use super::lobe::{BoundLobe, Lobe, LobeAlbedo, PreparedLobe, Sides};
 use super::math::{Rgb, lum};
 use super::microfacet::{
     Compensation, Dielectric, DielectricMode as LobeDielectricMode, MicrofacetR,
@@ -229,8 +229,9 @@ pub struct LeafInfo {
     frame_slot: u8,
     /// Layerable (§2.4).
     layerable: bool,
-    /// The lobe, when every parameter register is a constant (built once at compile time).
-    const_lobe: Option<Lobe>,
+    /// The lobe, when every parameter register is a constant (built and bound once at
+    /// compile time).
+    const_lobe: Option<BoundLobe>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -251,6 +252,10 @@ pub struct Material {
     nodes: Vec<CNode>,
     /// Bit `m` set: the node's throughput in mode `m` is read by some layer.
     need: Vec<u8>,
+    /// Where node `i`'s throughput in mode `m` lives in [`Scratch`] (`NO_SLOT`: never read).
+    thr_slot: Vec<[u16; 4]>,
+    /// The throughput pass compiled to straight-line steps, bottom-up.
+    thr_ops: Vec<ThrOp>,
     leaves: Vec<LeafInfo>,
     /// The IR frames used by leaves, in compact order.
     frames: Vec<FrameSlot>,
@@ -273,7 +278,7 @@ pub struct Scratch {
     slots: Vec<Vec3>,
     regs: Vec<Vec3>,
     mu: Vec<f32>,
-    thr: Vec<[Vec3; 4]>,
+    thr: Vec<Vec3>,
     w: Vec<Vec3>,
 }
 
@@ -349,7 +354,7 @@ impl Material {
                         for (r, v) in c {
                             regs[r.index()] = v;
                         }
-                        leaf_lobe(&leaf.kind, &regs)
+                        leaf_lobe(&leaf.kind, &regs).bind()
                     });
                     leaves.push(LeafInfo {
                         node: NodeId(i as u32),
@@ -392,6 +397,7 @@ impl Material {
             }
         }
         let need = mode_needs(&nodes);
+        let (thr_slot, thr_ops) = compile_throughput(&nodes, &need);
         let mut layout = Vec::with_capacity(ir.inputs.len());
         let mut off = 0;
         for s in &ir.inputs {
@@ -413,6 +419,8 @@ impl Material {
             ir: ir.clone(),
             nodes,
             need,
+            thr_slot,
+            thr_ops,
             leaves,
             frames,
             frame_ids,
@@ -623,58 +631,41 @@ impl Material {
     }
 
     fn throughput(&self, s: &mut Scratch, out: &Prepared, ready: &[bool; MAX_LOBES]) {
-        let n = self.nodes.len();
         s.thr.clear();
-        s.thr.resize(n, [Vec3::ONE; 4]);
+        s.thr.resize(self.thr_ops.len(), Vec3::ONE);
         let regs = self.const_regs.as_deref().unwrap_or(&s.regs);
         let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
-        for i in (0..n).rev() {
-            let need = self.need[i];
-            if need == 0 {
-                continue;
-            }
-            let thr = &mut s.thr;
-            let t = match self.nodes[i] {
-                CNode::Leaf(k) => {
-                    let info = &self.leaves[k as usize];
-                    match ready[k as usize] {
-                        true if info.layerable => {
-                            let a = out.lobes[k as usize].lobe.albedo();
-                            let e = a.reflect + a.transmit_energy;
-                            let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
-                            per_mode(need, |m| {
-                                crate::ir::algebra::leaf_throughput(m, tint, ttint, e)
-                            })
-                        }
-                        _ => [Vec3::ZERO; 4],
-                    }
+        let thr = &mut s.thr;
+        for op in &self.thr_ops {
+            let (dst, t) = match *op {
+                ThrOp::Leaf { dst, leaf, mode } => {
+                    let info = &self.leaves[leaf as usize];
+                    let t = if ready[leaf as usize] && info.layerable {
+                        let a = out.lobes[leaf as usize].lobe.albedo();
+                        let e = a.reflect + a.transmit_energy;
+                        let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
+                        crate::ir::algebra::leaf_throughput(mode, tint, ttint, e)
+                    } else {
+                        Vec3::ZERO
+                    };
+                    (dst, t)
                 }
-                CNode::Emission(_) | CNode::Transparent(_) => [Vec3::ONE; 4],
-                CNode::Layer { top, base, mode } => {
-                    let tt = thr[top as usize][mode as usize];
-                    let tb = thr[base as usize];
-                    per_mode(need, |m| tt * tb[m as usize])
-                }
-                CNode::Mix { a, b, m } => {
+                ThrOp::One { dst } => (dst, Vec3::ONE),
+                ThrOp::Layer { dst, top, base } => (dst, thr[top as usize] * thr[base as usize]),
+                ThrOp::Mix { dst, a, b, m } => {
                     let m = sat(reg(m));
-                    let (ta, tb) = (thr[a as usize], thr[b as usize]);
-                    per_mode(need, |k| {
-                        (Vec3::ONE - m) * ta[k as usize] + m * tb[k as usize]
-                    })
+                    (dst, (Vec3::ONE - m) * thr[a as usize] + m * thr[b as usize])
                 }
-                CNode::Add { a, b } => {
-                    let (ta, tb) = (thr[a as usize], thr[b as usize]);
-                    per_mode(need, |k| {
-                        (ta[k as usize] + tb[k as usize] - Vec3::ONE).max(Vec3::ZERO)
-                    })
-                }
-                CNode::Multiply { f, c } => {
+                ThrOp::Add { dst, a, b } => (
+                    dst,
+                    (thr[a as usize] + thr[b as usize] - Vec3::ONE).max(Vec3::ZERO),
+                ),
+                ThrOp::Multiply { dst, f, c } => {
                     let c = reg(c).max(Vec3::ZERO);
-                    let tf = thr[f as usize];
-                    per_mode(need, |k| sat(Vec3::ONE - c * (Vec3::ONE - tf[k as usize])))
+                    (dst, sat(Vec3::ONE - c * (Vec3::ONE - thr[f as usize])))
                 }
             };
-            thr[i] = t;
+            thr[dst as usize] = t;
         }
     }
 
@@ -700,7 +691,8 @@ impl Material {
                 CNode::Transparent(r) => out.transparency += clean(wi * reg(r)),
                 CNode::Layer { top, base, mode } => {
                     w[top as usize] += wi;
-                    w[base as usize] += wi * s.thr[top as usize][mode as usize];
+                    let t = self.thr_slot[top as usize][mode as usize];
+                    w[base as usize] += wi * s.thr[t as usize];
                 }
                 CNode::Mix { a, b, m } => {
                     let m = sat(reg(m));
@@ -747,14 +739,68 @@ fn mode_needs(nodes: &[CNode]) -> Vec<u8> {
     need
 }
 
-fn per_mode(need: u8, f: impl Fn(TintMode) -> Vec3) -> [Vec3; 4] {
-    let mut out = [Vec3::ONE; 4];
-    for m in TintMode::ALL {
-        if need & (1 << (m as u8)) != 0 {
-            out[m as usize] = f(m);
+/// One step of the compiled throughput pass: writes slot `dst` from slots written before
+/// (bottom-up) and registers.
+#[derive(Debug, Clone, Copy)]
+enum ThrOp {
+    /// A leaf's throughput in `mode` (0 for leaves that are not layerable or not prepared).
+    Leaf { dst: u16, leaf: u8, mode: TintMode },
+    /// Emission and transparency pass everything.
+    One { dst: u16 },
+    /// `T_top(layer mode) · T_base(m)`.
+    Layer { dst: u16, top: u16, base: u16 },
+    /// `(1 − m) T_a + m T_b`.
+    Mix { dst: u16, a: u16, b: u16, m: Reg },
+    /// `max(T_a + T_b − 1, 0)`.
+    Add { dst: u16, a: u16, b: u16 },
+    /// `sat(1 − c (1 − T_f))`.
+    Multiply { dst: u16, f: u16, c: Reg },
+}
+
+/// Marks a (node, mode) throughput that is never read.
+const NO_SLOT: u16 = u16::MAX;
+
+/// Compile the throughput pass: one slot and one step per (node, mode) pair that some layer
+/// reads (`need`), ordered children first. Returns the slot table and the steps.
+fn compile_throughput(nodes: &[CNode], need: &[u8]) -> (Vec<[u16; 4]>, Vec<ThrOp>) {
+    let mut slot = vec![[NO_SLOT; 4]; nodes.len()];
+    let mut ops = Vec::new();
+    for i in (0..nodes.len()).rev() {
+        for m in TintMode::ALL {
+            if need[i] & (1 << (m as u8)) == 0 {
+                continue;
+            }
+            let dst = ops.len() as u16;
+            let at = |j: u32, mode: TintMode| slot[j as usize][mode as usize];
+            ops.push(match nodes[i] {
+                CNode::Leaf(leaf) => ThrOp::Leaf { dst, leaf, mode: m },
+                CNode::Emission(_) | CNode::Transparent(_) => ThrOp::One { dst },
+                CNode::Layer { top, base, mode } => ThrOp::Layer {
+                    dst,
+                    top: at(top, mode),
+                    base: at(base, m),
+                },
+                CNode::Mix { a, b, m: r } => ThrOp::Mix {
+                    dst,
+                    a: at(a, m),
+                    b: at(b, m),
+                    m: r,
+                },
+                CNode::Add { a, b } => ThrOp::Add {
+                    dst,
+                    a: at(a, m),
+                    b: at(b, m),
+                },
+                CNode::Multiply { f, c } => ThrOp::Multiply {
+                    dst,
+                    f: at(f, m),
+                    c,
+                },
+            });
+            slot[i][m as usize] = dst;
         }
     }
-    out
+    (slot, ops)
 }
 
 fn sat(v: Vec3) -> Vec3 {
@@ -763,7 +809,14 @@ fn sat(v: Vec3) -> Vec3 {
 
 /// Non-negative and finite (NaN and infinities become 0).
 fn clean(v: Vec3) -> Vec3 {
-    let c = |x: f32| if x.is_finite() && x > 0.0 { x } else { 0.0 };
+    // `&`, not `&&`: no branch per channel.
+    let c = |x: f32| {
+        if (x > 0.0) & (x < f32::INFINITY) {
+            x
+        } else {
+            0.0
+        }
+    };
     Vec3::new(c(v.x), c(v.y), c(v.z))
 }
 

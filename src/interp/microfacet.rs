@@ -8,7 +8,7 @@ use super::fresnel::{self, Fresnel};
 use super::ggx::{Ggx, Masking, g2};
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
-use super::tables::{self, Row, TableId};
+use super::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -140,27 +140,120 @@ pub struct MicrofacetR {
 /// Prepared [`MicrofacetR`].
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedMicrofacetR {
-    ggx: Ggx,
-    masking: Masking,
-    fresnel: Fresnel,
-    v: Vec3,
-    lambda_v: f32,
-    g1_v: f32,
-    inv_4mu: f32,
+    pub(super) ggx: Ggx,
+    pub(super) masking: Masking,
+    pub(super) fresnel: Fresnel,
+    pub(super) v: Vec3,
+    pub(super) lambda_v: f32,
+    pub(super) g1_v: f32,
+    pub(super) inv_4mu: f32,
     /// Turquin factor (1 when off).
-    scale: Rgb,
+    pub(super) scale: Rgb,
     /// Kulla–Conty: `F_ms (1 − E(μ_o)) / (π (1 − E_avg))` (0 when off).
-    ms: Rgb,
-    e_row: Option<Row>,
+    pub(super) ms: Rgb,
+    pub(super) e_row: Option<Row>,
     /// Probability of sampling the Kulla–Conty part.
-    p_ms: f32,
-    delta: bool,
-    albedo: Rgb,
+    pub(super) p_ms: f32,
+    pub(super) delta: bool,
+    pub(super) albedo: Rgb,
+}
+
+/// The view-independent part of a GGX reflection lobe's `prepare` ([`MicrofacetR::bind`]):
+/// the Fresnel form the tables read and the albedo tables at the lobe's roughness.
+#[derive(Debug, Clone, Copy)]
+pub struct MicrofacetBound {
+    albedo_fresnel: Fresnel,
+    /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables).
+    curves: Option<ReflectionCurves>,
+}
+
+/// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
+#[derive(Debug, Clone, Copy)]
+struct ReflectionCurves {
+    e1: MuCurve,
+    sq: Option<MuCurve>,
+    h82: Option<MuCurve>,
+}
+
+impl ReflectionCurves {
+    /// [`reflection_albedo`] for the forms the curves were built for (One, Schlick, F82).
+    #[inline]
+    fn albedo(&self, f: &Fresnel, mu: f32) -> Rgb {
+        let e1v = self.e1.at(mu);
+        let sq = |c: &Option<MuCurve>| c.as_ref().map_or(0.0, |c| c.at(mu));
+        let schlick = |f0: Rgb, f90: Rgb| f0 * e1v + (f90 - f0) * sq(&self.sq);
+        match *f {
+            Fresnel::Schlick { f0, f90, .. } => schlick(f0, f90),
+            Fresnel::F82 { f0, f90, a, .. } => {
+                (schlick(f0, f90) - a * sq(&self.h82)).max(Vec3::ZERO)
+            }
+            _ => Vec3::splat(e1v),
+        }
+    }
 }
 
 impl MicrofacetR {
+    /// The Fresnel form the albedo tables read: a conductor through its F82 fit (§3.9),
+    /// any other form as it is. The fit costs two complex Fresnel evaluations, so a compiled
+    /// material computes it once per constant leaf ([`MicrofacetR::prepare_bound`]).
+    pub fn albedo_fresnel(&self) -> Fresnel {
+        match self.fresnel {
+            Fresnel::Conductor { eta, kappa } => {
+                let (f0, t) = fresnel::conductor_to_f82(eta, kappa);
+                Fresnel::F82 {
+                    f0,
+                    f90: Vec3::ONE,
+                    q: 5.0,
+                    a: fresnel::f82_coefficient(f0, Vec3::ONE, 5.0, t),
+                }
+            }
+            f => f,
+        }
+    }
+
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedMicrofacetR {
+        self.prepare_bound(v, &self.bind())
+    }
+
+    /// The view-independent part of [`MicrofacetR::prepare`], for
+    /// [`MicrofacetR::prepare_bound`].
+    pub fn bind(&self) -> MicrofacetBound {
+        let albedo_fresnel = self.albedo_fresnel();
+        let y = tables::ggx_axis(self.ggx.lookup_alpha());
+        let (sq, h82) = match self.masking {
+            Masking::HeightCorrelated => (TableId::SqHc, TableId::H82Hc),
+            Masking::Separable => (TableId::SqSep, TableId::H82Sep),
+        };
+        let curves = match albedo_fresnel {
+            Fresnel::One => Some((None, None)),
+            Fresnel::Schlick { q, .. } => {
+                Some((Some(MuCurve::new3(sq, y, tables::q_axis(q))), None))
+            }
+            Fresnel::F82 { q, .. } => Some((
+                Some(MuCurve::new3(sq, y, tables::q_axis(q))),
+                Some(MuCurve::new2(h82, y)),
+            )),
+            Fresnel::Dielectric { .. } | Fresnel::Conductor { .. } => None,
+        };
+        MicrofacetBound {
+            albedo_fresnel,
+            curves: curves.map(|(sq, h82)| ReflectionCurves {
+                e1: MuCurve::new2(e1_table(self.masking), y),
+                sq,
+                h82,
+            }),
+        }
+    }
+
+    /// As [`MicrofacetR::prepare`], with `bound` the result of [`MicrofacetR::bind`]
+    /// (computed once by the caller).
+    pub fn prepare_bound(&self, v: Vec3, bound: &MicrofacetBound) -> PreparedMicrofacetR {
+        let albedo_fresnel = &bound.albedo_fresnel;
+        // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
+        let conductor = self.fresnel.is_conductor();
+        let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
+        let f_average = || clamp1(albedo_fresnel.average());
         let alpha = self.ggx.lookup_alpha();
         let lambda_v = self.ggx.lambda(v);
         let mut p = PreparedMicrofacetR {
@@ -182,15 +275,18 @@ impl MicrofacetR {
             p.albedo = self.fresnel.eval(v.z);
             return p;
         }
-        let ess = reflection_albedo(&self.fresnel, self.masking, v.z, alpha);
+        let ess = clamp1(match &bound.curves {
+            Some(c) => c.albedo(albedo_fresnel, v.z),
+            None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
+        });
         match self.comp {
             Compensation::None => p.albedo = ess,
             Compensation::Turquin(k) => {
-                p.scale = turquin_scale(k, self.fresnel.average(), self.masking, v.z, alpha);
+                p.scale = turquin_scale(k, f_average(), self.masking, v.z, alpha);
                 p.albedo = ess * p.scale;
             }
             Compensation::KullaConty => {
-                let f_avg = self.fresnel.average();
+                let f_avg = f_average();
                 let e_avg = e1_avg(self.masking, alpha).min(1.0 - 1e-6);
                 let f_ms = f_avg * f_avg * e_avg / (Vec3::ONE - f_avg * (1.0 - e_avg));
                 let e_o = e1(self.masking, v.z, alpha);
@@ -368,47 +464,90 @@ impl Dielectric {
 /// Prepared [`Dielectric`].
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedDielectric {
-    ggx: Ggx,
-    masking: Masking,
+    pub(super) ggx: Ggx,
+    pub(super) masking: Masking,
     /// Index on L's (transmitted) side over V's side.
-    eta: f32,
-    v: Vec3,
-    lambda_v: f32,
-    g1_v: f32,
-    inv_mu: f32,
-    refl: bool,
-    trans: bool,
-    tint_r: Rgb,
-    tint_t: Rgb,
-    lum_r: f32,
-    lum_t: f32,
-    t_fresnel: bool,
-    delta: bool,
-    albedo: LobeAlbedo,
+    pub(super) eta: f32,
+    pub(super) v: Vec3,
+    pub(super) lambda_v: f32,
+    pub(super) g1_v: f32,
+    pub(super) inv_mu: f32,
+    pub(super) refl: bool,
+    pub(super) trans: bool,
+    pub(super) tint_r: Rgb,
+    pub(super) tint_t: Rgb,
+    pub(super) lum_r: f32,
+    pub(super) lum_t: f32,
+    pub(super) t_fresnel: bool,
+    pub(super) delta: bool,
+    pub(super) albedo: LobeAlbedo,
+}
+
+/// The view-independent part of a dielectric's `prepare` ([`Dielectric::bind`]): its albedo
+/// tables `[E_R, E_T, E_T without (1 − F)]` at its roughness, for η and for 1/η (a view from
+/// below). Only height-correlated, non-delta lobes have them.
+#[derive(Debug, Clone, Copy)]
+pub struct DielectricBound {
+    curves: Option<[[MuCurve; 3]; 2]>,
 }
 
 impl Dielectric {
-    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
-    /// below the surface (the frame was flipped), so η is inverted.
-    pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
-        let eta0 = if self.eta.is_finite() && self.eta > 0.0 {
+    /// η, with invalid values replaced by 1.
+    fn eta0(&self) -> f32 {
+        if self.eta.is_finite() && self.eta > 0.0 {
             self.eta
         } else {
             1.0
+        }
+    }
+
+    /// The view-independent part of [`Dielectric::prepare`].
+    pub fn bind(&self) -> DielectricBound {
+        if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
+            return DielectricBound { curves: None };
+        }
+        let y = tables::ggx_axis(self.ggx.lookup_alpha());
+        let at = |eta: f32| {
+            let (inv, z) = tables::eta_axis(eta);
+            let ids = if inv {
+                [TableId::ErDielInv, TableId::EtDielInv, TableId::EtnDielInv]
+            } else {
+                [TableId::ErDiel, TableId::EtDiel, TableId::EtnDiel]
+            };
+            ids.map(|t| MuCurve::new3(t, y, z))
         };
+        let eta0 = self.eta0();
+        DielectricBound {
+            curves: Some([at(eta0), at(1.0 / eta0)]),
+        }
+    }
+
+    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
+    /// below the surface (the frame was flipped), so η is inverted.
+    pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
+        self.prepare_bound(v, flipped, &DielectricBound { curves: None })
+    }
+
+    /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
+    pub fn prepare_bound(
+        &self,
+        v: Vec3,
+        flipped: bool,
+        bound: &DielectricBound,
+    ) -> PreparedDielectric {
+        let eta0 = self.eta0();
         let eta = if flipped { 1.0 / eta0 } else { eta0 };
         let lambda_v = self.ggx.lambda(v);
         let refl = self.mode != DielectricMode::T;
         let trans = self.mode != DielectricMode::R;
         let alpha = self.ggx.lookup_alpha();
-        let scale = turquin_scale(
-            self.turquin,
-            Vec3::splat(fresnel::dielectric_avg(eta)),
-            self.masking,
-            v.z,
-            alpha,
-        );
-        let tint_r = self.tint_r * scale;
+        // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
+        let tint_r = if self.turquin > 0.0 {
+            let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
+            self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha)
+        } else {
+            self.tint_r
+        };
         let mut p = PreparedDielectric {
             ggx: self.ggx,
             masking: self.masking,
@@ -433,7 +572,13 @@ impl Dielectric {
             [f, (1.0 - f) * t, t]
         } else {
             let want = [refl, trans && self.t_fresnel, trans && !self.t_fresnel];
-            dielectric_albedos_masked(self.masking, v.z, alpha, eta, want)
+            match &bound.curves {
+                Some(c) => {
+                    let c = &c[usize::from(flipped)];
+                    [0, 1, 2].map(|i| if want[i] { c[i].at(v.z) } else { 0.0 })
+                }
+                None => dielectric_albedos_masked(self.masking, v.z, alpha, eta, want),
+            }
         };
         if refl {
             p.albedo.reflect = tint_r * er;

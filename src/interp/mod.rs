@@ -33,6 +33,7 @@ pub mod sheen;
 pub mod soa;
 pub mod tables;
 pub mod verify;
+pub mod vmath;
 pub mod ward;
 
 pub use batch::{PreparedBatch, ShadingBatch};
@@ -42,7 +43,8 @@ pub use frame::Frame;
 pub use fresnel::Fresnel;
 pub use ggx::{Ggx, Masking};
 pub use lobe::{
-    Lobe, LobeAlbedo, LobeClass, LobeEval, LobeKind, LobeSample, PreparedLobe, Reciprocity, Sides,
+    BoundLobe, Lobe, LobeAlbedo, LobeClass, LobeEval, LobeKind, LobeSample, PreparedLobe,
+    Reciprocity, Sides,
 };
 pub use material::{
     ActiveLobe, Albedo, Eval, Material, PrepareOptions, Prepared, Sample, Scratch, ShadingPoint,

@@ -5,7 +5,7 @@
 
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{sample_cosine, sample_uniform_hemisphere};
-use super::tables::{self, TableId};
+use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -52,38 +52,57 @@ fn ck_ln_lambda(c: &[f32; 5], mu: f32) -> f32 {
 /// Prepared [`SheenCK`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedSheenCK {
-    v: Vec3,
-    half_inv_r: f32,
-    norm: f32,
-    masking: SheenMasking,
-    coef: [f32; 5],
-    lambda_o: f32,
-    inv_4mu: f32,
-    albedo: f32,
+    pub(super) v: Vec3,
+    pub(super) half_inv_r: f32,
+    pub(super) norm: f32,
+    pub(super) masking: SheenMasking,
+    pub(super) coef: [f32; 5],
+    pub(super) lambda_o: f32,
+    pub(super) inv_4mu: f32,
+    pub(super) albedo: f32,
 }
 
 impl SheenCK {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
-        let r = if self.r.is_nan() {
+        self.prepare_bound(v, &self.albedo_curve())
+    }
+
+    /// The roughness clamped to its range (NaN → 1).
+    fn clamped_r(&self) -> f32 {
+        if self.r.is_nan() {
             1.0
         } else {
             self.r.clamp(SHEEN_CK_MIN_R, 1.0)
-        };
-        let coef = ck_coefficients(r);
+        }
+    }
+
+    /// The albedo table at this lobe's roughness, for [`SheenCK::prepare_bound`].
+    pub fn albedo_curve(&self) -> MuCurve {
         let table = match self.masking {
             SheenMasking::MaterialX => TableId::SheenMx,
             SheenMasking::Original => TableId::SheenOrig,
         };
+        MuCurve::new2(table, tables::sheen_axis(self.clamped_r()))
+    }
+
+    /// [`SheenCK::prepare`] with the albedo curve computed once ([`SheenCK::albedo_curve`]).
+    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedSheenCK {
+        let r = self.clamped_r();
+        let coef = ck_coefficients(r);
         PreparedSheenCK {
             v,
             half_inv_r: 0.5 / r,
             norm: (2.0 + 1.0 / r) * 0.5 * FRAC_1_PI,
             masking: self.masking,
             coef,
-            lambda_o: ck_ln_lambda(&coef, v.z).exp(),
+            // Λ(μ_o) is read by the original masking only (it costs a `powf` and an `exp`).
+            lambda_o: match self.masking {
+                SheenMasking::Original => ck_ln_lambda(&coef, v.z).exp(),
+                SheenMasking::MaterialX => 0.0,
+            },
             inv_4mu: 0.25 / v.z.max(1e-7),
-            albedo: tables::lookup2(table, v.z, tables::sheen_axis(r)),
+            albedo: albedo.at(v.z),
         }
     }
 }
@@ -167,11 +186,11 @@ pub fn sheen_ltc_coefficients(x: f32, y: f32) -> (f32, f32) {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedSheenLTC {
     /// LTC frame axes in the lobe's local frame (`X` toward V's tangential part).
-    ax_x: Vec3,
-    ax_y: Vec3,
-    a: f32,
-    b: f32,
-    e_hat: f32,
+    pub(super) ax_x: Vec3,
+    pub(super) ax_y: Vec3,
+    pub(super) a: f32,
+    pub(super) b: f32,
+    pub(super) e_hat: f32,
 }
 
 impl SheenLTC {

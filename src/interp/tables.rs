@@ -454,6 +454,54 @@ pub fn lookup1(id: TableId, x: f32) -> f32 {
     d[i] + (d[i + 1] - d[i]) * w
 }
 
+/// A table lookup with every axis but `μ` fixed (a constant leaf's roughness, index or
+/// exponent): [`MuCurve::at`] returns exactly what [`lookup2`] / [`lookup3`] return at the
+/// same coordinates, without redoing the fixed axes' index arithmetic per call. Compiled
+/// materials build these once per constant leaf ([`super::BoundLobe`]).
+#[derive(Debug, Clone, Copy)]
+pub struct MuCurve {
+    lo: Row,
+    hi: Row,
+    wz: f32,
+    three: bool,
+}
+
+impl MuCurve {
+    /// A 2-D table at `y`.
+    pub fn new2(id: TableId, y: f32) -> MuCurve {
+        let r = Row::new(id, y);
+        MuCurve {
+            lo: r,
+            hi: r,
+            wz: 0.0,
+            three: false,
+        }
+    }
+
+    /// A 3-D table at `(y, z)`.
+    pub fn new3(id: TableId, y: f32, z: f32) -> MuCurve {
+        let d = &lut(id).data;
+        let (k, wz) = axis_coord(z);
+        MuCurve {
+            lo: Row::from_slice(&d[k * N * N..(k + 1) * N * N], y),
+            hi: Row::from_slice(&d[(k + 1) * N * N..(k + 2) * N * N], y),
+            wz,
+            three: true,
+        }
+    }
+
+    /// The table at `μ`.
+    #[inline]
+    pub fn at(&self, mu: f32) -> f32 {
+        let lo = self.lo.at(mu);
+        if !self.three {
+            return lo;
+        }
+        let hi = self.hi.at(mu);
+        lo + (hi - lo) * self.wz
+    }
+}
+
 /// Bilinear lookup in a 2-D table: `mu` = μ_o, `y` normalised second coordinate.
 pub fn lookup2(id: TableId, mu: f32, y: f32) -> f32 {
     Row::new(id, y).at(mu)

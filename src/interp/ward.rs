@@ -6,7 +6,7 @@
 
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, reflect};
-use super::tables::{self, TableId};
+use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -42,15 +42,15 @@ pub fn ward_albedo(variant: WardVariant, mu: f32, ax: f32, ay: f32) -> f32 {
 
 /// One Ward core: widths and normalisation, with the view fixed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct WardCore {
-    inv_ax2: f32,
-    inv_ay2: f32,
-    ax: f32,
-    ay: f32,
+pub(super) struct WardCore {
+    pub(super) inv_ax2: f32,
+    pub(super) inv_ay2: f32,
+    pub(super) ax: f32,
+    pub(super) ay: f32,
     /// Classic: `1/(4π α_x α_y √μ_o)`; GM: `1/(π α_x α_y)`.
-    norm: f32,
+    pub(super) norm: f32,
     /// `1/(4π α_x α_y)` for the pdf.
-    pdf_norm: f32,
+    pub(super) pdf_norm: f32,
 }
 
 impl WardCore {
@@ -116,23 +116,37 @@ pub struct Ward {
 /// Prepared [`Ward`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedWard {
-    core: WardCore,
-    variant: WardVariant,
-    rho: Rgb,
-    v: Vec3,
-    albedo: Rgb,
+    pub(super) core: WardCore,
+    pub(super) variant: WardVariant,
+    pub(super) rho: Rgb,
+    pub(super) v: Vec3,
+    pub(super) albedo: Rgb,
 }
 
 impl Ward {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedWard {
-        let core = WardCore::new(self.ax, self.ay, self.variant, v.z);
+        self.prepare_bound(v, &self.albedo_curve())
+    }
+
+    /// The albedo table at this lobe's (clamped) widths, for [`Ward::prepare_bound`].
+    pub fn albedo_curve(&self) -> MuCurve {
+        let (ax, ay) = (clamp_alpha(self.ax), clamp_alpha(self.ay));
+        let t = match self.variant {
+            WardVariant::Classic => TableId::WardClassic,
+            WardVariant::Gm => TableId::WardGm,
+        };
+        MuCurve::new2(t, tables::ward_axis((ax * ay).sqrt()))
+    }
+
+    /// [`Ward::prepare`] with the albedo curve computed once ([`Ward::albedo_curve`]).
+    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedWard {
         PreparedWard {
-            core,
+            core: WardCore::new(self.ax, self.ay, self.variant, v.z),
             variant: self.variant,
             rho: self.rho,
             v,
-            albedo: self.rho * ward_albedo(self.variant, v.z, core.ax, core.ay),
+            albedo: self.rho * albedo.at(v.z),
         }
     }
 }
