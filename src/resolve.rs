@@ -7,9 +7,9 @@
 //! is one node being resolved, with the snapshot of its connected input heads and the position
 //! reached in it.
 
-use crate::cond::Choice;
 use crate::cond::{
-    self, Action, ActionKind, ComparisonReport, CopyOutcome, Extension, Extensions, Statement,
+    self, Action, ActionKind, Choice, ComparisonReport, CopyOutcome, Extension, Extensions,
+    Statement,
 };
 use crate::diag::{Diagnostic, Diagnostics, Location};
 use crate::network::{Link, Network, NodeId};
@@ -493,7 +493,6 @@ impl Resolver<'_> {
             }
         };
         let action = cond::eval::chosen_action(stmt, choice);
-        let reports = &reports;
         if let Some(event) = event {
             event.reads = stmt
                 .param_names()
@@ -502,7 +501,7 @@ impl Resolver<'_> {
                 .collect();
             event.action = Some(action.to_string());
         }
-        for report in reports {
+        for report in &reports {
             self.comparison_warning(ctx, output, entry, report);
         }
         match &action.kind {

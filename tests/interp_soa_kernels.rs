@@ -97,6 +97,17 @@ fn rgb(rng: &mut Rng) -> [f32; 3] {
     [rng.f32(), rng.f32(), rng.f32()]
 }
 
+/// Widths `[α_x, α_y]` in `[lo, 1)`: isotropic in about half the lanes.
+fn alphas(rng: &mut Rng, lo: f32) -> Vec<f32> {
+    let a = lo + (1.0 - lo) * rng.f32();
+    let b = if rng.f32() < 0.5 {
+        a
+    } else {
+        lo + (1.0 - lo) * rng.f32()
+    };
+    vec![a, b]
+}
+
 #[test]
 fn lambert_kernel_equals_scalar() {
     check(
@@ -155,16 +166,10 @@ fn conductor_kernel_equals_scalar() {
                 )
             },
             |r, _| {
-                let a = 0.01 + 0.99 * r.f32();
-                // Isotropic in half the lanes.
-                let b = if r.f32() < 0.5 {
-                    a
-                } else {
-                    0.01 + 0.99 * r.f32()
-                };
+                let ab = alphas(r, 0.01);
                 let eta = rgb(r).map(|x| 0.1 + 2.0 * x);
                 let kappa = rgb(r).map(|x| 4.0 * x);
-                [vec![a, b], eta.to_vec(), kappa.to_vec()].concat()
+                [ab, eta.to_vec(), kappa.to_vec()].concat()
             },
             3,
         );
@@ -194,18 +199,13 @@ fn dielectric_r_kernel_equals_scalar() {
             )
         },
         |r, k| {
-            let a = 0.01 + 0.99 * r.f32();
-            let b = if r.f32() < 0.5 {
-                a
-            } else {
-                0.01 + 0.99 * r.f32()
-            };
+            let ab = alphas(r, 0.01);
             // η < 1 too: total internal reflection inside the lobe.
             let eta = 0.5 + 2.5 * r.f32();
             // Two-sided: views from below flip the frame instead of masking the lane, so
             // some lanes are masked by a zero tint (the lobe is dropped there).
             let tint = if k % 4 == 1 { [0.0; 3] } else { rgb(r) };
-            [vec![a, b, eta], tint.to_vec()].concat()
+            [ab, vec![eta], tint.to_vec()].concat()
         },
         4,
     );
@@ -228,15 +228,7 @@ fn ward_kernels_equal_scalar() {
                     "ward",
                 )
             },
-            |r, _| {
-                let a = 0.02 + 0.98 * r.f32();
-                let b = if r.f32() < 0.5 {
-                    a
-                } else {
-                    0.02 + 0.98 * r.f32()
-                };
-                [vec![a, b], rgb(r).to_vec()].concat()
-            },
+            |r, _| [alphas(r, 0.02), rgb(r).to_vec()].concat(),
             5,
         );
     }

@@ -632,40 +632,38 @@ impl Material {
 
     fn throughput(&self, s: &mut Scratch, out: &Prepared, ready: &[bool; MAX_LOBES]) {
         s.thr.clear();
-        s.thr.resize(self.thr_ops.len(), Vec3::ONE);
         let regs = self.const_regs.as_deref().unwrap_or(&s.regs);
         let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
         let thr = &mut s.thr;
+        // Step `i` writes slot `i`, reading only slots written before it.
         for op in &self.thr_ops {
-            let (dst, t) = match *op {
-                ThrOp::Leaf { dst, leaf, mode } => {
+            let t = match *op {
+                ThrOp::Leaf { leaf, mode } => {
                     let info = &self.leaves[leaf as usize];
-                    let t = if ready[leaf as usize] && info.layerable {
+                    if ready[leaf as usize] && info.layerable {
                         let a = out.lobes[leaf as usize].lobe.albedo();
                         let e = a.reflect + a.transmit_energy;
                         let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
                         crate::ir::algebra::leaf_throughput(mode, tint, ttint, e)
                     } else {
                         Vec3::ZERO
-                    };
-                    (dst, t)
+                    }
                 }
-                ThrOp::One { dst } => (dst, Vec3::ONE),
-                ThrOp::Layer { dst, top, base } => (dst, thr[top as usize] * thr[base as usize]),
-                ThrOp::Mix { dst, a, b, m } => {
+                ThrOp::One => Vec3::ONE,
+                ThrOp::Layer { top, base } => thr[top as usize] * thr[base as usize],
+                ThrOp::Mix { a, b, m } => {
                     let m = sat(reg(m));
-                    (dst, (Vec3::ONE - m) * thr[a as usize] + m * thr[b as usize])
+                    (Vec3::ONE - m) * thr[a as usize] + m * thr[b as usize]
                 }
-                ThrOp::Add { dst, a, b } => (
-                    dst,
-                    (thr[a as usize] + thr[b as usize] - Vec3::ONE).max(Vec3::ZERO),
-                ),
-                ThrOp::Multiply { dst, f, c } => {
+                ThrOp::Add { a, b } => {
+                    (thr[a as usize] + thr[b as usize] - Vec3::ONE).max(Vec3::ZERO)
+                }
+                ThrOp::Multiply { f, c } => {
                     let c = reg(c).max(Vec3::ZERO);
-                    (dst, sat(Vec3::ONE - c * (Vec3::ONE - thr[f as usize])))
+                    sat(Vec3::ONE - c * (Vec3::ONE - thr[f as usize]))
                 }
             };
-            thr[dst as usize] = t;
+            thr.push(t);
         }
     }
 
@@ -739,22 +737,22 @@ fn mode_needs(nodes: &[CNode]) -> Vec<u8> {
     need
 }
 
-/// One step of the compiled throughput pass: writes slot `dst` from slots written before
-/// (bottom-up) and registers.
+/// One step of the compiled throughput pass: step `i` writes slot `i` from slots written
+/// before it (bottom-up) and registers.
 #[derive(Debug, Clone, Copy)]
 enum ThrOp {
     /// A leaf's throughput in `mode` (0 for leaves that are not layerable or not prepared).
-    Leaf { dst: u16, leaf: u8, mode: TintMode },
+    Leaf { leaf: u8, mode: TintMode },
     /// Emission and transparency pass everything.
-    One { dst: u16 },
+    One,
     /// `T_top(layer mode) · T_base(m)`.
-    Layer { dst: u16, top: u16, base: u16 },
+    Layer { top: u16, base: u16 },
     /// `(1 − m) T_a + m T_b`.
-    Mix { dst: u16, a: u16, b: u16, m: Reg },
+    Mix { a: u16, b: u16, m: Reg },
     /// `max(T_a + T_b − 1, 0)`.
-    Add { dst: u16, a: u16, b: u16 },
+    Add { a: u16, b: u16 },
     /// `sat(1 − c (1 − T_f))`.
-    Multiply { dst: u16, f: u16, c: Reg },
+    Multiply { f: u16, c: Reg },
 }
 
 /// Marks a (node, mode) throughput that is never read.
@@ -770,34 +768,27 @@ fn compile_throughput(nodes: &[CNode], need: &[u8]) -> (Vec<[u16; 4]>, Vec<ThrOp
             if need[i] & (1 << (m as u8)) == 0 {
                 continue;
             }
-            let dst = ops.len() as u16;
             let at = |j: u32, mode: TintMode| slot[j as usize][mode as usize];
-            ops.push(match nodes[i] {
-                CNode::Leaf(leaf) => ThrOp::Leaf { dst, leaf, mode: m },
-                CNode::Emission(_) | CNode::Transparent(_) => ThrOp::One { dst },
+            let op = match nodes[i] {
+                CNode::Leaf(leaf) => ThrOp::Leaf { leaf, mode: m },
+                CNode::Emission(_) | CNode::Transparent(_) => ThrOp::One,
                 CNode::Layer { top, base, mode } => ThrOp::Layer {
-                    dst,
                     top: at(top, mode),
                     base: at(base, m),
                 },
                 CNode::Mix { a, b, m: r } => ThrOp::Mix {
-                    dst,
                     a: at(a, m),
                     b: at(b, m),
                     m: r,
                 },
                 CNode::Add { a, b } => ThrOp::Add {
-                    dst,
                     a: at(a, m),
                     b: at(b, m),
                 },
-                CNode::Multiply { f, c } => ThrOp::Multiply {
-                    dst,
-                    f: at(f, m),
-                    c,
-                },
-            });
-            slot[i][m as usize] = dst;
+                CNode::Multiply { f, c } => ThrOp::Multiply { f: at(f, m), c },
+            };
+            slot[i][m as usize] = ops.len() as u16;
+            ops.push(op);
         }
     }
     (slot, ops)

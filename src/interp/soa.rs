@@ -97,13 +97,8 @@ impl<const W: usize> DielectricRBatch<W> {
                 x / (2.0 * (1.0 + (1.0 + x).sqrt()))
             };
             let g = 1.0 / (1.0 + lam(vx, vy, vz) + lam(lx, ly, lz));
-            // Exact dielectric Fresnel (no TIR: V is outside, η ≥ 1 expected; guarded).
-            let eta = self.eta[k];
-            let g2 = (eta * eta + vh * vh - 1.0).max(0.0);
-            let gg = g2.sqrt();
-            let a = (gg - vh) / (gg + vh).max(1e-30);
-            let b = (vh * (gg + vh) - 1.0) / (vh * (gg - vh) + 1.0);
-            let f = (0.5 * a * a * (1.0 + b * b)).min(1.0);
+            // Exact dielectric Fresnel (total internal reflection gives 1).
+            let f = dielectric1(vh, self.eta[k]);
             let value = f * d * g * 0.25 / vz.max(1e-7);
             scalar[k] = keep(valid, value);
         }

@@ -7,10 +7,9 @@
 //! ([`Program::rebuild`]).
 
 use glam::Vec3;
+// Fx hashing: keys are a few integers, so SipHash's DoS resistance is not needed (and cost
+// most of the builder's time).
 use rustc_hash::FxHashMap as HashMap;
-/// The value-numbering table's map: keys are a few integers, so SipHash's DoS resistance is
-/// not needed (and cost most of the builder's time); Fx hashing is.
-pub type FastMap<K, V> = HashMap<K, V>;
 
 /// A register: the index of the op that defines it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -421,7 +420,7 @@ impl Program {
 #[derive(Debug, Default)]
 pub struct ProgramBuilder {
     ops: Vec<Op>,
-    seen: FastMap<(OpCode, [u32; 4], [u32; 3]), Reg>,
+    seen: HashMap<(OpCode, [u32; 4], [u32; 3]), Reg>,
 }
 
 impl ProgramBuilder {

@@ -246,7 +246,7 @@ pub fn lower_node_cached<G: Graph>(
         }
         return Err(d.into());
     };
-    let mut cx = Lower::with_cache(graph, defs, cache, diags);
+    let mut cx = Lower::new(graph, defs, cache, diags);
     let root = match recipe {
         crate::ir::RecipeId::PxrSurface => pxr::lower_surface(&mut cx, node),
         crate::ir::RecipeId::VRayMtl => vray::lower(&mut cx, node),
@@ -294,7 +294,7 @@ pub struct Lower<'a, G: Graph> {
     pub b: IrBuilder,
     /// Diagnostics sink.
     pub diags: &'a mut Diagnostics,
-    cache: CacheRef<'a>,
+    cache: &'a mut DefinitionCache,
     /// The definition of the node looked up last: bindings come in runs per node.
     last_definition: Option<(G::Id, Option<Arc<IndexedDefinition>>)>,
     outputs: FxHashMap<(G::Id, String), Reg>,
@@ -305,46 +305,13 @@ pub struct Lower<'a, G: Graph> {
     warned_no_def: FxHashSet<String>,
 }
 
-/// The lowering context's definition cache: its own, or one shared across materials.
-enum CacheRef<'a> {
-    Own(DefinitionCache),
-    Shared(&'a mut DefinitionCache),
-}
-
-impl CacheRef<'_> {
-    fn get(&mut self) -> &mut DefinitionCache {
-        match self {
-            CacheRef::Own(c) => c,
-            CacheRef::Shared(c) => c,
-        }
-    }
-}
-
 impl<'a, G: Graph> Lower<'a, G> {
-    /// A fresh context.
-    pub fn new(graph: &'a G, defs: &'a dyn Definitions, diags: &'a mut Diagnostics) -> Self {
-        Self::build(
-            graph,
-            defs,
-            CacheRef::Own(DefinitionCache::default()),
-            diags,
-        )
-    }
-
-    /// A fresh context that looks definitions up through `cache`.
-    pub fn with_cache(
+    /// A fresh context that looks definitions up through `cache` (which may outlive it and
+    /// serve many materials).
+    pub fn new(
         graph: &'a G,
         defs: &'a dyn Definitions,
         cache: &'a mut DefinitionCache,
-        diags: &'a mut Diagnostics,
-    ) -> Self {
-        Self::build(graph, defs, CacheRef::Shared(cache), diags)
-    }
-
-    fn build(
-        graph: &'a G,
-        defs: &'a dyn Definitions,
-        cache: CacheRef<'a>,
         diags: &'a mut Diagnostics,
     ) -> Self {
         Lower {
@@ -364,7 +331,7 @@ impl<'a, G: Graph> Lower<'a, G> {
     /// The definition of a node's shader, with its inputs indexed by name (cached).
     pub fn definition(&mut self, n: G::Id) -> Option<&IndexedDefinition> {
         if self.last_definition.as_ref().is_none_or(|(id, _)| *id != n) {
-            let d = self.cache.get().get(self.defs, self.graph.shader(n));
+            let d = self.cache.get(self.defs, self.graph.shader(n));
             self.last_definition = Some((n, d));
         }
         self.last_definition
@@ -426,22 +393,24 @@ impl<'a, G: Graph> Lower<'a, G> {
         authored: Option<&Value>,
         builtin: &Value,
     ) -> (Value, NumericRange, Type) {
-        let Some(def) = self.definition(n) else {
-            let ty = Type::scalar(builtin.base_type());
-            let v = self.static_value(n, param, builtin);
-            return (v, NumericRange::default(), ty);
-        };
-        match def.input_with_range(param) {
-            Some((p, range)) => {
-                let v = authored.or(p.default.as_ref()).unwrap_or(builtin).clone();
-                (v, range, p.ty.clone())
-            }
-            None => (
+        let undeclared = || {
+            (
                 authored.unwrap_or(builtin).clone(),
                 NumericRange::default(),
                 Type::scalar(builtin.base_type()),
-            ),
+            )
+        };
+        if let Some(def) = self.definition(n) {
+            return match def.input_with_range(param) {
+                Some((p, range)) => {
+                    let v = authored.or(p.default.as_ref()).unwrap_or(builtin).clone();
+                    (v, range, p.ty.clone())
+                }
+                None => undeclared(),
+            };
         }
+        self.warn_no_definition(n);
+        undeclared()
     }
 
     /// §4.0: a constant outside the parameter's documented range (the definition's `min` /
@@ -500,10 +469,12 @@ impl<'a, G: Graph> Lower<'a, G> {
     /// The constant scalar value of a parameter when it is not connected (authored,
     /// definition default or built-in), for structural choices such as Fresnel modes.
     pub fn static_scalar(&mut self, n: G::Id, param: &str, builtin: f32) -> Option<f32> {
-        if self.graph.connection(n, param).is_some() {
+        let graph = self.graph;
+        let input = graph.input(n, param);
+        if input.connection.is_some() {
             return None;
         }
-        let v = self.static_value(n, param, &Value::Float(builtin));
+        let (v, ..) = self.static_binding(n, param, input.value, &Value::Float(builtin));
         Some(value_to_vec3(&v).x)
     }
 
@@ -515,32 +486,25 @@ impl<'a, G: Graph> Lower<'a, G> {
     /// Authored value, else definition default, else `builtin` (LW003 once per shader type
     /// when the registry has no definition).
     pub fn static_value(&mut self, n: G::Id, param: &str, builtin: &Value) -> Value {
-        if let Some(v) = self.graph.value(n, param) {
-            return v.clone();
-        }
-        match self.definition(n) {
-            Some(def) => match def.input(param).and_then(|p| p.default.clone()) {
-                Some(v) => v,
-                None => builtin.clone(),
-            },
-            None => {
-                let graph = self.graph;
-                let shader = graph.shader(n);
-                if !self.warned_no_def.contains(shader) {
-                    let shader = shader.to_string();
-                    self.warned_no_def.insert(shader.clone());
-                    self.diag(
-                        n,
-                        Diagnostic::warning(
-                            "LW003",
-                            format!(
-                                "no definition of `{shader}` in the registry; the lowering uses its built-in defaults"
-                            ),
-                        ),
-                    );
-                }
-                builtin.clone()
-            }
+        let graph = self.graph;
+        self.static_binding(n, param, graph.value(n, param), builtin)
+            .0
+    }
+
+    /// LW003, once per shader type: the registry has no definition of `n`'s type.
+    fn warn_no_definition(&mut self, n: G::Id) {
+        let graph = self.graph;
+        let shader = graph.shader(n);
+        if self.warned_no_def.insert(shader.to_string()) {
+            self.diag(
+                n,
+                Diagnostic::warning(
+                    "LW003",
+                    format!(
+                        "no definition of `{shader}` in the registry; the lowering uses its built-in defaults"
+                    ),
+                ),
+            );
         }
     }
 

@@ -21,9 +21,7 @@ impl Graph for Network {
         Network::value(self, n, param)
     }
     fn connection(&self, n: NodeId, param: &str) -> Option<(NodeId, &str)> {
-        self.connections(n, param)
-            .iter()
-            .find_map(|l| l.upstream_node().map(|u| (u, l.output().unwrap_or(""))))
+        self.input(n, param).connection
     }
     fn input(&self, n: NodeId, param: &str) -> Binding<'_, NodeId> {
         let p = self[n].param(param);

@@ -878,8 +878,7 @@ impl Network {
     /// ```
     pub fn set_param(&mut self, node: NodeId, name: &str, value: Value) -> Option<Value> {
         let slot = self.graph[node].index_or_insert(name);
-        let name = self.graph[node].params[slot].name.clone();
-        self.set_slot(node, Some(slot), &name, value)
+        self.set_at(node, slot, value)
     }
 
     /// Remove the authored value of `node.name`; returns it.
@@ -1037,24 +1036,6 @@ impl Network {
             .into_vec()
     }
 
-    /// Make `up.output` the only connection of `down.input`, sharing both names (the fast
-    /// path of resolution, which connects hundreds of members per material).
-    ///
-    /// ```
-    /// use std::sync::Arc;
-    /// use vstructc::network::Network;
-    /// let mut net = Network::new();
-    /// let u = net.add_node("u", "PxrLayer");
-    /// let d = net.add_node("d", "PxrLayerMixer");
-    /// let (input, output): (Arc<str>, Arc<str>) = ("baselayer_diffuseGain".into(), "pxrMaterialOut_diffuseGain".into());
-    /// net.connect_only(d, &input, u, &output);
-    /// assert_eq!(net.connections(d, "baselayer_diffuseGain")[0].output(), Some("pxrMaterialOut_diffuseGain"));
-    /// ```
-    pub fn connect_only(&mut self, down: NodeId, input: &Arc<str>, up: NodeId, output: &Arc<str>) {
-        let slot = self.graph[down].index_of(input);
-        self.connect_slot(down, slot, input, up, output);
-    }
-
     /// The position of `node.name` among the node's parameters (live or not), for the
     /// `*_slot` operations: resolution looks each member up once and then works by position.
     pub(crate) fn param_slot(&self, node: NodeId, name: &str) -> Option<usize> {
@@ -1066,7 +1047,8 @@ impl Network {
         &self.graph[node].params[slot]
     }
 
-    /// [`Network::connect_only`] for a member whose position is known: `slot` is
+    /// Make `up.output` the only connection of `down.input`, sharing both names (the fast
+    /// path of resolution, which connects hundreds of members per material). `slot` is
     /// `param_slot(down, input)`, `None` when the parameter does not exist yet.
     pub(crate) fn connect_slot(
         &mut self,
@@ -1090,8 +1072,13 @@ impl Network {
         name: &Arc<str>,
         value: Value,
     ) -> Option<Value> {
+        let i = slot.unwrap_or_else(|| self.graph[node].insert_param(name.clone()));
+        self.set_at(node, i, value)
+    }
+
+    /// Set the value of the parameter at position `i`; returns the previous value.
+    fn set_at(&mut self, node: NodeId, i: usize, value: Value) -> Option<Value> {
         let n = &mut self.graph[node];
-        let i = slot.unwrap_or_else(|| n.insert_param(name.clone()));
         let p = &mut n.params[i];
         if p.value.as_deref() == Some(&value) {
             return Some(value);
