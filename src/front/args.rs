@@ -72,7 +72,7 @@ pub fn parse_args_with(
 /// NUL is not a legal XML character anywhere (XML 1.0 `Char`); quick-xml passes it through,
 /// so it is rejected here (AR001 at the NUL).
 fn reject_nul(text: &str, file: &Arc<str>) -> Result<(), Error> {
-    let Some(offset) = text.find('\0') else {
+    let Some(offset) = memchr::memchr(0, text.as_bytes()) else {
         return Ok(());
     };
     let (line, column) = crate::diag::line_column(&text[..offset], offset);
@@ -109,6 +109,74 @@ fn decode_utf8<'a>(bytes: &'a [u8], file: &Arc<str>) -> Result<&'a str, Error> {
 /// How many times `needle` occurs in `text`.
 fn count_occurrences(text: &str, needle: &str) -> usize {
     memchr::memmem::find_iter(text.as_bytes(), needle.as_bytes()).count()
+}
+
+/// Reads the attributes of a start tag in the common plain form — `name="value"` separated by
+/// whitespace, values with no entity, `<` or whitespace to normalise, no duplicate — borrowing
+/// key and value from the file. Returns false at the first thing outside that form (the
+/// caller then clears `out` and lets quick-xml read the tag, with its error reporting).
+/// `base` is the byte offset of `raw` in the file.
+fn plain_attributes<'a>(raw: &'a str, base: usize, out: &mut Vec<Attr<'a>>) -> bool {
+    let bytes = raw.as_bytes();
+    let mut i = 0;
+    loop {
+        let gap = i;
+        while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if i == bytes.len() {
+            return true;
+        }
+        if i == gap && !out.is_empty() {
+            return false; // attributes must be separated by whitespace
+        }
+        let key_start = i;
+        while i < bytes.len() && is_plain_name_byte(bytes[i]) {
+            i += 1;
+        }
+        let starts_name = bytes[key_start].is_ascii_alphabetic() || bytes[key_start] == b'_';
+        if i == key_start || !starts_name || bytes.get(i) != Some(&b'=') {
+            return false;
+        }
+        let Some(&quote) = bytes.get(i + 1).filter(|q| matches!(q, b'"' | b'\'')) else {
+            return false;
+        };
+        let value_start = i + 2;
+        let Some(len) = memchr::memchr(quote, &bytes[value_start..]) else {
+            return false;
+        };
+        let key = &raw[key_start..i];
+        let value = &raw[value_start..value_start + len];
+        if !is_plain_value(value) || out.iter().any(|a| a.key == key) {
+            return false;
+        }
+        out.push(Attr {
+            key: Cow::Borrowed(key),
+            value: Cow::Borrowed(value),
+            offset: base + value_start,
+        });
+        i = value_start + len + 1;
+    }
+}
+
+/// True if a value needs nothing from quick-xml: no entity, no `<`, nothing to normalise.
+fn is_plain_value(value: &str) -> bool {
+    !value.bytes().fold(false, |bad, b| {
+        bad | matches!(b, b'&' | b'<' | b'\t' | b'\n' | b'\r')
+    })
+}
+
+/// ASCII bytes of an XML name (the fast path leaves anything else to quick-xml).
+fn is_plain_name_byte(b: u8) -> bool {
+    b.is_ascii_alphanumeric() || matches!(b, b'_' | b':' | b'-' | b'.')
+}
+
+/// True if an attribute value holds an entity or a character that XML attribute-value
+/// normalisation replaces (tab, line feed, carriage return).
+fn needs_normalisation(value: &str) -> bool {
+    value.bytes().fold(false, |any, b| {
+        any | matches!(b, b'&' | b'\t' | b'\n' | b'\r')
+    })
 }
 
 /// Byte offsets of line starts, for fast offset → line:column mapping.
@@ -355,6 +423,13 @@ impl<'a> ArgsParser<'a> {
     /// a small pool; give it back with [`Self::recycle`] on hot paths.
     fn attributes(&mut self, start: usize, e: &BytesStart<'_>) -> PResult<Vec<Attr<'a>>> {
         let mut out = self.attr_pool.pop().unwrap_or_default();
+        if let Some(raw) = self.reborrow(e.attributes_raw())
+            && let Some(base) = self.offset_of(raw)
+            && plain_attributes(raw, base, &mut out)
+        {
+            return Ok(out);
+        }
+        out.clear();
         // quick-xml's own duplicate check allocates per element; ours scans the few
         // attributes already read.
         for a in e.attributes().with_checks(false) {
@@ -378,7 +453,14 @@ impl<'a> ArgsParser<'a> {
                 ));
             }
             let offset = self.offset_of(&a.value).unwrap_or(start);
-            let value = a.normalized_value(XmlVersion::Implicit1_0).map_err(|err| {
+            // Most values need neither entity decoding nor whitespace normalisation; one
+            // vectorisable scan skips quick-xml's byte-by-byte normalisation for them.
+            let value = if needs_normalisation(&a.value) {
+                a.normalized_value(XmlVersion::Implicit1_0)
+            } else {
+                Ok(a.value.clone())
+            };
+            let value = value.map_err(|err| {
                 let at = offset + escape_error_position(&err);
                 self.reject(
                     "AR001",
@@ -1614,6 +1696,61 @@ fn fit_fixed(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// Attributes as quick-xml reads and normalises them: (key, value, value offset in `raw`).
+    fn quick_xml_attributes(raw: &str) -> Option<Vec<(String, String, usize)>> {
+        let tag = format!("<p{raw}/>");
+        let mut reader = Reader::from_str(&tag);
+        let Ok(Event::Empty(e)) = reader.read_event() else {
+            return None;
+        };
+        let mut out = Vec::new();
+        for a in e.attributes() {
+            let a = a.ok()?;
+            let value = a.normalized_value(XmlVersion::Implicit1_0).ok()?;
+            let offset = a.value.as_ptr() as usize - tag.as_ptr() as usize - 2;
+            out.push((a.key.as_ref().to_string(), value.into_owned(), offset));
+        }
+        Some(out)
+    }
+
+    proptest! {
+        /// Whenever the plain fast path accepts a tag, it reads exactly what quick-xml reads.
+        #[test]
+        fn plain_attributes_agree_with_quick_xml(raw in "( {0,2}[a-c_1:]{0,3} ?= ?[\"'][a-c &<\t\"']{0,4}[\"']){0,4} ?") {
+            let mut fast = Vec::new();
+            if plain_attributes(&raw, 0, &mut fast) {
+                let fast: Vec<_> = fast
+                    .iter()
+                    .map(|a| (a.key.to_string(), a.value.to_string(), a.offset))
+                    .collect();
+                prop_assert_eq!(Some(fast), quick_xml_attributes(&raw));
+            }
+        }
+    }
+
+    #[test]
+    fn plain_attributes_take_the_common_form_and_leave_the_rest() {
+        let mut out = Vec::new();
+        assert!(plain_attributes(r#" name="a" type='float'"#, 10, &mut out));
+        assert_eq!(out.len(), 2);
+        assert_eq!(
+            (&*out[1].key, &*out[1].value, out[1].offset),
+            ("type", "float", 26)
+        );
+        for other in [
+            r#" name = "a""#,     // spaced `=`
+            r#" name="a&amp;b""#, // entity
+            r#" a="1"b="2""#,     // no whitespace between attributes
+            r#" a="1" a="2""#,    // duplicate
+            r#" help="x	y""#,     // tab to normalise
+            r#" name="unterminated"#,
+        ] {
+            out.clear();
+            assert!(!plain_attributes(other, 0, &mut out), "{other}");
+        }
+    }
 
     fn ty(b: BaseType) -> Type {
         Type::scalar(b)

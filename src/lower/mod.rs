@@ -653,6 +653,9 @@ where
         use rayon::prelude::*;
         terminals
             .par_iter()
+            // Each rayon job builds its own cache; jobs of at least 128 materials keep
+            // that one-time indexing small next to the lowering itself.
+            .with_min_len(128)
             .map_init(DefinitionCache::default, one)
             .collect()
     } else {
