@@ -139,6 +139,8 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         memo: HashMap::default(),
         plans: HashMap::default(),
         order,
+        slots: Vec::new(),
+        choices: Vec::new(),
     };
     r.run();
     r.remove_head_values();
@@ -182,7 +184,15 @@ struct Resolver<'a> {
     /// Every node in handle order (resolution adds no nodes): the order of the walk and of
     /// the final head-value clean-up.
     order: Vec<NodeId>,
+    /// Scratch: the parameter position of each member of the head being expanded.
+    slots: Vec<Option<usize>>,
+    /// Scratch: the conditional's choice for each member of the head being expanded, when
+    /// it was evaluated ahead (see [`Resolver::count_added`]).
+    choices: Vec<Option<KnownChoice>>,
 }
+
+/// A conditional's choice, and whether its evaluation reported anything (VS015).
+type KnownChoice = (Choice, bool);
 
 /// For each member of an input head: the index of the name it matched by and the upstream
 /// output member, or `None` when the upstream head has no counterpart.
@@ -366,15 +376,25 @@ impl Resolver<'_> {
         let up_def = self.definition(&up_shader);
         self.net.clear_connections(node, head);
         self.memo.clear();
-        // Most members get a connection or a value: make room for them at once. (Reserving
-        // for all heads when the node is entered moves less but measured ~25 % more memory.)
-        self.net
-            .reserve_params(node, down_tables.members_in(head).len());
         let plan = self.match_plan(&down_tables, head, &up_tables, &source.head);
-        for (member, matched) in down_tables.members_in(head).iter().zip(plan.iter()) {
-            // One look-up per member; connecting or writing then works by position.
-            let slot = self.net.param_slot(node, &member.property);
+        let members = down_tables.members_in(head);
+        // One look-up per member; connecting or writing then works by position.
+        let mut slots = std::mem::take(&mut self.slots);
+        slots.clear();
+        slots.extend(
+            members
+                .iter()
+                .map(|m| self.net.param_slot(node, &m.property)),
+        );
+        // Make room for exactly the parameters this head will add: growing by doubling, or
+        // reserving a slot for every member, left most of a resolved scene's memory unused.
+        let added = self.count_added(node, source, up_def.as_deref(), &slots, &plan);
+        self.net.reserve_params(node, added);
+        let choices = std::mem::take(&mut self.choices);
+        for (i, (member, matched)) in members.iter().zip(plan.iter()).enumerate() {
+            let slot = slots[i];
             let ctx = MemberCtx {
+                known: choices[i],
                 node,
                 head,
                 member: &member.property,
@@ -392,6 +412,84 @@ impl Resolver<'_> {
                 None => self.no_counterpart(&ctx, &member.names),
             }
         }
+        self.slots = slots;
+        self.choices = choices;
+    }
+
+    /// How many new parameters expanding a head adds to `node` (an upper bound: a `set` that
+    /// turns out not to apply is counted). Evaluates the conditionals into the memo, where
+    /// the expansion then finds them; U does not change while D is expanded, so evaluating
+    /// first gives the same results. When D is U nothing is evaluated ahead and every matched
+    /// member counts.
+    fn count_added(
+        &mut self,
+        node: NodeId,
+        source: &HeadSource,
+        up_def: Option<&IndexedDefinition>,
+        slots: &[Option<usize>],
+        plan: &[Option<(usize, OutputMember)>],
+    ) -> usize {
+        let cacheable = node != source.upstream;
+        let mut choices = std::mem::take(&mut self.choices);
+        choices.clear();
+        let mut added = 0;
+        for (slot, matched) in slots.iter().zip(plan) {
+            let mut known = None;
+            if let Some((_, output)) = matched {
+                let adds = match (&output.cond, self.options.conditions) {
+                    (None, _) | (Some(_), false) => true,
+                    (Some(entry), true) => match entry.statement() {
+                        None => false,
+                        Some(_) if !cacheable => true,
+                        Some(stmt) => {
+                            let choice = self.memo_choice(entry, stmt, source.upstream, up_def);
+                            known = Some(choice);
+                            !matches!(
+                                cond::eval::chosen_action(stmt, choice.0).kind,
+                                ActionKind::Ignore
+                            )
+                        }
+                    },
+                };
+                added += usize::from(adds && slot.is_none());
+            }
+            choices.push(known);
+        }
+        self.choices = choices;
+        added
+    }
+
+    /// The VS015 reports of a memoised conditional.
+    fn memo_reports(&self, entry: &CondEntry) -> Vec<ComparisonReport> {
+        let key = Arc::as_ptr(&entry.parsed) as usize;
+        self.memo
+            .get(&key)
+            .map(|(_, reports)| reports.clone())
+            .unwrap_or_default()
+    }
+
+    /// The memoised choice of `entry` on U, evaluating it on a miss (D ≠ U only).
+    fn memo_choice(
+        &mut self,
+        entry: &CondEntry,
+        stmt: &Statement,
+        upstream: NodeId,
+        up_def: Option<&IndexedDefinition>,
+    ) -> KnownChoice {
+        let key = Arc::as_ptr(&entry.parsed) as usize;
+        if let Some((choice, reports)) = self.memo.get(&key) {
+            return (*choice, !reports.is_empty());
+        }
+        let view = NodeView {
+            net: self.net,
+            node: upstream,
+            def: up_def,
+        };
+        let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
+        let known = (evaluation.choice, !evaluation.reports.is_empty());
+        self.memo
+            .insert(key, (evaluation.choice, evaluation.reports));
+        known
     }
 
     /// Member matching (step 3f: by member name, then alias) depends only on the two types
@@ -472,25 +570,27 @@ impl Resolver<'_> {
         stmt: &Statement,
         event: Option<&mut MemberEvent>,
     ) -> Outcome {
-        let key = Arc::as_ptr(&entry.parsed) as usize;
-        let cacheable = ctx.node != ctx.source.upstream;
+        let (choice, reports) = if let Some((choice, has_reports)) = ctx.known {
+            // Reports are rare: look them up only when there are some.
+            let reports = if has_reports {
+                self.memo_reports(entry)
+            } else {
+                Vec::new()
+            };
+            (choice, reports)
+        } else {
+            let view = NodeView {
+                net: self.net,
+                node: ctx.source.upstream,
+                def: ctx.up_def,
+            };
+            let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
+            (evaluation.choice, evaluation.reports)
+        };
         let view = NodeView {
             net: self.net,
             node: ctx.source.upstream,
             def: ctx.up_def,
-        };
-        let (choice, reports) = match self.memo.get(&key).filter(|_| cacheable) {
-            // Reports are rare: clone the vector only when there are some.
-            Some((choice, reports)) if reports.is_empty() => (*choice, Vec::new()),
-            Some(hit) => hit.clone(),
-            None => {
-                let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
-                let result = (evaluation.choice, evaluation.reports);
-                if cacheable {
-                    self.memo.insert(key, result.clone());
-                }
-                result
-            }
         };
         let action = cond::eval::chosen_action(stmt, choice);
         if let Some(event) = event {
@@ -882,6 +982,8 @@ struct MemberCtx<'c> {
     member: &'c Arc<str>,
     /// The member's position among the node's parameters when it exists already.
     slot: Option<usize>,
+    /// The conditional's choice when it was evaluated ahead.
+    known: Option<KnownChoice>,
     source: &'c HeadSource,
     down_def: Option<&'c IndexedDefinition>,
     up_def: Option<&'c IndexedDefinition>,
@@ -942,6 +1044,12 @@ impl cond::Upstream for NodeView<'_> {
     }
     fn is_connected(&self, param: &str) -> bool {
         !self.net.connections(self.node, param).is_empty()
+    }
+    /// One look-up in the node and at most one in the definition.
+    fn operand(&self, param: &str) -> Option<&Value> {
+        self.net
+            .value(self.node, param)
+            .or_else(|| self.def?.input(param)?.default.as_ref())
     }
 }
 

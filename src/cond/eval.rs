@@ -32,12 +32,26 @@ pub trait Upstream {
     /// True if U's input `param` has at least one incoming connection now.
     fn is_connected(&self, param: &str) -> bool;
 
+    /// The comparison operand of §4.2: the authored value, else the default of a declared
+    /// input, else `None`. The default implementation combines [`Upstream::authored`],
+    /// [`Upstream::declares_input`] and [`Upstream::default_value`]; implementations that can
+    /// answer with fewer look-ups should override it.
+    fn operand(&self, param: &str) -> Option<&Value> {
+        self.authored(param).or_else(|| {
+            if self.declares_input(param) {
+                self.default_value(param)
+            } else {
+                None
+            }
+        })
+    }
+
     /// Extension `array-index`: element `index` of the array parameter `param` — of its
     /// authored value, else of its default. `None` when there is no such array value or the
     /// index is out of range. The default implementation reads [`Value::Array`] values
     /// through [`Upstream::authored`] and [`Upstream::default_value`].
     fn element(&self, param: &str, index: usize) -> Option<Value> {
-        match operand_value(self, param)? {
+        match self.operand(param)? {
             Value::Array(_, items) => items.get(index).cloned(),
             _ => None,
         }
@@ -50,18 +64,6 @@ pub trait Upstream {
         let _ = index;
         self.is_connected(param)
     }
-}
-
-/// The comparison operand rule of §4.2: the authored value, else the default of a declared
-/// input, else nothing.
-fn operand_value<'u, U: Upstream + ?Sized>(u: &'u U, param: &str) -> Option<&'u Value> {
-    u.authored(param).or_else(|| {
-        if u.declares_input(param) {
-            u.default_value(param)
-        } else {
-            None
-        }
-    })
 }
 
 /// Which part of the statement chose the action.
@@ -335,7 +337,9 @@ impl<U: Upstream + ?Sized> Evaluator<'_, U> {
                     _ => Err(FalseReason::NoElement { index }),
                 },
             },
-            None => operand_value(self.u, &param.name)
+            None => self
+                .u
+                .operand(&param.name)
                 .map(Cow::Borrowed)
                 .ok_or_else(|| missing(&param.name)),
         }

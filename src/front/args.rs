@@ -127,8 +127,8 @@ fn plain_attributes<'a>(raw: &'a str, base: usize, out: &mut Vec<Attr<'a>>) -> b
         if i == bytes.len() {
             return true;
         }
-        if i == gap && !out.is_empty() {
-            return false; // attributes must be separated by whitespace
+        if i == gap {
+            return false; // whitespace precedes every attribute (after the element name, too)
         }
         let key_start = i;
         while i < bytes.len() && is_plain_name_byte(bytes[i]) {
@@ -1718,7 +1718,7 @@ mod tests {
     proptest! {
         /// Whenever the plain fast path accepts a tag, it reads exactly what quick-xml reads.
         #[test]
-        fn plain_attributes_agree_with_quick_xml(raw in "( {0,2}[a-c_1:]{0,3} ?= ?[\"'][a-c &<\t\"']{0,4}[\"']){0,4} ?") {
+        fn plain_attributes_agree_with_quick_xml(raw in "( {1,2}[a-c_1:]{0,3} ?= ?[\"'][a-c &<\t\"']{0,4}[\"']){0,4} ?") {
             let mut fast = Vec::new();
             if plain_attributes(&raw, 0, &mut fast) {
                 let fast: Vec<_> = fast

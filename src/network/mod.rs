@@ -969,6 +969,11 @@ impl Network {
     /// ```
     pub fn push_link(&mut self, down: NodeId, input: &str, link: Link) {
         let i = self.graph[down].index_or_insert(input);
+        self.append_link(down, i, link);
+    }
+
+    /// Append `link` to the parameter at position `i` of `down`, with its graph edge.
+    fn append_link(&mut self, down: NodeId, i: usize, link: Link) {
         let index = self.graph[down].params[i].links.len();
         let edge = self.add_edge_for(down, i, &link, index);
         let n = &mut self.graph[down];
@@ -1058,8 +1063,13 @@ impl Network {
         up: NodeId,
         output: &Arc<str>,
     ) {
-        let i = slot.unwrap_or_else(|| self.graph[down].insert_param(input.clone()));
         let link = Link::node_shared(up, output.clone());
+        let Some(i) = slot else {
+            // A new parameter has no links or edges to replace.
+            let i = self.graph[down].insert_param(input.clone());
+            self.append_link(down, i, link);
+            return;
+        };
         self.replace_links(down, i, smallvec::smallvec![link]);
     }
 
