@@ -421,20 +421,25 @@ impl Writer<'_> {
     }
 
     fn links_text(&self, links: &[Link]) -> String {
-        let parts: Vec<String> = links
-            .iter()
-            .map(|l| {
-                let handle = match &l.upstream {
-                    Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
-                    Upstream::Missing(h) => h.as_str(),
-                };
-                match l.output() {
-                    Some(o) => quote(&format!("{handle}:{o}")),
-                    None => quote(handle),
-                }
-            })
-            .collect();
-        format!("[{}]", parts.join(" "))
+        let mut text = String::from("[");
+        for (i, l) in links.iter().enumerate() {
+            let handle = match &l.upstream {
+                Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
+                Upstream::Missing(h) => h.as_str(),
+            };
+            if i > 0 {
+                text.push(' ');
+            }
+            text.push('"');
+            text.push_str(&escape(handle));
+            if let Some(o) = l.output() {
+                text.push(':');
+                text.push_str(&escape(o));
+            }
+            text.push('"');
+        }
+        text.push(']');
+        text
     }
 }
 
@@ -546,6 +551,13 @@ pub fn quote(s: &str) -> String {
 }
 
 fn escape(s: &str) -> String {
+    // Names and handles almost never need escaping: copy them whole.
+    if !s
+        .bytes()
+        .any(|b| b < 0x20 || b == 0x7f || b == b'"' || b == b'\\')
+    {
+        return s.to_string();
+    }
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

@@ -36,7 +36,8 @@ pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, Vs
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
 use crate::front::args::{ArgsOptions, parse_args_with};
 use crate::front::oso::parse_oso;
-use std::collections::{BTreeMap, HashMap};
+use rustc_hash::FxHashMap as HashMap;
+use std::collections::BTreeMap;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -155,6 +156,7 @@ struct Tabled {
 struct Entry {
     loaded: OnceLock<Loaded>,
     tables: OnceLock<Tabled>,
+    indexed: OnceLock<Arc<IndexedDefinition>>,
 }
 
 /// Shader definitions by id, loaded lazily, with their vstruct tables.
@@ -165,6 +167,7 @@ pub struct Registry {
     index: BTreeMap<String, Vec<Candidate>>,
     /// Diagnostics from listing the search path.
     index_diags: Vec<Diagnostic>,
+    /// Loaded state per id (Fx hashing: the writers and lowering look ids up per parameter).
     entries: Mutex<HashMap<String, Arc<Entry>>>,
 }
 
@@ -182,7 +185,7 @@ impl Registry {
             options,
             index: BTreeMap::new(),
             index_diags: Vec::new(),
-            entries: Mutex::new(HashMap::new()),
+            entries: Mutex::new(HashMap::default()),
         };
         for p in reg.options.paths.clone() {
             reg.index_path(&p, Severity::Error);
@@ -345,6 +348,9 @@ impl Registry {
             Ok(g) => g,
             Err(poisoned) => poisoned.into_inner(),
         };
+        if let Some(entry) = entries.get(id) {
+            return Some(entry.clone());
+        }
         Some(entries.entry(id.to_string()).or_default().clone())
     }
 
@@ -358,6 +364,19 @@ impl Registry {
     /// if no file provides it or the chosen file was rejected (see [`Registry::diagnostics`]).
     pub fn definition(&self, id: &str) -> Option<Arc<Definition>> {
         self.loaded(id).and_then(|(_, d)| d)
+    }
+
+    /// The definition of `id` with its input index (built on first use), for callers that
+    /// look inputs up by name many times.
+    pub fn indexed(&self, id: &str) -> Option<Arc<IndexedDefinition>> {
+        let (entry, def) = self.loaded(id)?;
+        let def = def?;
+        Some(
+            entry
+                .indexed
+                .get_or_init(|| Arc::new(IndexedDefinition::new(def)))
+                .clone(),
+        )
     }
 
     /// The vstruct tables of `id` (built on first use).

@@ -348,6 +348,11 @@ impl IndexedDefinition {
         self.inputs.get(name).map(|&i| &self.def.inputs[i])
     }
 
+    /// The position of the input named `name` among the definition's inputs.
+    pub fn input_position(&self, name: &str) -> Option<usize> {
+        self.inputs.get(name).copied()
+    }
+
     /// The input named `name` with its documented range.
     pub fn input_with_range(&self, name: &str) -> Option<(&Property, NumericRange)> {
         self.inputs

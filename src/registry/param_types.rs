@@ -11,7 +11,7 @@ impl ParamTypes for Registry {
     }
 
     fn input_type(&self, shader: &str, input: &str) -> Option<Type> {
-        Some(self.definition(shader)?.input(input)?.ty.clone())
+        Some(self.indexed(shader)?.input(input)?.ty.clone())
     }
 
     fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
@@ -19,10 +19,7 @@ impl ParamTypes for Registry {
     }
 
     fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
-        self.definition(shader)?
-            .inputs
-            .iter()
-            .position(|p| p.name == input)
+        self.indexed(shader)?.input_position(input)
     }
 
     fn is_input_head(&self, shader: &str, input: &str) -> bool {
