@@ -112,7 +112,7 @@ fn count_occurrences(text: &str, needle: &str) -> usize {
 }
 
 /// Reads the attributes of a start tag in the common plain form — `name="value"` separated by
-/// whitespace, values with no entity, `<` or whitespace to normalise, no duplicate — borrowing
+/// whitespace, values with no entity or whitespace to normalise, no duplicate — borrowing
 /// key and value from the file. Returns false at the first thing outside that form (the
 /// caller then clears `out` and lets quick-xml read the tag, with its error reporting).
 /// `base` is the byte offset of `raw` in the file.
@@ -147,7 +147,7 @@ fn plain_attributes<'a>(raw: &'a str, base: usize, out: &mut Vec<Attr<'a>>) -> b
         };
         let key = &raw[key_start..i];
         let value = &raw[value_start..value_start + len];
-        if !is_plain_value(value) || out.iter().any(|a| a.key == key) {
+        if needs_normalisation(value) || out.iter().any(|a| a.key == key) {
             return false;
         }
         out.push(Attr {
@@ -157,13 +157,6 @@ fn plain_attributes<'a>(raw: &'a str, base: usize, out: &mut Vec<Attr<'a>>) -> b
         });
         i = value_start + len + 1;
     }
-}
-
-/// True if a value needs nothing from quick-xml: no entity, no `<`, nothing to normalise.
-fn is_plain_value(value: &str) -> bool {
-    !value.bytes().fold(false, |bad, b| {
-        bad | matches!(b, b'&' | b'<' | b'\t' | b'\n' | b'\r')
-    })
 }
 
 /// ASCII bytes of an XML name (the fast path leaves anything else to quick-xml).
