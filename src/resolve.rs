@@ -187,7 +187,7 @@ struct Resolver<'a> {
     /// Scratch: the parameter position of each member of the head being expanded.
     slots: Vec<Option<usize>>,
     /// Scratch: the conditional's choice for each member of the head being expanded, when
-    /// it was evaluated ahead (see [`Resolver::count_added`]).
+    /// it was evaluated ahead (see [`Resolver::decide_ahead`]).
     choices: Vec<Option<KnownChoice>>,
 }
 
@@ -210,10 +210,7 @@ impl Resolver<'_> {
             return info.clone();
         }
         let info = TypeInfo {
-            def: self
-                .registry
-                .definition(shader)
-                .map(|d| Arc::new(IndexedDefinition::new(d))),
+            def: self.registry.indexed(shader),
             tables: self.registry.tables(shader),
         };
         self.types.insert(shader.to_string(), info.clone());
@@ -388,7 +385,7 @@ impl Resolver<'_> {
         );
         // Make room for exactly the parameters this head will add: growing by doubling, or
         // reserving a slot for every member, left most of a resolved scene's memory unused.
-        let added = self.count_added(node, source, up_def.as_deref(), &slots, &plan);
+        let added = self.decide_ahead(node, source, up_def.as_deref(), &slots, &plan);
         self.net.reserve_params(node, added);
         let choices = std::mem::take(&mut self.choices);
         for (i, (member, matched)) in members.iter().zip(plan.iter()).enumerate() {
@@ -416,12 +413,12 @@ impl Resolver<'_> {
         self.choices = choices;
     }
 
-    /// How many new parameters expanding a head adds to `node` (an upper bound: a `set` that
-    /// turns out not to apply is counted). Evaluates the conditionals into the memo, where
-    /// the expansion then finds them; U does not change while D is expanded, so evaluating
-    /// first gives the same results. When D is U nothing is evaluated ahead and every matched
-    /// member counts.
-    fn count_added(
+    /// Decides the members' conditionals ahead of the expansion (each member's choice into
+    /// `self.choices`, each distinct conditional's result into the memo) and returns how many
+    /// new parameters the expansion adds to `node` (an upper bound: a `set` that turns out not
+    /// to apply is counted). U does not change while D is expanded, so deciding first gives
+    /// the same results; when D is U nothing is decided ahead and every matched member counts.
+    fn decide_ahead(
         &mut self,
         node: NodeId,
         source: &HeadSource,
@@ -461,9 +458,8 @@ impl Resolver<'_> {
 
     /// The VS015 reports of a memoised conditional.
     fn memo_reports(&self, entry: &CondEntry) -> Vec<ComparisonReport> {
-        let key = Arc::as_ptr(&entry.parsed) as usize;
         self.memo
-            .get(&key)
+            .get(&memo_key(entry))
             .map(|(_, reports)| reports.clone())
             .unwrap_or_default()
     }
@@ -476,7 +472,7 @@ impl Resolver<'_> {
         upstream: NodeId,
         up_def: Option<&IndexedDefinition>,
     ) -> KnownChoice {
-        let key = Arc::as_ptr(&entry.parsed) as usize;
+        let key = memo_key(entry);
         if let Some((choice, reports)) = self.memo.get(&key) {
             return (*choice, !reports.is_empty());
         }
@@ -570,27 +566,19 @@ impl Resolver<'_> {
         stmt: &Statement,
         event: Option<&mut MemberEvent>,
     ) -> Outcome {
-        let (choice, reports) = if let Some((choice, has_reports)) = ctx.known {
-            // Reports are rare: look them up only when there are some.
-            let reports = if has_reports {
-                self.memo_reports(entry)
-            } else {
-                Vec::new()
-            };
-            (choice, reports)
-        } else {
-            let view = NodeView {
-                net: self.net,
-                node: ctx.source.upstream,
-                def: ctx.up_def,
-            };
-            let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
-            (evaluation.choice, evaluation.reports)
-        };
         let view = NodeView {
             net: self.net,
             node: ctx.source.upstream,
             def: ctx.up_def,
+        };
+        let (choice, reports) = match ctx.known {
+            // Reports are rare: look them up only when there are some.
+            Some((choice, true)) => (choice, self.memo_reports(entry)),
+            Some((choice, false)) => (choice, Vec::new()),
+            None => {
+                let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
+                (evaluation.choice, evaluation.reports)
+            }
         };
         let action = cond::eval::chosen_action(stmt, choice);
         if let Some(event) = event {
@@ -987,6 +975,12 @@ struct MemberCtx<'c> {
     source: &'c HeadSource,
     down_def: Option<&'c IndexedDefinition>,
     up_def: Option<&'c IndexedDefinition>,
+}
+
+/// The memo key of a conditional: its shared parse result, so members with the same
+/// expression text share one entry.
+fn memo_key(entry: &CondEntry) -> usize {
+    Arc::as_ptr(&entry.parsed) as usize
 }
 
 /// True if every branch of the conditional connects (so `--no-conditions` changes nothing

@@ -8,8 +8,7 @@ use glam::Vec3;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
-    Cl, DielectricMode, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, Reg,
-    SheenMasking, WardVariant,
+    Cl, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, Reg, SheenMasking, WardVariant,
 };
 use vstructc::types::{BaseType, Type, Value};
 
@@ -183,20 +182,7 @@ fn dielectric_r_kernel_equals_scalar() {
         |b| {
             let (ax, ay, eta) = (float_in(b, "ax"), float_in(b, "ay"), float_in(b, "eta"));
             let tint = color_in(b, "tint");
-            let one = b.prog.constf(1.0);
-            b.simple_leaf(
-                LeafKind::Dielectric {
-                    alpha_x: ax,
-                    alpha_y: ay,
-                    eta,
-                    mode: DielectricMode::R,
-                    refl_tint: tint,
-                    trans_tint: one,
-                    t_fresnel: true,
-                    masking: Masking::HeightCorrelated,
-                },
-                "specular",
-            )
+            reference::dielectric_r_of(b, [ax, ay, eta], tint, "specular")
         },
         |r, k| {
             let ab = alphas(r, 0.01);

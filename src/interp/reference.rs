@@ -3,8 +3,8 @@
 //! examples.
 
 use crate::ir::{
-    Cl, DielectricMode, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, SheenMasking,
-    TintMode, WardVariant,
+    Cl, DielectricMode, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, Reg,
+    SheenMasking, TintMode, WardVariant,
 };
 use glam::Vec3;
 
@@ -17,13 +17,20 @@ pub const GOLD_KAPPA: Vec3 = Vec3::new(3.424, 2.346, 1.770);
 pub fn dielectric_r(b: &mut IrBuilder, ax: f32, ay: f32, eta: f32, label: &str) -> Cl {
     let (ax, ay, eta) = (b.prog.constf(ax), b.prog.constf(ay), b.prog.constf(eta));
     let one = b.prog.constf(1.0);
+    dielectric_r_of(b, [ax, ay, eta], one, label)
+}
+
+/// [`dielectric_r`] with its parameters in registers: `[alpha_x, alpha_y, eta]` and the
+/// reflection tint (the transmission tint is 1).
+pub fn dielectric_r_of(b: &mut IrBuilder, [ax, ay, eta]: [Reg; 3], tint: Reg, label: &str) -> Cl {
+    let one = b.prog.constf(1.0);
     b.simple_leaf(
         LeafKind::Dielectric {
             alpha_x: ax,
             alpha_y: ay,
             eta,
             mode: DielectricMode::R,
-            refl_tint: one,
+            refl_tint: tint,
             trans_tint: one,
             t_fresnel: true,
             masking: Masking::HeightCorrelated,

@@ -2,9 +2,11 @@
 //! different (point, V, L), one lobe kind. Every lane runs the same straight-line arithmetic
 //! (branches become selects), so the compiler autovectorises the loops.
 //!
-//! Implemented here: the GGX dielectric reflection lobe (anisotropic, height-correlated,
-//! exact Fresnel) — the spec's batched anchor. Results equal the scalar
-//! [`super::PreparedLobe::eval`] to relative 1e-5.
+//! Implemented here: the public batched GGX dielectric reflection lobe (the spec's batched
+//! anchor), and the kernels the batched material path runs per lobe slot — Lambert,
+//! Oren–Nayar/EON, GGX conductor and dielectric reflection, Ward, sheen (CK, LTC); other
+//! families fall back to the scalar lobe lane by lane. Results equal the scalar
+//! [`super::PreparedLobe::eval`] to relative 1e-5 (`tests/interp_soa_kernels.rs`).
 
 use super::fresnel::Fresnel;
 use super::ggx::Masking;
@@ -46,6 +48,18 @@ impl<const W: usize> Vec3x<W> {
     /// Lane `k`.
     pub fn get(&self, k: usize) -> Vec3 {
         Vec3::new(self.x[k], self.y[k], self.z[k])
+    }
+
+    /// Lane `k` as a tuple (the kernels' scalar form).
+    #[inline(always)]
+    fn lane(&self, k: usize) -> (f32, f32, f32) {
+        (self.x[k], self.y[k], self.z[k])
+    }
+
+    /// Lane `k` scaled by `s`, as the kernels' RGB triple.
+    #[inline(always)]
+    fn scaled(&self, k: usize, s: f32) -> [f32; 3] {
+        [self.x[k] * s, self.y[k] * s, self.z[k] * s]
     }
 
     /// Sets lane `k`.
@@ -293,7 +307,7 @@ impl<const W: usize> Kernel<W> {
                         x.rho_pi.set(k, p.rho_pi);
                         x.a[k] = p.a;
                         x.b[k] = p.b;
-                        x.keep_negative_s[k] = if p.keep_negative_s { 1.0 } else { 0.0 };
+                        x.keep_negative_s[k] = flag(p.keep_negative_s);
                         x.ms.set(k, p.ms);
                         let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
                         x.af[k] = af;
@@ -364,11 +378,7 @@ impl<const W: usize> Kernel<W> {
                         x.inv_ay2[k] = p.core.inv_ay2;
                         x.norm[k] = p.core.norm;
                         x.pdf_norm[k] = p.core.pdf_norm;
-                        x.gm[k] = if p.variant == WardVariant::Gm {
-                            1.0
-                        } else {
-                            0.0
-                        };
+                        x.gm[k] = flag(p.variant == WardVariant::Gm);
                         x.rho.set(k, p.rho);
                     }
                 }
@@ -462,6 +472,24 @@ fn add_rgb<const W: usize>(acc: &mut Acc<W>, lw: &LaneWeights<W>, k: usize, f: [
     acc.pdf[k] += lw.p[k] * pdf;
 }
 
+/// [`add_rgb`] of `f` and `pdf` where `valid` holds, nothing elsewhere (bit masks, no branch).
+#[inline(always)]
+fn add_valid<const W: usize>(
+    acc: &mut Acc<W>,
+    lw: &LaneWeights<W>,
+    k: usize,
+    valid: bool,
+    f: [f32; 3],
+    pdf: f32,
+) {
+    add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
+}
+
+/// 1 where `c` holds, else 0 (per-lane flags the kernels blend with).
+fn flag(c: bool) -> f32 {
+    f32::from(u8::from(c))
+}
+
 /// Lane `k` of `l` with the lane's flip applied.
 #[inline(always)]
 fn lane_l<const W: usize>(l: &Vec3x<W>, lw: &LaneWeights<W>, k: usize) -> (f32, f32, f32) {
@@ -474,8 +502,7 @@ fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>,
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
         let c = keep(lz > 0.0, lz);
-        let f = [rho_pi.x[k] * c, rho_pi.y[k] * c, rho_pi.z[k] * c];
-        add_rgb(acc, lw, k, f, c * FRAC_1_PI);
+        add_rgb(acc, lw, k, rho_pi.scaled(k, c), c * FRAC_1_PI);
     }
 }
 
@@ -495,7 +522,7 @@ impl<const W: usize> OrenNayarX<W> {
     fn run<const FAST: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
-            let (vx, vy, vz) = (self.v.x[k], self.v.y[k], self.v.z[k]);
+            let (vx, vy, vz) = self.v.lane(k);
             let valid = lz > 0.0;
             let s = (vx * lx + vy * ly + vz * lz) - lz * vz;
             let st = pick(s > 0.0, s / lz.max(vz), s * self.keep_negative_s[k]);
@@ -506,13 +533,9 @@ impl<const W: usize> OrenNayarX<W> {
                 self.af[k] + self.c[k] * eon_g(lz)
             };
             let ms = (1.0 - e_hat) * lz;
-            let f = [
-                self.rho_pi.x[k] * ss + self.ms.x[k] * ms,
-                self.rho_pi.y[k] * ss + self.ms.y[k] * ms,
-                self.rho_pi.z[k] * ss + self.ms.z[k] * ms,
-            ];
-            let f = f.map(|c| keep(valid, c));
-            add_rgb(acc, lw, k, f, keep(valid, lz * FRAC_1_PI));
+            let (single, multiple) = (self.rho_pi.scaled(k, ss), self.ms.scaled(k, ms));
+            let f = [0, 1, 2].map(|c| single[c] + multiple[c]);
+            add_valid(acc, lw, k, valid, f, lz * FRAC_1_PI);
         }
     }
 }
@@ -545,7 +568,7 @@ impl<const W: usize> GgxX<W> {
         self.ay[k] = ay;
         self.lambda_v[k] = lambda_v;
         self.g1_v[k] = g1_v;
-        self.separable[k] = if m == Masking::Separable { 1.0 } else { 0.0 };
+        self.separable[k] = flag(m == Masking::Separable);
     }
 
     /// Lane `k` at `(lx, ly, lz)` (`lz > 0` assumed by the caller's select): the unit half
@@ -553,7 +576,7 @@ impl<const W: usize> GgxX<W> {
     #[inline(always)]
     fn reflect_terms(&self, k: usize, lx: f32, ly: f32, lz: f32) -> (f32, f32, f32) {
         let (ax, ay) = (self.ax[k], self.ay[k]);
-        let (vx, vy, vz) = (self.v.x[k], self.v.y[k], self.v.z[k]);
+        let (vx, vy, vz) = self.v.lane(k);
         let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
         let inv_len = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
         let (hx, hy, hz) = (hx * inv_len, hy * inv_len, hz * inv_len);
@@ -615,14 +638,10 @@ impl<const W: usize> ConductorX<W> {
                 conductor1(vh, self.eta.y[k], self.kappa.y[k]),
                 conductor1(vh, self.eta.z[k], self.kappa.z[k]),
             ];
-            let f = [
-                fr[0] * q * self.scale.x[k],
-                fr[1] * q * self.scale.y[k],
-                fr[2] * q * self.scale.z[k],
-            ];
+            let scale = self.scale.scaled(k, q);
+            let f = [0, 1, 2].map(|c| fr[c] * scale[c]);
             let pdf = d * self.g.g1_v[k] * self.inv_4mu[k];
-            let valid = lz > 0.0;
-            add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
+            add_valid(acc, lw, k, lz > 0.0, f, pdf);
         }
     }
 }
@@ -636,15 +655,8 @@ impl<const W: usize> DielectricX<W> {
             let (vh, d, g) = self.g.reflect_terms(k, lx, ly, lz);
             let fr = dielectric1(vh, self.eta[k]);
             let q = 0.25 * d * self.inv_mu[k];
-            let s = fr * g * q;
-            let f = [
-                self.tint_r.x[k] * s,
-                self.tint_r.y[k] * s,
-                self.tint_r.z[k] * s,
-            ];
-            let pdf = self.g.g1_v[k] * q;
-            let valid = lz > 0.0;
-            add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
+            let f = self.tint_r.scaled(k, fr * g * q);
+            add_valid(acc, lw, k, lz > 0.0, f, self.g.g1_v[k] * q);
         }
     }
 }
@@ -655,7 +667,7 @@ impl<const W: usize> WardX<W> {
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
-            let (vx, vy, vz) = (self.v.x[k], self.v.y[k], self.v.z[k]);
+            let (vx, vy, vz) = self.v.lane(k);
             let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
             let hh2 = hx * hx + hy * hy + hz * hz;
             let vhh = vx * hx + vy * hy + vz * hz;
@@ -667,9 +679,7 @@ impl<const W: usize> WardX<W> {
             let f = pick(self.gm[k] > 0.0, f_gm, f_classic);
             let pdf = self.pdf_norm[k] * ex * hh2 * hh2 / (hz2 * hz * vhh);
             let valid = (lz > 0.0) & (ex > 0.0);
-            let (f, pdf) = (keep(valid, f), keep(valid, pdf));
-            let rgb = [self.rho.x[k] * f, self.rho.y[k] * f, self.rho.z[k] * f];
-            add_rgb(acc, lw, k, rgb, pdf);
+            add_valid(acc, lw, k, valid, self.rho.scaled(k, f), pdf);
         }
     }
 }
@@ -680,15 +690,13 @@ impl<const W: usize> SheenCKX<W> {
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
-            let (vx, vy, vz) = (self.v.x[k], self.v.y[k], self.v.z[k]);
+            let (vx, vy, vz) = self.v.lane(k);
             let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
             let sin2 = ((hx * hx + hy * hy) / (hx * hx + hy * hy + hz * hz)).min(1.0);
             let d = self.norm[k] * vmath::pow_pos(sin2, self.half_inv_r[k]);
             let (mi, mo) = (lz, vz);
             let f = d * mi / (4.0 * (mi + mo - mi * mo));
-            let valid = lz > 0.0;
-            let (f, pdf) = (keep(valid, f), keep(valid, 0.5 * FRAC_1_PI));
-            add_rgb(acc, lw, k, [f; 3], pdf);
+            add_valid(acc, lw, k, lz > 0.0, [f; 3], 0.5 * FRAC_1_PI);
         }
     }
 }
@@ -705,9 +713,7 @@ impl<const W: usize> SheenLTCX<W> {
             let (px, py, pz) = (a * wx + b * lz, a * wy, lz);
             let kk = a / (px * px + py * py + pz * pz).max(1e-30);
             let d = lz.max(0.0) * FRAC_1_PI * kk * kk;
-            let valid = lz > 0.0;
-            let (f, pdf) = (keep(valid, self.e_hat[k] * d), keep(valid, d));
-            add_rgb(acc, lw, k, [f; 3], pdf);
+            add_valid(acc, lw, k, lz > 0.0, [self.e_hat[k] * d; 3], d);
         }
     }
 }
