@@ -548,3 +548,129 @@ fn vs017_head_value_without_connection_is_removed_too() {
     assert_eq!(net.value(d, "inputMaterial"), None);
     insta::assert_snapshot!(text);
 }
+
+/// One upstream state for the decision-cache property below: values of `enable`, `other`,
+/// `f` and `c` (absent, or one of a few values, `-0.0` included), and whether `h` and `h_flag`
+/// are connected.
+#[derive(Debug, Clone)]
+struct UpState {
+    enable: Option<i32>,
+    other: Option<i32>,
+    f: Option<f32>,
+    c: Option<f32>,
+    h_connected: bool,
+    flag_connected: bool,
+}
+
+fn up_state() -> impl proptest::strategy::Strategy<Value = UpState> {
+    use proptest::prelude::*;
+    let int = prop::option::of(prop_oneof![Just(0), Just(1), Just(2)]);
+    let float = prop::option::of(prop_oneof![Just(0.0f32), Just(-0.0), Just(0.75), Just(1.0)]);
+    (
+        int.clone(),
+        int,
+        float.clone(),
+        float,
+        any::<bool>(),
+        any::<bool>(),
+    )
+        .prop_map(
+            |(enable, other, f, c, h_connected, flag_connected)| UpState {
+                enable,
+                other,
+                f,
+                c,
+                h_connected,
+                flag_connected,
+            },
+        )
+}
+
+/// Adds `U{i}` in `state` and `D{i}` connected to it (plus the feeder `F{i}` of `h`).
+fn add_pair(net: &mut Network, i: usize, state: &UpState) {
+    let u = net.add_node(&format!("U{i}"), "Up");
+    let d = net.add_node(&format!("D{i}"), "Down");
+    let feeder = net.add_node(&format!("F{i}"), "PxrFractal");
+    if let Some(v) = state.enable {
+        net.set_param(u, "enable", Value::Int(v));
+    }
+    if let Some(v) = state.other {
+        net.set_param(u, "other", Value::Int(v));
+    }
+    if let Some(v) = state.f {
+        net.set_param(u, "f", Value::Float(v));
+    }
+    if let Some(v) = state.c {
+        net.set_param(
+            u,
+            "c",
+            Value::Triple(vstructc::types::BaseType::Color, [v; 3]),
+        );
+    }
+    if state.h_connected {
+        net.connect(u, "h", feeder, "resultRGB");
+    }
+    if state.flag_connected {
+        net.connect(u, "h_flag", feeder, "resultF");
+    }
+    net.connect(d, "inputMaterial", u, "out");
+}
+
+/// The dump lines and diagnostics of pair `i` (names are single digits, so `D1` does not
+/// match `D10`).
+fn pair_text(net: &Network, diagnostics: &Diagnostics, i: usize) -> String {
+    let names = [format!("D{i}"), format!("U{i}"), format!("F{i}")];
+    let mut out = String::new();
+    let mut keep = false;
+    for line in dump(net).lines() {
+        if !line.starts_with(' ') {
+            keep = names.iter().any(|n| line.starts_with(n.as_str()));
+        }
+        if keep {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    for line in diags(diagnostics).lines() {
+        if names.iter().any(|n| line.contains(n.as_str())) {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    /// Resolution shares the conditionals' verdicts between expansions that find the upstream
+    /// node in the same state. Resolving many pairs in one network must therefore give each
+    /// pair exactly what resolving it alone gives: results and diagnostics.
+    #[test]
+    fn shared_decisions_match_resolving_each_pair_alone(
+        states in proptest::collection::vec(up_state(), 1..10),
+        verbose in proptest::prelude::any::<bool>(),
+    ) {
+        let reg = registry(&[
+            ("a", "float"), ("flag", "int"), ("gated", "float"), ("ne", "float"),
+            ("seti", "int"), ("setc", "color"), ("copyf", "float"), ("copyint", "int"),
+            ("ign", "float"), ("else", "int"), ("isset", "float"), ("headconn", "float"),
+            ("memconn", "float"), ("bad", "float"), ("missing", "float"),
+        ]);
+        let options = ResolveOptions { verbose, ..ResolveOptions::default() };
+        let mut together = Network::new();
+        for (i, state) in states.iter().enumerate() {
+            add_pair(&mut together, i, state);
+        }
+        let res = resolve(&mut together, &reg, &options);
+        for (i, state) in states.iter().enumerate() {
+            let mut alone = Network::new();
+            add_pair(&mut alone, i, state);
+            let res_alone = resolve(&mut alone, &reg, &options);
+            proptest::prop_assert_eq!(
+                pair_text(&together, &res.diagnostics, i),
+                pair_text(&alone, &res_alone.diagnostics, i)
+            );
+        }
+    }
+}

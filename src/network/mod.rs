@@ -478,7 +478,32 @@ pub struct Node {
 }
 
 /// The hash of a parameter name in [`Node`]'s index.
-fn name_hash(name: &str) -> u64 {
+/// Where a parameter is among a node's parameters: at a position, or not there yet (with the
+/// hash of its name, so that adding it does not hash the name again).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Slot {
+    /// At this position of [`Node::all_params`].
+    At(usize),
+    /// Not a parameter of the node yet.
+    Missing {
+        /// [`name_hash`] of the name.
+        hash: u64,
+    },
+}
+
+impl Slot {
+    /// The position, if the parameter exists.
+    pub(crate) fn position(self) -> Option<usize> {
+        match self {
+            Slot::At(i) => Some(i),
+            Slot::Missing { .. } => None,
+        }
+    }
+}
+
+/// The hash of a parameter name in a node's name index. Callers that look the same names up
+/// in many nodes (resolution's members) compute it once and use the `*_hashed` look-ups.
+pub(crate) fn name_hash(name: &str) -> u64 {
     FxBuildHasher.hash_one(name)
 }
 
@@ -588,9 +613,14 @@ impl Node {
     }
 
     fn index_of(&self, name: &str) -> Option<usize> {
+        self.index_of_hashed(name, name_hash(name))
+    }
+
+    /// [`Self::index_of`] with the name's [`name_hash`] already known.
+    fn index_of_hashed(&self, name: &str, hash: u64) -> Option<usize> {
         let params = &self.params;
         self.by_name
-            .find(name_hash(name), |&i| &*params[i as usize].name == name)
+            .find(hash, |&i| &*params[i as usize].name == name)
             .map(|&i| i as usize)
     }
 
@@ -603,8 +633,13 @@ impl Node {
 
     /// [`Self::index_or_insert`] for a name the caller already shares.
     fn insert_param(&mut self, name: Arc<str>) -> usize {
-        let idx = self.params.len();
         let hash = name_hash(&name);
+        self.insert_param_hashed(name, hash)
+    }
+
+    /// [`Self::insert_param`] with the name's [`name_hash`] already known.
+    fn insert_param_hashed(&mut self, name: Arc<str>, hash: u64) -> usize {
+        let idx = self.params.len();
         self.params.push(Param::empty(name));
         let params = &self.params;
         self.by_name
@@ -1041,10 +1076,13 @@ impl Network {
             .into_vec()
     }
 
-    /// The position of `node.name` among the node's parameters (live or not), for the
-    /// `*_slot` operations: resolution looks each member up once and then works by position.
-    pub(crate) fn param_slot(&self, node: NodeId, name: &str) -> Option<usize> {
-        self.graph[node].index_of(name)
+    /// Where `node.name` is, given the name's [`name_hash`] (resolution hashes each member
+    /// name once per run rather than once per node).
+    pub(crate) fn slot_of(&self, node: NodeId, name: &str, hash: u64) -> Slot {
+        match self.graph[node].index_of_hashed(name, hash) {
+            Some(i) => Slot::At(i),
+            None => Slot::Missing { hash },
+        }
     }
 
     /// The parameter at `slot` (from [`Network::param_slot`]).
@@ -1053,22 +1091,25 @@ impl Network {
     }
 
     /// Make `up.output` the only connection of `down.input`, sharing both names (the fast
-    /// path of resolution, which connects hundreds of members per material). `slot` is
-    /// `param_slot(down, input)`, `None` when the parameter does not exist yet.
+    /// path of resolution, which connects hundreds of members per material). `slot` is where
+    /// `down.input` is (see [`Network::slot_of`]).
     pub(crate) fn connect_slot(
         &mut self,
         down: NodeId,
-        slot: Option<usize>,
+        slot: Slot,
         input: &Arc<str>,
         up: NodeId,
         output: &Arc<str>,
     ) {
         let link = Link::node_shared(up, output.clone());
-        let Some(i) = slot else {
-            // A new parameter has no links or edges to replace.
-            let i = self.graph[down].insert_param(input.clone());
-            self.append_link(down, i, link);
-            return;
+        let i = match slot {
+            Slot::At(i) => i,
+            Slot::Missing { hash } => {
+                // A new parameter has no links or edges to replace.
+                let i = self.graph[down].insert_param_hashed(input.clone(), hash);
+                self.append_link(down, i, link);
+                return;
+            }
         };
         self.replace_links(down, i, smallvec::smallvec![link]);
     }
@@ -1078,11 +1119,14 @@ impl Network {
     pub(crate) fn set_slot(
         &mut self,
         node: NodeId,
-        slot: Option<usize>,
+        slot: Slot,
         name: &Arc<str>,
         value: Value,
     ) -> Option<Value> {
-        let i = slot.unwrap_or_else(|| self.graph[node].insert_param(name.clone()));
+        let i = match slot {
+            Slot::At(i) => i,
+            Slot::Missing { hash } => self.graph[node].insert_param_hashed(name.clone(), hash),
+        };
         self.set_at(node, i, value)
     }
 

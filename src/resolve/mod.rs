@@ -12,12 +12,15 @@ use crate::cond::{
     Statement,
 };
 use crate::diag::{Diagnostic, Diagnostics, Location};
-use crate::network::{Link, Network, NodeId};
+use crate::network::{Link, Network, NodeId, Slot};
 use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
 use crate::registry::{IndexedDefinition, Registry};
 use crate::types::Value;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
+
+mod plan;
+use plan::{Decision, DecisionCache, Plan, Verdict};
 
 /// Options of one resolution run.
 #[derive(Debug, Clone)]
@@ -138,9 +141,10 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         types: HashMap::default(),
         memo: HashMap::default(),
         plans: HashMap::default(),
+        decisions: DecisionCache::default(),
+        decision: Arc::default(),
         order,
         slots: Vec::new(),
-        choices: Vec::new(),
     };
     r.run();
     r.remove_head_values();
@@ -174,29 +178,26 @@ struct Resolver<'a> {
     on_stack: HashSet<NodeId>,
     /// Per shader id: its definition and tables, looked up in the registry once per run.
     types: HashMap<String, TypeInfo>,
-    /// Results of the conditionals evaluated during the current head expansion, keyed by the
-    /// shared parse result: members with the same expression text share one evaluation, which
-    /// is exact because expanding D never changes U (unless D is U, when nothing is cached).
-    /// The choice is kept rather than the action: it is `Copy`, so a hit allocates nothing.
-    memo: HashMap<usize, (Choice, Vec<ComparisonReport>)>,
-    /// Member matches per (downstream tables, input head, upstream tables, output head).
-    plans: HashMap<(usize, String, usize, String), MatchPlan>,
+    /// Scratch while a [`Decision`] is computed: the choice of each conditional evaluated so
+    /// far, keyed by the shared parse result, so members with the same expression text share
+    /// one evaluation (exact because expanding D never changes U; when D is U nothing is
+    /// decided ahead). The choice is kept rather than the action: it is `Copy`.
+    memo: HashMap<usize, KnownChoice>,
+    /// Plans per (downstream tables, input head, upstream tables, output head).
+    plans: HashMap<(usize, String, usize, String), Arc<Plan>>,
+    /// Decisions already computed, by plan and upstream state.
+    decisions: DecisionCache,
+    /// The decision of the head being expanded.
+    decision: Arc<Decision>,
     /// Every node in handle order (resolution adds no nodes): the order of the walk and of
     /// the final head-value clean-up.
     order: Vec<NodeId>,
-    /// Scratch: the parameter position of each member of the head being expanded.
-    slots: Vec<Option<usize>>,
-    /// Scratch: the conditional's choice for each member of the head being expanded, when
-    /// it was evaluated ahead (see [`Resolver::decide_ahead`]).
-    choices: Vec<Option<KnownChoice>>,
+    /// Scratch: where each member of the head being expanded is in the downstream node.
+    slots: Vec<Slot>,
 }
 
 /// A conditional's choice, and whether its evaluation reported anything (VS015).
 type KnownChoice = (Choice, bool);
-
-/// For each member of an input head: the index of the name it matched by and the upstream
-/// output member, or `None` when the upstream head has no counterpart.
-type MatchPlan = Arc<Vec<Option<(usize, OutputMember)>>>;
 
 #[derive(Clone)]
 struct TypeInfo {
@@ -372,8 +373,7 @@ impl Resolver<'_> {
         let down_def = self.definition(&down_shader);
         let up_def = self.definition(&up_shader);
         self.net.clear_connections(node, head);
-        self.memo.clear();
-        let plan = self.match_plan(&down_tables, head, &up_tables, &source.head);
+        let plan = self.plan(&down_tables, head, &up_tables, &source.head);
         let members = down_tables.members_in(head);
         // One look-up per member; connecting or writing then works by position.
         let mut slots = std::mem::take(&mut self.slots);
@@ -381,17 +381,23 @@ impl Resolver<'_> {
         slots.extend(
             members
                 .iter()
-                .map(|m| self.net.param_slot(node, &m.property)),
+                .zip(&plan.members)
+                .map(|(m, p)| self.net.slot_of(node, &m.property, p.hash)),
         );
+        self.decision = self.decide(node, source, up_def.as_deref(), &plan);
         // Make room for exactly the parameters this head will add: growing by doubling, or
         // reserving a slot for every member, left most of a resolved scene's memory unused.
-        let added = self.decide_ahead(node, source, up_def.as_deref(), &slots, &plan);
+        let added = slots
+            .iter()
+            .zip(&self.decision.adds)
+            .filter(|(slot, adds)| **adds && matches!(slot, Slot::Missing { .. }))
+            .count();
         self.net.reserve_params(node, added);
-        let choices = std::mem::take(&mut self.choices);
-        for (i, (member, matched)) in members.iter().zip(plan.iter()).enumerate() {
+        let decision = self.decision.clone();
+        for (i, (member, planned)) in members.iter().zip(&plan.members).enumerate() {
             let slot = slots[i];
             let ctx = MemberCtx {
-                known: choices[i],
+                known: decision.choices[i],
                 node,
                 head,
                 member: &member.property,
@@ -400,81 +406,111 @@ impl Resolver<'_> {
                 down_def: down_def.as_deref(),
                 up_def: up_def.as_deref(),
             };
-            if slot.is_some_and(|i| self.net.param_at(node, i).is_connected()) {
+            if let Slot::At(at) = slot
+                && self.net.param_at(node, at).is_connected()
+            {
                 self.direct_connection_wins(&ctx);
                 continue;
             }
-            match matched {
-                Some((name, output)) => self.apply_member(&ctx, &member.names[*name], output),
-                None => self.no_counterpart(&ctx, &member.names),
+            // Most members are ignored or simply connected; the general path would come to
+            // the same result through the explain story and the diagnostics checks.
+            let verdict = match &planned.matched {
+                Some(_) if self.options.record_events => Verdict::General,
+                _ => decision.verdicts[i],
+            };
+            match (verdict, &planned.matched) {
+                (Verdict::Ignore, _) => {}
+                (Verdict::Connect, Some((_, output))) => self.connect(&ctx, &output.property),
+                (_, Some((name, output))) => self.apply_member(&ctx, &member.names[*name], output),
+                (_, None) => self.no_counterpart(&ctx, &member.names),
             }
         }
         self.slots = slots;
-        self.choices = choices;
     }
 
-    /// Decides the members' conditionals ahead of the expansion (each member's choice into
-    /// `self.choices`, each distinct conditional's result into the memo) and returns how many
-    /// new parameters the expansion adds to `node` (an upper bound: a `set` that turns out not
-    /// to apply is counted). U does not change while D is expanded, so deciding first gives
-    /// the same results; when D is U nothing is decided ahead and every matched member counts.
-    fn decide_ahead(
+    /// The members' verdicts for this expansion: from the cache when U is in a state seen
+    /// before with the same plan, else computed (and cached). U does not change while D is
+    /// expanded, so deciding first gives the same results as deciding member by member; when
+    /// D is U nothing is decided ahead and every matched member counts as adding.
+    fn decide(
         &mut self,
         node: NodeId,
         source: &HeadSource,
         up_def: Option<&IndexedDefinition>,
-        slots: &[Option<usize>],
-        plan: &[Option<(usize, OutputMember)>],
-    ) -> usize {
-        let cacheable = node != source.upstream;
-        let mut choices = std::mem::take(&mut self.choices);
-        choices.clear();
-        let mut added = 0;
-        for (slot, matched) in slots.iter().zip(plan) {
+        plan: &Plan,
+    ) -> Arc<Decision> {
+        let evaluates = self.options.conditions && node != source.upstream;
+        // `array-index` reads elements through names the plan does not list.
+        let cacheable = evaluates && !self.options.extensions.contains(Extension::ArrayIndex);
+        if !cacheable {
+            return Arc::new(self.compute_decision(evaluates, source.upstream, up_def, plan));
+        }
+        let def = up_def.map_or(0, |d| d as *const IndexedDefinition as usize);
+        match self.decisions.lookup(plan, def, self.net, source.upstream) {
+            Ok(decision) => decision,
+            Err(miss) => {
+                let decision = Arc::new(self.compute_decision(true, source.upstream, up_def, plan));
+                self.decisions.insert(miss, decision.clone());
+                decision
+            }
+        }
+    }
+
+    /// Evaluates the plan's conditionals on U (when `evaluates`), each distinct one once.
+    fn compute_decision(
+        &mut self,
+        evaluates: bool,
+        upstream: NodeId,
+        up_def: Option<&IndexedDefinition>,
+        plan: &Plan,
+    ) -> Decision {
+        self.memo.clear();
+        let mut decision = Decision::default();
+        for planned in &plan.members {
             let mut known = None;
-            if let Some((_, output)) = matched {
-                let adds = match (&output.cond, self.options.conditions) {
-                    (None, _) | (Some(_), false) => true,
+            let (adds, verdict) = match &planned.matched {
+                None => (false, Verdict::General),
+                Some((_, output)) => match (&output.cond, self.options.conditions) {
+                    (None, _) => (true, Verdict::Connect),
+                    (Some(_), false) => (true, Verdict::General),
                     (Some(entry), true) => match entry.statement() {
-                        None => false,
-                        Some(_) if !cacheable => true,
+                        None => (false, Verdict::General),
+                        Some(_) if !evaluates => (true, Verdict::General),
                         Some(stmt) => {
-                            let choice = self.memo_choice(entry, stmt, source.upstream, up_def);
+                            let choice =
+                                self.memo_choice(entry, stmt, upstream, up_def, &mut decision);
                             known = Some(choice);
-                            !matches!(
-                                cond::eval::chosen_action(stmt, choice.0).kind,
-                                ActionKind::Ignore
-                            )
+                            let kind = &cond::eval::chosen_action(stmt, choice.0).kind;
+                            let verdict = match (kind, choice.1) {
+                                (ActionKind::Ignore, false) => Verdict::Ignore,
+                                (ActionKind::Connect, false) => Verdict::Connect,
+                                _ => Verdict::General,
+                            };
+                            (!matches!(kind, ActionKind::Ignore), verdict)
                         }
                     },
-                };
-                added += usize::from(adds && slot.is_none());
-            }
-            choices.push(known);
+                },
+            };
+            decision.choices.push(known);
+            decision.adds.push(adds);
+            decision.verdicts.push(verdict);
         }
-        self.choices = choices;
-        added
+        decision
     }
 
-    /// The VS015 reports of a memoised conditional.
-    fn memo_reports(&self, entry: &CondEntry) -> Vec<ComparisonReport> {
-        self.memo
-            .get(&memo_key(entry))
-            .map(|(_, reports)| reports.clone())
-            .unwrap_or_default()
-    }
-
-    /// The memoised choice of `entry` on U, evaluating it on a miss (D ≠ U only).
+    /// The choice of `entry` on U, evaluating it the first time it is met while `decision`
+    /// is computed (its VS015 reports go into the decision).
     fn memo_choice(
         &mut self,
         entry: &CondEntry,
         stmt: &Statement,
         upstream: NodeId,
         up_def: Option<&IndexedDefinition>,
+        decision: &mut Decision,
     ) -> KnownChoice {
         let key = memo_key(entry);
-        if let Some((choice, reports)) = self.memo.get(&key) {
-            return (*choice, !reports.is_empty());
+        if let Some(known) = self.memo.get(&key) {
+            return *known;
         }
         let view = NodeView {
             net: self.net,
@@ -483,20 +519,21 @@ impl Resolver<'_> {
         };
         let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
         let known = (evaluation.choice, !evaluation.reports.is_empty());
-        self.memo
-            .insert(key, (evaluation.choice, evaluation.reports));
+        if known.1 {
+            decision.reports.insert(key, evaluation.reports);
+        }
+        self.memo.insert(key, known);
         known
     }
 
-    /// Member matching (step 3f: by member name, then alias) depends only on the two types
-    /// and heads, so it is worked out once per pair of heads rather than once per material.
-    fn match_plan(
+    /// The plan of a pair of heads, worked out on first use.
+    fn plan(
         &mut self,
         down: &Arc<VstructTables>,
         head: &str,
         up: &Arc<VstructTables>,
         up_head: &str,
-    ) -> MatchPlan {
+    ) -> Arc<Plan> {
         let key = (
             Arc::as_ptr(down) as usize,
             head.to_string(),
@@ -506,16 +543,12 @@ impl Resolver<'_> {
         if let Some(plan) = self.plans.get(&key) {
             return plan.clone();
         }
-        let plan: MatchPlan = Arc::new(
-            down.members_in(head)
-                .iter()
-                .map(|member| {
-                    member.names.iter().enumerate().find_map(|(i, name)| {
-                        up.reverse_out(up_head, name).map(|out| (i, out.clone()))
-                    })
-                })
-                .collect(),
-        );
+        let plan = Arc::new(Plan::new(
+            self.plans.len(),
+            down.members_in(head),
+            up,
+            up_head,
+        ));
         self.plans.insert(key, plan.clone());
         plan
     }
@@ -573,7 +606,14 @@ impl Resolver<'_> {
         };
         let (choice, reports) = match ctx.known {
             // Reports are rare: look them up only when there are some.
-            Some((choice, true)) => (choice, self.memo_reports(entry)),
+            Some((choice, true)) => (
+                choice,
+                self.decision
+                    .reports
+                    .get(&memo_key(entry))
+                    .cloned()
+                    .unwrap_or_default(),
+            ),
             Some((choice, false)) => (choice, Vec::new()),
             None => {
                 let evaluation = cond::evaluate(stmt, &view, &self.options.extensions);
@@ -667,6 +707,7 @@ impl Resolver<'_> {
     fn connect(&mut self, ctx: &MemberCtx<'_>, output: &Arc<str>) {
         let authored = ctx
             .slot
+            .position()
             .is_some_and(|i| self.net.param_at(ctx.node, i).value().is_some());
         if authored {
             let d = Diagnostic::info(
@@ -968,8 +1009,8 @@ struct MemberCtx<'c> {
     node: NodeId,
     head: &'c str,
     member: &'c Arc<str>,
-    /// The member's position among the node's parameters when it exists already.
-    slot: Option<usize>,
+    /// Where the member is among the node's parameters.
+    slot: Slot,
     /// The conditional's choice when it was evaluated ahead.
     known: Option<KnownChoice>,
     source: &'c HeadSource,

@@ -1,0 +1,274 @@
+//! Expansion plans and the decision cache of resolution.
+//!
+//! How the members of an input head match the members of an output head depends only on the
+//! two node types and heads, so it is worked out once per pair of heads (a [`Plan`]). The
+//! choices of the matched members' conditionals depend only on the plan and on what the
+//! conditionals can read of the upstream node U: for each parameter they name, its authored
+//! value and whether it is connected (declarations and defaults belong to U's definition,
+//! which is part of the cache key). Scenes repeat a few upstream states thousands of times,
+//! so the choices of one expansion ([`Decision`]) are computed once per (plan, state) and
+//! shared by every expansion that finds U in the same state.
+
+use super::KnownChoice;
+use crate::cond::ComparisonReport;
+use crate::network::{Network, NodeId, Param, name_hash};
+use crate::registry::tables::{InputMember, OutputMember, VstructTables};
+use crate::types::Value;
+use hashbrown::HashTable;
+use rustc_hash::{FxBuildHasher, FxHashMap as HashMap};
+use std::hash::BuildHasher;
+use std::io::Write;
+use std::sync::Arc;
+
+/// How one input head's members meet one output head's members.
+pub(super) struct Plan {
+    /// Distinguishes plans in the decision cache.
+    pub id: usize,
+    /// One entry per member of the input head, in declaration order.
+    pub members: Vec<PlannedMember>,
+    /// Every parameter of U that a matched member's (parsed) conditional names, with its
+    /// [`name_hash`]: the upstream state a [`Decision`] depends on.
+    pub reads: Vec<(String, u64)>,
+}
+
+/// One member of the input head.
+pub(super) struct PlannedMember {
+    /// [`name_hash`] of the member property, for the look-up in each downstream node.
+    pub hash: u64,
+    /// The index of the name it matched by and the upstream output member; `None` when the
+    /// upstream head has no counterpart.
+    pub matched: Option<(usize, OutputMember)>,
+}
+
+impl Plan {
+    /// Match `down_members` against output head `up_head` of `up` (step 3f: by member name,
+    /// then alias) and collect what the conditionals read.
+    pub fn new(id: usize, down_members: &[InputMember], up: &VstructTables, up_head: &str) -> Plan {
+        let members: Vec<PlannedMember> = down_members
+            .iter()
+            .map(|member| PlannedMember {
+                hash: name_hash(&member.property),
+                matched: member.names.iter().enumerate().find_map(|(i, name)| {
+                    up.reverse_out(up_head, name).map(|out| (i, out.clone()))
+                }),
+            })
+            .collect();
+        let mut reads: Vec<(String, u64)> = Vec::new();
+        let statements = members
+            .iter()
+            .filter_map(|m| m.matched.as_ref()?.1.cond.as_ref()?.statement());
+        for stmt in statements {
+            for name in stmt.param_names() {
+                if !reads.iter().any(|(r, _)| r == name) {
+                    reads.push((name.to_string(), name_hash(name)));
+                }
+            }
+        }
+        Plan { id, members, reads }
+    }
+}
+
+/// What expanding a member comes down to, when that is simple enough to do without the
+/// general path (which builds the explain story and every diagnostic).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Verdict {
+    /// Nothing happens: the conditional chose `ignore` and reported nothing.
+    Ignore,
+    /// Connect to the matched output: no conditional, or one that chose `connect` and
+    /// reported nothing.
+    Connect,
+    /// Anything else (`set`, `copy`, VS015 reports, no counterpart, an unparsable or
+    /// unevaluated conditional): the general path.
+    General,
+}
+
+/// The conditionals' verdicts for one expansion.
+#[derive(Default)]
+pub(super) struct Decision {
+    /// Per member of the plan: the choice of its conditional when it was evaluated ahead.
+    pub choices: Vec<Option<KnownChoice>>,
+    /// Per member of the plan: what its expansion comes down to.
+    pub verdicts: Vec<Verdict>,
+    /// Per member of the plan: true if the member writes or connects something (so it adds a
+    /// parameter to a node that does not have it yet).
+    pub adds: Vec<bool>,
+    /// The VS015 reports of each conditional that had some, by [`super::memo_key`].
+    pub reports: HashMap<usize, Vec<ComparisonReport>>,
+}
+
+/// At most this many decisions are kept: a scene whose upstream states never repeat would
+/// otherwise keep one per expansion. Past the bound, decisions are computed and dropped.
+const MAX_CACHED: usize = 4096;
+
+/// Decisions by (plan, upstream definition, upstream state).
+#[derive(Default)]
+pub(super) struct DecisionCache {
+    table: HashTable<Cached>,
+    /// Scratch: the state being looked up.
+    state: Vec<u8>,
+}
+
+struct Cached {
+    hash: u64,
+    plan: usize,
+    def: usize,
+    state: Box<[u8]>,
+    decision: Arc<Decision>,
+}
+
+/// A look-up that missed: what [`DecisionCache::insert`] needs to store the decision.
+pub(super) struct Miss {
+    hash: u64,
+    plan: usize,
+    def: usize,
+}
+
+impl DecisionCache {
+    /// The cached decision of `plan` for `upstream` in its current state, else what to
+    /// insert it under. `def` identifies U's definition (its address; 0 for none).
+    pub fn lookup(
+        &mut self,
+        plan: &Plan,
+        def: usize,
+        net: &Network,
+        upstream: NodeId,
+    ) -> Result<Arc<Decision>, Miss> {
+        self.state.clear();
+        for (name, hash) in &plan.reads {
+            let param = net.slot_of(upstream, name, *hash).position();
+            encode_param(&mut self.state, param.map(|i| net.param_at(upstream, i)));
+        }
+        let hash = FxBuildHasher.hash_one((plan.id, def, &self.state[..]));
+        let state = &self.state[..];
+        let found = self.table.find(hash, |c| {
+            c.plan == plan.id && c.def == def && &*c.state == state
+        });
+        match found {
+            Some(c) => Ok(c.decision.clone()),
+            None => Err(Miss {
+                hash,
+                plan: plan.id,
+                def,
+            }),
+        }
+    }
+
+    /// Keep `decision` for the state of the last [`DecisionCache::lookup`] (which missed).
+    pub fn insert(&mut self, miss: Miss, decision: Arc<Decision>) {
+        if self.table.len() >= MAX_CACHED {
+            return;
+        }
+        let cached = Cached {
+            hash: miss.hash,
+            plan: miss.plan,
+            def: miss.def,
+            state: self.state.as_slice().into(),
+            decision,
+        };
+        self.table.insert_unique(miss.hash, cached, |c| c.hash);
+    }
+}
+
+/// Appends what a conditional can observe of one parameter of U: whether it exists, is
+/// connected and has a value, and the value bit for bit (so `-0.0` and `0.0`, which compare
+/// equal, are still different states).
+fn encode_param(out: &mut Vec<u8>, param: Option<&Param>) {
+    let Some(p) = param else {
+        out.push(0);
+        return;
+    };
+    out.push(1 | u8::from(p.is_connected()) << 1 | u8::from(p.value().is_some()) << 2);
+    match p.value() {
+        None => {}
+        Some(Value::Int(i)) => {
+            out.push(1);
+            out.extend_from_slice(&i.to_le_bytes());
+        }
+        Some(Value::Float(f)) => {
+            out.push(2);
+            out.extend_from_slice(&f.to_bits().to_le_bytes());
+        }
+        // Rarer values: their debug text is exact (floats print as the shortest text that
+        // reads back to the same bits), and the length prefix keeps the encoding unambiguous.
+        Some(other) => {
+            out.push(3);
+            let start = out.len();
+            out.extend_from_slice(&[0; 4]);
+            // Writing to a Vec cannot fail.
+            let _ = write!(out, "{other:?}");
+            let len = u32::try_from(out.len() - start - 4).unwrap_or(u32::MAX);
+            out[start..start + 4].copy_from_slice(&len.to_le_bytes());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn encoded(value: Option<Value>, connected: bool) -> Vec<u8> {
+        let mut net = Network::new();
+        let up = net.add_node("up", "PxrFractal");
+        let n = net.add_node("n", "PxrLayer");
+        if let Some(v) = value {
+            net.set_param(n, "p", v);
+        }
+        if connected {
+            net.connect(n, "p", up, "resultF");
+        }
+        let mut out = Vec::new();
+        let param = net[n].param("p");
+        encode_param(&mut out, param);
+        out
+    }
+
+    #[test]
+    fn states_a_conditional_can_tell_apart_encode_differently() {
+        let states = [
+            encoded(None, false),
+            encoded(None, true),
+            encoded(Some(Value::Int(1)), false),
+            encoded(Some(Value::Int(1)), true),
+            encoded(Some(Value::Int(0)), false),
+            encoded(Some(Value::Float(0.0)), false),
+            encoded(Some(Value::Float(-0.0)), false),
+            encoded(Some(Value::Float(1.0)), false),
+            encoded(Some(Value::Str("1".into())), false),
+            encoded(Some(Value::Str("10".into())), false),
+            encoded(Some(Value::Token("1".into())), false),
+            encoded(Some(Value::Bool(true)), false),
+        ];
+        for (i, a) in states.iter().enumerate() {
+            for b in &states[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+        assert_eq!(
+            encoded(Some(Value::Int(7)), true),
+            encoded(Some(Value::Int(7)), true)
+        );
+    }
+
+    #[test]
+    fn the_cache_is_bounded() {
+        let mut cache = DecisionCache::default();
+        let plan = Plan {
+            id: 0,
+            members: Vec::new(),
+            reads: vec![("p".to_string(), name_hash("p"))],
+        };
+        let mut net = Network::new();
+        let n = net.add_node("n", "PxrLayer");
+        for i in 0..MAX_CACHED as i32 + 10 {
+            net.set_param(n, "p", Value::Int(i));
+            let miss = cache
+                .lookup(&plan, 0, &net, n)
+                .err()
+                .expect("a new state misses");
+            cache.insert(miss, Arc::new(Decision::default()));
+        }
+        assert_eq!(cache.table.len(), MAX_CACHED);
+        net.set_param(n, "p", Value::Int(3));
+        assert!(cache.lookup(&plan, 0, &net, n).is_ok());
+    }
+}
