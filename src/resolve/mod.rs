@@ -377,13 +377,7 @@ impl Resolver<'_> {
         let members = down_tables.members_in(head);
         // One look-up per member; connecting or writing then works by position.
         let mut slots = std::mem::take(&mut self.slots);
-        slots.clear();
-        slots.extend(
-            members
-                .iter()
-                .zip(&plan.members)
-                .map(|(m, p)| self.net.slot_of(node, &m.property, p.hash)),
-        );
+        plan.properties.find_in(self.net, node, &mut slots);
         self.decision = self.decide(node, source, up_def.as_deref(), &plan);
         // Make room for exactly the parameters this head will add: growing by doubling, or
         // reserving a slot for every member, left most of a resolved scene's memory unused.

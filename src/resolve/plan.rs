@@ -11,7 +11,7 @@
 
 use super::KnownChoice;
 use crate::cond::ComparisonReport;
-use crate::network::{Network, NodeId, Param, name_hash};
+use crate::network::{Network, NodeId, Param, Slot, name_hash};
 use crate::registry::tables::{InputMember, OutputMember, VstructTables};
 use crate::types::Value;
 use hashbrown::HashTable;
@@ -20,21 +20,96 @@ use std::hash::BuildHasher;
 use std::io::Write;
 use std::sync::Arc;
 
+/// A list of parameter names to find in nodes, with their hashes and an index by hash.
+#[derive(Default)]
+pub(super) struct NameSet {
+    names: Vec<(Arc<str>, u64)>,
+    /// Positions in `names` of the first occurrence of each name, by [`name_hash`].
+    index: HashTable<u32>,
+    /// True once a name was pushed twice (a scan would fill only the first occurrence).
+    repeated: bool,
+}
+
+impl NameSet {
+    /// Adds `name` unless it is in the set already.
+    fn insert(&mut self, name: Arc<str>) {
+        if !self.contains(&name) {
+            self.push(name);
+        }
+    }
+
+    fn contains(&self, name: &str) -> bool {
+        let names = &self.names;
+        self.index
+            .find(name_hash(name), |&i| &*names[i as usize].0 == name)
+            .is_some()
+    }
+
+    /// Appends `name`, even if it is in the set already (positions must stay aligned with
+    /// the caller's list).
+    fn push(&mut self, name: Arc<str>) {
+        if self.contains(&name) {
+            self.repeated = true;
+            self.names.push((name.clone(), name_hash(&name)));
+            return;
+        }
+        let hash = name_hash(&name);
+        let i = u32::try_from(self.names.len()).expect("fewer than 2^32 names");
+        self.names.push((name, hash));
+        let names = &self.names;
+        self.index.insert_unique(hash, i, |&j| names[j as usize].1);
+    }
+
+    /// The number of names.
+    #[cfg(test)]
+    fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Where each name is among `node`'s parameters, in the set's order. A node with fewer
+    /// parameters than the set has names is scanned (one hash per parameter); otherwise
+    /// each name is looked up in the node's own index. Both find the same positions, since
+    /// parameter names are unique in a node.
+    pub fn find_in(&self, net: &Network, node: NodeId, out: &mut Vec<Slot>) {
+        out.clear();
+        let params = net[node].all_params();
+        if params.len() < self.names.len() && !self.repeated {
+            out.extend(self.names.iter().map(|&(_, hash)| Slot::Missing { hash }));
+            for (at, param) in params.iter().enumerate() {
+                let name = param.name();
+                let names = &self.names;
+                if let Some(&i) = self
+                    .index
+                    .find(name_hash(name), |&i| &*names[i as usize].0 == name)
+                {
+                    out[i as usize] = Slot::At(at);
+                }
+            }
+        } else {
+            out.extend(
+                self.names
+                    .iter()
+                    .map(|(name, hash)| net.slot_of(node, name, *hash)),
+            );
+        }
+    }
+}
+
 /// How one input head's members meet one output head's members.
 pub(super) struct Plan {
     /// Distinguishes plans in the decision cache.
     pub id: usize,
     /// One entry per member of the input head, in declaration order.
     pub members: Vec<PlannedMember>,
-    /// Every parameter of U that a matched member's (parsed) conditional names, with its
-    /// [`name_hash`]: the upstream state a [`Decision`] depends on.
-    pub reads: Vec<(String, u64)>,
+    /// The member properties, in the same order, to find them in each downstream node.
+    pub properties: NameSet,
+    /// Every parameter of U that a matched member's (parsed) conditional names: the upstream
+    /// state a [`Decision`] depends on.
+    pub reads: NameSet,
 }
 
 /// One member of the input head.
 pub(super) struct PlannedMember {
-    /// [`name_hash`] of the member property, for the look-up in each downstream node.
-    pub hash: u64,
     /// The index of the name it matched by and the upstream output member; `None` when the
     /// upstream head has no counterpart.
     pub matched: Option<(usize, OutputMember)>,
@@ -47,24 +122,30 @@ impl Plan {
         let members: Vec<PlannedMember> = down_members
             .iter()
             .map(|member| PlannedMember {
-                hash: name_hash(&member.property),
                 matched: member.names.iter().enumerate().find_map(|(i, name)| {
                     up.reverse_out(up_head, name).map(|out| (i, out.clone()))
                 }),
             })
             .collect();
-        let mut reads: Vec<(String, u64)> = Vec::new();
+        let mut properties = NameSet::default();
+        for member in down_members {
+            properties.push(member.property.clone());
+        }
+        let mut reads = NameSet::default();
         let statements = members
             .iter()
             .filter_map(|m| m.matched.as_ref()?.1.cond.as_ref()?.statement());
         for stmt in statements {
             for name in stmt.param_names() {
-                if !reads.iter().any(|(r, _)| r == name) {
-                    reads.push((name.to_string(), name_hash(name)));
-                }
+                reads.insert(Arc::from(name));
             }
         }
-        Plan { id, members, reads }
+        Plan {
+            id,
+            members,
+            properties,
+            reads,
+        }
     }
 }
 
@@ -106,6 +187,8 @@ pub(super) struct DecisionCache {
     table: HashTable<Cached>,
     /// Scratch: the state being looked up.
     state: Vec<u8>,
+    /// Scratch: where the plan's reads are in U.
+    slots: Vec<Slot>,
 }
 
 struct Cached {
@@ -134,9 +217,10 @@ impl DecisionCache {
         upstream: NodeId,
     ) -> Result<Arc<Decision>, Miss> {
         self.state.clear();
-        for (name, hash) in &plan.reads {
-            let param = net.slot_of(upstream, name, *hash).position();
-            encode_param(&mut self.state, param.map(|i| net.param_at(upstream, i)));
+        plan.reads.find_in(net, upstream, &mut self.slots);
+        for slot in &self.slots {
+            let param = slot.position().map(|i| net.param_at(upstream, i));
+            encode_param(&mut self.state, param);
         }
         let hash = FxBuildHasher.hash_one((plan.id, def, &self.state[..]));
         let state = &self.state[..];
@@ -250,12 +334,53 @@ mod tests {
     }
 
     #[test]
+    fn scanning_and_looking_up_find_the_same_slots() {
+        let mut net = Network::new();
+        let n = net.add_node("n", "PxrLayer");
+        let mut set = NameSet::default();
+        for name in ["a", "b", "c", "d", "e", "b"] {
+            set.insert(Arc::from(name));
+        }
+        assert_eq!(set.len(), 5);
+        let mut repeated = NameSet::default();
+        for name in ["a", "b", "a"] {
+            repeated.push(Arc::from(name));
+        }
+        assert_eq!(repeated.len(), 3);
+        let mut other = Network::new();
+        let m = other.add_node("m", "PxrLayer");
+        other.set_param(m, "a", Value::Int(0));
+        let mut slots = Vec::new();
+        repeated.find_in(&other, m, &mut slots);
+        assert_eq!(
+            slots,
+            [Slot::At(0), slots[1], Slot::At(0)],
+            "both occurrences found"
+        );
+        let mut scanned = Vec::new();
+        let mut looked_up = Vec::new();
+        for (k, name) in ["x", "d", "y", "a", "z", "w", "v"].into_iter().enumerate() {
+            net.set_param(n, name, Value::Int(k as i32));
+            set.find_in(&net, n, &mut scanned);
+            let by_lookup = set.names.iter().map(|(m, h)| net.slot_of(n, m, *h));
+            looked_up.clear();
+            looked_up.extend(by_lookup);
+            assert_eq!(scanned, looked_up, "after adding {name}");
+        }
+        assert_eq!(scanned[0], Slot::At(3));
+        assert_eq!(scanned[3], Slot::At(1));
+    }
+
+    #[test]
     fn the_cache_is_bounded() {
         let mut cache = DecisionCache::default();
+        let mut reads = NameSet::default();
+        reads.insert(Arc::from("p"));
         let plan = Plan {
             id: 0,
             members: Vec::new(),
-            reads: vec![("p".to_string(), name_hash("p"))],
+            properties: NameSet::default(),
+            reads,
         };
         let mut net = Network::new();
         let n = net.add_node("n", "PxrLayer");
