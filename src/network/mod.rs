@@ -471,7 +471,9 @@ pub struct Node {
     params: Vec<Param>,
     /// Indices into `params`, hashed by parameter name. Resolution looks parameters up by
     /// name several times per member; nodes such as PxrLayerMixer have hundreds of them.
-    by_name: HashTable<u32>,
+    /// (position in `params`, the name's hash folded to 32 bits): keeping the hash lets the
+    /// table grow without hashing every name again.
+    by_name: HashTable<(u32, u32)>,
     location: Option<Location>,
     source: Option<NodeSource>,
     dirty: bool,
@@ -503,8 +505,17 @@ impl Slot {
 
 /// The hash of a parameter name in a node's name index. Callers that look the same names up
 /// in many nodes (resolution's members) compute it once and use the `*_hashed` look-ups.
+///
+/// The hash is 32 bits repeated in both halves, so the name index can store it in 4 bytes
+/// and rebuild the full value when it grows ([`unfold`]).
 pub(crate) fn name_hash(name: &str) -> u64 {
-    FxBuildHasher.hash_one(name)
+    let h = FxBuildHasher.hash_one(name);
+    unfold((h ^ (h >> 32)) as u32)
+}
+
+/// The [`name_hash`] whose low half is `h`.
+fn unfold(h: u32) -> u64 {
+    u64::from(h) << 32 | u64::from(h)
 }
 
 impl PartialEq for Node {
@@ -545,9 +556,8 @@ impl Node {
         let params = &self.params;
         let mut by_name = HashTable::with_capacity(params.len());
         for (i, p) in params.iter().enumerate() {
-            by_name.insert_unique(name_hash(&p.name), i as u32, |&j: &u32| {
-                name_hash(&params[j as usize].name)
-            });
+            let hash = name_hash(&p.name);
+            by_name.insert_unique(hash, (i as u32, hash as u32), |&(_, h)| unfold(h));
         }
         self.by_name = by_name;
     }
@@ -620,8 +630,8 @@ impl Node {
     fn index_of_hashed(&self, name: &str, hash: u64) -> Option<usize> {
         let params = &self.params;
         self.by_name
-            .find(hash, |&i| &*params[i as usize].name == name)
-            .map(|&i| i as usize)
+            .find(hash, |&(i, _)| &*params[i as usize].name == name)
+            .map(|&(i, _)| i as usize)
     }
 
     fn index_or_insert(&mut self, name: &str) -> usize {
@@ -641,9 +651,8 @@ impl Node {
     fn insert_param_hashed(&mut self, name: Arc<str>, hash: u64) -> usize {
         let idx = self.params.len();
         self.params.push(Param::empty(name));
-        let params = &self.params;
         self.by_name
-            .insert_unique(hash, idx as u32, |&i| name_hash(&params[i as usize].name));
+            .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
         idx
     }
 
@@ -946,9 +955,7 @@ impl Network {
     pub fn reserve_params(&mut self, node: NodeId, additional: usize) {
         let n = &mut self.graph[node];
         n.params.reserve(additional);
-        let params = &n.params;
-        n.by_name
-            .reserve(additional, |&i| name_hash(&params[i as usize].name));
+        n.by_name.reserve(additional, |&(_, h)| unfold(h));
     }
 
     /// The connections of `node.input` in connection order (empty if none).

@@ -13,7 +13,7 @@ use crate::cond::{
 };
 use crate::diag::{Diagnostic, Diagnostics, Location};
 use crate::network::{Link, Network, NodeId, Slot};
-use crate::registry::tables::{CondEntry, OutputMember, VstructTables};
+use crate::registry::tables::{CondEntry, InputMember, OutputMember, VstructTables};
 use crate::registry::{IndexedDefinition, Registry};
 use crate::types::Value;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
@@ -199,6 +199,9 @@ struct Resolver<'a> {
 /// A conditional's choice, and whether its evaluation reported anything (VS015).
 type KnownChoice = (Choice, bool);
 
+/// The definitions of D and U, when known.
+type Defs<'d> = (Option<&'d IndexedDefinition>, Option<&'d IndexedDefinition>);
+
 #[derive(Clone)]
 struct TypeInfo {
     def: Option<Arc<IndexedDefinition>>,
@@ -378,7 +381,8 @@ impl Resolver<'_> {
         // One look-up per member; connecting or writing then works by position.
         let mut slots = std::mem::take(&mut self.slots);
         plan.properties.find_in(self.net, node, &mut slots);
-        self.decision = self.decide(node, source, up_def.as_deref(), &plan);
+        let defs = (down_def.as_deref(), up_def.as_deref());
+        self.decision = self.decide(node, source, defs, members, &plan);
         // Make room for exactly the parameters this head will add: growing by doubling, or
         // reserving a slot for every member, left most of a resolved scene's memory unused.
         let added = slots
@@ -409,12 +413,17 @@ impl Resolver<'_> {
             // Most members are ignored or simply connected; the general path would come to
             // the same result through the explain story and the diagnostics checks.
             let verdict = match &planned.matched {
-                Some(_) if self.options.record_events => Verdict::General,
-                _ => decision.verdicts[i],
+                Some(_) if self.options.record_events => &Verdict::General,
+                _ => &decision.verdicts[i],
             };
             match (verdict, &planned.matched) {
                 (Verdict::Ignore, _) => {}
                 (Verdict::Connect, Some((_, output))) => self.connect(&ctx, &output.property),
+                // A new parameter has no value to replace (VS018), so writing is all there is.
+                (Verdict::Write(value), Some(_)) if matches!(slot, Slot::Missing { .. }) => {
+                    self.net
+                        .set_slot(node, slot, &member.property, value.clone());
+                }
                 (_, Some((name, output))) => self.apply_member(&ctx, &member.names[*name], output),
                 (_, None) => self.no_counterpart(&ctx, &member.names),
             }
@@ -430,20 +439,25 @@ impl Resolver<'_> {
         &mut self,
         node: NodeId,
         source: &HeadSource,
-        up_def: Option<&IndexedDefinition>,
+        defs: Defs<'_>,
+        members: &[InputMember],
         plan: &Plan,
     ) -> Arc<Decision> {
         let evaluates = self.options.conditions && node != source.upstream;
         // `array-index` reads elements through names the plan does not list.
         let cacheable = evaluates && !self.options.extensions.contains(Extension::ArrayIndex);
+        let compute = |r: &mut Self, evaluates| {
+            Arc::new(r.compute_decision(evaluates, source.upstream, defs, members, plan))
+        };
         if !cacheable {
-            return Arc::new(self.compute_decision(evaluates, source.upstream, up_def, plan));
+            return compute(self, evaluates);
         }
-        let def = up_def.map_or(0, |d| d as *const IndexedDefinition as usize);
+        // The plan fixes D's type; U's definition is part of the key.
+        let def = defs.1.map_or(0, |d| d as *const IndexedDefinition as usize);
         match self.decisions.lookup(plan, def, self.net, source.upstream) {
             Ok(decision) => decision,
             Err(miss) => {
-                let decision = Arc::new(self.compute_decision(true, source.upstream, up_def, plan));
+                let decision = compute(self, true);
                 self.decisions.insert(miss, decision.clone());
                 decision
             }
@@ -455,12 +469,13 @@ impl Resolver<'_> {
         &mut self,
         evaluates: bool,
         upstream: NodeId,
-        up_def: Option<&IndexedDefinition>,
+        (down_def, up_def): Defs<'_>,
+        members: &[InputMember],
         plan: &Plan,
     ) -> Decision {
         self.memo.clear();
         let mut decision = Decision::default();
-        for planned in &plan.members {
+        for (member, planned) in members.iter().zip(&plan.members) {
             let mut known = None;
             let (adds, verdict) = match &planned.matched {
                 None => (false, Verdict::General),
@@ -478,6 +493,15 @@ impl Resolver<'_> {
                             let verdict = match (kind, choice.1) {
                                 (ActionKind::Ignore, false) => Verdict::Ignore,
                                 (ActionKind::Connect, false) => Verdict::Connect,
+                                (ActionKind::Set { literal }, false) => {
+                                    let dest = down_def
+                                        .and_then(|d| d.input(&member.property))
+                                        .map(|p| &p.ty);
+                                    match cond::set_value(literal, dest, &self.options.extensions) {
+                                        Ok(set) if !set.saturated => Verdict::Write(set.value),
+                                        _ => Verdict::General,
+                                    }
+                                }
                                 _ => Verdict::General,
                             };
                             (!matches!(kind, ActionKind::Ignore), verdict)

@@ -151,14 +151,17 @@ impl Plan {
 
 /// What expanding a member comes down to, when that is simple enough to do without the
 /// general path (which builds the explain story and every diagnostic).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(super) enum Verdict {
     /// Nothing happens: the conditional chose `ignore` and reported nothing.
     Ignore,
     /// Connect to the matched output: no conditional, or one that chose `connect` and
     /// reported nothing.
     Connect,
-    /// Anything else (`set`, `copy`, VS015 reports, no counterpart, an unparsable or
+    /// Write this value: the conditional chose a `set` that applies to the member's type
+    /// without saturating, and reported nothing.
+    Write(Value),
+    /// Anything else (`copy`, VS015 reports, no counterpart, an unparsable or
     /// unevaluated conditional): the general path.
     General,
 }
