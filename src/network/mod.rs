@@ -503,6 +503,15 @@ impl Slot {
     }
 }
 
+/// The first eight bytes of `s` as a big-endian number, zero-padded: comparing two of these
+/// orders strings as comparing their first eight bytes does.
+fn prefix_key(s: &str) -> u64 {
+    let mut bytes = [0u8; 8];
+    let n = s.len().min(8);
+    bytes[..n].copy_from_slice(&s.as_bytes()[..n]);
+    u64::from_be_bytes(bytes)
+}
+
 /// The hash of a parameter name in a node's name index. Callers that look the same names up
 /// in many nodes (resolution's members) compute it once and use the `*_hashed` look-ups.
 ///
@@ -895,16 +904,21 @@ impl Network {
     /// assert_eq!(net.nodes_sorted(), vec![a, b, b1]);
     /// ```
     pub fn nodes_sorted(&self) -> Vec<NodeId> {
-        // Sorting the keys themselves rather than ids saves two graph look-ups per comparison.
-        // Ties (none in networks the readers build) fall back to the id, which is the order
-        // the stable sort of ids gave.
-        let mut keys: Vec<(&str, u32, NodeId)> = self
+        // Sorting the keys themselves rather than ids saves two graph look-ups per comparison,
+        // and the handle's first eight bytes as a number decide most comparisons without
+        // comparing strings (zero padding keeps that number in byte-wise order; equal
+        // numbers fall through to the whole handle). Ties (none in networks the readers
+        // build) fall back to the id, which is the order the stable sort of ids gave.
+        let mut keys: Vec<(u64, &str, u32, NodeId)> = self
             .graph
             .node_indices()
-            .map(|id| (self.graph[id].handle.as_str(), self.graph[id].version, id))
+            .map(|id| {
+                let handle = self.graph[id].handle.as_str();
+                (prefix_key(handle), handle, self.graph[id].version, id)
+            })
             .collect();
         keys.sort_unstable();
-        keys.into_iter().map(|(_, _, id)| id).collect()
+        keys.into_iter().map(|(_, _, _, id)| id).collect()
     }
 
     /// The authored value of `node.name`.
@@ -1392,6 +1406,27 @@ impl Network {
 mod tests {
     use super::*;
     use crate::types::BaseType;
+
+    proptest::proptest! {
+        /// The keyed sort gives the order of the plain definition: stable sort of ids by
+        /// (handle byte-wise, version). Handles share long prefixes, differ after the eighth
+        /// byte, contain NUL and multi-byte characters, and repeat (versions).
+        #[test]
+        fn nodes_sorted_is_handle_then_version_order(
+            handles in proptest::collection::vec("(m1_|m12_)?[a\\x00é]{0,10}", 0..40)
+        ) {
+            let mut net = Network::new();
+            for h in &handles {
+                net.add_node(h, "X");
+            }
+            let mut expected: Vec<NodeId> = net.graph.node_indices().collect();
+            expected.sort_by(|&x, &y| {
+                let (nx, ny) = (&net.graph[x], &net.graph[y]);
+                nx.handle.cmp(&ny.handle).then(nx.version.cmp(&ny.version))
+            });
+            proptest::prop_assert_eq!(net.nodes_sorted(), expected);
+        }
+    }
 
     fn sourced_node(net: &mut Network) -> NodeId {
         let mut node = Node::new_raw("n", "PxrLayer", RequestKind::Pattern);

@@ -267,12 +267,15 @@ impl Resolver<'_> {
             }
             return None;
         };
-        let heads: Vec<String> = self
-            .net
-            .connected_inputs(node)
-            .into_iter()
-            .filter(|i| tables.is_input_head(i))
+        // The connected input heads in byte-wise order. A type has a few heads and a node
+        // many parameters, so the heads are checked rather than the parameters scanned.
+        let mut heads: Vec<String> = tables
+            .input_heads()
+            .filter(|h| !self.net.connections(node, h).is_empty())
+            .map(str::to_string)
             .collect();
+        heads.sort_unstable();
+        heads.dedup();
         if heads.is_empty() {
             return None;
         }
