@@ -1110,7 +1110,7 @@ impl Network {
         }
     }
 
-    /// The parameter at `slot` (from [`Network::param_slot`]).
+    /// The parameter at position `slot` (from [`Network::slot_of`]).
     pub(crate) fn param_at(&self, node: NodeId, slot: usize) -> &Param {
         &self.graph[node].params[slot]
     }
