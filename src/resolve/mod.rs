@@ -397,6 +397,19 @@ impl Resolver<'_> {
         let decision = self.decision.clone();
         for (i, (member, planned)) in members.iter().zip(&plan.members).enumerate() {
             let slot = slots[i];
+            let connected = match slot {
+                Slot::At(at) => self.net.param_at(node, at).is_connected(),
+                Slot::Missing { .. } => false,
+            };
+            // Most members are ignored or simply connected; the general path would come to
+            // the same result through the explain story and the diagnostics checks.
+            let verdict = match &planned.matched {
+                Some(_) if self.options.record_events => &Verdict::General,
+                _ => &decision.verdicts[i],
+            };
+            if !connected && *verdict == Verdict::Ignore {
+                continue;
+            }
             let ctx = MemberCtx {
                 known: decision.choices[i],
                 node,
@@ -407,18 +420,10 @@ impl Resolver<'_> {
                 down_def: down_def.as_deref(),
                 up_def: up_def.as_deref(),
             };
-            if let Slot::At(at) = slot
-                && self.net.param_at(node, at).is_connected()
-            {
+            if connected {
                 self.direct_connection_wins(&ctx);
                 continue;
             }
-            // Most members are ignored or simply connected; the general path would come to
-            // the same result through the explain story and the diagnostics checks.
-            let verdict = match &planned.matched {
-                Some(_) if self.options.record_events => &Verdict::General,
-                _ => &decision.verdicts[i],
-            };
             match (verdict, &planned.matched) {
                 (Verdict::Ignore, _) => {}
                 (Verdict::Connect, Some((_, output))) => self.connect(&ctx, &output.property),
