@@ -16,7 +16,7 @@ use crate::network::{Link, Network, NodeId, Slot};
 use crate::registry::tables::{CondEntry, InputMember, OutputMember, VstructTables};
 use crate::registry::{IndexedDefinition, Registry};
 use crate::types::Value;
-use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
+use rustc_hash::FxHashMap as HashMap;
 use std::sync::Arc;
 
 mod plan;
@@ -131,13 +131,15 @@ pub struct MemberEvent {
 /// removed (§4.7, VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
     let order = net.nodes_sorted();
+    // Resolution adds no nodes, so every node index stays below this bound.
+    let bound = petgraph::visit::NodeIndexable::node_bound(net.graph());
     let mut r = Resolver {
         net,
         registry,
         options,
         out: Resolution::default(),
-        visited: HashSet::default(),
-        on_stack: HashSet::default(),
+        visited: NodeSet::new(bound),
+        on_stack: NodeSet::new(bound),
         types: HashMap::default(),
         memo: HashMap::default(),
         plans: HashMap::default(),
@@ -173,9 +175,9 @@ struct Resolver<'a> {
     registry: &'a Registry,
     options: &'a ResolveOptions,
     out: Resolution,
-    visited: HashSet<NodeId>,
+    visited: NodeSet,
     /// Nodes of the frames on the work stack (step 1's "on stack"), for O(1) cycle checks.
-    on_stack: HashSet<NodeId>,
+    on_stack: NodeSet,
     /// Per shader id: its definition and tables, looked up in the registry once per run.
     types: HashMap<String, TypeInfo>,
     /// Scratch while a [`Decision`] is computed: the choice of each conditional evaluated so
@@ -194,6 +196,30 @@ struct Resolver<'a> {
     order: Vec<NodeId>,
     /// Scratch: where each member of the head being expanded is in the downstream node.
     slots: Vec<Slot>,
+}
+
+/// A set of nodes as one flag per node index: resolution asks for every node and every head
+/// whether it was visited, and a dense table answers that without hashing or scattered reads.
+struct NodeSet(Vec<bool>);
+
+impl NodeSet {
+    /// An empty set for node indices below `bound`.
+    fn new(bound: usize) -> NodeSet {
+        NodeSet(vec![false; bound])
+    }
+
+    /// Adds `node`; false if it was in the set already.
+    fn insert(&mut self, node: NodeId) -> bool {
+        !std::mem::replace(&mut self.0[node.index()], true)
+    }
+
+    fn remove(&mut self, node: NodeId) {
+        self.0[node.index()] = false;
+    }
+
+    fn contains(&self, node: NodeId) -> bool {
+        self.0[node.index()]
+    }
 }
 
 /// A conditional's choice, and whether its evaluation reported anything (VS015).
@@ -239,7 +265,7 @@ impl Resolver<'_> {
             }
             while let Some(top) = stack.len().checked_sub(1) {
                 if stack[top].next >= stack[top].heads.len() {
-                    self.on_stack.remove(&stack[top].node);
+                    self.on_stack.remove(stack[top].node);
                     stack.pop();
                     continue;
                 }
@@ -301,13 +327,13 @@ impl Resolver<'_> {
         };
         if !upstream_done {
             stack[top].upstream_done = true;
-            if self.on_stack.contains(&source.upstream) {
+            if self.on_stack.contains(source.upstream) {
                 let pos = stack
                     .iter()
                     .position(|f| f.node == source.upstream)
                     .unwrap_or(0);
                 self.report_cycle(&stack[pos..], &head, &source);
-            } else if !self.visited.contains(&source.upstream) {
+            } else if !self.visited.contains(source.upstream) {
                 return Some(source.upstream);
             }
         }
