@@ -65,7 +65,17 @@ pub struct PreparedSheenCK {
 impl SheenCK {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
-        self.prepare_bound(v, &self.albedo_curve())
+        // One lookup: baking the whole curve ([`SheenCK::albedo_curve`]) pays only when
+        // reused.
+        let e = tables::lookup2(self.table(), v.z, tables::sheen_axis(self.clamped_r()));
+        self.prepare_with_albedo(v, e)
+    }
+
+    fn table(&self) -> TableId {
+        match self.masking {
+            SheenMasking::MaterialX => TableId::SheenMx,
+            SheenMasking::Original => TableId::SheenOrig,
+        }
     }
 
     /// The roughness clamped to its range (NaN → 1).
@@ -79,15 +89,17 @@ impl SheenCK {
 
     /// The albedo table at this lobe's roughness, for [`SheenCK::prepare_bound`].
     pub fn albedo_curve(&self) -> MuCurve {
-        let table = match self.masking {
-            SheenMasking::MaterialX => TableId::SheenMx,
-            SheenMasking::Original => TableId::SheenOrig,
-        };
-        MuCurve::new2(table, tables::sheen_axis(self.clamped_r()))
+        MuCurve::new2(self.table(), tables::sheen_axis(self.clamped_r()))
     }
 
     /// [`SheenCK::prepare`] with the albedo curve computed once ([`SheenCK::albedo_curve`]).
     pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedSheenCK {
+        self.prepare_with_albedo(v, albedo.at(v.z))
+    }
+
+    /// The prepared lobe given its table albedo `e` at `μ_o`.
+    #[inline]
+    fn prepare_with_albedo(&self, v: Vec3, e: f32) -> PreparedSheenCK {
         let r = self.clamped_r();
         let coef = ck_coefficients(r);
         PreparedSheenCK {
@@ -102,7 +114,7 @@ impl SheenCK {
                 SheenMasking::MaterialX => 0.0,
             },
             inv_4mu: 0.25 / v.z.max(1e-7),
-            albedo: albedo.at(v.z),
+            albedo: e,
         }
     }
 }

@@ -126,7 +126,9 @@ pub struct PreparedWard {
 impl Ward {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedWard {
-        self.prepare_bound(v, &self.albedo_curve())
+        // One lookup: baking the whole curve ([`Ward::albedo_curve`]) pays only when reused.
+        let (ax, ay) = (clamp_alpha(self.ax), clamp_alpha(self.ay));
+        self.prepare_with_albedo(v, ward_albedo(self.variant, v.z, ax, ay))
     }
 
     /// The albedo table at this lobe's (clamped) widths, for [`Ward::prepare_bound`].
@@ -141,12 +143,18 @@ impl Ward {
 
     /// [`Ward::prepare`] with the albedo curve computed once ([`Ward::albedo_curve`]).
     pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedWard {
+        self.prepare_with_albedo(v, albedo.at(v.z))
+    }
+
+    /// The prepared lobe given its table albedo at `μ_o` (ρ = 1).
+    #[inline]
+    fn prepare_with_albedo(&self, v: Vec3, e: f32) -> PreparedWard {
         PreparedWard {
             core: WardCore::new(self.ax, self.ay, self.variant, v.z),
             variant: self.variant,
             rho: self.rho,
             v,
-            albedo: self.rho * albedo.at(v.z),
+            albedo: self.rho * e,
         }
     }
 }
