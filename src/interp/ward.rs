@@ -75,7 +75,8 @@ impl WardCore {
     fn eval(&self, variant: WardVariant, hh: Vec3, hh2: f32, vhh: f32, mu_i: f32) -> (f32, f32) {
         let hz2 = hh.z * hh.z;
         let e = (hh.x * hh.x * self.inv_ax2 + hh.y * hh.y * self.inv_ay2) / hz2;
-        let ex = (-e).exp();
+        // The polynomial `exp` (1–2 ulp, `vmath` tests): no library call per evaluation.
+        let ex = super::vmath::exp(-e);
         if ex <= 0.0 {
             // Also avoids 0·∞ when H_z underflows (both directions at the horizon).
             return (0.0, 0.0);
@@ -113,6 +114,14 @@ pub struct Ward {
     pub variant: WardVariant,
 }
 
+/// The view-independent part of a [`Ward`] lobe's prepare ([`Ward::bind`]): its albedo
+/// curve and its widths and normalisation (the classic norm at `μ_o = 1`).
+#[derive(Debug, Clone, Copy)]
+pub struct WardBound {
+    curve: MuCurve,
+    core: WardCore,
+}
+
 /// Prepared [`Ward`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedWard {
@@ -141,9 +150,29 @@ impl Ward {
         MuCurve::new2(t, tables::ward_axis((ax * ay).sqrt()))
     }
 
-    /// [`Ward::prepare`] with the albedo curve computed once ([`Ward::albedo_curve`]).
-    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedWard {
-        self.prepare_with_albedo(v, albedo.at(v.z))
+    /// The view-independent part of [`Ward::prepare`] ([`WardBound`]).
+    pub fn bind(&self) -> WardBound {
+        WardBound {
+            curve: self.albedo_curve(),
+            core: WardCore::new(self.ax, self.ay, self.variant, 1.0),
+        }
+    }
+
+    /// [`Ward::prepare`] with the result of [`Ward::bind`].
+    #[inline]
+    pub fn prepare_bound(&self, v: Vec3, b: &WardBound) -> PreparedWard {
+        let mut core = b.core;
+        if self.variant == WardVariant::Classic {
+            // The only view-dependent part of the core: `1/√μ_o` in the classic norm.
+            core.norm = b.core.norm / v.z.max(1e-7).sqrt();
+        }
+        PreparedWard {
+            core,
+            variant: self.variant,
+            rho: self.rho,
+            v,
+            albedo: self.rho * b.curve.at(v.z),
+        }
     }
 
     /// The prepared lobe given its table albedo at `μ_o` (ρ = 1).
