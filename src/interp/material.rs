@@ -647,10 +647,10 @@ impl Material {
 
     /// Prepares leaf `info` at local view `v` into `out`.
     fn prepare_leaf(&self, info: &LeafInfo, regs: &[Vec3], v: Vec3, out: &mut PreparedLobe) {
-        *out = match &info.const_lobe {
-            Some(lobe) => lobe.prepare(v, self.options.sides),
-            None => leaf_lobe(&info.leaf.kind, regs).prepare(v, self.options.sides),
-        };
+        match &info.const_lobe {
+            Some(lobe) => lobe.prepare_into(v, self.options.sides, out),
+            None => *out = leaf_lobe(&info.leaf.kind, regs).prepare(v, self.options.sides),
+        }
     }
 
     fn throughput(&self, s: &mut Scratch, out: &Prepared, ready: &[bool; MAX_LOBES]) {
@@ -977,9 +977,10 @@ fn sat(v: Vec3) -> Vec3 {
 /// Non-negative and finite (NaN and infinities become 0).
 #[inline]
 fn clean(v: Vec3) -> Vec3 {
-    // A bit mask per channel, no branch (NaN fails both comparisons).
+    // A bit mask per channel, no branch. `x − x` is 0 exactly for finite x (NaN for ±∞ and
+    // NaN); written as `x < ∞`, LLVM turns the test into integer classification code.
     let c = |x: f32| {
-        let keep = (x > 0.0) & (x < f32::INFINITY);
+        let keep = (x > 0.0) & (x - x == 0.0);
         f32::from_bits(x.to_bits() & u32::from(keep).wrapping_neg())
     };
     Vec3::new(c(v.x), c(v.y), c(v.z))
