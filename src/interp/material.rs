@@ -447,6 +447,13 @@ impl Material {
         &self.ir.name
     }
 
+    /// True when the program reads no input, global or view: every point and view gets
+    /// the same parameters (the program ran once, at compile time), so callers may leave
+    /// [`ShadingPoint`]'s inputs, position and `uv` unset.
+    pub fn is_uniform(&self) -> bool {
+        self.const_regs.is_some()
+    }
+
     /// The options.
     pub fn options(&self) -> PrepareOptions {
         self.options

@@ -100,8 +100,9 @@ impl PreviewOptions {
     }
 }
 
-/// The geometry of one sphere pixel: normal, tangent, globals.
-fn sphere_point(x: f32, y: f32) -> Option<ShadingPoint<'static>> {
+/// The geometry of one sphere pixel: normal, tangent, globals (`uv` only when `with_uv`:
+/// it costs an `atan2` and an `asin`, and a program that reads no global ignores it).
+fn sphere_point(x: f32, y: f32, with_uv: bool) -> Option<ShadingPoint<'static>> {
     let r2 = x * x + y * y;
     if r2 >= 1.0 {
         return None;
@@ -112,10 +113,14 @@ fn sphere_point(x: f32, y: f32) -> Option<ShadingPoint<'static>> {
     } else {
         Vec3::Y.cross(n).normalize()
     };
-    let uv = Vec2::new(
-        0.5 + n.x.atan2(n.z) / TAU,
-        0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
-    );
+    let uv = if with_uv {
+        Vec2::new(
+            0.5 + n.x.atan2(n.z) / TAU,
+            0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
+        )
+    } else {
+        Vec2::ZERO
+    };
     Some(
         ShadingPoint::new(n, t, Vec3::Z)
             .with_position(n)
@@ -197,7 +202,7 @@ fn shade_row_with(
     let l = opts.light_dir.normalize_or(Vec3::Z);
     for (i, px) in out.iter_mut().enumerate() {
         let (x, y) = pixel_xy(i, j, size);
-        let Some(p) = sphere_point(x, y) else {
+        let Some(p) = sphere_point(x, y, !material.is_uniform()) else {
             continue;
         };
         let p = p.with_inputs(&opts.inputs);
@@ -255,11 +260,12 @@ fn shade_row_batched_with(
     }
     let size = out.len();
     let l = opts.light_dir.normalize_or(Vec3::Z);
+    let with_uv = !material.is_uniform();
     // Sphere pixels of this row, in order.
     let xs: Vec<(usize, ShadingPoint)> = (0..size)
         .filter_map(|i| {
             let (x, y) = pixel_xy(i, j, size);
-            sphere_point(x, y).map(|p| (i, p.with_inputs(&opts.inputs)))
+            sphere_point(x, y, with_uv).map(|p| (i, p.with_inputs(&opts.inputs)))
         })
         .collect();
     for chunk in xs.chunks(W) {
