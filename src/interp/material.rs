@@ -986,6 +986,7 @@ fn sat(v: Vec3) -> Vec3 {
 fn clean(v: Vec3) -> Vec3 {
     // A bit mask per channel, no branch. `x − x` is 0 exactly for finite x (NaN for ±∞ and
     // NaN); written as `x < ∞`, LLVM turns the test into integer classification code.
+    #[allow(clippy::eq_op)] // `x − x` is the finiteness test (see above), not a slip
     let c = |x: f32| {
         let keep = (x > 0.0) & (x - x == 0.0);
         f32::from_bits(x.to_bits() & u32::from(keep).wrapping_neg())

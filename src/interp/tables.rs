@@ -408,7 +408,9 @@ pub fn init_all() {
 /// Position on an axis: lower node index and blend weight, for `x` in [0, 1].
 #[inline]
 pub fn axis_coord(x: f32) -> (usize, f32) {
-    // `f32::max` returns the other operand for NaN: NaN maps to 0.
+    // `f32::max` returns the other operand for NaN, so NaN maps to 0 (`clamp` would keep
+    // the NaN).
+    #[allow(clippy::manual_clamp)]
     let t = x.max(0.0).min(1.0) * (N - 1) as f32;
     let i = (t as usize).min(N - 2);
     (i, t - i as f32)
