@@ -236,7 +236,7 @@ impl<const W: usize> PreparedBatch<W> {
         for slot in &mut self.slots[..count] {
             let lanes = &self.lanes;
             let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
-            slot.kernel = Kernel::build(lobe, &slot.live);
+            slot.kernel.rebuild(lobe, &slot.live);
         }
         self.count = count;
     }

@@ -5,7 +5,7 @@
 
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, pdf_cosine, pow5, sample_cosine};
-use super::tables::{self, TableId};
+use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -169,7 +169,8 @@ pub fn eon_e_hat_fast(mu: f32, sigma: f32) -> f32 {
 fn eon_g(mu: f32) -> f32 {
     let mu = mu.clamp(0.0, 1.0);
     let s = (1.0 - mu * mu).max(0.0).sqrt();
-    let theta = mu.acos();
+    // The polynomial `acos` (error < 5e-7, `vmath` tests): no library call per evaluation.
+    let theta = super::vmath::acos(mu);
     s * (theta - s * mu) + (2.0 / 3.0) * s * (mu * (1.0 + s + s * s) / (1.0 + s) - 1.0)
 }
 
@@ -234,8 +235,7 @@ impl OrenNayar {
                     (p.a, p.b, p.keep_negative_s) = (af, sigma * af, true);
                     let e_o = p.e_hat(v.z);
                     let e_avg = eon_e_avg(sigma);
-                    let rho_ms = self.rho * self.rho * e_avg
-                        / (Vec3::ONE - self.rho * (1.0 - e_avg)).max(Vec3::splat(1e-6));
+                    let rho_ms = eon_rho_ms(self.rho, e_avg);
                     p.ms = rho_ms * ((1.0 - e_o) * FRAC_1_PI / (1.0 - e_avg));
                     p.albedo = self.rho * e_o + rho_ms * (1.0 - e_o);
                 }
@@ -243,6 +243,69 @@ impl OrenNayar {
         }
         p
     }
+}
+
+/// The view-independent part of an [`OrenNayar`] lobe's prepare ([`OrenNayar::bind`]):
+/// the prepared lobe at `μ_o = 1` as a template, EON's multiple-scattering colour terms,
+/// and the QON albedo curve.
+#[derive(Debug, Clone, Copy)]
+pub struct OrenNayarBound {
+    template: PreparedOrenNayar,
+    /// EON: `ρ_ms` and `ρ_ms/(π(1 − Ē))` (zero below the σ cut-off and for QON/FON).
+    rho_ms: Rgb,
+    ms_scale: Rgb,
+    qon: Option<MuCurve>,
+}
+
+impl OrenNayar {
+    /// The view-independent part of [`OrenNayar::prepare`].
+    pub fn bind(&self) -> OrenNayarBound {
+        let template = self.prepare(Vec3::Z);
+        let (mut rho_ms, mut ms_scale) = (Vec3::ZERO, Vec3::ZERO);
+        let energy = matches!(
+            self.variant,
+            OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast
+        );
+        if energy && template.sigma >= EON_SIGMA_MIN {
+            let e_avg = eon_e_avg(template.sigma);
+            rho_ms = eon_rho_ms(self.rho, e_avg);
+            ms_scale = rho_ms * (FRAC_1_PI / (1.0 - e_avg));
+        }
+        let qon = (self.variant == OrenNayarVariant::Qualitative)
+            .then(|| MuCurve::new2(TableId::Qon, template.sigma));
+        OrenNayarBound {
+            template,
+            rho_ms,
+            ms_scale,
+            qon,
+        }
+    }
+
+    /// [`OrenNayar::prepare`] with the result of [`OrenNayar::bind`].
+    #[inline]
+    pub fn prepare_bound(&self, v: Vec3, b: &OrenNayarBound) -> PreparedOrenNayar {
+        let mut p = b.template;
+        p.v = v;
+        match self.variant {
+            OrenNayarVariant::Qualitative => {
+                p.albedo = self.rho * b.qon.as_ref().map_or(1.0, |c| c.at(v.z));
+            }
+            OrenNayarVariant::Fujii => p.albedo = self.rho * eon_e_hat(v.z, p.sigma),
+            OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => {
+                if p.sigma >= EON_SIGMA_MIN {
+                    let e_o = p.e_hat(v.z);
+                    p.ms = b.ms_scale * (1.0 - e_o);
+                    p.albedo = self.rho * e_o + b.rho_ms * (1.0 - e_o);
+                }
+            }
+        }
+        p
+    }
+}
+
+/// EON's multiple-scattering colour `ρ_ms = ρ² Ē / (1 − ρ(1 − Ē))`.
+fn eon_rho_ms(rho: Rgb, e_avg: f32) -> Rgb {
+    rho * rho * e_avg / (Vec3::ONE - rho * (1.0 - e_avg)).max(Vec3::splat(1e-6))
 }
 
 impl PreparedOrenNayar {

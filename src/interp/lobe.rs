@@ -14,8 +14,8 @@
 //! two-sided. A view exactly on the horizon (`μ_o = 0`) makes every BSDF lobe inactive.
 
 use super::diffuse::{
-    Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant, PreparedBurley, PreparedLambert,
-    PreparedMiaDiffuse, PreparedOrenNayar,
+    Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarBound, OrenNayarVariant, PreparedBurley,
+    PreparedLambert, PreparedMiaDiffuse, PreparedOrenNayar,
 };
 use super::emission::{Emission, Transparent};
 use super::math::{Rgb, flip};
@@ -23,9 +23,10 @@ use super::microfacet::{
     Compensation, Dielectric, DielectricBound, DielectricMode, MicrofacetBound, MicrofacetR,
     PreparedDielectric, PreparedMicrofacetR,
 };
-use super::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenLTC, SheenMasking};
-use super::tables::MuCurve;
-use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward};
+use super::sheen::{
+    PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenMasking,
+};
+use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward, WardBound};
 use glam::Vec3;
 
 /// Result of [`PreparedLobe::eval`]: cosine-weighted response and sampling density.
@@ -313,8 +314,9 @@ impl Lobe {
         let aux = match self {
             Lobe::MicrofacetR(m) => Aux::Microfacet(m.bind()),
             Lobe::Dielectric(d) => Aux::Dielectric(d.bind()),
-            Lobe::Ward(w) => Aux::Ward(w.albedo_curve()),
-            Lobe::SheenCK(s) => Aux::SheenCK(s.albedo_curve()),
+            Lobe::Ward(w) => Aux::Ward(w.bind()),
+            Lobe::SheenCK(s) => Aux::SheenCK(s.bind()),
+            Lobe::OrenNayar(o) => Aux::OrenNayar(o.bind()),
             _ => Aux::None,
         };
         BoundLobe { lobe: *self, aux }
@@ -322,35 +324,45 @@ impl Lobe {
 
     #[inline]
     fn prepare_aux(&self, v: Vec3, sides: Sides, aux: &Aux) -> PreparedLobe {
-        let kind = self.kind();
+        let mut out = PreparedLobe {
+            kind: LobeKind::Lambert,
+            flipped: false,
+            state: State::Inactive,
+        };
+        self.prepare_aux_into(v, sides, aux, &mut out);
+        out
+    }
+
+    /// [`Lobe::prepare_aux`] writing into `out`: each family's state is built in the
+    /// record, not in a temporary that is then copied (a prepared lobe is ~170 bytes, and
+    /// the copies were a tenth of a material's prepare).
+    #[inline]
+    fn prepare_aux_into(&self, v: Vec3, sides: Sides, aux: &Aux, out: &mut PreparedLobe) {
+        out.kind = self.kind();
+        out.flipped = false;
         if let Lobe::Emission(e) = self {
-            return PreparedLobe {
-                kind,
-                flipped: false,
-                state: State::Emission(e.radiance),
-            };
+            out.state = State::Emission(e.radiance);
+            return;
         }
         if let Lobe::Transparent(t) = self {
-            return PreparedLobe {
-                kind,
-                flipped: false,
-                state: State::Transparent(*t, v),
-            };
+            out.state = State::Transparent(*t, v);
+            return;
         }
         let may_flip = sides == Sides::Both || self.is_two_sided();
         let flipped = v.z < 0.0 && may_flip;
+        out.flipped = flipped;
         let v = if flipped { flip(v) } else { v };
         if v.z <= 0.0 || !v.is_finite() {
-            return PreparedLobe {
-                kind,
-                flipped,
-                state: State::Inactive,
-            };
+            out.state = State::Inactive;
+            return;
         }
-        let state = match self {
+        out.state = match self {
             Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l) => State::Lambert(l.prepare()),
             Lobe::Translucent(l) => State::Translucent(l.prepare()),
-            Lobe::OrenNayar(o) => State::OrenNayar(o.prepare(v)),
+            Lobe::OrenNayar(o) => State::OrenNayar(match aux {
+                Aux::OrenNayar(b) => o.prepare_bound(v, b),
+                _ => o.prepare(v),
+            }),
             Lobe::MiaDiffuse(m) => State::MiaDiffuse(m.prepare(v)),
             Lobe::Burley(b) => State::Burley(b.prepare(v)),
             Lobe::MicrofacetR(m) => State::MicrofacetR(match aux {
@@ -373,11 +385,6 @@ impl Lobe {
             Lobe::SheenLTC(s) => State::SheenLTC(s.prepare(v)),
             Lobe::Emission(_) | Lobe::Transparent(_) => State::Inactive,
         };
-        PreparedLobe {
-            kind,
-            flipped,
-            state,
-        }
     }
 }
 
@@ -400,8 +407,9 @@ enum Aux {
     None,
     Microfacet(MicrofacetBound),
     Dielectric(DielectricBound),
-    Ward(MuCurve),
-    SheenCK(MuCurve),
+    Ward(WardBound),
+    SheenCK(SheenCKBound),
+    OrenNayar(OrenNayarBound),
 }
 
 impl BoundLobe {
@@ -414,6 +422,12 @@ impl BoundLobe {
     #[inline]
     pub fn prepare(&self, v: Vec3, sides: Sides) -> PreparedLobe {
         self.lobe.prepare_aux(v, sides, &self.aux)
+    }
+
+    /// [`BoundLobe::prepare`] into an existing record.
+    #[inline]
+    pub(super) fn prepare_into(&self, v: Vec3, sides: Sides, out: &mut PreparedLobe) {
+        self.lobe.prepare_aux_into(v, sides, &self.aux, out)
     }
 }
 

@@ -267,6 +267,9 @@ pub struct Material {
     rerun_for_mu: bool,
     /// The register file when the program reads no input, global or view (computed once).
     const_regs: Option<Vec<Vec3>>,
+    /// The weight pass with every register read folded in, when the registers are
+    /// constant (`const_regs`) and the DAG has few enough paths.
+    w_plan: Option<WeightPlan>,
     options: PrepareOptions,
 }
 
@@ -414,7 +417,11 @@ impl Material {
                 globals: Globals::default(),
             })
         });
+        let w_plan = const_regs
+            .as_deref()
+            .and_then(|regs| compile_weights(&nodes, &leaves, &thr_slot, regs));
         Ok(Material {
+            w_plan,
             const_regs,
             ir: ir.clone(),
             nodes,
@@ -438,6 +445,13 @@ impl Material {
     /// The material's name.
     pub fn name(&self) -> &str {
         &self.ir.name
+    }
+
+    /// True when the program reads no input, global or view: every point and view gets
+    /// the same parameters (the program ran once, at compile time), so callers may leave
+    /// [`ShadingPoint`]'s inputs, position and `uv` unset.
+    pub fn is_uniform(&self) -> bool {
+        self.const_regs.is_some()
     }
 
     /// The options.
@@ -522,13 +536,24 @@ impl Material {
         if self.nodes.is_empty() {
             return;
         }
+        // V in each frame, once (every leaf of a frame reads it).
+        let mut v_local = [Vec3::Z; MAX_LOBES];
+        for (vl, f) in v_local.iter_mut().zip(&out.frames[..out.frame_count]) {
+            *vl = f.to_local(v);
+        }
+        let regs = self.regs(s);
         // Leaves are prepared in place, at their leaf index, in their frames: those inside
         // some layer top first (step 3 needs their E_k(μ_o)), the others only when their
         // weight turns out non-zero. Step 6 then compacts the array.
         let mut ready = [false; MAX_LOBES];
         for (k, info) in self.leaves.iter().enumerate() {
             if self.need[info.node.index()] != 0 {
-                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), out);
+                self.prepare_leaf(
+                    info,
+                    regs,
+                    v_local[info.frame_slot as usize],
+                    &mut out.lobes[k].lobe,
+                );
                 ready[k] = true;
             }
         }
@@ -538,6 +563,7 @@ impl Material {
         let mut weights = [Vec3::ZERO; MAX_LOBES];
         self.weights(s, &mut weights, out);
         // Step 5: V-only terms and albedos of the weighted lobes; step 6: drop.
+        let regs = self.regs(s);
         let threshold = self.options.drop_threshold;
         let mut count = 0;
         for (k, info) in self.leaves.iter().enumerate() {
@@ -546,7 +572,12 @@ impl Material {
                 continue;
             }
             if !ready[k] {
-                out.lobes[k].lobe = self.prepare_leaf(info, self.regs(s), out);
+                self.prepare_leaf(
+                    info,
+                    regs,
+                    v_local[info.frame_slot as usize],
+                    &mut out.lobes[k].lobe,
+                );
             }
             let albedo = Albedo::scaled(&out.lobes[k].lobe.albedo(), w);
             let a_max = albedo.reflect + albedo.transmit.max(albedo.transmit_radiance);
@@ -621,12 +652,11 @@ impl Material {
         out.frame_count = self.frames.len();
     }
 
-    fn prepare_leaf(&self, info: &LeafInfo, regs: &[Vec3], out: &Prepared) -> PreparedLobe {
-        let frame = &out.frames[info.frame_slot as usize];
-        let v = frame.to_local(out.v);
+    /// Prepares leaf `info` at local view `v` into `out`.
+    fn prepare_leaf(&self, info: &LeafInfo, regs: &[Vec3], v: Vec3, out: &mut PreparedLobe) {
         match &info.const_lobe {
-            Some(lobe) => lobe.prepare(v, self.options.sides),
-            None => leaf_lobe(&info.leaf.kind, regs).prepare(v, self.options.sides),
+            Some(lobe) => lobe.prepare_into(v, self.options.sides, out),
+            None => *out = leaf_lobe(&info.leaf.kind, regs).prepare(v, self.options.sides),
         }
     }
 
@@ -668,6 +698,9 @@ impl Material {
     }
 
     fn weights(&self, s: &mut Scratch, weights: &mut [Vec3; MAX_LOBES], out: &mut Prepared) {
+        if let Some(plan) = &self.w_plan {
+            return self.weights_planned(plan, s, weights, out);
+        }
         let n = self.nodes.len();
         s.w.clear();
         s.w.resize(n, Vec3::ZERO);
@@ -705,6 +738,156 @@ impl Material {
             }
         }
     }
+}
+
+impl Material {
+    /// [`Material::weights`] for constant registers, from the compiled terms of
+    /// [`compile_weights`]: each target's weight is its terms' sum, cleaned once, as the
+    /// general pass does with the sum over a node's parents.
+    fn weights_planned(
+        &self,
+        plan: &WeightPlan,
+        s: &mut Scratch,
+        weights: &mut [Vec3; MAX_LOBES],
+        out: &mut Prepared,
+    ) {
+        s.w.clear();
+        s.w.resize(plan.targets.len(), Vec3::ZERO);
+        let acc = &mut s.w[..];
+        let thr = &s.thr[..];
+        for t in &plan.terms {
+            let mut w = t.c;
+            for &j in &plan.slots[t.from as usize..t.to as usize] {
+                w *= thr[j as usize];
+            }
+            acc[t.target as usize] += w;
+        }
+        for (target, &a) in plan.targets.iter().zip(acc.iter()) {
+            match *target {
+                Target::Leaf { leaf, tint } => weights[leaf as usize] = clean(tint * a),
+                Target::Emission(e) => out.emission += clean(a * e),
+                Target::Transparent(t) => out.transparency += clean(a * t),
+            }
+        }
+    }
+}
+
+/// The weight pass of a material with constant registers (§1.4 step 4), compiled: every
+/// root-to-target path of the closure DAG is one term `c ⊙ Π thr[j]`, where `c` is the
+/// product of the path's constant `mix` and `mul` factors and the `thr[j]` are the
+/// throughputs of the layer tops the path passes under (the only view-dependent part).
+#[derive(Debug, Clone)]
+struct WeightPlan {
+    terms: Vec<WTerm>,
+    /// The throughput slots of every term, concatenated.
+    slots: Vec<u16>,
+    /// Leaves, emission and transparency nodes, each with its own accumulator.
+    targets: Vec<Target>,
+}
+
+/// One path of a [`WeightPlan`].
+#[derive(Debug, Clone, Copy)]
+struct WTerm {
+    c: Vec3,
+    /// `slots[from..to]` are the throughput slots multiplied in.
+    from: u32,
+    to: u32,
+    /// Index into [`WeightPlan::targets`].
+    target: u32,
+}
+
+/// What a [`WeightPlan`] term's weight goes to.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    /// `weights[leaf] = clean(tint ⊙ Σ)`.
+    Leaf { leaf: u8, tint: Vec3 },
+    /// `emission += clean(Σ ⊙ radiance)`.
+    Emission(Vec3),
+    /// `transparency += clean(Σ ⊙ tint)`.
+    Transparent(Vec3),
+}
+
+/// Above this many paths a material keeps the general weight pass (a DAG that shares
+/// nodes can have exponentially many).
+const MAX_WEIGHT_TERMS: usize = 256;
+
+/// Compile the weight pass for constant registers `regs` ([`WeightPlan`]); `None` when the
+/// DAG has more than [`MAX_WEIGHT_TERMS`] paths. Paths through a zero `mix` or `mul`
+/// factor are left out (they carry no weight).
+fn compile_weights(
+    nodes: &[CNode],
+    leaves: &[LeafInfo],
+    thr_slot: &[[u16; 4]],
+    regs: &[Vec3],
+) -> Option<WeightPlan> {
+    let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
+    let mut plan = WeightPlan {
+        terms: Vec::new(),
+        slots: Vec::new(),
+        targets: Vec::new(),
+    };
+    if nodes.is_empty() {
+        return Some(plan);
+    }
+    // Target index per node (leaves, emission, transparency), in node order.
+    let mut target_of = vec![u32::MAX; nodes.len()];
+    for (i, node) in nodes.iter().enumerate() {
+        let t = match *node {
+            CNode::Leaf(k) => Target::Leaf {
+                leaf: k,
+                tint: reg(leaves[k as usize].leaf.tint),
+            },
+            CNode::Emission(r) => Target::Emission(reg(r)),
+            CNode::Transparent(r) => Target::Transparent(reg(r)),
+            _ => continue,
+        };
+        target_of[i] = plan.targets.len() as u32;
+        plan.targets.push(t);
+    }
+    // Depth-first over paths with an explicit stack: (node, factor, slots so far).
+    let mut stack: Vec<(u32, Vec3, Vec<u16>)> = vec![(0, Vec3::ONE, Vec::new())];
+    while let Some((i, c, path)) = stack.pop() {
+        let mut push = |to: u32, f: Vec3, path: Vec<u16>| {
+            if f != Vec3::ZERO {
+                stack.push((to, c * f, path));
+            }
+        };
+        match nodes[i as usize] {
+            CNode::Leaf(_) | CNode::Emission(_) | CNode::Transparent(_) => {
+                if plan.terms.len() >= MAX_WEIGHT_TERMS {
+                    return None;
+                }
+                let from = plan.slots.len() as u32;
+                plan.slots.extend_from_slice(&path);
+                plan.terms.push(WTerm {
+                    c,
+                    from,
+                    to: plan.slots.len() as u32,
+                    target: target_of[i as usize],
+                });
+            }
+            CNode::Layer { top, base, mode } => {
+                let mut below = path.clone();
+                below.push(thr_slot[top as usize][mode as usize]);
+                push(top, Vec3::ONE, path);
+                push(base, Vec3::ONE, below);
+            }
+            CNode::Mix { a, b, m } => {
+                let m = sat(reg(m));
+                push(a, Vec3::ONE - m, path.clone());
+                push(b, m, path);
+            }
+            CNode::Add { a, b } => {
+                push(a, Vec3::ONE, path.clone());
+                push(b, Vec3::ONE, path);
+            }
+            CNode::Multiply { f, c: r } => push(f, reg(r).max(Vec3::ZERO), path),
+        }
+        if stack.len() > MAX_WEIGHT_TERMS * 4 {
+            return None;
+        }
+    }
+    Some(plan)
 }
 
 impl MaterialIr {
@@ -799,14 +982,14 @@ fn sat(v: Vec3) -> Vec3 {
 }
 
 /// Non-negative and finite (NaN and infinities become 0).
+#[inline]
 fn clean(v: Vec3) -> Vec3 {
-    // `&`, not `&&`: no branch per channel.
+    // A bit mask per channel, no branch. `x − x` is 0 exactly for finite x (NaN for ±∞ and
+    // NaN); written as `x < ∞`, LLVM turns the test into integer classification code.
+    #[allow(clippy::eq_op)] // `x − x` is the finiteness test (see above), not a slip
     let c = |x: f32| {
-        if (x > 0.0) & (x < f32::INFINITY) {
-            x
-        } else {
-            0.0
-        }
+        let keep = (x > 0.0) & (x - x == 0.0);
+        f32::from_bits(x.to_bits() & u32::from(keep).wrapping_neg())
     };
     Vec3::new(c(v.x), c(v.y), c(v.z))
 }
@@ -1012,22 +1195,32 @@ impl Prepared {
     /// `lum(τ)`); else proportional to `lum(w_k)`; else absorbing (all 0).
     fn select(&mut self) {
         let n = self.count;
-        let a_lum = |l: &ActiveLobe| lum(l.albedo.reflect + l.albedo.transmit_radiance).max(0.0);
+        // One pass over the (large) lobe records for the albedo luminances.
+        let mut a = [0.0f32; MAX_LOBES];
+        let mut sum = 0.0f32;
+        for (x, l) in a.iter_mut().zip(&self.lobes[..n]) {
+            *x = lum(l.albedo.reflect + l.albedo.transmit_radiance).max(0.0);
+            sum += *x;
+        }
         let tau = lum(self.transparency).max(0.0);
-        let mut sum: f32 = self.lobes[..n].iter().map(a_lum).sum::<f32>() + tau;
+        sum += tau;
         let by_weight = sum.is_nan() || sum <= 0.0;
         if by_weight {
-            sum = self.lobes[..n].iter().map(|l| lum(l.weight).max(0.0)).sum();
+            sum = 0.0;
+            for (x, l) in a.iter_mut().zip(&self.lobes[..n]) {
+                *x = lum(l.weight).max(0.0);
+                sum += *x;
+            }
         }
         if !(sum > 0.0 && sum.is_finite()) {
+            // Absorbing: every probability 0 (the records may hold an earlier prepare's).
+            for l in &mut self.lobes[..n] {
+                l.prob = 0.0;
+            }
             return;
         }
-        for l in &mut self.lobes[..n] {
-            l.prob = if by_weight {
-                lum(l.weight).max(0.0)
-            } else {
-                a_lum(l)
-            } / sum;
+        for (l, x) in self.lobes[..n].iter_mut().zip(a) {
+            l.prob = x / sum;
         }
         self.p_transparency = if by_weight { 0.0 } else { tau / sum };
     }

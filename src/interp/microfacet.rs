@@ -163,7 +163,8 @@ pub struct PreparedMicrofacetR {
 #[derive(Debug, Clone, Copy)]
 pub struct MicrofacetBound {
     albedo_fresnel: Fresnel,
-    /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables).
+    /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables), and
+    /// in the one-off bound of [`MicrofacetR::prepare`] (direct lookups).
     curves: Option<ReflectionCurves>,
 }
 
@@ -213,7 +214,13 @@ impl MicrofacetR {
 
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedMicrofacetR {
-        self.prepare_bound(v, &self.bind())
+        // Direct table lookups: baking the curves ([`MicrofacetR::bind`]) pays only when
+        // reused.
+        let bound = MicrofacetBound {
+            albedo_fresnel: self.albedo_fresnel(),
+            curves: None,
+        };
+        self.prepare_bound(v, &bound)
     }
 
     /// The view-independent part of [`MicrofacetR::prepare`], for
@@ -575,7 +582,8 @@ impl Dielectric {
             match &bound.curves {
                 Some(c) => {
                     let c = &c[usize::from(flipped)];
-                    [0, 1, 2].map(|i| if want[i] { c[i].at(v.z) } else { 0.0 })
+                    let at = |i: usize| if want[i] { c[i].at(v.z) } else { 0.0 };
+                    [at(0), at(1), at(2)]
                 }
                 None => dielectric_albedos_masked(self.masking, v.z, alpha, eta, want),
             }

@@ -100,8 +100,9 @@ impl PreviewOptions {
     }
 }
 
-/// The geometry of one sphere pixel: normal, tangent, globals.
-fn sphere_point(x: f32, y: f32) -> Option<ShadingPoint<'static>> {
+/// The geometry of one sphere pixel: normal, tangent, globals (`uv` only when `with_uv`:
+/// it costs an `atan2` and an `asin`, and a program that reads no global ignores it).
+fn sphere_point(x: f32, y: f32, with_uv: bool) -> Option<ShadingPoint<'static>> {
     let r2 = x * x + y * y;
     if r2 >= 1.0 {
         return None;
@@ -112,10 +113,14 @@ fn sphere_point(x: f32, y: f32) -> Option<ShadingPoint<'static>> {
     } else {
         Vec3::Y.cross(n).normalize()
     };
-    let uv = Vec2::new(
-        0.5 + n.x.atan2(n.z) / TAU,
-        0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
-    );
+    let uv = if with_uv {
+        Vec2::new(
+            0.5 + n.x.atan2(n.z) / TAU,
+            0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
+        )
+    } else {
+        Vec2::ZERO
+    };
     Some(
         ShadingPoint::new(n, t, Vec3::Z)
             .with_position(n)
@@ -142,35 +147,66 @@ pub fn render_ball(
     let size = opts.size.max(1);
     let mut img = Image::filled(size, size, opts.env);
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let row = |(j, out): (usize, &mut [Rgb])| {
-        if opts.batched {
-            shade_row_batched(material, opts, j, out);
-        } else {
-            shade_row(material, opts, j, out);
+    // Working memory per worker, not per row: a 16-lane batch is ~120 KB, and building one
+    // per row cost a quarter of a batched preview.
+    let init = || RowState {
+        scratch: Scratch::default(),
+        prep: Prepared::new(),
+        batch: opts.batched.then(PreparedBatch::<PREVIEW_LANES>::new_boxed),
+    };
+    let row = |st: &mut RowState, (j, out): (usize, &mut [Rgb])| {
+        match &mut st.batch {
+            Some(batch) => shade_row_batched_with(material, opts, j, out, &mut st.scratch, batch),
+            None => shade_row_with(material, opts, j, out, &mut st.scratch, &mut st.prep),
         }
         progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
     };
     if opts.parallel {
-        img.pixels.par_chunks_mut(size).enumerate().for_each(row);
+        img.pixels
+            .par_chunks_mut(size)
+            .enumerate()
+            .for_each_init(init, row);
     } else {
-        img.pixels.chunks_mut(size).enumerate().for_each(row);
+        let mut st = init();
+        img.pixels
+            .chunks_mut(size)
+            .enumerate()
+            .for_each(|r| row(&mut st, r));
     }
     img
 }
 
+/// Per-worker working memory of [`render_ball`].
+struct RowState {
+    scratch: Scratch,
+    prep: Prepared,
+    batch: Option<Box<PreparedBatch<PREVIEW_LANES>>>,
+}
+
 /// Shade row `j` with the scalar interpreter.
 pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+    let (mut scratch, mut prep) = (Scratch::default(), Prepared::new());
+    shade_row_with(material, opts, j, out, &mut scratch, &mut prep);
+}
+
+/// [`shade_row`] with caller-owned working memory.
+fn shade_row_with(
+    material: &Material,
+    opts: &PreviewOptions,
+    j: usize,
+    out: &mut [Rgb],
+    scratch: &mut Scratch,
+    prep: &mut Prepared,
+) {
     let size = out.len();
     let l = opts.light_dir.normalize_or(Vec3::Z);
-    let mut scratch = Scratch::default();
-    let mut prep = Prepared::new();
     for (i, px) in out.iter_mut().enumerate() {
         let (x, y) = pixel_xy(i, j, size);
-        let Some(p) = sphere_point(x, y) else {
+        let Some(p) = sphere_point(x, y, !material.is_uniform()) else {
             continue;
         };
         let p = p.with_inputs(&opts.inputs);
-        material.prepare_into(&p, &mut scratch, &mut prep);
+        material.prepare_into(&p, scratch, prep);
         let direct = if opts.light == Vec3::ZERO {
             Vec3::ZERO
         } else {
@@ -204,19 +240,32 @@ pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut
 
 /// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
 pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+    let mut scratch = Scratch::default();
+    let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
+    shade_row_batched_with(material, opts, j, out, &mut scratch, &mut batch);
+}
+
+/// [`shade_row_batched`] with caller-owned working memory.
+fn shade_row_batched_with(
+    material: &Material,
+    opts: &PreviewOptions,
+    j: usize,
+    out: &mut [Rgb],
+    scratch: &mut Scratch,
+    batch: &mut PreparedBatch<PREVIEW_LANES>,
+) {
     const W: usize = PREVIEW_LANES;
     if opts.aov_leaf.is_some() {
         return shade_row(material, opts, j, out);
     }
     let size = out.len();
     let l = opts.light_dir.normalize_or(Vec3::Z);
-    let mut scratch = Scratch::default();
-    let mut batch = PreparedBatch::<W>::new_boxed();
+    let with_uv = !material.is_uniform();
     // Sphere pixels of this row, in order.
     let xs: Vec<(usize, ShadingPoint)> = (0..size)
         .filter_map(|i| {
             let (x, y) = pixel_xy(i, j, size);
-            sphere_point(x, y).map(|p| (i, p.with_inputs(&opts.inputs)))
+            sphere_point(x, y, with_uv).map(|p| (i, p.with_inputs(&opts.inputs)))
         })
         .collect();
     for chunk in xs.chunks(W) {
@@ -229,7 +278,7 @@ pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, o
             p: std::array::from_fn(|k| lane(k).p),
             uv: std::array::from_fn(|k| lane(k).uv),
         };
-        material.prepare_batch_into(&pts, &mut scratch, &mut batch);
+        material.prepare_batch_into(&pts, scratch, batch);
         let direct = if opts.light == Vec3::ZERO {
             None
         } else {

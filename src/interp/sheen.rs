@@ -49,6 +49,16 @@ fn ck_ln_lambda(c: &[f32; 5], mu: f32) -> f32 {
     }
 }
 
+/// The view-independent part of a [`SheenCK`] lobe's prepare ([`SheenCK::bind`]): its
+/// albedo curve and the terms of its clamped roughness.
+#[derive(Debug, Clone, Copy)]
+pub struct SheenCKBound {
+    curve: MuCurve,
+    half_inv_r: f32,
+    norm: f32,
+    coef: [f32; 5],
+}
+
 /// Prepared [`SheenCK`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedSheenCK {
@@ -65,7 +75,17 @@ pub struct PreparedSheenCK {
 impl SheenCK {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
-        self.prepare_bound(v, &self.albedo_curve())
+        // One lookup: baking the whole curve ([`SheenCK::albedo_curve`]) pays only when
+        // reused.
+        let e = tables::lookup2(self.table(), v.z, tables::sheen_axis(self.clamped_r()));
+        self.prepare_with_albedo(v, e)
+    }
+
+    fn table(&self) -> TableId {
+        match self.masking {
+            SheenMasking::MaterialX => TableId::SheenMx,
+            SheenMasking::Original => TableId::SheenOrig,
+        }
     }
 
     /// The roughness clamped to its range (NaN → 1).
@@ -79,15 +99,41 @@ impl SheenCK {
 
     /// The albedo table at this lobe's roughness, for [`SheenCK::prepare_bound`].
     pub fn albedo_curve(&self) -> MuCurve {
-        let table = match self.masking {
-            SheenMasking::MaterialX => TableId::SheenMx,
-            SheenMasking::Original => TableId::SheenOrig,
-        };
-        MuCurve::new2(table, tables::sheen_axis(self.clamped_r()))
+        MuCurve::new2(self.table(), tables::sheen_axis(self.clamped_r()))
     }
 
-    /// [`SheenCK::prepare`] with the albedo curve computed once ([`SheenCK::albedo_curve`]).
-    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedSheenCK {
+    /// The view-independent part of [`SheenCK::prepare`] ([`SheenCKBound`]).
+    pub fn bind(&self) -> SheenCKBound {
+        let p = self.prepare_with_albedo(Vec3::Z, 0.0);
+        SheenCKBound {
+            curve: self.albedo_curve(),
+            half_inv_r: p.half_inv_r,
+            norm: p.norm,
+            coef: p.coef,
+        }
+    }
+
+    /// [`SheenCK::prepare`] with the result of [`SheenCK::bind`].
+    #[inline]
+    pub fn prepare_bound(&self, v: Vec3, b: &SheenCKBound) -> PreparedSheenCK {
+        PreparedSheenCK {
+            v,
+            half_inv_r: b.half_inv_r,
+            norm: b.norm,
+            masking: self.masking,
+            coef: b.coef,
+            lambda_o: match self.masking {
+                SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
+                SheenMasking::MaterialX => 0.0,
+            },
+            inv_4mu: 0.25 / v.z.max(1e-7),
+            albedo: b.curve.at(v.z),
+        }
+    }
+
+    /// The prepared lobe given its table albedo `e` at `μ_o`.
+    #[inline]
+    fn prepare_with_albedo(&self, v: Vec3, e: f32) -> PreparedSheenCK {
         let r = self.clamped_r();
         let coef = ck_coefficients(r);
         PreparedSheenCK {
@@ -102,7 +148,7 @@ impl SheenCK {
                 SheenMasking::MaterialX => 0.0,
             },
             inv_4mu: 0.25 / v.z.max(1e-7),
-            albedo: albedo.at(v.z),
+            albedo: e,
         }
     }
 }
@@ -171,7 +217,7 @@ pub fn sheen_ltc_albedo(x: f32, y: f32) -> f32 {
     let m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y);
     let o = y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y));
     let q = (x - m) / s;
-    ((-0.5 * q * q).exp() / (s * (2.0 * PI).sqrt()) + o).max(0.0)
+    (super::vmath::exp(-0.5 * q * q) / (s * (2.0 * PI).sqrt()) + o).max(0.0)
 }
 
 /// The LTC coefficients `(a, b)` at `(μ_o, r)`.

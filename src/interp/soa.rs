@@ -263,166 +263,197 @@ use super::lobe::{PreparedLobe, State};
 use super::vmath;
 
 impl<const W: usize> Kernel<W> {
-    /// The kernel for one slot's lanes (`lobes(k)`: lane `k`'s lobe; `live[k]`: it is live
-    /// there), or
-    /// [`Kernel::Scalar`] when the lanes mix families or configurations no kernel covers.
-    pub(super) fn build<'a>(
+    /// Makes this the kernel for one slot's lanes (`lobes(k)`: lane `k`'s lobe; `live[k]`:
+    /// it is live there), or [`Kernel::Scalar`] when the lanes mix families or
+    /// configurations no kernel covers. When the kernel already has the family's variant (a
+    /// batch re-prepared for the same material), every lane is overwritten in place: a
+    /// kernel is up to ~1 KB, and zeroing a fresh one and copying it into the slot cost more
+    /// than filling it.
+    pub(super) fn rebuild<'a>(
+        &mut self,
         lobes: impl Fn(usize) -> &'a PreparedLobe,
         live: &[bool; W],
-    ) -> Kernel<W> {
+    ) {
         let Some(first) = (0..W).find(|&k| live[k]) else {
-            return Kernel::Scalar;
+            *self = Kernel::Scalar;
+            return;
         };
         // Dead lanes borrow the first live lane's parameters.
         let lane = |k: usize| if live[k] { lobes(k) } else { lobes(first) };
         let same = |f: &dyn Fn(&State) -> bool| (0..W).all(|k| f(&lane(k).state));
+        // Every arm checks with `same` that all lanes hold its family, so filling lane by
+        // lane overwrites everything the previous contents held.
         match &lobes(first).state {
             State::Lambert(_) if same(&|s| matches!(s, State::Lambert(_))) => {
-                let mut rho_pi = Vec3x::zero();
-                for k in 0..W {
-                    if let State::Lambert(p) = &lane(k).state {
-                        rho_pi.set(k, p.rho_pi);
+                if !matches!(self, Kernel::Lambert { .. }) {
+                    *self = Kernel::Lambert {
+                        rho_pi: Vec3x::zero(),
+                    };
+                }
+                if let Kernel::Lambert { rho_pi } = self {
+                    for k in 0..W {
+                        if let State::Lambert(p) = &lane(k).state {
+                            rho_pi.set(k, p.rho_pi);
+                        }
                     }
                 }
-                Kernel::Lambert { rho_pi }
             }
             State::OrenNayar(p0)
                 if same(&|s| matches!(s, State::OrenNayar(p) if p.fast == p0.fast)) =>
             {
-                let mut x = OrenNayarX {
-                    v: Vec3x::zero(),
-                    rho_pi: Vec3x::zero(),
-                    a: [0.0; W],
-                    b: [0.0; W],
-                    keep_negative_s: [0.0; W],
-                    ms: Vec3x::zero(),
-                    af: [0.0; W],
-                    c: [0.0; W],
-                    fast: p0.fast,
-                    sigma: [0.0; W],
-                };
-                for k in 0..W {
-                    if let State::OrenNayar(p) = &lane(k).state {
-                        x.v.set(k, p.v);
-                        x.rho_pi.set(k, p.rho_pi);
-                        x.a[k] = p.a;
-                        x.b[k] = p.b;
-                        x.keep_negative_s[k] = flag(p.keep_negative_s);
-                        x.ms.set(k, p.ms);
-                        let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
-                        x.af[k] = af;
-                        x.c[k] = p.sigma * af * FRAC_1_PI;
-                        x.sigma[k] = p.sigma;
+                if !matches!(self, Kernel::OrenNayar(_)) {
+                    *self = Kernel::OrenNayar(OrenNayarX {
+                        v: Vec3x::zero(),
+                        rho_pi: Vec3x::zero(),
+                        a: [0.0; W],
+                        b: [0.0; W],
+                        keep_negative_s: [0.0; W],
+                        ms: Vec3x::zero(),
+                        af: [0.0; W],
+                        c: [0.0; W],
+                        fast: false,
+                        sigma: [0.0; W],
+                    });
+                }
+                if let Kernel::OrenNayar(x) = self {
+                    x.fast = p0.fast;
+                    for k in 0..W {
+                        if let State::OrenNayar(p) = &lane(k).state {
+                            x.v.set(k, p.v);
+                            x.rho_pi.set(k, p.rho_pi);
+                            x.a[k] = p.a;
+                            x.b[k] = p.b;
+                            x.keep_negative_s[k] = flag(p.keep_negative_s);
+                            x.ms.set(k, p.ms);
+                            let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
+                            x.af[k] = af;
+                            x.c[k] = p.sigma * af * FRAC_1_PI;
+                            x.sigma[k] = p.sigma;
+                        }
                     }
                 }
-                Kernel::OrenNayar(x)
             }
             State::MicrofacetR(_)
                 if same(&|s| matches!(s, State::MicrofacetR(p) if conductor_ok(p))) =>
             {
-                let mut x = ConductorX {
-                    g: GgxX::zero(),
-                    inv_4mu: [0.0; W],
-                    eta: Vec3x::zero(),
-                    kappa: Vec3x::zero(),
-                    scale: Vec3x::zero(),
-                };
-                for k in 0..W {
-                    if let State::MicrofacetR(p) = &lane(k).state {
-                        x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.g1_v, p.masking);
-                        x.inv_4mu[k] = p.inv_4mu;
-                        if let Fresnel::Conductor { eta, kappa } = p.fresnel {
-                            x.eta.set(k, eta);
-                            x.kappa.set(k, kappa);
+                if !matches!(self, Kernel::Conductor(_)) {
+                    *self = Kernel::Conductor(ConductorX {
+                        g: GgxX::zero(),
+                        inv_4mu: [0.0; W],
+                        eta: Vec3x::zero(),
+                        kappa: Vec3x::zero(),
+                        scale: Vec3x::zero(),
+                    });
+                }
+                if let Kernel::Conductor(x) = self {
+                    for k in 0..W {
+                        if let State::MicrofacetR(p) = &lane(k).state {
+                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.g1_v, p.masking);
+                            x.inv_4mu[k] = p.inv_4mu;
+                            if let Fresnel::Conductor { eta, kappa } = p.fresnel {
+                                x.eta.set(k, eta);
+                                x.kappa.set(k, kappa);
+                            }
+                            x.scale.set(k, p.scale);
                         }
-                        x.scale.set(k, p.scale);
                     }
                 }
-                Kernel::Conductor(x)
             }
             State::Dielectric(_)
                 if same(
                     &|s| matches!(s, State::Dielectric(p) if p.refl && !p.trans && !p.delta),
                 ) =>
             {
-                let mut x = DielectricX {
-                    g: GgxX::zero(),
-                    eta: [0.0; W],
-                    inv_mu: [0.0; W],
-                    tint_r: Vec3x::zero(),
-                };
-                for k in 0..W {
-                    if let State::Dielectric(p) = &lane(k).state {
-                        x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.g1_v, p.masking);
-                        x.eta[k] = p.eta;
-                        x.inv_mu[k] = p.inv_mu;
-                        x.tint_r.set(k, p.tint_r);
+                if !matches!(self, Kernel::DielectricR(_)) {
+                    *self = Kernel::DielectricR(DielectricX {
+                        g: GgxX::zero(),
+                        eta: [0.0; W],
+                        inv_mu: [0.0; W],
+                        tint_r: Vec3x::zero(),
+                    });
+                }
+                if let Kernel::DielectricR(x) = self {
+                    for k in 0..W {
+                        if let State::Dielectric(p) = &lane(k).state {
+                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.g1_v, p.masking);
+                            x.eta[k] = p.eta;
+                            x.inv_mu[k] = p.inv_mu;
+                            x.tint_r.set(k, p.tint_r);
+                        }
                     }
                 }
-                Kernel::DielectricR(x)
             }
             State::Ward(_) if same(&|s| matches!(s, State::Ward(_))) => {
-                let mut x = WardX {
-                    v: Vec3x::zero(),
-                    inv_ax2: [0.0; W],
-                    inv_ay2: [0.0; W],
-                    norm: [0.0; W],
-                    pdf_norm: [0.0; W],
-                    gm: [0.0; W],
-                    rho: Vec3x::zero(),
-                };
-                for k in 0..W {
-                    if let State::Ward(p) = &lane(k).state {
-                        x.v.set(k, p.v);
-                        x.inv_ax2[k] = p.core.inv_ax2;
-                        x.inv_ay2[k] = p.core.inv_ay2;
-                        x.norm[k] = p.core.norm;
-                        x.pdf_norm[k] = p.core.pdf_norm;
-                        x.gm[k] = flag(p.variant == WardVariant::Gm);
-                        x.rho.set(k, p.rho);
+                if !matches!(self, Kernel::Ward(_)) {
+                    *self = Kernel::Ward(WardX {
+                        v: Vec3x::zero(),
+                        inv_ax2: [0.0; W],
+                        inv_ay2: [0.0; W],
+                        norm: [0.0; W],
+                        pdf_norm: [0.0; W],
+                        gm: [0.0; W],
+                        rho: Vec3x::zero(),
+                    });
+                }
+                if let Kernel::Ward(x) = self {
+                    for k in 0..W {
+                        if let State::Ward(p) = &lane(k).state {
+                            x.v.set(k, p.v);
+                            x.inv_ax2[k] = p.core.inv_ax2;
+                            x.inv_ay2[k] = p.core.inv_ay2;
+                            x.norm[k] = p.core.norm;
+                            x.pdf_norm[k] = p.core.pdf_norm;
+                            x.gm[k] = flag(p.variant == WardVariant::Gm);
+                            x.rho.set(k, p.rho);
+                        }
                     }
                 }
-                Kernel::Ward(x)
             }
             State::SheenCK(_)
                 if same(
                     &|s| matches!(s, State::SheenCK(p) if p.masking == SheenMasking::MaterialX),
                 ) =>
             {
-                let mut x = SheenCKX {
-                    v: Vec3x::zero(),
-                    half_inv_r: [0.0; W],
-                    norm: [0.0; W],
-                };
-                for k in 0..W {
-                    if let State::SheenCK(p) = &lane(k).state {
-                        x.v.set(k, p.v);
-                        x.half_inv_r[k] = p.half_inv_r;
-                        x.norm[k] = p.norm;
+                if !matches!(self, Kernel::SheenCK(_)) {
+                    *self = Kernel::SheenCK(SheenCKX {
+                        v: Vec3x::zero(),
+                        half_inv_r: [0.0; W],
+                        norm: [0.0; W],
+                    });
+                }
+                if let Kernel::SheenCK(x) = self {
+                    for k in 0..W {
+                        if let State::SheenCK(p) = &lane(k).state {
+                            x.v.set(k, p.v);
+                            x.half_inv_r[k] = p.half_inv_r;
+                            x.norm[k] = p.norm;
+                        }
                     }
                 }
-                Kernel::SheenCK(x)
             }
             State::SheenLTC(_) if same(&|s| matches!(s, State::SheenLTC(_))) => {
-                let mut x = SheenLTCX {
-                    ax_x: Vec3x::zero(),
-                    ax_y: Vec3x::zero(),
-                    a: [0.0; W],
-                    b: [0.0; W],
-                    e_hat: [0.0; W],
-                };
-                for k in 0..W {
-                    if let State::SheenLTC(p) = &lane(k).state {
-                        x.ax_x.set(k, p.ax_x);
-                        x.ax_y.set(k, p.ax_y);
-                        x.a[k] = p.a;
-                        x.b[k] = p.b;
-                        x.e_hat[k] = p.e_hat;
+                if !matches!(self, Kernel::SheenLTC(_)) {
+                    *self = Kernel::SheenLTC(SheenLTCX {
+                        ax_x: Vec3x::zero(),
+                        ax_y: Vec3x::zero(),
+                        a: [0.0; W],
+                        b: [0.0; W],
+                        e_hat: [0.0; W],
+                    });
+                }
+                if let Kernel::SheenLTC(x) = self {
+                    for k in 0..W {
+                        if let State::SheenLTC(p) = &lane(k).state {
+                            x.ax_x.set(k, p.ax_x);
+                            x.ax_y.set(k, p.ax_y);
+                            x.a[k] = p.a;
+                            x.b[k] = p.b;
+                            x.e_hat[k] = p.e_hat;
+                        }
                     }
                 }
-                Kernel::SheenLTC(x)
             }
-            _ => Kernel::Scalar,
+            _ => *self = Kernel::Scalar,
         }
     }
 

@@ -408,7 +408,10 @@ pub fn init_all() {
 /// Position on an axis: lower node index and blend weight, for `x` in [0, 1].
 #[inline]
 pub fn axis_coord(x: f32) -> (usize, f32) {
-    let t = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) } * (N - 1) as f32;
+    // `f32::max` returns the other operand for NaN, so NaN maps to 0 (`clamp` would keep
+    // the NaN).
+    #[allow(clippy::manual_clamp)]
+    let t = x.max(0.0).min(1.0) * (N - 1) as f32;
     let i = (t as usize).min(N - 2);
     (i, t - i as f32)
 }
@@ -454,16 +457,15 @@ pub fn lookup1(id: TableId, x: f32) -> f32 {
     d[i] + (d[i + 1] - d[i]) * w
 }
 
-/// A table lookup with every axis but `μ` fixed (a constant leaf's roughness, index or
-/// exponent): [`MuCurve::at`] returns exactly what [`lookup2`] / [`lookup3`] return at the
-/// same coordinates, without redoing the fixed axes' index arithmetic per call. Compiled
-/// materials build these once per constant leaf ([`super::BoundLobe`]).
-#[derive(Debug, Clone, Copy)]
+/// A table with every axis but `μ` fixed (a constant leaf's roughness, index or exponent),
+/// baked into its `N` nodes along `μ`: [`MuCurve::at`] is one linear interpolation, equal to
+/// what [`lookup2`] / [`lookup3`] return at the same coordinates up to rounding (the
+/// interpolation is separable; only the order of the blends differs). Building one costs
+/// `N` blends, so compiled materials build them once per constant leaf
+/// ([`super::BoundLobe`]); per-point prepares of non-constant leaves use the lookups.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MuCurve {
-    lo: Row,
-    hi: Row,
-    wz: f32,
-    three: bool,
+    nodes: [f32; N],
 }
 
 impl MuCurve {
@@ -471,10 +473,7 @@ impl MuCurve {
     pub fn new2(id: TableId, y: f32) -> MuCurve {
         let r = Row::new(id, y);
         MuCurve {
-            lo: r,
-            hi: r,
-            wz: 0.0,
-            three: false,
+            nodes: std::array::from_fn(|i| r.node(i)),
         }
     }
 
@@ -482,23 +481,23 @@ impl MuCurve {
     pub fn new3(id: TableId, y: f32, z: f32) -> MuCurve {
         let d = &lut(id).data;
         let (k, wz) = axis_coord(z);
+        let lo = Row::from_slice(&d[k * N * N..(k + 1) * N * N], y);
+        let hi = Row::from_slice(&d[(k + 1) * N * N..(k + 2) * N * N], y);
         MuCurve {
-            lo: Row::from_slice(&d[k * N * N..(k + 1) * N * N], y),
-            hi: Row::from_slice(&d[(k + 1) * N * N..(k + 2) * N * N], y),
-            wz,
-            three: true,
+            nodes: std::array::from_fn(|i| {
+                let (a, b) = (lo.node(i), hi.node(i));
+                a + (b - a) * wz
+            }),
         }
     }
 
-    /// The table at `μ`.
+    /// The table at `μ` (clamped to [0, 1]; NaN reads the first node).
     #[inline]
     pub fn at(&self, mu: f32) -> f32 {
-        let lo = self.lo.at(mu);
-        if !self.three {
-            return lo;
-        }
-        let hi = self.hi.at(mu);
-        lo + (hi - lo) * self.wz
+        let (i, w) = axis_coord(mu);
+        // `i ≤ N − 2` by construction, so both reads are in bounds.
+        let (a, b) = (self.nodes[i], self.nodes[i + 1]);
+        a + (b - a) * w
     }
 }
 
@@ -538,6 +537,12 @@ impl Row {
             hi: &plane[(j + 1) * N..(j + 2) * N],
             w,
         }
+    }
+
+    /// Node `i` along μ (the second coordinate blended).
+    #[inline]
+    fn node(&self, i: usize) -> f32 {
+        self.lo[i] + (self.hi[i] - self.lo[i]) * self.w
     }
 
     /// The value at μ (clamped to [0, 1]).

@@ -75,7 +75,8 @@ impl WardCore {
     fn eval(&self, variant: WardVariant, hh: Vec3, hh2: f32, vhh: f32, mu_i: f32) -> (f32, f32) {
         let hz2 = hh.z * hh.z;
         let e = (hh.x * hh.x * self.inv_ax2 + hh.y * hh.y * self.inv_ay2) / hz2;
-        let ex = (-e).exp();
+        // The polynomial `exp` (1–2 ulp, `vmath` tests): no library call per evaluation.
+        let ex = super::vmath::exp(-e);
         if ex <= 0.0 {
             // Also avoids 0·∞ when H_z underflows (both directions at the horizon).
             return (0.0, 0.0);
@@ -113,6 +114,14 @@ pub struct Ward {
     pub variant: WardVariant,
 }
 
+/// The view-independent part of a [`Ward`] lobe's prepare ([`Ward::bind`]): its albedo
+/// curve and its widths and normalisation (the classic norm at `μ_o = 1`).
+#[derive(Debug, Clone, Copy)]
+pub struct WardBound {
+    curve: MuCurve,
+    core: WardCore,
+}
+
 /// Prepared [`Ward`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedWard {
@@ -126,7 +135,9 @@ pub struct PreparedWard {
 impl Ward {
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
     pub fn prepare(&self, v: Vec3) -> PreparedWard {
-        self.prepare_bound(v, &self.albedo_curve())
+        // One lookup: baking the whole curve ([`Ward::albedo_curve`]) pays only when reused.
+        let (ax, ay) = (clamp_alpha(self.ax), clamp_alpha(self.ay));
+        self.prepare_with_albedo(v, ward_albedo(self.variant, v.z, ax, ay))
     }
 
     /// The albedo table at this lobe's (clamped) widths, for [`Ward::prepare_bound`].
@@ -139,14 +150,40 @@ impl Ward {
         MuCurve::new2(t, tables::ward_axis((ax * ay).sqrt()))
     }
 
-    /// [`Ward::prepare`] with the albedo curve computed once ([`Ward::albedo_curve`]).
-    pub fn prepare_bound(&self, v: Vec3, albedo: &MuCurve) -> PreparedWard {
+    /// The view-independent part of [`Ward::prepare`] ([`WardBound`]).
+    pub fn bind(&self) -> WardBound {
+        WardBound {
+            curve: self.albedo_curve(),
+            core: WardCore::new(self.ax, self.ay, self.variant, 1.0),
+        }
+    }
+
+    /// [`Ward::prepare`] with the result of [`Ward::bind`].
+    #[inline]
+    pub fn prepare_bound(&self, v: Vec3, b: &WardBound) -> PreparedWard {
+        let mut core = b.core;
+        if self.variant == WardVariant::Classic {
+            // The only view-dependent part of the core: `1/√μ_o` in the classic norm.
+            core.norm = b.core.norm / v.z.max(1e-7).sqrt();
+        }
+        PreparedWard {
+            core,
+            variant: self.variant,
+            rho: self.rho,
+            v,
+            albedo: self.rho * b.curve.at(v.z),
+        }
+    }
+
+    /// The prepared lobe given its table albedo at `μ_o` (ρ = 1).
+    #[inline]
+    fn prepare_with_albedo(&self, v: Vec3, e: f32) -> PreparedWard {
         PreparedWard {
             core: WardCore::new(self.ax, self.ay, self.variant, v.z),
             variant: self.variant,
             rho: self.rho,
             v,
-            albedo: self.rho * albedo.at(v.z),
+            albedo: self.rho * e,
         }
     }
 }
