@@ -965,10 +965,12 @@ impl Network {
         old
     }
 
-    /// Make room for `additional` more parameters on `node` (a hint; nothing changes).
+    /// Make room for exactly `additional` more parameters on `node` (a hint; nothing
+    /// changes). The room is not rounded up, so call it once with the total rather than once
+    /// per parameter (resolution calls it once per expanded head).
     pub fn reserve_params(&mut self, node: NodeId, additional: usize) {
         let n = &mut self.graph[node];
-        n.params.reserve(additional);
+        n.params.reserve_exact(additional);
         n.by_name.reserve(additional, |&(_, h)| unfold(h));
     }
 
