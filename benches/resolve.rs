@@ -5,7 +5,8 @@
 //! thread's CPU time (ns): resolution is single-threaded, and on the shared development
 //! machine wall-clock time mostly measures the other processes.
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::measurement::Measurement;
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -14,6 +15,7 @@ use std::hint::black_box;
 use vstructc::Diagnostics;
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::front::rib::{RibOptions, parse_rib};
+use vstructc::network::Network;
 use vstructc::network::testgen::layered_scene;
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
@@ -21,6 +23,29 @@ use vstructc::resolve::{ResolveOptions, resolve};
 // The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// `resolve/{materials}`: resolution of a fresh copy of `parsed` (the copy is not timed).
+fn bench_resolve<M: Measurement>(
+    group: &mut BenchmarkGroup<'_, M>,
+    reg: &Registry,
+    parsed: &Network,
+    materials: usize,
+) {
+    group.bench_with_input(
+        BenchmarkId::new("resolve", materials),
+        &materials,
+        |b, _| {
+            b.iter_batched(
+                || parsed.clone(),
+                |mut net| {
+                    let res = resolve(&mut net, reg, &ResolveOptions::default());
+                    black_box((net, res))
+                },
+                criterion::BatchSize::LargeInput,
+            )
+        },
+    );
+}
 
 fn bench(c: &mut Criterion) {
     let reg = Registry::embedded();
@@ -36,20 +61,7 @@ fn bench(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
             b.iter(|| black_box(parse()))
         });
-        group.bench_with_input(
-            BenchmarkId::new("resolve", materials),
-            &materials,
-            |b, _| {
-                b.iter_batched(
-                    || parsed.clone(),
-                    |mut net| {
-                        let res = resolve(&mut net, &reg, &ResolveOptions::default());
-                        black_box((net, res))
-                    },
-                    criterion::BatchSize::LargeInput,
-                )
-            },
-        );
+        bench_resolve(&mut group, &reg, &parsed, materials);
         let mut resolved = parsed.clone();
         resolve(&mut resolved, &reg, &ResolveOptions::default());
         group.bench_with_input(BenchmarkId::new("write", materials), &materials, |b, _| {
@@ -68,20 +80,7 @@ fn bench_cpu(c: &mut Criterion<CpuTime>) {
         let mut diags = Diagnostics::new();
         let parsed =
             parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap();
-        group.bench_with_input(
-            BenchmarkId::new("resolve", materials),
-            &materials,
-            |b, _| {
-                b.iter_batched(
-                    || parsed.clone(),
-                    |mut net| {
-                        let res = resolve(&mut net, &reg, &ResolveOptions::default());
-                        black_box((net, res))
-                    },
-                    criterion::BatchSize::LargeInput,
-                )
-            },
-        );
+        bench_resolve(&mut group, &reg, &parsed, materials);
     }
     group.finish();
 }
