@@ -200,9 +200,10 @@ fn shade_row_with(
 ) {
     let size = out.len();
     let l = opts.light_dir.normalize_or(Vec3::Z);
+    let with_uv = !material.is_uniform();
     for (i, px) in out.iter_mut().enumerate() {
         let (x, y) = pixel_xy(i, j, size);
-        let Some(p) = sphere_point(x, y, !material.is_uniform()) else {
+        let Some(p) = sphere_point(x, y, with_uv) else {
             continue;
         };
         let p = p.with_inputs(&opts.inputs);

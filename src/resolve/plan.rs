@@ -46,18 +46,18 @@ impl NameSet {
     }
 
     /// Appends `name`, even if it is in the set already (positions must stay aligned with
-    /// the caller's list).
+    /// the caller's list); the index keeps the first occurrence.
     fn push(&mut self, name: Arc<str>) {
-        if self.contains(&name) {
-            self.repeated = true;
-            self.names.push((name.clone(), name_hash(&name)));
-            return;
-        }
         let hash = name_hash(&name);
+        let seen = self.contains(&name);
         let i = u32::try_from(self.names.len()).expect("fewer than 2^32 names");
         self.names.push((name, hash));
-        let names = &self.names;
-        self.index.insert_unique(hash, i, |&j| names[j as usize].1);
+        if seen {
+            self.repeated = true;
+        } else {
+            let names = &self.names;
+            self.index.insert_unique(hash, i, |&j| names[j as usize].1);
+        }
     }
 
     /// The number of names.
@@ -357,7 +357,13 @@ mod tests {
         repeated.find_in(&other, m, &mut slots);
         assert_eq!(
             slots,
-            [Slot::At(0), slots[1], Slot::At(0)],
+            [
+                Slot::At(0),
+                Slot::Missing {
+                    hash: name_hash("b")
+                },
+                Slot::At(0)
+            ],
             "both occurrences found"
         );
         let mut scanned = Vec::new();
