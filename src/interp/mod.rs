@@ -13,7 +13,7 @@
 //! [`Material::prepare`] runs its program and the closure algebra for one point and view and
 //! returns a [`Prepared`] (at most `MAX_LOBES` weighted lobes, no heap allocation) with
 //! `eval`, `sample`, `albedo`, `emission` and `transparency`; [`batch`] prepares and evaluates
-//! many points at once; [`preview`] renders the material ball; [`reference`] builds the
+//! many points at once; [`preview`] renders the material ball; [`reference`](mod@reference) builds the
 //! spec's 10-lobe benchmark material.
 
 pub mod batch;

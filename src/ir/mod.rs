@@ -1,7 +1,7 @@
 //! The closure IR (spec closures.md §1.2, §1.3, §2): a parameter program (straight-line SSA
 //! over `f32x3` registers, [`program`]) and a closure DAG ([`closure`]) whose leaves are BSDF
 //! lobes. [`algebra`] computes the flat form (lobes with weights) for one point and view;
-//! [`passes`] optimises; [`print`] renders the stable text forms.
+//! [`passes`] optimises; [`print`](mod@print) renders the stable text forms.
 //!
 //! IRs are built with [`IrBuilder`], which folds constants, shares identical ops and nodes,
 //! and drops closures that are statically zero while it builds (so lowering code can build

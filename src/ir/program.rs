@@ -122,7 +122,7 @@ pub enum OpCode {
     Min,
     /// max(a, b).
     Max,
-    /// clamp(a, imm[0], imm[1]).
+    /// clamp(a, `imm[0]`, `imm[1]`).
     Clamp,
     /// lerp(a, b, t) = (1 − t) a + t b.
     Lerp,
