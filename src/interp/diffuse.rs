@@ -55,7 +55,7 @@ impl Lambert {
 
 impl PreparedLambert {
     /// `ρ μ_i / π` on the upper hemisphere.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
@@ -89,7 +89,7 @@ impl PreparedLambert {
     }
 
     /// Translucent: `ρ |μ_i| / π` on the lower hemisphere.
-    #[inline]
+    #[inline(always)]
     pub fn eval_translucent(&self, l: Vec3) -> LobeEval {
         if l.z >= 0.0 {
             return LobeEval::ZERO;
@@ -333,7 +333,7 @@ impl PreparedOrenNayar {
     }
 
     /// `f·μ_i` and the cosine pdf.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
@@ -409,7 +409,7 @@ impl MiaDiffuse {
 
 impl PreparedMiaDiffuse {
     /// `f_QON(V, L)·s(μ_i)` and the cosine pdf.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
@@ -484,7 +484,7 @@ impl Burley {
 
 impl PreparedBurley {
     /// `(ρ/π) F_D(μ_i) F_D(μ_o) μ_i` with `F_D90 = 1/2 + 2σ(L·h)²`, `(L·h)² = (1 + V·L)/2`.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;

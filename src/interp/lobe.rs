@@ -464,7 +464,10 @@ impl PreparedLobe {
     }
 
     /// `f(V, L)·|μ_i|` (RGB) and the pdf of [`PreparedLobe::sample`] at `l` (local frame).
-    #[inline]
+    // Always inlined, as are the family `eval`s it dispatches to: a non-inlined call returns
+    // its `LobeEval` through memory, written as 8 + 4 + 4 bytes and read back as 16, and that
+    // store-forwarding stall was half of `Prepared::eval`'s own time (perf annotate, S6).
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         let l = if self.flipped { flip(l) } else { l };
         match &self.state {

@@ -320,7 +320,7 @@ impl PreparedMicrofacetR {
     }
 
     /// Single-scattering `f·μ_i` and VNDF pdf at `l` (`l.z > 0`), plus the KC part.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if self.delta || l.z <= 0.0 {
             return LobeEval::ZERO;
@@ -658,7 +658,7 @@ impl PreparedDielectric {
     }
 
     /// `f·|μ_i|` and the pdf of [`PreparedDielectric::sample`].
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if self.delta {
             return LobeEval::ZERO;

@@ -155,7 +155,7 @@ impl SheenCK {
 
 impl PreparedSheenCK {
     /// `f·μ_i` and the uniform-hemisphere pdf.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
@@ -276,7 +276,7 @@ impl PreparedSheenLTC {
     }
 
     /// `Ê·D(w)` and the exact pdf `D(w)`.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;

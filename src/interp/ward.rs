@@ -190,7 +190,7 @@ impl Ward {
 
 impl PreparedWard {
     /// `f·μ_i` and the Walter pdf.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
@@ -293,7 +293,7 @@ impl MiaHighlight3 {
 
 impl PreparedMiaHighlight3 {
     /// Weighted sum of the three Ward lobes, and the mixture pdf.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
