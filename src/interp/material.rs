@@ -565,6 +565,9 @@ impl Material {
         // Step 5: V-only terms and albedos of the weighted lobes; step 6: drop.
         let regs = self.regs(s);
         let threshold = self.options.drop_threshold;
+        // Step 7's albedo luminances, kept here rather than read back from the records just
+        // written (a read of fresh, differently sized stores stalls store forwarding).
+        let mut lums = [0.0f32; MAX_LOBES];
         let mut count = 0;
         for (k, info) in self.leaves.iter().enumerate() {
             let w = weights[k];
@@ -592,11 +595,12 @@ impl Material {
             a.albedo = albedo;
             a.frame = info.frame_slot;
             a.leaf = k as u8;
+            lums[count] = lum(albedo.reflect + albedo.transmit_radiance).max(0.0);
             count += 1;
         }
         out.count = count;
         // Step 7: selection probabilities.
-        out.select();
+        out.select(&lums);
     }
 
     fn regs<'s>(&'s self, s: &'s Scratch) -> &'s [Vec3] {
@@ -1193,13 +1197,12 @@ impl Prepared {
 
     /// Step 7: `p_k = lum(A_k)/Σ lum(A_j)` (straight transmission takes part with
     /// `lum(τ)`); else proportional to `lum(w_k)`; else absorbing (all 0).
-    fn select(&mut self) {
+    /// `lums[k]` is `max(lum(A_k), 0)` with transmission in the radiance convention.
+    fn select(&mut self, lums: &[f32; MAX_LOBES]) {
         let n = self.count;
-        // One pass over the (large) lobe records for the albedo luminances.
-        let mut a = [0.0f32; MAX_LOBES];
+        let mut a = *lums;
         let mut sum = 0.0f32;
-        for (x, l) in a.iter_mut().zip(&self.lobes[..n]) {
-            *x = lum(l.albedo.reflect + l.albedo.transmit_radiance).max(0.0);
+        for x in &a[..n] {
             sum += *x;
         }
         let tau = lum(self.transparency).max(0.0);
