@@ -282,7 +282,8 @@ impl OrenNayar {
     }
 
     /// [`OrenNayar::prepare`] with the result of [`OrenNayar::bind`].
-    #[inline]
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, b: &OrenNayarBound) -> PreparedOrenNayar {
         let mut p = b.template;
         p.v = v;

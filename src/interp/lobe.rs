@@ -334,8 +334,9 @@ impl Lobe {
     }
 
     /// [`Lobe::prepare_aux`] writing into `out`: each family's state is built in the
-    /// record, not in a temporary that is then copied (a prepared lobe is ~170 bytes, and
-    /// the copies were a tenth of a material's prepare).
+    /// record, not in a temporary that is then copied (a prepared lobe is ~170 bytes; the
+    /// copies were a tenth of a material's prepare, and reading a temporary just written
+    /// with narrower stores stalls store forwarding).
     #[inline]
     fn prepare_aux_into(&self, v: Vec3, sides: Sides, aux: &Aux, out: &mut PreparedLobe) {
         out.kind = self.kind();
@@ -356,35 +357,61 @@ impl Lobe {
             out.state = State::Inactive;
             return;
         }
-        out.state = match self {
-            Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l) => State::Lambert(l.prepare()),
-            Lobe::Translucent(l) => State::Translucent(l.prepare()),
-            Lobe::OrenNayar(o) => State::OrenNayar(match aux {
-                Aux::OrenNayar(b) => o.prepare_bound(v, b),
-                _ => o.prepare(v),
-            }),
-            Lobe::MiaDiffuse(m) => State::MiaDiffuse(m.prepare(v)),
-            Lobe::Burley(b) => State::Burley(b.prepare(v)),
-            Lobe::MicrofacetR(m) => State::MicrofacetR(match aux {
-                Aux::Microfacet(b) => m.prepare_bound(v, b),
-                _ => m.prepare(v),
-            }),
-            Lobe::Dielectric(d) => State::Dielectric(match aux {
-                Aux::Dielectric(b) => d.prepare_bound(v, flipped, b),
-                _ => d.prepare(v, flipped),
-            }),
-            Lobe::Ward(w) => State::Ward(match aux {
-                Aux::Ward(c) => w.prepare_bound(v, c),
-                _ => w.prepare(v),
-            }),
-            Lobe::MiaHighlight3(m) => State::MiaHighlight3(m.prepare(v)),
-            Lobe::SheenCK(s) => State::SheenCK(match aux {
-                Aux::SheenCK(c) => s.prepare_bound(v, c),
-                _ => s.prepare(v),
-            }),
-            Lobe::SheenLTC(s) => State::SheenLTC(s.prepare(v)),
-            Lobe::Emission(_) | Lobe::Transparent(_) => State::Inactive,
-        };
+        // A record at a fixed index usually held the same family at the previous prepare:
+        // then the new state is written over the old one field by field, with no temporary
+        // (copying a freshly written temporary stalls store forwarding).
+        macro_rules! put {
+            ($variant:ident, $value:expr) => {
+                match &mut out.state {
+                    State::$variant(p) => *p = $value,
+                    s => *s = State::$variant($value),
+                }
+            };
+        }
+        match self {
+            Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l) => put!(Lambert, l.prepare()),
+            Lobe::Translucent(l) => put!(Translucent, l.prepare()),
+            Lobe::OrenNayar(o) => put!(
+                OrenNayar,
+                match aux {
+                    Aux::OrenNayar(b) => o.prepare_bound(v, b),
+                    _ => o.prepare(v),
+                }
+            ),
+            Lobe::MiaDiffuse(m) => put!(MiaDiffuse, m.prepare(v)),
+            Lobe::Burley(b) => put!(Burley, b.prepare(v)),
+            Lobe::MicrofacetR(m) => put!(
+                MicrofacetR,
+                match aux {
+                    Aux::Microfacet(b) => m.prepare_bound(v, b),
+                    _ => m.prepare(v),
+                }
+            ),
+            Lobe::Dielectric(d) => put!(
+                Dielectric,
+                match aux {
+                    Aux::Dielectric(b) => d.prepare_bound(v, flipped, b),
+                    _ => d.prepare(v, flipped),
+                }
+            ),
+            Lobe::Ward(w) => put!(
+                Ward,
+                match aux {
+                    Aux::Ward(c) => w.prepare_bound(v, c),
+                    _ => w.prepare(v),
+                }
+            ),
+            Lobe::MiaHighlight3(m) => put!(MiaHighlight3, m.prepare(v)),
+            Lobe::SheenCK(s) => put!(
+                SheenCK,
+                match aux {
+                    Aux::SheenCK(c) => s.prepare_bound(v, c),
+                    _ => s.prepare(v),
+                }
+            ),
+            Lobe::SheenLTC(s) => put!(SheenLTC, s.prepare(v)),
+            Lobe::Emission(_) | Lobe::Transparent(_) => out.state = State::Inactive,
+        }
     }
 }
 

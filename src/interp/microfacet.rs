@@ -255,6 +255,8 @@ impl MicrofacetR {
 
     /// As [`MicrofacetR::prepare`], with `bound` the result of [`MicrofacetR::bind`]
     /// (computed once by the caller).
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, bound: &MicrofacetBound) -> PreparedMicrofacetR {
         let albedo_fresnel = &bound.albedo_fresnel;
         // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
@@ -536,6 +538,8 @@ impl Dielectric {
     }
 
     /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
     pub fn prepare_bound(
         &self,
         v: Vec3,

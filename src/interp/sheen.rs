@@ -114,7 +114,8 @@ impl SheenCK {
     }
 
     /// [`SheenCK::prepare`] with the result of [`SheenCK::bind`].
-    #[inline]
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, b: &SheenCKBound) -> PreparedSheenCK {
         PreparedSheenCK {
             v,
@@ -241,6 +242,8 @@ pub struct PreparedSheenLTC {
 
 impl SheenLTC {
     /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
     pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
         let y = if self.r.is_nan() {
             1.0

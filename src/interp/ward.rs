@@ -159,7 +159,8 @@ impl Ward {
     }
 
     /// [`Ward::prepare`] with the result of [`Ward::bind`].
-    #[inline]
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, b: &WardBound) -> PreparedWard {
         let mut core = b.core;
         if self.variant == WardVariant::Classic {
