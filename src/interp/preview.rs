@@ -262,37 +262,51 @@ fn shade_row_batched_with(
     let size = out.len();
     let l = opts.light_dir.normalize_or(Vec3::Z);
     let with_uv = !material.is_uniform();
-    // Sphere pixels of this row, in order.
-    let xs: Vec<(usize, ShadingPoint)> = (0..size)
-        .filter_map(|i| {
-            let (x, y) = pixel_xy(i, j, size);
-            sphere_point(x, y, with_uv).map(|p| (i, p.with_inputs(&opts.inputs)))
-        })
-        .collect();
-    for chunk in xs.chunks(W) {
-        let lane = |k: usize| chunk[k.min(chunk.len() - 1)].1;
-        let pts = ShadingBatch::<W> {
-            n: std::array::from_fn(|k| lane(k).n),
-            t: std::array::from_fn(|k| lane(k).t),
-            v: std::array::from_fn(|k| lane(k).v),
-            inputs: std::array::from_fn(|k| lane(k).inputs),
-            p: std::array::from_fn(|k| lane(k).p),
-            uv: std::array::from_fn(|k| lane(k).uv),
-        };
-        material.prepare_batch_into(&pts, scratch, batch);
-        let direct = if opts.light == Vec3::ZERO {
-            None
-        } else {
-            Some(batch.eval(&[l; W]))
-        };
-        for (k, (i, _)) in chunk.iter().enumerate() {
+    let mut pts = ShadingBatch::<W>::new([Vec3::Z; W], [Vec3::X; W], [Vec3::Z; W]);
+    pts.inputs = [&opts.inputs[..]; W];
+    // The columns of this row's sphere pixels, filled straight into the batch's lanes (no
+    // per-row list of points).
+    let mut cols = [0usize; W];
+    let mut filled = 0;
+    let mut flush = |pts: &mut ShadingBatch<W>, cols: &[usize; W], n: usize, out: &mut [Rgb]| {
+        // Pad a partial batch by repeating its last point (every lane must be a real point).
+        for k in n..W {
+            pts.n[k] = pts.n[n - 1];
+            pts.t[k] = pts.t[n - 1];
+            pts.v[k] = pts.v[n - 1];
+            pts.p[k] = pts.p[n - 1];
+            pts.uv[k] = pts.uv[n - 1];
+        }
+        material.prepare_batch_into(pts, scratch, batch);
+        let direct = (opts.light != Vec3::ZERO).then(|| batch.eval(&[l; W]));
+        for (k, &i) in cols[..n].iter().enumerate() {
             let prep = batch.lane(k);
             let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
-            out[*i] = d * opts.light
+            out[i] = d * opts.light
                 + opts.env * prep.albedo().total()
                 + prep.emission()
                 + prep.transparency() * opts.env;
         }
+    };
+    for i in 0..size {
+        let (x, y) = pixel_xy(i, j, size);
+        let Some(p) = sphere_point(x, y, with_uv) else {
+            continue;
+        };
+        pts.n[filled] = p.n;
+        pts.t[filled] = p.t;
+        pts.v[filled] = p.v;
+        pts.p[filled] = p.p;
+        pts.uv[filled] = p.uv;
+        cols[filled] = i;
+        filled += 1;
+        if filled == W {
+            flush(&mut pts, &cols, W, out);
+            filled = 0;
+        }
+    }
+    if filled > 0 {
+        flush(&mut pts, &cols, filled, out);
     }
 }
 
