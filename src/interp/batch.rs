@@ -237,7 +237,7 @@ impl<const W: usize> PreparedBatch<W> {
         for slot in &mut self.slots[..count] {
             let lanes = &self.lanes;
             let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
-            slot.kernel.rebuild(lobe, &slot.live);
+            slot.kernel.rebuild(lobe, &slot.live, &slot.lw);
         }
         self.count = count;
     }

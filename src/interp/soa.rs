@@ -159,7 +159,7 @@ pub(super) enum Kernel<const W: usize> {
     Scalar,
     /// Lambert (and the subsurface proxy).
     Lambert {
-        /// `ρ/π`.
+        /// `w ρ/π` (the slot's weight folded in).
         rho_pi: Vec3x<W>,
     },
     /// Oren–Nayar (QON, FON, EON).
@@ -180,11 +180,13 @@ pub(super) enum Kernel<const W: usize> {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct OrenNayarX<const W: usize> {
     v: Vec3x<W>,
+    /// `w ρ/π` (the slot's weight folded in).
     rho_pi: Vec3x<W>,
     a: [f32; W],
     b: [f32; W],
     /// 1 where a negative `s` is kept (FON, EON), else 0.
     keep_negative_s: [f32; W],
+    /// `w ρ_ms` (weighted).
     ms: Vec3x<W>,
     /// EON's `Ê(μ) = af + c·g(μ)` (exact form): `af`.
     af: [f32; W],
@@ -199,13 +201,13 @@ pub(super) struct OrenNayarX<const W: usize> {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ConductorX<const W: usize> {
     g: GgxX<W>,
-    /// `G1(V)/(4 μ_o)`: the pdf is `D` times this.
+    /// `p G1(V)/(4 μ_o)` (`p`: the slot's probability): the pdf term is `D` times this.
     pdf_c: [f32; W],
     /// `η² − κ²` per channel.
     e2mk2: Vec3x<W>,
     /// `4 η² κ²` per channel.
     four_e2k2: Vec3x<W>,
-    /// `scale/(4 μ_o)`: `f·μ_i` is `F D G2` times this.
+    /// `w scale/(4 μ_o)` (`w`: the slot's weight): the `f·μ_i` term is `F D G2` times this.
     scale_q: Vec3x<W>,
 }
 
@@ -215,9 +217,9 @@ pub(super) struct DielectricX<const W: usize> {
     g: GgxX<W>,
     /// `η²`.
     eta2: [f32; W],
-    /// `G1(V)/(4 μ_o)`: the pdf is `D` times this.
+    /// `p G1(V)/(4 μ_o)`: the pdf term is `D` times this.
     pdf_c: [f32; W],
-    /// `tint_r/(4 μ_o)`: `f·μ_i` is `F D G2` times this.
+    /// `w tint_r/(4 μ_o)`: the `f·μ_i` term is `F D G2` times this.
     tint_q: Vec3x<W>,
 }
 
@@ -246,11 +248,13 @@ pub(super) struct WardX<const W: usize> {
     inv_ax2: [f32; W],
     inv_ay2: [f32; W],
     norm: [f32; W],
+    /// The pdf normalisation times the slot's probability.
     pdf_norm: [f32; W],
     /// 1 for GM, 0 for classic.
     gm: [f32; W],
     /// Some lane is classic (else the loop skips the classic form's square root).
     any_classic: bool,
+    /// `w ρ_s` (weighted).
     rho: Vec3x<W>,
 }
 
@@ -300,10 +304,15 @@ impl<const W: usize> Kernel<W> {
     /// batch re-prepared for the same material), every lane is overwritten in place: a
     /// kernel is up to ~1 KB, and zeroing a fresh one and copying it into the slot cost more
     /// than filling it.
+    ///
+    /// Where a kernel's output is a per-lane constant times a computed factor, the slot's
+    /// weights `lw` (set before this is called) are folded into the constant here, so eval
+    /// adds without multiplying by the weight.
     pub(super) fn rebuild<'a>(
         &mut self,
         lobes: impl Fn(usize) -> &'a PreparedLobe,
         live: &[bool; W],
+        lw: &LaneWeights<W>,
     ) {
         let Some(first) = (0..W).find(|&k| live[k]) else {
             *self = Kernel::Scalar;
@@ -324,7 +333,7 @@ impl<const W: usize> Kernel<W> {
                 if let Kernel::Lambert { rho_pi } = self {
                     for k in 0..W {
                         if let State::Lambert(p) = &lane(k).state {
-                            rho_pi.set(k, p.rho_pi);
+                            rho_pi.set(k, p.rho_pi * lw.w.get(k));
                         }
                     }
                 }
@@ -351,11 +360,11 @@ impl<const W: usize> Kernel<W> {
                     for k in 0..W {
                         if let State::OrenNayar(p) = &lane(k).state {
                             x.v.set(k, p.v);
-                            x.rho_pi.set(k, p.rho_pi);
+                            x.rho_pi.set(k, p.rho_pi * lw.w.get(k));
                             x.a[k] = p.a;
                             x.b[k] = p.b;
                             x.keep_negative_s[k] = flag(p.keep_negative_s);
-                            x.ms.set(k, p.ms);
+                            x.ms.set(k, p.ms * lw.w.get(k));
                             let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
                             x.af[k] = af;
                             x.c[k] = p.sigma * af * FRAC_1_PI;
@@ -380,13 +389,13 @@ impl<const W: usize> Kernel<W> {
                     for k in 0..W {
                         if let State::MicrofacetR(p) = &lane(k).state {
                             x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
-                            x.pdf_c[k] = p.g1_v * p.inv_4mu;
+                            x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
                             if let Fresnel::Conductor { eta, kappa } = p.fresnel {
                                 let (e2, k2) = (eta * eta, kappa * kappa);
                                 x.e2mk2.set(k, e2 - k2);
                                 x.four_e2k2.set(k, 4.0 * e2 * k2);
                             }
-                            x.scale_q.set(k, p.scale * p.inv_4mu);
+                            x.scale_q.set(k, p.scale * p.inv_4mu * lw.w.get(k));
                         }
                     }
                 }
@@ -410,8 +419,8 @@ impl<const W: usize> Kernel<W> {
                             x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
                             x.eta2[k] = p.eta * p.eta;
                             let q = 0.25 * p.inv_mu;
-                            x.pdf_c[k] = p.g1_v * q;
-                            x.tint_q.set(k, p.tint_r * q);
+                            x.pdf_c[k] = p.g1_v * q * lw.p[k];
+                            x.tint_q.set(k, p.tint_r * q * lw.w.get(k));
                         }
                     }
                 }
@@ -439,9 +448,9 @@ impl<const W: usize> Kernel<W> {
                             x.inv_ax2[k] = p.core.inv_ax2;
                             x.inv_ay2[k] = p.core.inv_ay2;
                             x.norm[k] = p.core.norm;
-                            x.pdf_norm[k] = p.core.pdf_norm;
+                            x.pdf_norm[k] = p.core.pdf_norm * lw.p[k];
                             x.gm[k] = flag(p.variant == WardVariant::Gm);
-                            x.rho.set(k, p.rho);
+                            x.rho.set(k, p.rho * lw.w.get(k));
                         }
                     }
                 }
@@ -540,6 +549,16 @@ fn add_rgb<const W: usize>(acc: &mut Acc<W>, lw: &LaneWeights<W>, k: usize, f: [
     acc.pdf[k] += lw.p[k] * pdf;
 }
 
+/// `acc += f_rgb`, `pdf += pdf` for lane `k`, where `valid` holds (bit masks, no branch):
+/// for kernels whose constants already carry the slot's weight and probability.
+#[inline(always)]
+fn add_baked<const W: usize>(acc: &mut Acc<W>, k: usize, valid: bool, f: [f32; 3], pdf: f32) {
+    acc.f.x[k] += keep(valid, f[0]);
+    acc.f.y[k] += keep(valid, f[1]);
+    acc.f.z[k] += keep(valid, f[2]);
+    acc.pdf[k] += keep(valid, pdf);
+}
+
 /// [`add_rgb`] of `f` and `pdf` where `valid` holds, nothing elsewhere (bit masks, no branch).
 #[inline(always)]
 fn add_valid<const W: usize>(
@@ -570,7 +589,12 @@ fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>,
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
         let c = keep(lz > 0.0, lz);
-        add_rgb(acc, lw, k, rho_pi.scaled(k, c), c * FRAC_1_PI);
+        // `rho_pi` carries the weight (see `Kernel::rebuild`).
+        let f = rho_pi.scaled(k, c);
+        acc.f.x[k] += f[0];
+        acc.f.y[k] += f[1];
+        acc.f.z[k] += f[2];
+        acc.pdf[k] += lw.p[k] * (c * FRAC_1_PI);
     }
 }
 
@@ -603,7 +627,7 @@ impl<const W: usize> OrenNayarX<W> {
             let ms = (1.0 - e_hat) * lz;
             let (single, multiple) = (self.rho_pi.scaled(k, ss), self.ms.scaled(k, ms));
             let f = [0, 1, 2].map(|c| single[c] + multiple[c]);
-            add_valid(acc, lw, k, valid, f, lz * FRAC_1_PI);
+            add_baked(acc, k, valid, f, lw.p[k] * (lz * FRAC_1_PI));
         }
     }
 }
@@ -784,7 +808,7 @@ impl<const W: usize> ConductorX<W> {
             ];
             let scale = self.scale_q.scaled(k, dg);
             let f = [0, 1, 2].map(|c| fr[c] * scale[c]);
-            add_valid(acc, lw, k, lz > 0.0, f, d * self.pdf_c[k]);
+            add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
     }
 }
@@ -799,7 +823,7 @@ impl<const W: usize> DielectricX<W> {
             let (vh, d, dg) = (vh[k], d[k], dg[k]);
             let fr = dielectric1(vh, self.eta2[k]);
             let f = self.tint_q.scaled(k, fr * dg);
-            add_valid(acc, lw, k, lz > 0.0, f, d * self.pdf_c[k]);
+            add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
     }
 }
@@ -841,7 +865,7 @@ impl<const W: usize> WardX<W> {
             };
             let pdf = self.pdf_norm[k] * ex * hh2 * hh2 * r;
             let valid = (lz > 0.0) & (ex > 0.0);
-            add_valid(acc, lw, k, valid, self.rho.scaled(k, f), pdf);
+            add_baked(acc, k, valid, self.rho.scaled(k, f), pdf);
         }
     }
 }
