@@ -49,3 +49,71 @@ fn batch_equals_scalar() {
         }
     }
 }
+
+/// Lanes below the surface (either direction) give exactly 0, total internal reflection
+/// (η < 1) and the narrowest widths the batch takes (1e-3) still equal the scalar leaf.
+#[test]
+fn batch_masked_lanes_tir_and_narrow_widths() {
+    const W: usize = 16;
+    let mut rng = Rng::new(23);
+    for round in 0..200 {
+        let mut batch = DielectricRBatch::<W> {
+            ax: [0.0; W],
+            ay: [0.0; W],
+            eta: [0.0; W],
+            tint: Vec3x::zero(),
+        };
+        let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
+        for k in 0..W {
+            let narrow = k % 3 == 0;
+            let a = |r: &mut Rng| {
+                if narrow {
+                    1e-3 + 0.02 * r.f32()
+                } else {
+                    1e-3 + r.f32()
+                }
+            };
+            batch.ax[k] = a(&mut rng);
+            batch.ay[k] = a(&mut rng);
+            batch.eta[k] = 0.5 + 2.5 * rng.f32();
+            batch
+                .tint
+                .set(k, Vec3::new(rng.f32(), rng.f32(), rng.f32()));
+            let s = rng.sphere();
+            // Lane 1 mod 4: V below; lane 2 mod 4: L anywhere (half below).
+            let vz = if k % 4 == 1 { -s.z.abs() } else { s.z.abs() };
+            v.set(k, Vec3::new(s.x, s.y, vz));
+            let d = rng.sphere();
+            l.set(
+                k,
+                if k % 4 == 2 {
+                    d
+                } else {
+                    Vec3::new(d.x, d.y, d.z.abs())
+                },
+            );
+        }
+        let out = batch.eval(&v, &l);
+        for k in 0..W {
+            let got = out.get(k);
+            if v.z[k] <= 0.0 || l.z[k] <= 0.0 {
+                assert_eq!(got, Vec3::ZERO, "round {round} lane {k}: masked");
+                continue;
+            }
+            let lobe = Lobe::Dielectric(Dielectric {
+                tint_r: batch.tint.get(k),
+                ..Dielectric::new(
+                    Ggx::new(batch.ax[k], batch.ay[k]),
+                    Masking::HeightCorrelated,
+                    batch.eta[k],
+                    DielectricMode::R,
+                )
+            });
+            let want = lobe.prepare(v.get(k), Sides::Front).eval(l.get(k)).f_cos;
+            assert!(
+                (got - want).abs().max_element() <= 1e-5 * want.max_element() + 1e-12,
+                "round {round} lane {k}: {got} vs {want}"
+            );
+        }
+    }
+}

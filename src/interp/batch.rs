@@ -109,6 +109,7 @@ impl<const W: usize> FrameX<W> {
 
     /// World → local for every lane (the same arithmetic as [`Frame::to_local`]).
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
     fn local(&self, w: &Vec3x<W>) -> Vec3x<W> {
         let mut out = Vec3x::zero();
         let dot = |a: &Vec3x<W>, k: usize| w.x[k] * a.x[k] + w.y[k] * a.y[k] + w.z[k] * a.z[k];
@@ -236,7 +237,7 @@ impl<const W: usize> PreparedBatch<W> {
         for slot in &mut self.slots[..count] {
             let lanes = &self.lanes;
             let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
-            slot.kernel.rebuild(lobe, &slot.live);
+            slot.kernel.rebuild(lobe, &slot.live, &slot.lw);
         }
         self.count = count;
     }
@@ -245,34 +246,45 @@ impl<const W: usize> PreparedBatch<W> {
     /// relative 1e-5).
     pub fn eval(&self, l: &[Vec3; W]) -> [Eval; W] {
         let world = Vec3x::from_vecs(l);
-        let mut local = [Vec3x::zero(); MAX_LOBES];
-        for (loc, frames) in local.iter_mut().zip(&self.frames[..self.frame_count]) {
-            *loc = frames.local(&world);
-        }
         let mut acc = Acc {
             f: Vec3x::zero(),
             pdf: [0.0f32; W],
         };
+        // L in the current slot's frame, transformed when the frame changes. Slots are in
+        // leaf order and leaves share few frames (ref10 has one), so this transforms about
+        // once per frame; an array of every frame's local L would have to be zeroed first
+        // (3 KB for 16 lanes, a third of the instructions of a ref10 batch).
+        let mut frame = usize::MAX;
+        let mut loc = Vec3x::zero();
         for slot in &self.slots[..self.count] {
-            let loc = &local[slot.frame as usize];
-            if slot.kernel.accumulate(loc, &slot.lw, &mut acc) {
-                continue;
+            if slot.frame as usize != frame {
+                frame = slot.frame as usize;
+                loc = self.frames[frame].local(&world);
             }
-            for k in 0..W {
-                if slot.live[k] {
-                    let e = self.lanes[k].lobes[slot.index[k] as usize]
-                        .lobe
-                        .eval(loc.get(k));
-                    let f = slot.lw.w.get(k) * e.f_cos;
-                    acc.f.set(k, acc.f.get(k) + f);
-                    acc.pdf[k] += slot.lw.p[k] * e.pdf;
-                }
+            if !slot.kernel.accumulate(&loc, &slot.lw, &mut acc) {
+                self.scalar_slot(slot, &loc, &mut acc);
             }
         }
         std::array::from_fn(|k| Eval {
             f_cos: acc.f.get(k),
             pdf: acc.pdf[k],
         })
+    }
+
+    /// A slot without a kernel: the scalar leaf lane by lane. Kept out of line so that the
+    /// scalar leaves (with their library calls) do not bloat `eval`'s kernel loops.
+    #[inline(never)]
+    fn scalar_slot(&self, slot: &Slot<W>, loc: &Vec3x<W>, acc: &mut Acc<W>) {
+        for k in 0..W {
+            if slot.live[k] {
+                let e = self.lanes[k].lobes[slot.index[k] as usize]
+                    .lobe
+                    .eval(loc.get(k));
+                let f = slot.lw.w.get(k) * e.f_cos;
+                acc.f.set(k, acc.f.get(k) + f);
+                acc.pdf[k] += slot.lw.p[k] * e.pdf;
+            }
+        }
     }
 
     /// Number of slots that run a vectorised kernel (the others run the scalar leaf per

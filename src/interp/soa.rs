@@ -37,6 +37,7 @@ impl<const W: usize> Vec3x<W> {
     }
 
     /// From `W` vectors.
+    #[inline]
     pub fn from_vecs(v: &[Vec3; W]) -> Self {
         let mut out = Self::zero();
         for (k, v) in v.iter().enumerate() {
@@ -89,37 +90,52 @@ impl<const W: usize> DielectricRBatch<W> {
     /// or `μ_i ≤ 0` give 0.
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     pub fn eval(&self, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
-        let mut out = Vec3x::zero();
-        let mut scalar = [0.0f32; W];
+        // The scalar leaf spends 13 divisions and 4 square roots per lane; vectorised, the
+        // divide/sqrt unit and the latency of chains through it bound the loop, so the same
+        // formula is rearranged around two divisions. With H = V + L unnormalised:
+        //   D = 1/(π αx αy t²),  t = (hx/αx)² + (hy/αy)² + hz² = T/(|H|² (αx αy)²)
+        //     with T = (Hx αy)² + (Hy αx)² + (Hz αx αy)²,  so D = |H|⁴ (αx αy)³/(π T²);
+        //   Λ(w) = (√(1 + x) − 1)/2 = (S_w/w_z − 1)/2,  S_w = √(w_z² + αx² wx² + αy² wy²),
+        //     so G2 = 1/(1 + Λv + Λl) = 2 v_z l_z/(S_v l_z + S_l v_z)
+        // (w_z clamped at 1e-7 as the scalar clamps w_z² at 1e-14), and
+        //   f = F D G2/(4 v_z) = F |H|⁴ (αx αy)³ l_z / (2 π T² (S_v l_z + S_l v_z)),
+        // with the Fresnel quotient F = F_n/F_d folded into the same division.
+        //
+        // Two passes over the lanes: the geometry, then the Fresnel term that depends on
+        // V·h. Each pass is a short loop body whose iterations are independent, so the
+        // out-of-order core overlaps the square-root/division chains of several vectors;
+        // in one long body it waits on one chain at a time.
+        let mut vh = [0.0f32; W];
+        let mut num = [0.0f32; W];
+        let mut den = [0.0f32; W];
         for k in 0..W {
             let (ax, ay) = (self.ax[k], self.ay[k]);
             let (vx, vy, vz) = (v.x[k], v.y[k], v.z[k]);
             let (lx, ly, lz) = (l.x[k], l.y[k], l.z[k]);
-            let valid = (vz > 0.0) & (lz > 0.0);
-            // Half vector.
             let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
-            let inv_len = 1.0 / (hx * hx + hy * hy + hz * hz).max(1e-30).sqrt();
-            let (hx, hy, hz) = (hx * inv_len, hy * inv_len, hz * inv_len);
-            let vh = (vx * hx + vy * hy + vz * hz).max(0.0);
-            // D.
-            let (tx, ty) = (hx / ax, hy / ay);
-            let t = tx * tx + ty * ty + hz * hz;
-            let d = 1.0 / (PI * ax * ay * t * t);
-            // Height-correlated G2 from the two Λ.
-            let lam = |wx: f32, wy: f32, wz: f32| {
-                let x = (ax * ax * wx * wx + ay * ay * wy * wy) / (wz * wz).max(1e-14);
-                x / (2.0 * (1.0 + (1.0 + x).sqrt()))
-            };
-            let g = 1.0 / (1.0 + lam(vx, vy, vz) + lam(lx, ly, lz));
-            // Exact dielectric Fresnel (total internal reflection gives 1).
-            let f = dielectric1(vh, self.eta[k]);
-            let value = f * d * g * 0.25 / vz.max(1e-7);
-            scalar[k] = keep(valid, value);
+            let hh = (hx * hx + hy * hy + hz * hz).max(1e-30);
+            // V·h exactly as the scalar leaf (see `GgxX::reflect_terms`: the Fresnel term
+            // near total internal reflection amplifies any other rounding).
+            let inv_len = 1.0 / hh.sqrt();
+            vh[k] = (vx * (hx * inv_len) + vy * (hy * inv_len) + vz * (hz * inv_len)).max(0.0);
+            let axy = ax * ay;
+            let (ux, uy, uz) = (hx * ay, hy * ax, hz * axy);
+            let tt = ux * ux + uy * uy + uz * uz;
+            let (vzc, lzc) = (vz.max(1e-7), lz.max(1e-7));
+            let (ax2, ay2) = (ax * ax, ay * ay);
+            let s_v = (vzc * vzc + ax2 * vx * vx + ay2 * vy * vy).sqrt();
+            let s_l = (lzc * lzc + ax2 * lx * lx + ay2 * ly * ly).sqrt();
+            num[k] = hh * hh * (axy * axy * axy) * (0.5 * lzc);
+            den[k] = PI * tt * tt * (s_v * lzc + s_l * vzc);
         }
+        let mut out = Vec3x::zero();
         for k in 0..W {
-            out.x[k] = scalar[k] * self.tint.x[k];
-            out.y[k] = scalar[k] * self.tint.y[k];
-            out.z[k] = scalar[k] * self.tint.z[k];
+            let (f_n, f_d) = dielectric_nd(vh[k], self.eta[k] * self.eta[k]);
+            let value = f_n * num[k] / (f_d * den[k]);
+            let value = keep((v.z[k] > 0.0) & (l.z[k] > 0.0), value);
+            out.x[k] = value * self.tint.x[k];
+            out.y[k] = value * self.tint.y[k];
+            out.z[k] = value * self.tint.z[k];
         }
         out
     }
@@ -143,7 +159,7 @@ pub(super) enum Kernel<const W: usize> {
     Scalar,
     /// Lambert (and the subsurface proxy).
     Lambert {
-        /// `ρ/π`.
+        /// `w ρ/π` (the slot's weight folded in).
         rho_pi: Vec3x<W>,
     },
     /// Oren–Nayar (QON, FON, EON).
@@ -164,11 +180,13 @@ pub(super) enum Kernel<const W: usize> {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct OrenNayarX<const W: usize> {
     v: Vec3x<W>,
+    /// `w ρ/π` (the slot's weight folded in).
     rho_pi: Vec3x<W>,
     a: [f32; W],
     b: [f32; W],
     /// 1 where a negative `s` is kept (FON, EON), else 0.
     keep_negative_s: [f32; W],
+    /// `w ρ_ms` (weighted).
     ms: Vec3x<W>,
     /// EON's `Ê(μ) = af + c·g(μ)` (exact form): `af`.
     af: [f32; W],
@@ -183,31 +201,44 @@ pub(super) struct OrenNayarX<const W: usize> {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ConductorX<const W: usize> {
     g: GgxX<W>,
-    inv_4mu: [f32; W],
-    eta: Vec3x<W>,
-    kappa: Vec3x<W>,
-    scale: Vec3x<W>,
+    /// `p G1(V)/(4 μ_o)` (`p`: the slot's probability): the pdf term is `D` times this.
+    pdf_c: [f32; W],
+    /// `η² − κ²` per channel.
+    e2mk2: Vec3x<W>,
+    /// `4 η² κ²` per channel.
+    four_e2k2: Vec3x<W>,
+    /// `w scale/(4 μ_o)` (`w`: the slot's weight): the `f·μ_i` term is `F D G2` times this.
+    scale_q: Vec3x<W>,
 }
 
 /// Dielectric (mode R) lanes (see [`super::microfacet::PreparedDielectric`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct DielectricX<const W: usize> {
     g: GgxX<W>,
-    eta: [f32; W],
-    inv_mu: [f32; W],
-    tint_r: Vec3x<W>,
+    /// `η²`.
+    eta2: [f32; W],
+    /// `p G1(V)/(4 μ_o)`: the pdf term is `D` times this.
+    pdf_c: [f32; W],
+    /// `w tint_r/(4 μ_o)`: the `f·μ_i` term is `F D G2` times this.
+    tint_q: Vec3x<W>,
 }
 
-/// The view-dependent GGX terms shared by the microfacet kernels.
+/// The view-dependent GGX terms shared by the microfacet kernels, in the forms
+/// [`GgxX::reflect_terms`] needs (derived from the scalar prepare's fields in
+/// [`Kernel::rebuild`], so eval divides only where L enters).
 #[derive(Debug, Clone, Copy)]
 struct GgxX<const W: usize> {
     v: Vec3x<W>,
-    ax: [f32; W],
-    ay: [f32; W],
-    lambda_v: [f32; W],
-    g1_v: [f32; W],
-    /// 1 for separable masking, 0 for height-correlated.
-    separable: [f32; W],
+    inv_ax: [f32; W],
+    inv_ay: [f32; W],
+    ax2: [f32; W],
+    ay2: [f32; W],
+    /// `π αx αy`.
+    pi_axay: [f32; W],
+    /// The masking as `c_z l_z + c_s S_l` (see [`GgxX::reflect_terms`]): height-correlated
+    /// `(1 + 2Λv, 1)`, separable `(1 + Λv, 1 + Λv)`.
+    c_z: [f32; W],
+    c_s: [f32; W],
 }
 
 /// Ward lanes (see [`super::ward::PreparedWard`]).
@@ -217,9 +248,13 @@ pub(super) struct WardX<const W: usize> {
     inv_ax2: [f32; W],
     inv_ay2: [f32; W],
     norm: [f32; W],
+    /// The pdf normalisation times the slot's probability.
     pdf_norm: [f32; W],
     /// 1 for GM, 0 for classic.
     gm: [f32; W],
+    /// Some lane is classic (else the loop skips the classic form's square root).
+    any_classic: bool,
+    /// `w ρ_s` (weighted).
     rho: Vec3x<W>,
 }
 
@@ -269,10 +304,15 @@ impl<const W: usize> Kernel<W> {
     /// batch re-prepared for the same material), every lane is overwritten in place: a
     /// kernel is up to ~1 KB, and zeroing a fresh one and copying it into the slot cost more
     /// than filling it.
+    ///
+    /// Where a kernel's output is a per-lane constant times a computed factor, the slot's
+    /// weights `lw` (set before this is called) are folded into the constant here, so eval
+    /// adds without multiplying by the weight.
     pub(super) fn rebuild<'a>(
         &mut self,
         lobes: impl Fn(usize) -> &'a PreparedLobe,
         live: &[bool; W],
+        lw: &LaneWeights<W>,
     ) {
         let Some(first) = (0..W).find(|&k| live[k]) else {
             *self = Kernel::Scalar;
@@ -293,7 +333,7 @@ impl<const W: usize> Kernel<W> {
                 if let Kernel::Lambert { rho_pi } = self {
                     for k in 0..W {
                         if let State::Lambert(p) = &lane(k).state {
-                            rho_pi.set(k, p.rho_pi);
+                            rho_pi.set(k, p.rho_pi * lw.w.get(k));
                         }
                     }
                 }
@@ -320,11 +360,11 @@ impl<const W: usize> Kernel<W> {
                     for k in 0..W {
                         if let State::OrenNayar(p) = &lane(k).state {
                             x.v.set(k, p.v);
-                            x.rho_pi.set(k, p.rho_pi);
+                            x.rho_pi.set(k, p.rho_pi * lw.w.get(k));
                             x.a[k] = p.a;
                             x.b[k] = p.b;
                             x.keep_negative_s[k] = flag(p.keep_negative_s);
-                            x.ms.set(k, p.ms);
+                            x.ms.set(k, p.ms * lw.w.get(k));
                             let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
                             x.af[k] = af;
                             x.c[k] = p.sigma * af * FRAC_1_PI;
@@ -339,22 +379,23 @@ impl<const W: usize> Kernel<W> {
                 if !matches!(self, Kernel::Conductor(_)) {
                     *self = Kernel::Conductor(ConductorX {
                         g: GgxX::zero(),
-                        inv_4mu: [0.0; W],
-                        eta: Vec3x::zero(),
-                        kappa: Vec3x::zero(),
-                        scale: Vec3x::zero(),
+                        pdf_c: [0.0; W],
+                        e2mk2: Vec3x::zero(),
+                        four_e2k2: Vec3x::zero(),
+                        scale_q: Vec3x::zero(),
                     });
                 }
                 if let Kernel::Conductor(x) = self {
                     for k in 0..W {
                         if let State::MicrofacetR(p) = &lane(k).state {
-                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.g1_v, p.masking);
-                            x.inv_4mu[k] = p.inv_4mu;
+                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
+                            x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
                             if let Fresnel::Conductor { eta, kappa } = p.fresnel {
-                                x.eta.set(k, eta);
-                                x.kappa.set(k, kappa);
+                                let (e2, k2) = (eta * eta, kappa * kappa);
+                                x.e2mk2.set(k, e2 - k2);
+                                x.four_e2k2.set(k, 4.0 * e2 * k2);
                             }
-                            x.scale.set(k, p.scale);
+                            x.scale_q.set(k, p.scale * p.inv_4mu * lw.w.get(k));
                         }
                     }
                 }
@@ -367,18 +408,19 @@ impl<const W: usize> Kernel<W> {
                 if !matches!(self, Kernel::DielectricR(_)) {
                     *self = Kernel::DielectricR(DielectricX {
                         g: GgxX::zero(),
-                        eta: [0.0; W],
-                        inv_mu: [0.0; W],
-                        tint_r: Vec3x::zero(),
+                        eta2: [0.0; W],
+                        pdf_c: [0.0; W],
+                        tint_q: Vec3x::zero(),
                     });
                 }
                 if let Kernel::DielectricR(x) = self {
                     for k in 0..W {
                         if let State::Dielectric(p) = &lane(k).state {
-                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.g1_v, p.masking);
-                            x.eta[k] = p.eta;
-                            x.inv_mu[k] = p.inv_mu;
-                            x.tint_r.set(k, p.tint_r);
+                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
+                            x.eta2[k] = p.eta * p.eta;
+                            let q = 0.25 * p.inv_mu;
+                            x.pdf_c[k] = p.g1_v * q * lw.p[k];
+                            x.tint_q.set(k, p.tint_r * q * lw.w.get(k));
                         }
                     }
                 }
@@ -392,19 +434,23 @@ impl<const W: usize> Kernel<W> {
                         norm: [0.0; W],
                         pdf_norm: [0.0; W],
                         gm: [0.0; W],
+                        any_classic: false,
                         rho: Vec3x::zero(),
                     });
                 }
                 if let Kernel::Ward(x) = self {
+                    x.any_classic = (0..W).any(
+                        |k| matches!(&lane(k).state, State::Ward(p) if p.variant != WardVariant::Gm),
+                    );
                     for k in 0..W {
                         if let State::Ward(p) = &lane(k).state {
                             x.v.set(k, p.v);
                             x.inv_ax2[k] = p.core.inv_ax2;
                             x.inv_ay2[k] = p.core.inv_ay2;
                             x.norm[k] = p.core.norm;
-                            x.pdf_norm[k] = p.core.pdf_norm;
+                            x.pdf_norm[k] = p.core.pdf_norm * lw.p[k];
                             x.gm[k] = flag(p.variant == WardVariant::Gm);
-                            x.rho.set(k, p.rho);
+                            x.rho.set(k, p.rho * lw.w.get(k));
                         }
                     }
                 }
@@ -503,6 +549,16 @@ fn add_rgb<const W: usize>(acc: &mut Acc<W>, lw: &LaneWeights<W>, k: usize, f: [
     acc.pdf[k] += lw.p[k] * pdf;
 }
 
+/// `acc += f_rgb`, `pdf += pdf` for lane `k`, where `valid` holds (bit masks, no branch):
+/// for kernels whose constants already carry the slot's weight and probability.
+#[inline(always)]
+fn add_baked<const W: usize>(acc: &mut Acc<W>, k: usize, valid: bool, f: [f32; 3], pdf: f32) {
+    acc.f.x[k] += keep(valid, f[0]);
+    acc.f.y[k] += keep(valid, f[1]);
+    acc.f.z[k] += keep(valid, f[2]);
+    acc.pdf[k] += keep(valid, pdf);
+}
+
 /// [`add_rgb`] of `f` and `pdf` where `valid` holds, nothing elsewhere (bit masks, no branch).
 #[inline(always)]
 fn add_valid<const W: usize>(
@@ -533,7 +589,12 @@ fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>,
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
         let c = keep(lz > 0.0, lz);
-        add_rgb(acc, lw, k, rho_pi.scaled(k, c), c * FRAC_1_PI);
+        // `rho_pi` carries the weight (see `Kernel::rebuild`).
+        let f = rho_pi.scaled(k, c);
+        acc.f.x[k] += f[0];
+        acc.f.y[k] += f[1];
+        acc.f.z[k] += f[2];
+        acc.pdf[k] += lw.p[k] * (c * FRAC_1_PI);
     }
 }
 
@@ -566,7 +627,7 @@ impl<const W: usize> OrenNayarX<W> {
             let ms = (1.0 - e_hat) * lz;
             let (single, multiple) = (self.rho_pi.scaled(k, ss), self.ms.scaled(k, ms));
             let f = [0, 1, 2].map(|c| single[c] + multiple[c]);
-            add_valid(acc, lw, k, valid, f, lz * FRAC_1_PI);
+            add_baked(acc, k, valid, f, lw.p[k] * (lz * FRAC_1_PI));
         }
     }
 }
@@ -584,75 +645,151 @@ impl<const W: usize> GgxX<W> {
     fn zero() -> Self {
         GgxX {
             v: Vec3x::zero(),
-            ax: [0.0; W],
-            ay: [0.0; W],
-            lambda_v: [0.0; W],
-            g1_v: [0.0; W],
-            separable: [0.0; W],
+            inv_ax: [0.0; W],
+            inv_ay: [0.0; W],
+            ax2: [0.0; W],
+            ay2: [0.0; W],
+            pi_axay: [0.0; W],
+            c_z: [0.0; W],
+            c_s: [0.0; W],
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn set(&mut self, k: usize, v: Vec3, ax: f32, ay: f32, lambda_v: f32, g1_v: f32, m: Masking) {
+    fn set(&mut self, k: usize, v: Vec3, ax: f32, ay: f32, lambda_v: f32, m: Masking) {
         self.v.set(k, v);
-        self.ax[k] = ax;
-        self.ay[k] = ay;
-        self.lambda_v[k] = lambda_v;
-        self.g1_v[k] = g1_v;
-        self.separable[k] = flag(m == Masking::Separable);
+        self.inv_ax[k] = 1.0 / ax;
+        self.inv_ay[k] = 1.0 / ay;
+        self.ax2[k] = ax * ax;
+        self.ay2[k] = ay * ay;
+        self.pi_axay[k] = PI * ax * ay;
+        (self.c_z[k], self.c_s[k]) = match m {
+            Masking::HeightCorrelated => (1.0 + 2.0 * lambda_v, 1.0),
+            Masking::Separable => (1.0 + lambda_v, 1.0 + lambda_v),
+        };
     }
 
     /// Lane `k` at `(lx, ly, lz)` (`lz > 0` assumed by the caller's select): the unit half
-    /// vector's `V·h` (≥ 0), `D(h)` and `G2`.
+    /// vector's `V·h` (≥ 0), `D(h)` and `D(h)·G2`.
+    ///
+    /// The scalar leaf divides seven times here; the divide unit bounds the vectorised
+    /// loops, so `D` and `G2` come from one reciprocal. With `H = V + L` unnormalised,
+    /// `T = (Hx/αx)² + (Hy/αy)² + Hz² = |H|² t`, so `D = |H|⁴/(π αx αy T²)`;
+    /// `Λl = (S/l_z − 1)/2` with `S = √(l_z² + αx² lx² + αy² ly²)` (`l_z` clamped at 1e-7,
+    /// as the scalar clamps `l_z²` at 1e-14), so `G2 = 2 l_z/(c_z l_z + c_s S)` for either
+    /// masking; with `P = π αx αy T² (c_z l_z + c_s S)`, `D = |H|⁴ (c_z l_z + c_s S)/P` and
+    /// `D G2 = |H|⁴ 2 l_z/P`.
+    ///
+    /// With `SQUARED = false`, `V·h` is computed exactly as the scalar leaf does (normalise,
+    /// then dot): near total internal reflection the dielectric Fresnel term is a square
+    /// root of a difference in `V·h`, and a different rounding of `V·h` there alone exceeds
+    /// the 1e-5 tolerance. With `SQUARED = true` (the conductor, whose Fresnel term is
+    /// smooth and needs only `(V·h)²` and a product under a square root) the first value is
+    /// `min((V·H)²/|H|², 1)` from the same reciprocal as `D`: no square root or division of
+    /// its own on the chain to the Fresnel term.
     #[inline(always)]
-    fn reflect_terms(&self, k: usize, lx: f32, ly: f32, lz: f32) -> (f32, f32, f32) {
-        let (ax, ay) = (self.ax[k], self.ay[k]);
+    fn reflect_terms<const SQUARED: bool>(
+        &self,
+        k: usize,
+        lx: f32,
+        ly: f32,
+        lz: f32,
+    ) -> (f32, f32, f32) {
         let (vx, vy, vz) = self.v.lane(k);
         let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
-        let inv_len = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
-        let (hx, hy, hz) = (hx * inv_len, hy * inv_len, hz * inv_len);
-        let vh = (vx * hx + vy * hy + vz * hz).max(0.0);
-        let (tx, ty) = (hx / ax, hy / ay);
+        let hh = hx * hx + hy * hy + hz * hz;
+        let (tx, ty) = (hx * self.inv_ax[k], hy * self.inv_ay[k]);
         let t = tx * tx + ty * ty + hz * hz;
-        let d = 1.0 / (PI * ax * ay * t * t);
-        let z2 = (lz * lz).max(1e-14);
-        let x = (ax * ax * lx * lx + ay * ay * ly * ly) / z2;
-        let lambda_l = x / (2.0 * (1.0 + (1.0 + x).sqrt()));
-        let lv = self.lambda_v[k];
-        let g_hc = 1.0 / (1.0 + lv + lambda_l);
-        let g_sep = 1.0 / ((1.0 + lv) * (1.0 + lambda_l));
-        let g = pick(self.separable[k] > 0.0, g_sep, g_hc);
-        (vh, d, g)
+        let lzc = lz.max(1e-7);
+        let s = (lzc * lzc + self.ax2[k] * lx * lx + self.ay2[k] * ly * ly).sqrt();
+        let den_g = self.c_z[k] * lzc + self.c_s[k] * s;
+        let p = self.pi_axay[k] * t * t * den_g;
+        if SQUARED {
+            let vh_u = (vx * hx + vy * hy + vz * hz).max(0.0);
+            let r = 1.0 / (p * hh);
+            let hh3_r = hh * hh * hh * r;
+            let vh2 = (vh_u * vh_u * p * r).min(1.0);
+            (vh2, hh3_r * den_g, hh3_r * (2.0 * lzc))
+        } else {
+            let inv_len = 1.0 / hh.sqrt();
+            let vh = (vx * (hx * inv_len) + vy * (hy * inv_len) + vz * (hz * inv_len)).max(0.0);
+            let hh2_r = hh * hh / p;
+            (vh, hh2_r * den_g, hh2_r * (2.0 * lzc))
+        }
+    }
+
+    /// [`GgxX::reflect_terms`] for every lane, as arrays `(V·h, D, D G2)`.
+    ///
+    /// A pass of its own: the kernels' per-lane work is a long chain through square roots
+    /// and divisions (here, then again in the Fresnel term), and in one long loop body the
+    /// out-of-order core holds only about one vector's chain at a time. Two short loops
+    /// let it overlap the chains of every vector of lanes.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn reflect_pass<const SQUARED: bool>(
+        &self,
+        l: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+    ) -> [[f32; W]; 3] {
+        let mut out = [[0.0f32; W]; 3];
+        for k in 0..W {
+            let (lx, ly, lz) = lane_l(l, lw, k);
+            (out[0][k], out[1][k], out[2][k]) = self.reflect_terms::<SQUARED>(k, lx, ly, lz);
+        }
+        out
     }
 }
 
-/// One channel of [`super::fresnel::conductor`].
+/// One channel of [`super::fresnel::conductor`] at `c² = (V·h)²` (in [0, 1]), given
+/// `η² − κ²` and `4η²κ²`. The scalar's `½ (r_s + r_s·num/den)` is
+/// `r_s (c² |a+ib|² + s⁴)/den` (the `2ac s²` terms cancel in `den + num`), so the two
+/// quotients become one division; `2ac` is `2√(c² a²)`, one square root where the scalar
+/// takes two in sequence (`c`, then `a`).
 #[inline(always)]
-fn conductor1(c: f32, eta: f32, kappa: f32) -> f32 {
-    let c = c.clamp(0.0, 1.0);
-    let c2 = c * c;
+fn conductor1(c2: f32, e2mk2: f32, four_e2k2: f32) -> f32 {
     let s2 = 1.0 - c2;
-    let e2 = eta * eta;
-    let k2 = kappa * kappa;
-    let t0 = e2 - k2 - s2;
-    let ab2 = (t0 * t0 + 4.0 * e2 * k2).sqrt();
-    let a = (0.5 * (ab2 + t0)).max(0.0).sqrt();
-    let two_ac = 2.0 * c * a;
-    let rs = (ab2 - two_ac + c2) / (ab2 + two_ac + c2).max(1e-30);
-    let num = c2 * ab2 - two_ac * s2 + s2 * s2;
-    let den = (c2 * ab2 + two_ac * s2 + s2 * s2).max(1e-30);
-    (0.5 * (rs + rs * num / den)).clamp(0.0, 1.0)
+    let t0 = e2mk2 - s2;
+    let ab2 = (t0 * t0 + four_e2k2).sqrt();
+    let a2 = (0.5 * (ab2 + t0)).max(0.0);
+    let two_ac = 2.0 * (c2 * a2).sqrt();
+    let s4 = s2 * s2;
+    let rs_num = ab2 - two_ac + c2;
+    let rs_den = ab2 + two_ac + c2;
+    let den = c2 * ab2 + two_ac * s2 + s4;
+    (rs_num * (c2 * ab2 + s4) / (rs_den * den).max(1e-30)).clamp(0.0, 1.0)
 }
 
-/// [`super::fresnel::dielectric`] without branches.
+/// [`super::fresnel::dielectric`] at `mu` for `η² = eta2` as a quotient `(F_n, F_d)`,
+/// without branches, for callers that fold the division into their own: `½ a² (1 + b²)`
+/// with `a = (g − μ)/(g + μ)` and `b = (μ(g + μ) − 1)/(μ(g − μ) + 1)` over one denominator;
+/// `(1, 1)` under total internal reflection. (The scalar's final `min(1)` only trims
+/// rounding: the quotient is ≤ 1.)
 #[inline(always)]
-fn dielectric1(mu: f32, eta: f32) -> f32 {
+fn dielectric_nd(mu: f32, eta2: f32) -> (f32, f32) {
     let mu = mu.clamp(0.0, 1.0);
-    let g2 = eta * eta + mu * mu - 1.0;
+    let g2 = eta2 + mu * mu - 1.0;
     let g = g2.max(0.0).sqrt();
-    let a = (g - mu) / (g + mu).max(1e-30);
-    let b = (mu * (g + mu) - 1.0) / (mu * (g - mu) + 1.0);
-    let f = (0.5 * a * a * (1.0 + b * b)).min(1.0);
+    let (gm, gp) = (g - mu, g + mu);
+    let (bn, bd) = (mu * gp - 1.0, mu * gm + 1.0);
+    let bd2 = bd * bd;
+    let tir = g2 < 0.0;
+    (
+        pick(tir, 1.0, 0.5 * gm * gm * (bd2 + bn * bn)),
+        pick(tir, 1.0, (gp * gp * bd2).max(1e-30)),
+    )
+}
+
+/// [`super::fresnel::dielectric`] at `mu` for `η² = eta2`, without branches. With
+/// `a = (g − μ)/(g + μ)` and `b = (μ(g + μ) − 1)/(μ(g − μ) + 1)`, `½ a² (1 + b²)` is one
+/// quotient (one division instead of two).
+#[inline(always)]
+fn dielectric1(mu: f32, eta2: f32) -> f32 {
+    let mu = mu.clamp(0.0, 1.0);
+    let g2 = eta2 + mu * mu - 1.0;
+    let g = g2.max(0.0).sqrt();
+    let (gm, gp) = (g - mu, g + mu);
+    let (bn, bd) = (mu * gp - 1.0, mu * gm + 1.0);
+    let bd2 = bd * bd;
+    let f = (0.5 * gm * gm * (bd2 + bn * bn) / (gp * gp * bd2).max(1e-30)).min(1.0);
     pick(g2 < 0.0, 1.0, f)
 }
 
@@ -660,19 +797,18 @@ impl<const W: usize> ConductorX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+        let [vh2, d, dg] = self.g.reflect_pass::<true>(l, lw);
         for k in 0..W {
-            let (lx, ly, lz) = lane_l(l, lw, k);
-            let (vh, d, g) = self.g.reflect_terms(k, lx, ly, lz);
-            let q = d * g * self.inv_4mu[k];
+            let lz = lw.sign[k] * l.z[k];
+            let (c2, d, dg) = (vh2[k], d[k], dg[k]);
             let fr = [
-                conductor1(vh, self.eta.x[k], self.kappa.x[k]),
-                conductor1(vh, self.eta.y[k], self.kappa.y[k]),
-                conductor1(vh, self.eta.z[k], self.kappa.z[k]),
+                conductor1(c2, self.e2mk2.x[k], self.four_e2k2.x[k]),
+                conductor1(c2, self.e2mk2.y[k], self.four_e2k2.y[k]),
+                conductor1(c2, self.e2mk2.z[k], self.four_e2k2.z[k]),
             ];
-            let scale = self.scale.scaled(k, q);
+            let scale = self.scale_q.scaled(k, dg);
             let f = [0, 1, 2].map(|c| fr[c] * scale[c]);
-            let pdf = d * self.g.g1_v[k] * self.inv_4mu[k];
-            add_valid(acc, lw, k, lz > 0.0, f, pdf);
+            add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
     }
 }
@@ -681,21 +817,31 @@ impl<const W: usize> DielectricX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+        let [vh, d, dg] = self.g.reflect_pass::<false>(l, lw);
         for k in 0..W {
-            let (lx, ly, lz) = lane_l(l, lw, k);
-            let (vh, d, g) = self.g.reflect_terms(k, lx, ly, lz);
-            let fr = dielectric1(vh, self.eta[k]);
-            let q = 0.25 * d * self.inv_mu[k];
-            let f = self.tint_r.scaled(k, fr * g * q);
-            add_valid(acc, lw, k, lz > 0.0, f, self.g.g1_v[k] * q);
+            let lz = lw.sign[k] * l.z[k];
+            let (vh, d, dg) = (vh[k], d[k], dg[k]);
+            let fr = dielectric1(vh, self.eta2[k]);
+            let f = self.tint_q.scaled(k, fr * dg);
+            add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
     }
 }
 
 impl<const W: usize> WardX<W> {
-    #[allow(clippy::needless_range_loop)]
     #[inline]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+        // GM alone (ref10's three Ward lobes) needs no square root: one loop per case.
+        if self.any_classic {
+            self.run::<true>(l, lw, acc)
+        } else {
+            self.run::<false>(l, lw, acc)
+        }
+    }
+
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn run<const CLASSIC: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
             let (vx, vy, vz) = self.v.lane(k);
@@ -703,14 +849,23 @@ impl<const W: usize> WardX<W> {
             let hh2 = hx * hx + hy * hy + hz * hz;
             let vhh = vx * hx + vy * hy + vz * hz;
             let hz2 = hz * hz;
+            // The exponent keeps the scalar's own division: exp amplifies its rounding.
             let e = (hx * hx * self.inv_ax2[k] + hy * hy * self.inv_ay2[k]) / hz2;
             let ex = vmath::exp(-e);
-            let f_classic = self.norm[k] * ex * lz.max(0.0).sqrt();
-            let f_gm = self.norm[k] * hh2 / (hz2 * hz2) * ex * lz;
-            let f = pick(self.gm[k] > 0.0, f_gm, f_classic);
-            let pdf = self.pdf_norm[k] * ex * hh2 * hh2 / (hz2 * hz * vhh);
+            // One reciprocal for the two other quotients: with r = 1/(H_z³ V·H),
+            // 1/H_z² = H_z (V·H) r.
+            let r = 1.0 / (hz2 * hz * vhh);
+            let inv_hz2 = hz * vhh * r;
+            let f_gm = self.norm[k] * hh2 * (inv_hz2 * inv_hz2) * ex * lz;
+            let f = if CLASSIC {
+                let f_classic = self.norm[k] * ex * lz.max(0.0).sqrt();
+                pick(self.gm[k] > 0.0, f_gm, f_classic)
+            } else {
+                f_gm
+            };
+            let pdf = self.pdf_norm[k] * ex * hh2 * hh2 * r;
             let valid = (lz > 0.0) & (ex > 0.0);
-            add_valid(acc, lw, k, valid, self.rho.scaled(k, f), pdf);
+            add_baked(acc, k, valid, self.rho.scaled(k, f), pdf);
         }
     }
 }
