@@ -229,8 +229,24 @@ fn renders_are_deterministic_and_batched_equals_scalar() {
     let a = render_ok(&input, &dir.join("a.pfm"), &["--size", "40"]);
     let b = render_ok(&input, &dir.join("b.pfm"), &["--size", "40"]);
     assert_eq!(a, b);
+    // The batched kernels may round differently: §1.5 asks for the scalar result to relative
+    // 1e-5 (bit-identical runs are asserted above, per path).
     let c = render_ok(&input, &dir.join("c.pfm"), &["--size", "40", "--batched"]);
-    assert_eq!(a, c, "batched preview differs from scalar");
+    let d = render_ok(&input, &dir.join("d.pfm"), &["--size", "40", "--batched"]);
+    assert_eq!(c, d, "batched renders are not deterministic");
+    let (scalar, batched) = (read_pfm(&a), read_pfm(&c));
+    assert_eq!(scalar.px.len(), batched.px.len());
+    for (k, (s, b)) in scalar.px.iter().zip(&batched.px).enumerate() {
+        let tol = 1e-5 * s.iter().fold(1e-3f32, |m, x| m.max(x.abs()));
+        for ch in 0..3 {
+            assert!(
+                (s[ch] - b[ch]).abs() <= tol,
+                "pixel {k} channel {ch}: scalar {} vs batched {}",
+                s[ch],
+                b[ch]
+            );
+        }
+    }
 }
 
 #[test]
