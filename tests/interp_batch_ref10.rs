@@ -5,7 +5,10 @@
 //! whose view is below the surface (one-sided lobes masked, dielectrics flipped) are mixed
 //! in.
 
+#[path = "common/lanes.rs"]
+mod lanes;
 use glam::Vec3;
+use lanes::assert_lanes_match;
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
@@ -60,23 +63,7 @@ fn ref10_batch_equals_scalar() {
                     l
                 }
             });
-            let out = pb.eval(&ls);
-            for k in 0..W {
-                let s = scalar[k].eval(ls[k]);
-                let tol = |x: f32| 1e-5 * x.abs().max(1e-6);
-                assert!(
-                    (out[k].f_cos - s.f_cos).abs().max_element() <= tol(s.f_cos.max_element()),
-                    "round {round} lane {k}: {} vs {}",
-                    out[k].f_cos,
-                    s.f_cos
-                );
-                assert!(
-                    (out[k].pdf - s.pdf).abs() <= tol(s.pdf),
-                    "round {round} lane {k}: pdf {} vs {}",
-                    out[k].pdf,
-                    s.pdf
-                );
-            }
+            assert_lanes_match(&pb.eval(&ls), &scalar, &ls, &format!("round {round}"));
         }
     }
     assert!(masked > 0, "some slots have masked lanes");

@@ -4,7 +4,10 @@
 //! so those lanes are masked, or flipped for the two-sided dielectric), random L. Each test also checks that the slot really runs
 //! the kernel (not the scalar fallback).
 
+#[path = "common/lanes.rs"]
+mod lanes;
 use glam::Vec3;
+use lanes::assert_lanes_match;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
@@ -69,23 +72,7 @@ fn check(
                     l
                 }
             });
-            let out = pb.eval(&ls);
-            for k in 0..W {
-                let s = scalar[k].eval(ls[k]);
-                let tol = |x: f32| 1e-5 * x.abs().max(1e-6);
-                assert!(
-                    (out[k].f_cos - s.f_cos).abs().max_element() <= tol(s.f_cos.max_element()),
-                    "{name} lane {k}: {} vs {}",
-                    out[k].f_cos,
-                    s.f_cos
-                );
-                assert!(
-                    (out[k].pdf - s.pdf).abs() <= tol(s.pdf),
-                    "{name} lane {k}: pdf {} vs {}",
-                    out[k].pdf,
-                    s.pdf
-                );
-            }
+            assert_lanes_match(&pb.eval(&ls), &scalar, &ls, name);
         }
     }
     assert!(masked > 0, "{name}: some lanes are masked");

@@ -1,0 +1,32 @@
+//! Shared by the batched-evaluation tests: a batch's per-lane results against the scalar
+//! path, at the tolerance of spec closures.md §1.5 (relative 1e-5, floor 1e-6).
+
+use glam::Vec3;
+use vstructc::interp::{Eval, Prepared};
+
+/// Asserts `batched[k]` equals `scalar[k].eval(ls[k])` for every lane; `label` names the case
+/// in failure messages.
+pub fn assert_lanes_match<const W: usize>(
+    batched: &[Eval; W],
+    scalar: &[Prepared],
+    ls: &[Vec3; W],
+    label: &str,
+) {
+    let tol = |x: f32| 1e-5 * x.abs().max(1e-6);
+    for k in 0..W {
+        let s = scalar[k].eval(ls[k]);
+        let b = batched[k];
+        assert!(
+            (b.f_cos - s.f_cos).abs().max_element() <= tol(s.f_cos.max_element()),
+            "{label} lane {k}: {} vs {}",
+            b.f_cos,
+            s.f_cos
+        );
+        assert!(
+            (b.pdf - s.pdf).abs() <= tol(s.pdf),
+            "{label} lane {k}: pdf {} vs {}",
+            b.pdf,
+            s.pdf
+        );
+    }
+}
