@@ -6,17 +6,36 @@ use vstructc::interp::soa::{DielectricRBatch, Vec3x};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 
+const W: usize = 16;
+
+fn empty_batch() -> DielectricRBatch<W> {
+    DielectricRBatch {
+        ax: [0.0; W],
+        ay: [0.0; W],
+        eta: [0.0; W],
+        tint: Vec3x::zero(),
+    }
+}
+
+/// Lane `k` of `batch` evaluated by the scalar leaf: the reference.
+fn scalar_lane(batch: &DielectricRBatch<W>, k: usize, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3 {
+    let lobe = Lobe::Dielectric(Dielectric {
+        tint_r: batch.tint.get(k),
+        ..Dielectric::new(
+            Ggx::new(batch.ax[k], batch.ay[k]),
+            Masking::HeightCorrelated,
+            batch.eta[k],
+            DielectricMode::R,
+        )
+    });
+    lobe.prepare(v.get(k), Sides::Front).eval(l.get(k)).f_cos
+}
+
 #[test]
 fn batch_equals_scalar() {
-    const W: usize = 16;
     let mut rng = Rng::new(11);
     for _ in 0..200 {
-        let mut batch = DielectricRBatch::<W> {
-            ax: [0.0; W],
-            ay: [0.0; W],
-            eta: [0.0; W],
-            tint: Vec3x::zero(),
-        };
+        let mut batch = empty_batch();
         let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
         for k in 0..W {
             batch.ax[k] = 0.01 + 0.99 * rng.f32();
@@ -31,16 +50,7 @@ fn batch_equals_scalar() {
         }
         let out = batch.eval(&v, &l);
         for k in 0..W {
-            let lobe = Lobe::Dielectric(Dielectric {
-                tint_r: batch.tint.get(k),
-                ..Dielectric::new(
-                    Ggx::new(batch.ax[k], batch.ay[k]),
-                    Masking::HeightCorrelated,
-                    batch.eta[k],
-                    DielectricMode::R,
-                )
-            });
-            let want = lobe.prepare(v.get(k), Sides::Front).eval(l.get(k)).f_cos;
+            let want = scalar_lane(&batch, k, &v, &l);
             let got = out.get(k);
             assert!(
                 (got - want).abs().max_element() <= 1e-5 * want.max_element() + 1e-12,
@@ -54,15 +64,9 @@ fn batch_equals_scalar() {
 /// (η < 1) and the narrowest widths the batch takes (1e-3) still equal the scalar leaf.
 #[test]
 fn batch_masked_lanes_tir_and_narrow_widths() {
-    const W: usize = 16;
     let mut rng = Rng::new(23);
     for round in 0..200 {
-        let mut batch = DielectricRBatch::<W> {
-            ax: [0.0; W],
-            ay: [0.0; W],
-            eta: [0.0; W],
-            tint: Vec3x::zero(),
-        };
+        let mut batch = empty_batch();
         let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
         for k in 0..W {
             let narrow = k % 3 == 0;
@@ -100,16 +104,7 @@ fn batch_masked_lanes_tir_and_narrow_widths() {
                 assert_eq!(got, Vec3::ZERO, "round {round} lane {k}: masked");
                 continue;
             }
-            let lobe = Lobe::Dielectric(Dielectric {
-                tint_r: batch.tint.get(k),
-                ..Dielectric::new(
-                    Ggx::new(batch.ax[k], batch.ay[k]),
-                    Masking::HeightCorrelated,
-                    batch.eta[k],
-                    DielectricMode::R,
-                )
-            });
-            let want = lobe.prepare(v.get(k), Sides::Front).eval(l.get(k)).f_cos;
+            let want = scalar_lane(&batch, k, &v, &l);
             assert!(
                 (got - want).abs().max_element() <= 1e-5 * want.max_element() + 1e-12,
                 "round {round} lane {k}: {got} vs {want}"

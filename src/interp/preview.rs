@@ -183,6 +183,16 @@ struct RowState {
     batch: Option<Box<PreparedBatch<PREVIEW_LANES>>>,
 }
 
+/// A sphere pixel's radiance (§1.6): the light through `direct` (`eval(L_light).f_cos`), the
+/// uniform environment through the albedo, emission, and the environment seen through
+/// transparency.
+fn radiance(opts: &PreviewOptions, direct: Rgb, prep: &Prepared) -> Rgb {
+    direct * opts.light
+        + opts.env * prep.albedo().total()
+        + prep.emission()
+        + prep.transparency() * opts.env
+}
+
 /// Shade row `j` with the scalar interpreter.
 pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
     let (mut scratch, mut prep) = (Scratch::default(), Prepared::new());
@@ -221,12 +231,7 @@ fn shade_row_with(
             }
         };
         *px = match opts.aov_leaf {
-            None => {
-                direct * opts.light
-                    + opts.env * prep.albedo().total()
-                    + prep.emission()
-                    + prep.transparency() * opts.env
-            }
+            None => radiance(opts, direct, prep),
             Some(leaf) => {
                 let a = prep
                     .lobes()
@@ -282,10 +287,7 @@ fn shade_row_batched_with(
         for (k, &i) in cols[..n].iter().enumerate() {
             let prep = batch.lane(k);
             let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
-            out[i] = d * opts.light
-                + opts.env * prep.albedo().total()
-                + prep.emission()
-                + prep.transparency() * opts.env;
+            out[i] = radiance(opts, d, prep);
         }
     };
     for i in 0..size {
