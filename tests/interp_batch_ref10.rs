@@ -68,3 +68,29 @@ fn ref10_batch_equals_scalar() {
     }
     assert!(masked > 0, "some slots have masked lanes");
 }
+
+/// The whole ref10 batch gives the same bits at every vector extension (`interp::simd`).
+#[test]
+fn ref10_batch_levels_agree_bit_for_bit() {
+    use vstructc::interp::simd::Level;
+    tables::init_all();
+    let m = Material::new(&ref10_ir()).expect("ref10 compiles");
+    let mut rng = Rng::new(29);
+    for _ in 0..10 {
+        let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
+        let pts = ShadingBatch::<W>::new(
+            std::array::from_fn(|k| frames[k].z),
+            std::array::from_fn(|k| frames[k].x),
+            std::array::from_fn(|_| rng.sphere()),
+        );
+        let pb = m.prepare_batch(&pts);
+        for _ in 0..10 {
+            let ls: [Vec3; W] = std::array::from_fn(|_| rng.sphere());
+            let bits =
+                |e: &[Eval; W]| e.map(|e| (e.f_cos.to_array().map(f32::to_bits), e.pdf.to_bits()));
+            let base = bits(&pb.eval_at(Level::Baseline, &ls));
+            assert_eq!(bits(&pb.eval_at(Level::Avx2, &ls)), base, "avx2");
+            assert_eq!(bits(&pb.eval_at(Level::Avx512, &ls)), base, "avx512");
+        }
+    }
+}

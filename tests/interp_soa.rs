@@ -112,3 +112,36 @@ fn batch_masked_lanes_tir_and_narrow_widths() {
         }
     }
 }
+
+/// Every vector extension the batch can run with gives the same bits (`interp::simd`): the
+/// versions differ only in vector width, never in the per-lane operations.
+#[test]
+fn batch_levels_agree_bit_for_bit() {
+    use vstructc::interp::simd::{Level, level};
+    println!("widest level on this CPU: {}", level().name());
+    let mut rng = Rng::new(23);
+    for _ in 0..100 {
+        let mut batch = empty_batch();
+        let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
+        for k in 0..W {
+            batch.ax[k] = 0.001 + rng.f32();
+            batch.ay[k] = 0.001 + rng.f32();
+            batch.eta[k] = 0.3 + 2.7 * rng.f32();
+            batch.tint.set(k, Vec3::splat(rng.f32()));
+            v.set(k, rng.sphere());
+            l.set(k, rng.sphere());
+        }
+        let base = batch.eval_at(Level::Baseline, &v, &l);
+        for at in [Level::Avx2, Level::Avx512] {
+            let got = batch.eval_at(at, &v, &l);
+            for k in 0..W {
+                assert_eq!(
+                    got.get(k).to_array().map(f32::to_bits),
+                    base.get(k).to_array().map(f32::to_bits),
+                    "lane {k} at {}",
+                    at.name()
+                );
+            }
+        }
+    }
+}

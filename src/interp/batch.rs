@@ -16,6 +16,7 @@
 
 use super::frame::Frame;
 use super::material::{Eval, Material, Prepared, Scratch, ShadingPoint};
+use super::simd::{Level, call_widest, widest_versions};
 use super::soa::{Acc, Kernel, LaneWeights, Vec3x};
 use crate::ir::MAX_LOBES;
 use glam::{Vec2, Vec3};
@@ -243,8 +244,22 @@ impl<const W: usize> PreparedBatch<W> {
     }
 
     /// `eval` per lane at world directions `l` (equal to the scalar [`Prepared::eval`] to
-    /// relative 1e-5).
+    /// relative 1e-5). The kernels run in the widest vector extension the CPU has
+    /// ([`super::simd`]); the results do not depend on which.
     pub fn eval(&self, l: &[Vec3; W]) -> [Eval; W] {
+        self.eval_at(Level::Avx512, l)
+    }
+
+    /// [`PreparedBatch::eval`] with the kernels compiled for at most `level` (for tests and
+    /// benchmarks: every level gives the same bits).
+    pub fn eval_at(&self, level: Level, l: &[Vec3; W]) -> [Eval; W] {
+        call_widest!(level, self.eval_lanes(l), eval_avx512, eval_avx2)
+    }
+
+    widest_versions!(eval_lanes(l: &[Vec3; W]) -> [Eval; W], eval_avx512, eval_avx2);
+
+    #[inline(always)]
+    fn eval_lanes(&self, l: &[Vec3; W]) -> [Eval; W] {
         let world = Vec3x::from_vecs(l);
         let mut acc = Acc {
             f: Vec3x::zero(),

@@ -30,6 +30,7 @@ pub mod microfacet;
 pub mod preview;
 pub mod reference;
 pub mod sheen;
+pub mod simd;
 pub mod soa;
 pub mod tables;
 pub mod verify;

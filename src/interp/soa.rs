@@ -11,6 +11,7 @@
 use super::fresnel::Fresnel;
 use super::ggx::Masking;
 use super::sheen::SheenMasking;
+use super::simd::{Level, call_widest, widest_versions};
 use super::ward::WardVariant;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -37,7 +38,7 @@ impl<const W: usize> Vec3x<W> {
     }
 
     /// From `W` vectors.
-    #[inline]
+    #[inline(always)]
     pub fn from_vecs(v: &[Vec3; W]) -> Self {
         let mut out = Self::zero();
         for (k, v) in v.iter().enumerate() {
@@ -88,8 +89,22 @@ pub struct DielectricRBatch<const W: usize> {
 impl<const W: usize> DielectricRBatch<W> {
     /// `f·μ_i` per lane for local views `v` and lights `l` (both unit); lanes with `μ_o ≤ 0`
     /// or `μ_i ≤ 0` give 0.
-    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    /// Runs in the widest vector extension the CPU has ([`super::simd`]).
     pub fn eval(&self, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
+        self.eval_at(Level::Avx512, v, l)
+    }
+
+    /// [`DielectricRBatch::eval`] compiled for at most `level` (every level gives the same
+    /// bits).
+    pub fn eval_at(&self, level: Level, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
+        call_widest!(level, self.eval_lanes(v, l), eval_avx512, eval_avx2)
+    }
+
+    widest_versions!(eval_lanes(v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W>, eval_avx512, eval_avx2);
+
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    fn eval_lanes(&self, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
         // The scalar leaf spends 13 divisions and 4 square roots per lane; vectorised, the
         // divide/sqrt unit and the latency of chains through it bound the loop, so the same
         // formula is rearranged around two divisions. With H = V + L unnormalised:
@@ -505,7 +520,7 @@ impl<const W: usize> Kernel<W> {
 
     /// Adds the slot's weighted response at local directions `l` (before the per-lane flip)
     /// to `acc`. Returns false for [`Kernel::Scalar`] (the caller evaluates lane by lane).
-    #[inline]
+    #[inline(always)]
     pub(super) fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) -> bool {
         match self {
             Kernel::Scalar => return false,
@@ -584,7 +599,7 @@ fn lane_l<const W: usize>(l: &Vec3x<W>, lw: &LaneWeights<W>, k: usize) -> (f32, 
 }
 
 #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
-#[inline]
+#[inline(always)]
 fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
@@ -599,7 +614,7 @@ fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>,
 }
 
 impl<const W: usize> OrenNayarX<W> {
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         // The `Ê` form is the same for every lane: one loop per form, no branch inside.
         if self.fast {
@@ -795,7 +810,7 @@ fn dielectric1(mu: f32, eta2: f32) -> f32 {
 
 impl<const W: usize> ConductorX<W> {
     #[allow(clippy::needless_range_loop)]
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         let [vh2, d, dg] = self.g.reflect_pass::<true>(l, lw);
         for k in 0..W {
@@ -815,7 +830,7 @@ impl<const W: usize> ConductorX<W> {
 
 impl<const W: usize> DielectricX<W> {
     #[allow(clippy::needless_range_loop)]
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         let [vh, d, dg] = self.g.reflect_pass::<false>(l, lw);
         for k in 0..W {
@@ -829,7 +844,7 @@ impl<const W: usize> DielectricX<W> {
 }
 
 impl<const W: usize> WardX<W> {
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         // GM alone (ref10's three Ward lobes) needs no square root: one loop per case.
         if self.any_classic {
@@ -872,7 +887,7 @@ impl<const W: usize> WardX<W> {
 
 impl<const W: usize> SheenCKX<W> {
     #[allow(clippy::needless_range_loop)]
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
@@ -889,7 +904,7 @@ impl<const W: usize> SheenCKX<W> {
 
 impl<const W: usize> SheenLTCX<W> {
     #[allow(clippy::needless_range_loop)]
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);

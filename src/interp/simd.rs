@@ -1,0 +1,100 @@
+//! Runtime choice of the widest vector extension for the batched kernels ([`super::soa`],
+//! [`super::batch`]).
+//!
+//! A baseline x86-64 build may only assume SSE2, so the kernels' loops over lanes compile to
+//! 4-wide code. The same source compiled inside a function marked `#[target_feature]` becomes
+//! AVX2 or AVX-512 code. A batched entry point therefore comes in three versions, made by
+//! [`widest_versions!`]: its body (`#[inline(always)]`, so that it and the kernels it calls
+//! are compiled into each version), an AVX2 wrapper and an AVX-512 wrapper. The entry point
+//! picks one with [`level`], which asks the CPU once (the standard library caches the
+//! answer).
+//!
+//! Results do not depend on the version that runs: each does the same IEEE operations per
+//! lane in the same order (Rust never fuses `a * b + c` into one rounding, and lanes do not
+//! interact), so the outputs are bit-identical; `tests/interp_soa.rs` checks this.
+//!
+//! Why not only `-C target-cpu=native`: a build for distribution cannot assume AVX-512, and on
+//! Intel server cores LLVM's tuning for `native` prefers 256-bit vectors, while these kernels,
+//! limited by the divide/square-root unit, run fastest 512 bits wide (BENCHMARKS.md,
+//! session 7).
+
+/// The vector extensions a batched entry point can run with, narrowest first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Level {
+    /// Whatever the build targets (SSE2 for a baseline x86-64 build).
+    Baseline,
+    /// AVX2 with FMA.
+    Avx2,
+    /// AVX-512 (F, VL, DQ, BW) with AVX2 and FMA.
+    Avx512,
+}
+
+impl Level {
+    /// Lower-case name, for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Level::Avx512 => "avx512",
+            Level::Avx2 => "avx2",
+            Level::Baseline => "baseline",
+        }
+    }
+}
+
+/// The widest [`Level`] this CPU supports.
+#[inline]
+pub fn level() -> Level {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        let avx2 = has!("avx2") && has!("fma");
+        if avx2 && has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw") {
+            return Level::Avx512;
+        }
+        if avx2 {
+            return Level::Avx2;
+        }
+    }
+    Level::Baseline
+}
+
+/// Inside an `impl` block: defines `unsafe fn $avx512(&self, ..)` and `unsafe fn $avx2(&self,
+/// ..)` (x86-64 only) that run `self.$body(..)` with AVX-512 or AVX2 enabled. `$body` must be
+/// `#[inline(always)]`. Callers check [`level`] first: calling a version the CPU lacks is
+/// undefined behaviour.
+macro_rules! widest_versions {
+    ($body:ident($($arg:ident: $ty:ty),*) -> $ret:ty, $avx512:ident, $avx2:ident) => {
+        /// The body compiled with AVX-512. Safety: the CPU must support AVX-512 F, VL, DQ
+        /// and BW, AVX2 and FMA.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+        unsafe fn $avx512(&self, $($arg: $ty),*) -> $ret {
+            self.$body($($arg),*)
+        }
+
+        /// The body compiled with AVX2. Safety: the CPU must support AVX2 and FMA.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,fma")]
+        unsafe fn $avx2(&self, $($arg: $ty),*) -> $ret {
+            self.$body($($arg),*)
+        }
+    };
+}
+
+/// Calls the version of a [`widest_versions!`] entry point for `$at` (a [`Level`]), or for
+/// the widest level the CPU has if that is narrower.
+macro_rules! call_widest {
+    ($at:expr, $self:ident.$body:ident($($arg:expr),*), $avx512:ident, $avx2:ident) => {{
+        #[cfg(target_arch = "x86_64")]
+        match Ord::min($at, $crate::interp::simd::level()) {
+            // SAFETY: `level` found every feature the version is compiled with.
+            $crate::interp::simd::Level::Avx512 => unsafe { $self.$avx512($($arg),*) },
+            // SAFETY: as above.
+            $crate::interp::simd::Level::Avx2 => unsafe { $self.$avx2($($arg),*) },
+            $crate::interp::simd::Level::Baseline => $self.$body($($arg),*),
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        $self.$body($($arg),*)
+    }};
+}
+
+pub(super) use {call_widest, widest_versions};
