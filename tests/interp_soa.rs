@@ -131,9 +131,10 @@ fn batch_levels_agree_bit_for_bit() {
             v.set(k, rng.sphere());
             l.set(k, rng.sphere());
         }
-        let base = batch.eval_at(Level::Baseline, &v, &l);
+        let view = batch.view(&v);
+        let base = view.eval_at(Level::Baseline, &l);
         for at in [Level::Avx2, Level::Avx512] {
-            let got = batch.eval_at(at, &v, &l);
+            let got = view.eval_at(at, &l);
             for k in 0..W {
                 assert_eq!(
                     got.get(k).to_array().map(f32::to_bits),

@@ -66,6 +66,40 @@ pub fn dielectric(mu: f32, eta: f32) -> f32 {
     (0.5 * a * a * (1.0 + b * b)).min(1.0)
 }
 
+/// [`dielectric`] at the unnormalised half vector `H = V + L` of a reflection: `m = V·H`,
+/// `hh = |H|²`, `e2m1 = η² − 1`, as a quotient `(F_n, F_d)` with `F = F_n/F_d` (`(1, 1)` under
+/// total internal reflection).
+///
+/// The formula is homogeneous in `|H|`: with `G = √(|H|²(η² − 1) + m²) = |H| g`,
+/// `a = (G − m)/(G + m)` and `b = (m(G + m) − |H|²)/(m(G − m) + |H|²)`, so `V·h` (a square
+/// root and a division) is never formed. Apart from the cost, this is also the better
+/// conditioned form near η = 1, where `g − μ` cancels: against f64, its worst relative error
+/// over random GGX reflections was 1e-4 where normalising first gave 1e-3 (session 7).
+/// The scalar dielectric leaf and the batched kernels share it, so they agree to rounding.
+#[inline(always)]
+pub fn dielectric_half_quotient(m: f32, hh: f32, e2m1: f32) -> (f32, f32) {
+    let m = m.max(0.0);
+    let g2 = hh * e2m1 + m * m;
+    let g = g2.max(0.0).sqrt();
+    let (an, ad) = (g - m, g + m);
+    let (bn, bd) = (m * ad - hh, m * an + hh);
+    let bd2 = bd * bd;
+    // A select rather than a branch: the batched kernels run this on every lane.
+    let tir = g2 < 0.0;
+    let pick = |c: bool, a: f32, b: f32| super::vmath::select(c, a, b);
+    (
+        pick(tir, 1.0, 0.5 * an * an * (bd2 + bn * bn)),
+        pick(tir, 1.0, (ad * ad * bd2).max(1e-30)),
+    )
+}
+
+/// [`dielectric_half_quotient`] as a value, clamped to 1.
+#[inline(always)]
+pub fn dielectric_half(m: f32, hh: f32, e2m1: f32) -> f32 {
+    let (n, d) = dielectric_half_quotient(m, hh, e2m1);
+    (n / d).min(1.0)
+}
+
 /// Conductor reflectance for the complex index `η + iκ`, per channel.
 #[inline]
 pub fn conductor(mu: f32, eta: Rgb, kappa: Rgb) -> Rgb {

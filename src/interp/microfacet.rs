@@ -671,9 +671,11 @@ impl PreparedDielectric {
             if !self.refl {
                 return LobeEval::ZERO;
             }
-            let h = (self.v + l).normalize();
-            let vh = self.v.dot(h).max(0.0);
-            let f = fresnel::dielectric(vh, self.eta);
+            // Fresnel from the unnormalised half vector (shared with the batched kernels).
+            let hu = self.v + l;
+            let hh = hu.length_squared();
+            let f = fresnel::dielectric_half(self.v.dot(hu), hh, self.eta * self.eta - 1.0);
+            let h = hu * (1.0 / hh.sqrt());
             let d = self.ggx.d(h);
             let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
             let q = 0.25 * d * self.inv_mu;

@@ -8,7 +8,7 @@
 //! families fall back to the scalar lobe lane by lane. Results equal the scalar
 //! [`super::PreparedLobe::eval`] to relative 1e-5 (`tests/interp_soa_kernels.rs`).
 
-use super::fresnel::Fresnel;
+use super::fresnel::{Fresnel, dielectric_half, dielectric_half_quotient};
 use super::ggx::Masking;
 use super::sheen::SheenMasking;
 use super::simd::{Level, call_widest, widest_versions};
@@ -88,66 +88,114 @@ pub struct DielectricRBatch<const W: usize> {
 
 impl<const W: usize> DielectricRBatch<W> {
     /// `f·μ_i` per lane for local views `v` and lights `l` (both unit); lanes with `μ_o ≤ 0`
-    /// or `μ_i ≤ 0` give 0.
-    /// Runs in the widest vector extension the CPU has ([`super::simd`]).
+    /// or `μ_i ≤ 0` give 0. For many lights per view, prepare the view once
+    /// ([`DielectricRBatch::view`]).
     pub fn eval(&self, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
-        self.eval_at(Level::Avx512, v, l)
+        self.view(v).eval(l)
     }
 
-    /// [`DielectricRBatch::eval`] compiled for at most `level` (every level gives the same
+    /// The view-only terms for local views `v` (unit), computed once (spec §6.1).
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    pub fn view(&self, v: &Vec3x<W>) -> DielectricRView<W> {
+        let mut out = DielectricRView {
+            v: *v,
+            vzc: [0.0; W],
+            s_v: [0.0; W],
+            ax: self.ax,
+            ay: self.ay,
+            ax2: [0.0; W],
+            ay2: [0.0; W],
+            c: [0.0; W],
+            e2m1: [0.0; W],
+            tint: self.tint,
+        };
+        for k in 0..W {
+            let (ax, ay) = (self.ax[k], self.ay[k]);
+            let (ax2, ay2) = (ax * ax, ay * ay);
+            let vzc = v.z[k].max(1e-7);
+            out.vzc[k] = vzc;
+            out.ax2[k] = ax2;
+            out.ay2[k] = ay2;
+            out.s_v[k] = (vzc * vzc + ax2 * v.x[k] * v.x[k] + ay2 * v.y[k] * v.y[k]).sqrt();
+            let axy = ax * ay;
+            out.c[k] = axy * axy * axy * (0.5 / PI);
+            out.e2m1[k] = self.eta[k] * self.eta[k] - 1.0;
+        }
+        out
+    }
+}
+
+/// A [`DielectricRBatch`] at fixed views ([`DielectricRBatch::view`]): evaluates many
+/// lights with the view-only terms computed once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DielectricRView<const W: usize> {
+    v: Vec3x<W>,
+    /// `max(v_z, 1e-7)` (the scalar clamps `v_z²` at 1e-14).
+    vzc: [f32; W],
+    /// `S_v = √(v_z² + αx² v_x² + αy² v_y²)`.
+    s_v: [f32; W],
+    ax: [f32; W],
+    ay: [f32; W],
+    ax2: [f32; W],
+    ay2: [f32; W],
+    /// `(αx αy)³/(2π)`.
+    c: [f32; W],
+    /// `η² − 1`.
+    e2m1: [f32; W],
+    tint: Vec3x<W>,
+}
+
+impl<const W: usize> DielectricRView<W> {
+    /// `f·μ_i` per lane for local lights `l` (unit); lanes with `μ_o ≤ 0` or `μ_i ≤ 0`
+    /// give 0. Runs in the widest vector extension the CPU has ([`super::simd`]).
+    pub fn eval(&self, l: &Vec3x<W>) -> Vec3x<W> {
+        self.eval_at(Level::Avx512, l)
+    }
+
+    /// [`DielectricRView::eval`] compiled for at most `level` (every level gives the same
     /// bits).
-    pub fn eval_at(&self, level: Level, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
-        call_widest!(level, self.eval_lanes(v, l), eval_avx512, eval_avx2)
+    pub fn eval_at(&self, level: Level, l: &Vec3x<W>) -> Vec3x<W> {
+        call_widest!(level, self.eval_lanes(l), eval_avx512, eval_avx2)
     }
 
-    widest_versions!(eval_lanes(v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W>, eval_avx512, eval_avx2);
+    widest_versions!(eval_lanes(l: &Vec3x<W>) -> Vec3x<W>, eval_avx512, eval_avx2);
 
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     #[inline(always)]
-    fn eval_lanes(&self, v: &Vec3x<W>, l: &Vec3x<W>) -> Vec3x<W> {
+    fn eval_lanes(&self, l: &Vec3x<W>) -> Vec3x<W> {
         // The scalar leaf spends 13 divisions and 4 square roots per lane; vectorised, the
-        // divide/sqrt unit and the latency of chains through it bound the loop, so the same
-        // formula is rearranged around two divisions. With H = V + L unnormalised:
+        // divide/sqrt unit bounds the loop, so the same formula is rearranged around one
+        // division and two square roots. With H = V + L unnormalised and m = V·H = |H| (V·h):
         //   D = 1/(π αx αy t²),  t = (hx/αx)² + (hy/αy)² + hz² = T/(|H|² (αx αy)²)
         //     with T = (Hx αy)² + (Hy αx)² + (Hz αx αy)²,  so D = |H|⁴ (αx αy)³/(π T²);
         //   Λ(w) = (√(1 + x) − 1)/2 = (S_w/w_z − 1)/2,  S_w = √(w_z² + αx² wx² + αy² wy²),
         //     so G2 = 1/(1 + Λv + Λl) = 2 v_z l_z/(S_v l_z + S_l v_z)
-        // (w_z clamped at 1e-7 as the scalar clamps w_z² at 1e-14), and
+        //   (w_z clamped at 1e-7 as the scalar clamps w_z² at 1e-14; S_v is a view term);
+        //   the exact Fresnel is homogeneous in |H| (`fresnel::dielectric_half_quotient`),
+        //     so V·h itself (a square root and a division) is never formed;
         //   f = F D G2/(4 v_z) = F |H|⁴ (αx αy)³ l_z / (2 π T² (S_v l_z + S_l v_z)),
-        // with the Fresnel quotient F = F_n/F_d folded into the same division.
-        //
-        // Two passes over the lanes: the geometry, then the Fresnel term that depends on
-        // V·h. Each pass is a short loop body whose iterations are independent, so the
-        // out-of-order core overlaps the square-root/division chains of several vectors;
-        // in one long body it waits on one chain at a time.
-        let mut vh = [0.0f32; W];
-        let mut num = [0.0f32; W];
-        let mut den = [0.0f32; W];
+        // with F = ½ a²(1 + b²) as one quotient folded into the same division.
+        let v = &self.v;
+        let mut out = Vec3x::zero();
         for k in 0..W {
             let (ax, ay) = (self.ax[k], self.ay[k]);
             let (vx, vy, vz) = (v.x[k], v.y[k], v.z[k]);
             let (lx, ly, lz) = (l.x[k], l.y[k], l.z[k]);
             let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
             let hh = (hx * hx + hy * hy + hz * hz).max(1e-30);
-            // V·h exactly as the scalar leaf (see `GgxX::reflect_terms`: the Fresnel term
-            // near total internal reflection amplifies any other rounding).
-            let inv_len = 1.0 / hh.sqrt();
-            vh[k] = (vx * (hx * inv_len) + vy * (hy * inv_len) + vz * (hz * inv_len)).max(0.0);
+            // Fresnel, scale-free (see above), as the scalar leaf computes it.
+            let m = vx * hx + vy * hy + vz * hz;
+            let (f_n, f_d) = dielectric_half_quotient(m, hh, self.e2m1[k]);
+            // D and G2.
             let axy = ax * ay;
             let (ux, uy, uz) = (hx * ay, hy * ax, hz * axy);
             let tt = ux * ux + uy * uy + uz * uz;
-            let (vzc, lzc) = (vz.max(1e-7), lz.max(1e-7));
-            let (ax2, ay2) = (ax * ax, ay * ay);
-            let s_v = (vzc * vzc + ax2 * vx * vx + ay2 * vy * vy).sqrt();
-            let s_l = (lzc * lzc + ax2 * lx * lx + ay2 * ly * ly).sqrt();
-            num[k] = hh * hh * (axy * axy * axy) * (0.5 * lzc);
-            den[k] = PI * tt * tt * (s_v * lzc + s_l * vzc);
-        }
-        let mut out = Vec3x::zero();
-        for k in 0..W {
-            let (f_n, f_d) = dielectric_nd(vh[k], self.eta[k] * self.eta[k]);
-            let value = f_n * num[k] / (f_d * den[k]);
-            let value = keep((v.z[k] > 0.0) & (l.z[k] > 0.0), value);
+            let lzc = lz.max(1e-7);
+            let s_l = (lzc * lzc + self.ax2[k] * lx * lx + self.ay2[k] * ly * ly).sqrt();
+            let num = hh * hh * self.c[k] * lzc;
+            let den = tt * tt * (self.s_v[k] * lzc + s_l * self.vzc[k]);
+            let value = f_n * num / (f_d * den);
+            let value = keep((vz > 0.0) & (lz > 0.0), value);
             out.x[k] = value * self.tint.x[k];
             out.y[k] = value * self.tint.y[k];
             out.z[k] = value * self.tint.z[k];
@@ -230,8 +278,8 @@ pub(super) struct ConductorX<const W: usize> {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct DielectricX<const W: usize> {
     g: GgxX<W>,
-    /// `η²`.
-    eta2: [f32; W],
+    /// `η² − 1`.
+    e2m1: [f32; W],
     /// `p G1(V)/(4 μ_o)`: the pdf term is `D` times this.
     pdf_c: [f32; W],
     /// `w tint_r/(4 μ_o)`: the `f·μ_i` term is `F D G2` times this.
@@ -423,7 +471,7 @@ impl<const W: usize> Kernel<W> {
                 if !matches!(self, Kernel::DielectricR(_)) {
                     *self = Kernel::DielectricR(DielectricX {
                         g: GgxX::zero(),
-                        eta2: [0.0; W],
+                        e2m1: [0.0; W],
                         pdf_c: [0.0; W],
                         tint_q: Vec3x::zero(),
                     });
@@ -432,7 +480,7 @@ impl<const W: usize> Kernel<W> {
                     for k in 0..W {
                         if let State::Dielectric(p) = &lane(k).state {
                             x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
-                            x.eta2[k] = p.eta * p.eta;
+                            x.e2m1[k] = p.eta * p.eta - 1.0;
                             let q = 0.25 * p.inv_mu;
                             x.pdf_c[k] = p.g1_v * q * lw.p[k];
                             x.tint_q.set(k, p.tint_r * q * lw.w.get(k));
@@ -708,7 +756,7 @@ impl<const W: usize> GgxX<W> {
         lx: f32,
         ly: f32,
         lz: f32,
-    ) -> (f32, f32, f32) {
+    ) -> (f32, f32, f32, f32) {
         let (vx, vy, vz) = self.v.lane(k);
         let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
         let hh = hx * hx + hy * hy + hz * hz;
@@ -718,17 +766,17 @@ impl<const W: usize> GgxX<W> {
         let s = (lzc * lzc + self.ax2[k] * lx * lx + self.ay2[k] * ly * ly).sqrt();
         let den_g = self.c_z[k] * lzc + self.c_s[k] * s;
         let p = self.pi_axay[k] * t * t * den_g;
+        let vh_u = (vx * hx + vy * hy + vz * hz).max(0.0);
         if SQUARED {
-            let vh_u = (vx * hx + vy * hy + vz * hz).max(0.0);
             let r = 1.0 / (p * hh);
             let hh3_r = hh * hh * hh * r;
             let vh2 = (vh_u * vh_u * p * r).min(1.0);
-            (vh2, hh3_r * den_g, hh3_r * (2.0 * lzc))
+            (vh2, hh, hh3_r * den_g, hh3_r * (2.0 * lzc))
         } else {
-            let inv_len = 1.0 / hh.sqrt();
-            let vh = (vx * (hx * inv_len) + vy * (hy * inv_len) + vz * (hz * inv_len)).max(0.0);
+            // The dielectric's Fresnel term takes `V·H` and `|H|²` as they are
+            // (`fresnel::dielectric_half_quotient`): no normalisation.
             let hh2_r = hh * hh / p;
-            (vh, hh2_r * den_g, hh2_r * (2.0 * lzc))
+            (vh_u, hh, hh2_r * den_g, hh2_r * (2.0 * lzc))
         }
     }
 
@@ -744,11 +792,12 @@ impl<const W: usize> GgxX<W> {
         &self,
         l: &Vec3x<W>,
         lw: &LaneWeights<W>,
-    ) -> [[f32; W]; 3] {
-        let mut out = [[0.0f32; W]; 3];
+    ) -> [[f32; W]; 4] {
+        let mut out = [[0.0f32; W]; 4];
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
-            (out[0][k], out[1][k], out[2][k]) = self.reflect_terms::<SQUARED>(k, lx, ly, lz);
+            (out[0][k], out[1][k], out[2][k], out[3][k]) =
+                self.reflect_terms::<SQUARED>(k, lx, ly, lz);
         }
         out
     }
@@ -773,46 +822,11 @@ fn conductor1(c2: f32, e2mk2: f32, four_e2k2: f32) -> f32 {
     (rs_num * (c2 * ab2 + s4) / (rs_den * den).max(1e-30)).clamp(0.0, 1.0)
 }
 
-/// [`super::fresnel::dielectric`] at `mu` for `η² = eta2` as a quotient `(F_n, F_d)`,
-/// without branches, for callers that fold the division into their own: `½ a² (1 + b²)`
-/// with `a = (g − μ)/(g + μ)` and `b = (μ(g + μ) − 1)/(μ(g − μ) + 1)` over one denominator;
-/// `(1, 1)` under total internal reflection. (The scalar's final `min(1)` only trims
-/// rounding: the quotient is ≤ 1.)
-#[inline(always)]
-fn dielectric_nd(mu: f32, eta2: f32) -> (f32, f32) {
-    let mu = mu.clamp(0.0, 1.0);
-    let g2 = eta2 + mu * mu - 1.0;
-    let g = g2.max(0.0).sqrt();
-    let (gm, gp) = (g - mu, g + mu);
-    let (bn, bd) = (mu * gp - 1.0, mu * gm + 1.0);
-    let bd2 = bd * bd;
-    let tir = g2 < 0.0;
-    (
-        pick(tir, 1.0, 0.5 * gm * gm * (bd2 + bn * bn)),
-        pick(tir, 1.0, (gp * gp * bd2).max(1e-30)),
-    )
-}
-
-/// [`super::fresnel::dielectric`] at `mu` for `η² = eta2`, without branches. With
-/// `a = (g − μ)/(g + μ)` and `b = (μ(g + μ) − 1)/(μ(g − μ) + 1)`, `½ a² (1 + b²)` is one
-/// quotient (one division instead of two).
-#[inline(always)]
-fn dielectric1(mu: f32, eta2: f32) -> f32 {
-    let mu = mu.clamp(0.0, 1.0);
-    let g2 = eta2 + mu * mu - 1.0;
-    let g = g2.max(0.0).sqrt();
-    let (gm, gp) = (g - mu, g + mu);
-    let (bn, bd) = (mu * gp - 1.0, mu * gm + 1.0);
-    let bd2 = bd * bd;
-    let f = (0.5 * gm * gm * (bd2 + bn * bn) / (gp * gp * bd2).max(1e-30)).min(1.0);
-    pick(g2 < 0.0, 1.0, f)
-}
-
 impl<const W: usize> ConductorX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
-        let [vh2, d, dg] = self.g.reflect_pass::<true>(l, lw);
+        let [vh2, _, d, dg] = self.g.reflect_pass::<true>(l, lw);
         for k in 0..W {
             let lz = lw.sign[k] * l.z[k];
             let (c2, d, dg) = (vh2[k], d[k], dg[k]);
@@ -832,11 +846,11 @@ impl<const W: usize> DielectricX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
-        let [vh, d, dg] = self.g.reflect_pass::<false>(l, lw);
+        let [m, hh, d, dg] = self.g.reflect_pass::<false>(l, lw);
         for k in 0..W {
             let lz = lw.sign[k] * l.z[k];
-            let (vh, d, dg) = (vh[k], d[k], dg[k]);
-            let fr = dielectric1(vh, self.eta2[k]);
+            let (d, dg) = (d[k], dg[k]);
+            let fr = dielectric_half(m[k], hh[k], self.e2m1[k]);
             let f = self.tint_q.scaled(k, fr * dg);
             add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
