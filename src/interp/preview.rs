@@ -20,6 +20,7 @@
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
+use super::simd::Level;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::{PI, TAU};
@@ -283,7 +284,10 @@ fn shade_row_batched_with(
             pts.uv[k] = pts.uv[n - 1];
         }
         material.prepare_batch_into(pts, scratch, batch);
-        let direct = (opts.light != Vec3::ZERO).then(|| batch.eval(&[l; W]));
+        // AVX2 at most: a pixel's time is mostly the scalar prepare, and AVX-512 code lowers
+        // the core's clock for the code around it (measured: −12 % for the 512² preview on
+        // the AVX-512 reference machine, while bulk evaluation gains; BENCHMARKS.md, S7).
+        let direct = (opts.light != Vec3::ZERO).then(|| batch.eval_at(Level::Avx2, &[l; W]));
         for (k, &i) in cols[..n].iter().enumerate() {
             let prep = batch.lane(k);
             let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
