@@ -4,7 +4,7 @@
 //! A baseline x86-64 build may only assume SSE2, so the kernels' loops over lanes compile to
 //! 4-wide code. The same source compiled inside a function marked `#[target_feature]` becomes
 //! AVX2 or AVX-512 code. A batched entry point therefore comes in three versions, made by
-//! [`widest_versions!`]: its body (`#[inline(always)]`, so that it and the kernels it calls
+//! `widest_versions!`: its body (`#[inline(always)]`, so that it and the kernels it calls
 //! are compiled into each version), an AVX2 wrapper and an AVX-512 wrapper. The entry point
 //! picks one with [`level`], which asks the CPU once (the standard library caches the
 //! answer).
