@@ -731,8 +731,8 @@ impl<const W: usize> GgxX<W> {
         };
     }
 
-    /// Lane `k` at `(lx, ly, lz)` (`lz > 0` assumed by the caller's select): the unit half
-    /// vector's `V·h` (≥ 0), `D(h)` and `D(h)·G2`.
+    /// Lane `k` at `(lx, ly, lz)` (`lz > 0` assumed by the caller's select): a Fresnel
+    /// argument, `|H|²`, `D(h)` and `D(h)·G2`.
     ///
     /// The scalar leaf divides seven times here; the divide unit bounds the vectorised
     /// loops, so `D` and `G2` come from one reciprocal. With `H = V + L` unnormalised,
@@ -742,13 +742,12 @@ impl<const W: usize> GgxX<W> {
     /// masking; with `P = π αx αy T² (c_z l_z + c_s S)`, `D = |H|⁴ (c_z l_z + c_s S)/P` and
     /// `D G2 = |H|⁴ 2 l_z/P`.
     ///
-    /// With `SQUARED = false`, `V·h` is computed exactly as the scalar leaf does (normalise,
-    /// then dot): near total internal reflection the dielectric Fresnel term is a square
-    /// root of a difference in `V·h`, and a different rounding of `V·h` there alone exceeds
-    /// the 1e-5 tolerance. With `SQUARED = true` (the conductor, whose Fresnel term is
-    /// smooth and needs only `(V·h)²` and a product under a square root) the first value is
-    /// `min((V·H)²/|H|², 1)` from the same reciprocal as `D`: no square root or division of
-    /// its own on the chain to the Fresnel term.
+    /// The Fresnel argument: with `SQUARED = false` (the dielectric) it is `V·H` itself,
+    /// which `fresnel::dielectric_half_quotient` takes with `|H|²` exactly as the scalar
+    /// leaf does (no normalisation: near total internal reflection the dielectric term
+    /// amplifies any difference in rounding). With `SQUARED = true` (the conductor, whose
+    /// Fresnel term is smooth and needs only `(V·h)²` and a product under a square root) it
+    /// is `min((V·H)²/|H|², 1)` from the same reciprocal as `D`.
     #[inline(always)]
     fn reflect_terms<const SQUARED: bool>(
         &self,
@@ -780,7 +779,8 @@ impl<const W: usize> GgxX<W> {
         }
     }
 
-    /// [`GgxX::reflect_terms`] for every lane, as arrays `(V·h, D, D G2)`.
+    /// [`GgxX::reflect_terms`] for every lane, as arrays (Fresnel argument, `|H|²`, `D`,
+    /// `D G2`).
     ///
     /// A pass of its own: the kernels' per-lane work is a long chain through square roots
     /// and divisions (here, then again in the Fresnel term), and in one long loop body the
