@@ -8,7 +8,7 @@
 #[path = "common/lanes.rs"]
 mod lanes;
 use glam::Vec3;
-use lanes::assert_lanes_match;
+use lanes::{assert_lanes_match, random_frames_and_views};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
@@ -24,13 +24,8 @@ fn ref10_batch_equals_scalar() {
     let mut reused = PreparedBatch::<W>::new_boxed();
     let mut masked = 0;
     for round in 0..30 {
-        let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
         // Every fourth lane sees the surface from below.
-        let vs: [Vec3; W] = std::array::from_fn(|k| {
-            let v = rng.sphere();
-            let up = v.dot(frames[k].z) >= 0.0;
-            if up == (k % 4 != 0) { v } else { -v }
-        });
+        let (frames, vs) = random_frames_and_views::<W>(&mut rng);
         let pts = ShadingBatch::<W>::new(
             std::array::from_fn(|k| frames[k].z),
             std::array::from_fn(|k| frames[k].x),
@@ -77,11 +72,11 @@ fn ref10_batch_levels_agree_bit_for_bit() {
     let m = Material::new(&ref10_ir()).expect("ref10 compiles");
     let mut rng = Rng::new(29);
     for _ in 0..10 {
-        let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
+        let (frames, vs) = random_frames_and_views::<W>(&mut rng);
         let pts = ShadingBatch::<W>::new(
             std::array::from_fn(|k| frames[k].z),
             std::array::from_fn(|k| frames[k].x),
-            std::array::from_fn(|_| rng.sphere()),
+            vs,
         );
         let pb = m.prepare_batch(&pts);
         for _ in 0..10 {

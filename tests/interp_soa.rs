@@ -8,13 +8,38 @@ use vstructc::interp::*;
 
 const W: usize = 16;
 
-fn empty_batch() -> DielectricRBatch<W> {
-    DielectricRBatch {
+/// One lane's parameters and directions.
+struct Lane {
+    ax: f32,
+    ay: f32,
+    eta: f32,
+    tint: Vec3,
+    v: Vec3,
+    l: Vec3,
+}
+
+/// A batch with its views and lights, lane `k` drawn by `lane(rng, k)`.
+fn random_batch(
+    rng: &mut Rng,
+    mut lane: impl FnMut(&mut Rng, usize) -> Lane,
+) -> (DielectricRBatch<W>, Vec3x<W>, Vec3x<W>) {
+    let mut batch = DielectricRBatch {
         ax: [0.0; W],
         ay: [0.0; W],
         eta: [0.0; W],
         tint: Vec3x::zero(),
+    };
+    let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
+    for k in 0..W {
+        let x = lane(rng, k);
+        batch.ax[k] = x.ax;
+        batch.ay[k] = x.ay;
+        batch.eta[k] = x.eta;
+        batch.tint.set(k, x.tint);
+        v.set(k, x.v);
+        l.set(k, x.l);
     }
+    (batch, v, l)
 }
 
 /// Lane `k` of `batch` evaluated by the scalar leaf: the reference.
@@ -31,31 +56,49 @@ fn scalar_lane(batch: &DielectricRBatch<W>, k: usize, v: &Vec3x<W>, l: &Vec3x<W>
     lobe.prepare(v.get(k), Sides::Front).eval(l.get(k)).f_cos
 }
 
+/// Asserts lane `k` of `out` equals the scalar leaf to relative 1e-5.
+fn assert_lane_matches(
+    batch: &DielectricRBatch<W>,
+    out: &Vec3x<W>,
+    (v, l): (&Vec3x<W>, &Vec3x<W>),
+    k: usize,
+    label: &str,
+) {
+    let want = scalar_lane(batch, k, v, l);
+    let got = out.get(k);
+    assert!(
+        (got - want).abs().max_element() <= 1e-5 * want.max_element() + 1e-12,
+        "{label} lane {k}: {got} vs {want}"
+    );
+}
+
+fn random_tint(rng: &mut Rng) -> Vec3 {
+    Vec3::new(rng.f32(), rng.f32(), rng.f32())
+}
+
 #[test]
 fn batch_equals_scalar() {
     let mut rng = Rng::new(11);
-    for _ in 0..200 {
-        let mut batch = empty_batch();
-        let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
-        for k in 0..W {
-            batch.ax[k] = 0.01 + 0.99 * rng.f32();
-            batch.ay[k] = 0.01 + 0.99 * rng.f32();
-            batch.eta[k] = 1.0 + 2.0 * rng.f32();
-            batch
-                .tint
-                .set(k, Vec3::new(rng.f32(), rng.f32(), rng.f32()));
+    for round in 0..200 {
+        let (batch, v, l) = random_batch(&mut rng, |rng, _| {
+            let (ax, ay) = (0.01 + 0.99 * rng.f32(), 0.01 + 0.99 * rng.f32());
+            let eta = 1.0 + 2.0 * rng.f32();
+            let tint = random_tint(rng);
             let s = rng.sphere();
-            v.set(k, Vec3::new(s.x, s.y, s.z.abs()));
-            l.set(k, rng.sphere());
-        }
+            let v = Vec3::new(s.x, s.y, s.z.abs());
+            let l = rng.sphere();
+            Lane {
+                ax,
+                ay,
+                eta,
+                tint,
+                v,
+                l,
+            }
+        });
         let out = batch.eval(&v, &l);
         for k in 0..W {
-            let want = scalar_lane(&batch, k, &v, &l);
-            let got = out.get(k);
-            assert!(
-                (got - want).abs().max_element() <= 1e-5 * want.max_element() + 1e-12,
-                "lane {k}: {got} vs {want}"
-            );
+            assert_lane_matches(&batch, &out, (&v, &l), k, &format!("round {round}"));
         }
     }
 }
@@ -66,49 +109,44 @@ fn batch_equals_scalar() {
 fn batch_masked_lanes_tir_and_narrow_widths() {
     let mut rng = Rng::new(23);
     for round in 0..200 {
-        let mut batch = empty_batch();
-        let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
-        for k in 0..W {
+        let (batch, v, l) = random_batch(&mut rng, |rng, k| {
             let narrow = k % 3 == 0;
-            let a = |r: &mut Rng| {
+            let mut a = || {
                 if narrow {
-                    1e-3 + 0.02 * r.f32()
+                    1e-3 + 0.02 * rng.f32()
                 } else {
-                    1e-3 + r.f32()
+                    1e-3 + rng.f32()
                 }
             };
-            batch.ax[k] = a(&mut rng);
-            batch.ay[k] = a(&mut rng);
-            batch.eta[k] = 0.5 + 2.5 * rng.f32();
-            batch
-                .tint
-                .set(k, Vec3::new(rng.f32(), rng.f32(), rng.f32()));
+            let (ax, ay) = (a(), a());
+            let eta = 0.5 + 2.5 * rng.f32();
+            let tint = random_tint(rng);
             let s = rng.sphere();
             // Lane 1 mod 4: V below; lane 2 mod 4: L anywhere (half below).
             let vz = if k % 4 == 1 { -s.z.abs() } else { s.z.abs() };
-            v.set(k, Vec3::new(s.x, s.y, vz));
             let d = rng.sphere();
-            l.set(
-                k,
-                if k % 4 == 2 {
-                    d
-                } else {
-                    Vec3::new(d.x, d.y, d.z.abs())
-                },
-            );
-        }
+            let l = if k % 4 == 2 {
+                d
+            } else {
+                Vec3::new(d.x, d.y, d.z.abs())
+            };
+            let v = Vec3::new(s.x, s.y, vz);
+            Lane {
+                ax,
+                ay,
+                eta,
+                tint,
+                v,
+                l,
+            }
+        });
         let out = batch.eval(&v, &l);
         for k in 0..W {
-            let got = out.get(k);
             if v.z[k] <= 0.0 || l.z[k] <= 0.0 {
-                assert_eq!(got, Vec3::ZERO, "round {round} lane {k}: masked");
+                assert_eq!(out.get(k), Vec3::ZERO, "round {round} lane {k}: masked");
                 continue;
             }
-            let want = scalar_lane(&batch, k, &v, &l);
-            assert!(
-                (got - want).abs().max_element() <= 1e-5 * want.max_element() + 1e-12,
-                "round {round} lane {k}: {got} vs {want}"
-            );
+            assert_lane_matches(&batch, &out, (&v, &l), k, &format!("round {round}"));
         }
     }
 }
@@ -121,16 +159,20 @@ fn batch_levels_agree_bit_for_bit() {
     println!("widest level on this CPU: {}", level().name());
     let mut rng = Rng::new(23);
     for _ in 0..100 {
-        let mut batch = empty_batch();
-        let (mut v, mut l) = (Vec3x::<W>::zero(), Vec3x::<W>::zero());
-        for k in 0..W {
-            batch.ax[k] = 0.001 + rng.f32();
-            batch.ay[k] = 0.001 + rng.f32();
-            batch.eta[k] = 0.3 + 2.7 * rng.f32();
-            batch.tint.set(k, Vec3::splat(rng.f32()));
-            v.set(k, rng.sphere());
-            l.set(k, rng.sphere());
-        }
+        let (batch, v, l) = random_batch(&mut rng, |rng, _| {
+            let (ax, ay) = (0.001 + rng.f32(), 0.001 + rng.f32());
+            let eta = 0.3 + 2.7 * rng.f32();
+            let tint = Vec3::splat(rng.f32());
+            let (v, l) = (rng.sphere(), rng.sphere());
+            Lane {
+                ax,
+                ay,
+                eta,
+                tint,
+                v,
+                l,
+            }
+        });
         let view = batch.view(&v);
         let base = view.eval_at(Level::Baseline, &l);
         for at in [Level::Avx2, Level::Avx512] {

@@ -7,7 +7,7 @@
 #[path = "common/lanes.rs"]
 mod lanes;
 use glam::Vec3;
-use lanes::assert_lanes_match;
+use lanes::{assert_lanes_match, random_frames_and_views};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
@@ -43,13 +43,8 @@ fn check(
     let mut rng = Rng::new(seed);
     let mut masked = 0;
     for round in 0..20 {
-        let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
         // Every fourth lane sees the surface from below (masked for one-sided lobes).
-        let vs: [Vec3; W] = std::array::from_fn(|k| {
-            let v = rng.sphere();
-            let up = v.dot(frames[k].z) >= 0.0;
-            if up == (k % 4 != 0) { v } else { -v }
-        });
+        let (frames, vs) = random_frames_and_views::<W>(&mut rng);
         let packed: Vec<Vec<f32>> = (0..W).map(|k| inputs(&mut rng, k)).collect();
         let mut batch = ShadingBatch::<W>::new(
             std::array::from_fn(|k| frames[k].z),

@@ -4,6 +4,7 @@
 //! normal (`V·h` inside microfacet lobes, `μ_o` for view-dependent weights).
 
 use super::math::{Rgb, pow_q, pow5};
+use super::vmath::select;
 use glam::Vec3;
 
 /// `μ̄ = 1/7`, the angle (cosine) at which F82 forms are pinned.
@@ -86,10 +87,9 @@ pub fn dielectric_half_quotient(m: f32, hh: f32, e2m1: f32) -> (f32, f32) {
     let bd2 = bd * bd;
     // A select rather than a branch: the batched kernels run this on every lane.
     let tir = g2 < 0.0;
-    let pick = |c: bool, a: f32, b: f32| super::vmath::select(c, a, b);
     (
-        pick(tir, 1.0, 0.5 * an * an * (bd2 + bn * bn)),
-        pick(tir, 1.0, (ad * ad * bd2).max(1e-30)),
+        select(tir, 1.0, 0.5 * an * an * (bd2 + bn * bn)),
+        select(tir, 1.0, (ad * ad * bd2).max(1e-30)),
     )
 }
 

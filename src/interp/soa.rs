@@ -651,13 +651,9 @@ fn lane_l<const W: usize>(l: &Vec3x<W>, lw: &LaneWeights<W>, k: usize) -> (f32, 
 fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
-        let c = keep(lz > 0.0, lz);
         // `rho_pi` carries the weight (see `Kernel::rebuild`).
-        let f = rho_pi.scaled(k, c);
-        acc.f.x[k] += f[0];
-        acc.f.y[k] += f[1];
-        acc.f.z[k] += f[2];
-        acc.pdf[k] += lw.p[k] * (c * FRAC_1_PI);
+        let f = rho_pi.scaled(k, lz);
+        add_baked(acc, k, lz > 0.0, f, lw.p[k] * (lz * FRAC_1_PI));
     }
 }
 

@@ -2,7 +2,20 @@
 //! path, at the tolerance of spec closures.md §1.5 (relative 1e-5, floor 1e-6).
 
 use glam::Vec3;
-use vstructc::interp::{Eval, Prepared};
+use vstructc::interp::verify::Rng;
+use vstructc::interp::{Eval, Frame, Prepared};
+
+/// `W` random frames and views; every fourth lane (`k % 4 == 0`) sees its surface from below
+/// (one-sided lobes masked, two-sided ones flipped), the others from above.
+pub fn random_frames_and_views<const W: usize>(rng: &mut Rng) -> ([Frame; W], [Vec3; W]) {
+    let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
+    let views = std::array::from_fn(|k| {
+        let v = rng.sphere();
+        let up = v.dot(frames[k].z) >= 0.0;
+        if up == (k % 4 != 0) { v } else { -v }
+    });
+    (frames, views)
+}
 
 /// Asserts `batched[k]` equals `scalar[k].eval(ls[k])` for every lane; `label` names the case
 /// in failure messages.
