@@ -104,19 +104,41 @@ pub fn dielectric_half(m: f32, hh: f32, e2m1: f32) -> f32 {
 #[inline]
 pub fn conductor(mu: f32, eta: Rgb, kappa: Rgb) -> Rgb {
     let c = mu.clamp(0.0, 1.0);
-    let c2 = c * c;
+    conductor_squared(c * c, eta, kappa)
+}
+
+/// [`conductor`] at the squared cosine `c² ∈ [0, 1]`.
+#[inline]
+pub fn conductor_squared(c2: f32, eta: Rgb, kappa: Rgb) -> Rgb {
+    let (e2, k2) = (eta * eta, kappa * kappa);
+    let (a, b) = (e2 - k2, 4.0 * e2 * k2);
+    Vec3::new(
+        conductor_c2(c2, a.x, b.x),
+        conductor_c2(c2, a.y, b.y),
+        conductor_c2(c2, a.z, b.z),
+    )
+}
+
+/// One channel of [`conductor`] at `c² = (V·h)²` (in [0, 1]), given `η² − κ²` and `4η²κ²`.
+///
+/// With `a + ib = √((η + iκ)² − s²)` (`s² = 1 − c²`) the textbook form is
+/// `½ (r_s + r_s·num/den)`, `r_s = (|a+ib|² − 2ac + c²)/(|a+ib|² + 2ac + c²)`,
+/// `num/den = (c²|a+ib|² ∓ 2ac s² + s⁴)`; the `2ac s²` terms cancel in `den + num`, so it is
+/// `r_s (c² |a+ib|² + s⁴)/den`, one division; and `2ac = 2√(c² a²)` is one square root
+/// where the textbook form takes two in sequence (`c`, then `a`). Shared by the scalar leaves
+/// and the batched kernels.
+#[inline(always)]
+pub fn conductor_c2(c2: f32, e2mk2: f32, four_e2k2: f32) -> f32 {
     let s2 = 1.0 - c2;
-    let e2 = eta * eta;
-    let k2 = kappa * kappa;
-    let t0 = e2 - k2 - Vec3::splat(s2);
-    let ab2 = (t0 * t0 + 4.0 * e2 * k2).sqrt();
-    let a = (0.5 * (ab2 + t0)).max(Vec3::ZERO).sqrt();
-    let two_ac = 2.0 * c * a;
-    let rs =
-        (ab2 - two_ac + Vec3::splat(c2)) / (ab2 + two_ac + Vec3::splat(c2)).max(Vec3::splat(1e-30));
-    let num = c2 * ab2 - two_ac * s2 + Vec3::splat(s2 * s2);
-    let den = (c2 * ab2 + two_ac * s2 + Vec3::splat(s2 * s2)).max(Vec3::splat(1e-30));
-    (0.5 * (rs + rs * num / den)).clamp(Vec3::ZERO, Vec3::ONE)
+    let t0 = e2mk2 - s2;
+    let ab2 = (t0 * t0 + four_e2k2).sqrt();
+    let a2 = (0.5 * (ab2 + t0)).max(0.0);
+    let two_ac = 2.0 * (c2 * a2).sqrt();
+    let s4 = s2 * s2;
+    let rs_num = ab2 - two_ac + c2;
+    let rs_den = ab2 + two_ac + c2;
+    let den = c2 * ab2 + two_ac * s2 + s4;
+    (rs_num * (c2 * ab2 + s4) / (rs_den * den).max(1e-30)).clamp(0.0, 1.0)
 }
 
 /// Conductor reflectance at normal incidence: `((η − 1)² + κ²)/((η + 1)² + κ²)`.
@@ -246,6 +268,16 @@ impl Fresnel {
             Fresnel::F82 { f0, f90, q, a } => hoffman_f82(f0, f90, q, a, mu).max(Vec3::ZERO),
             Fresnel::Dielectric { eta } => Vec3::splat(dielectric(mu, eta)),
             Fresnel::Conductor { eta, kappa } => conductor(mu, eta, kappa),
+        }
+    }
+
+    /// [`Fresnel::eval`] at the squared cosine `c² ∈ [0, 1]`: a conductor needs no square
+    /// root ([`conductor_squared`]); the other forms take `√c²`.
+    #[inline]
+    pub fn eval_squared(&self, c2: f32) -> Rgb {
+        match *self {
+            Fresnel::Conductor { eta, kappa } => conductor_squared(c2, eta, kappa),
+            _ => self.eval(c2.sqrt()),
         }
     }
 

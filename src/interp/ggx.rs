@@ -95,6 +95,124 @@ impl Ggx {
     }
 }
 
+/// GGX reflection with the view fixed, in the division-light form shared by the scalar
+/// leaves and the batched kernels ([`super::soa`]), so that the two agree to rounding.
+///
+/// With `H = V + L` unnormalised, `T = (Hx/αx)² + (Hy/αy)² + Hz² = |H|² t`, so
+/// `D = |H|⁴/(π αx αy T²)`; `Λl = (S/l_z − 1)/2` with `S = √(l_z² + αx² lx² + αy² ly²)`
+/// (`l_z` clamped at 1e-7, as [`Ggx::lambda`] clamps `l_z²` at 1e-14), so
+/// `G2 = 2 l_z/(c_z l_z + c_s S)` for either masking (height-correlated: `c_z = 1 + 2Λv`,
+/// `c_s = 1`; separable: both `1 + Λv`). With `P = π αx αy T² (c_z l_z + c_s S)`,
+/// `D = |H|⁴ (c_z l_z + c_s S)/P` and `D G2 = |H|⁴ 2 l_z/P`: one square root and one
+/// division where [`Ggx::d`], [`Ggx::lambda`] and [`g2`] take two and five.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GgxView {
+    /// `1/α_x`.
+    pub inv_ax: f32,
+    /// `1/α_y`.
+    pub inv_ay: f32,
+    /// `α_x²`.
+    pub ax2: f32,
+    /// `α_y²`.
+    pub ay2: f32,
+    /// `π α_x α_y`.
+    pub pi_axay: f32,
+    /// The masking's coefficient of `l_z`.
+    pub c_z: f32,
+    /// The masking's coefficient of `S`.
+    pub c_s: f32,
+}
+
+/// The shared intermediate values of [`GgxView::core`].
+#[derive(Debug, Clone, Copy)]
+pub struct GgxCore {
+    /// `V·H` (clamped at 0).
+    pub vh: f32,
+    /// `|H|²`.
+    pub hh: f32,
+    /// `P = π αx αy T² (c_z l_z + c_s S)`.
+    pub p: f32,
+    /// `c_z l_z + c_s S`.
+    pub den_g: f32,
+    /// `l_z` clamped at 1e-7.
+    pub lz: f32,
+}
+
+impl GgxView {
+    /// The view-fixed constants of a (non-delta) distribution, given `Λ(V)`.
+    pub fn new(ggx: &Ggx, masking: Masking, lambda_v: f32) -> GgxView {
+        let (c_z, c_s) = match masking {
+            Masking::HeightCorrelated => (1.0 + 2.0 * lambda_v, 1.0),
+            Masking::Separable => (1.0 + lambda_v, 1.0 + lambda_v),
+        };
+        GgxView {
+            inv_ax: 1.0 / ggx.ax,
+            inv_ay: 1.0 / ggx.ay,
+            ax2: ggx.ax * ggx.ax,
+            ay2: ggx.ay * ggx.ay,
+            pi_axay: PI * ggx.ax * ggx.ay,
+            c_z,
+            c_s,
+        }
+    }
+
+    /// The intermediate values at view `v` and light `l` (`l_z > 0`). `H` is `V + L` times
+    /// a power of two that brings `|H|²` into [1, 4): the outputs of [`GgxView::reflect`]
+    /// and [`GgxView::reflect_squared`] are homogeneous of degree 0 in `H` (the dielectric
+    /// Fresnel term takes `V·H` and `|H|²` together), so the scaling, exact in binary, changes
+    /// no bit of them, and it keeps `T²|H|²` in range when `V ≈ −L` near the horizon (where
+    /// `|H|²` is tiny and its cube underflows).
+    #[inline(always)]
+    pub fn core(&self, v: Vec3, l: Vec3) -> GgxCore {
+        let (hx, hy, hz) = (v.x + l.x, v.y + l.y, v.z + l.z);
+        let sc = inv_sqrt_pow2(hx * hx + hy * hy + hz * hz);
+        let (hx, hy, hz) = (hx * sc, hy * sc, hz * sc);
+        let hh = hx * hx + hy * hy + hz * hz;
+        let (tx, ty) = (hx * self.inv_ax, hy * self.inv_ay);
+        let t = tx * tx + ty * ty + hz * hz;
+        let lz = l.z.max(1e-7);
+        let s = (lz * lz + self.ax2 * l.x * l.x + self.ay2 * l.y * l.y).sqrt();
+        let den_g = self.c_z * lz + self.c_s * s;
+        GgxCore {
+            vh: (v.x * hx + v.y * hy + v.z * hz).max(0.0),
+            hh,
+            p: self.pi_axay * t * t * den_g,
+            den_g,
+            lz,
+        }
+    }
+
+    /// `(V·H, |H|², D(h), D(h)·G2)` at view `v` and light `l` (`l_z > 0`), `H = V + L`
+    /// unnormalised: the form for the exact dielectric Fresnel term, which takes `V·H` and
+    /// `|H|²` as they are ([`super::fresnel::dielectric_half`]).
+    #[inline(always)]
+    pub fn reflect(&self, v: Vec3, l: Vec3) -> (f32, f32, f32, f32) {
+        let c = self.core(v, l);
+        let hh2_r = c.hh * c.hh / c.p;
+        (c.vh, c.hh, hh2_r * c.den_g, hh2_r * (2.0 * c.lz))
+    }
+
+    /// `((V·h)², |H|², D(h), D(h)·G2)` with the unit half vector's `(V·h)² =
+    /// min((V·H)²/|H|², 1)` taken from the same reciprocal as `D`: the form for Fresnel
+    /// terms of the cosine ([`super::fresnel::Fresnel::eval_squared`]).
+    #[inline(always)]
+    pub fn reflect_squared(&self, v: Vec3, l: Vec3) -> (f32, f32, f32, f32) {
+        let c = self.core(v, l);
+        let r = 1.0 / (c.p * c.hh);
+        let hh3_r = c.hh * c.hh * c.hh * r;
+        let vh2 = (c.vh * c.vh * c.p * r).min(1.0);
+        (vh2, c.hh, hh3_r * c.den_g, hh3_r * (2.0 * c.lz))
+    }
+}
+
+/// `2^−⌊e/2⌋` for the binary exponent `e` of `x ≥ 0` (subnormals count as `e = −127`), so
+/// `x` times its square is in [1, 4) for normal `x`. Integer operations only.
+#[inline(always)]
+fn inv_sqrt_pow2(x: f32) -> f32 {
+    let e = ((x.to_bits() >> 23) & 0xff) as i32 - 127;
+    f32::from_bits(((127 - (e >> 1)) as u32) << 23)
+}
+
 /// `G2` from the two Smith `Λ` values, per masking variant.
 #[inline]
 pub fn g2(masking: Masking, lambda_v: f32, lambda_l: f32) -> f32 {

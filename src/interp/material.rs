@@ -58,6 +58,7 @@ use crate::ir::{
 };
 use glam::{Vec2, Vec3};
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::f32::consts::TAU;
 
 /// The lobe index [`Sample::lobe`] reports for straight transmission through `Transparent`
@@ -283,6 +284,7 @@ pub struct Scratch {
     mu: Vec<f32>,
     thr: Vec<Vec3>,
     w: Vec<Vec3>,
+    scope: Vec<Vec3>,
 }
 
 thread_local! {
@@ -545,20 +547,20 @@ impl Material {
         // Leaves are prepared in place, at their leaf index, in their frames: those inside
         // some layer top first (step 3 needs their E_k(μ_o)), the others only when their
         // weight turns out non-zero. Step 6 then compacts the array.
+        // Each prepared leaf's albedo is read once from its record and kept here for steps 3
+        // and 5.
         let mut ready = [false; MAX_LOBES];
+        let mut albedos = [LobeAlbedo::default(); MAX_LOBES];
         for (k, info) in self.leaves.iter().enumerate() {
             if self.need[info.node.index()] != 0 {
-                self.prepare_leaf(
-                    info,
-                    regs,
-                    v_local[info.frame_slot as usize],
-                    &mut out.lobes[k].lobe,
-                );
+                let lobe = &mut out.lobes[k].lobe;
+                self.prepare_leaf(info, regs, v_local[info.frame_slot as usize], lobe);
+                albedos[k] = lobe.albedo();
                 ready[k] = true;
             }
         }
         // Step 3: throughput, bottom-up, only in the modes that are read.
-        self.throughput(s, out, &ready);
+        self.throughput(s, &albedos, &ready);
         // Step 4: weights, top-down; emission and transparency accumulate.
         let mut weights = [Vec3::ZERO; MAX_LOBES];
         self.weights(s, &mut weights, out);
@@ -575,14 +577,11 @@ impl Material {
                 continue;
             }
             if !ready[k] {
-                self.prepare_leaf(
-                    info,
-                    regs,
-                    v_local[info.frame_slot as usize],
-                    &mut out.lobes[k].lobe,
-                );
+                let lobe = &mut out.lobes[k].lobe;
+                self.prepare_leaf(info, regs, v_local[info.frame_slot as usize], lobe);
+                albedos[k] = lobe.albedo();
             }
-            let albedo = Albedo::scaled(&out.lobes[k].lobe.albedo(), w);
+            let albedo = Albedo::scaled(&albedos[k], w);
             let a_max = albedo.reflect + albedo.transmit.max(albedo.transmit_radiance);
             if threshold > 0.0 && a_max.max_element() <= threshold {
                 continue;
@@ -664,7 +663,12 @@ impl Material {
         }
     }
 
-    fn throughput(&self, s: &mut Scratch, out: &Prepared, ready: &[bool; MAX_LOBES]) {
+    fn throughput(
+        &self,
+        s: &mut Scratch,
+        albedos: &[LobeAlbedo; MAX_LOBES],
+        ready: &[bool; MAX_LOBES],
+    ) {
         s.thr.clear();
         let regs = self.const_regs.as_deref().unwrap_or(&s.regs);
         let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
@@ -675,7 +679,7 @@ impl Material {
                 ThrOp::Leaf { leaf, mode } => {
                     let info = &self.leaves[leaf as usize];
                     if ready[leaf as usize] && info.layerable {
-                        let a = out.lobes[leaf as usize].lobe.albedo();
+                        let a = &albedos[leaf as usize];
                         let e = a.reflect + a.transmit_energy;
                         let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
                         crate::ir::algebra::leaf_throughput(mode, tint, ttint, e)
@@ -755,16 +759,20 @@ impl Material {
         weights: &mut [Vec3; MAX_LOBES],
         out: &mut Prepared,
     ) {
-        s.w.clear();
-        s.w.resize(plan.targets.len(), Vec3::ZERO);
-        let acc = &mut s.w[..];
         let thr = &s.thr[..];
+        // Scope products, parents first (scope 0 is the root's 1).
+        let scope = &mut s.scope;
+        scope.clear();
+        scope.push(Vec3::ONE);
+        for &(parent, slot) in &plan.scopes {
+            let w = scope[parent as usize] * thr[slot as usize];
+            scope.push(w);
+        }
+        let acc = &mut s.w;
+        acc.clear();
+        acc.resize(plan.targets.len(), Vec3::ZERO);
         for t in &plan.terms {
-            let mut w = t.c;
-            for &j in &plan.slots[t.from as usize..t.to as usize] {
-                w *= thr[j as usize];
-            }
-            acc[t.target as usize] += w;
+            acc[t.target as usize] += t.c * scope[t.scope as usize];
         }
         for (target, &a) in plan.targets.iter().zip(acc.iter()) {
             match *target {
@@ -780,22 +788,24 @@ impl Material {
 /// root-to-target path of the closure DAG is one term `c ⊙ Π thr[j]`, where `c` is the
 /// product of the path's constant `mix` and `mul` factors and the `thr[j]` are the
 /// throughputs of the layer tops the path passes under (the only view-dependent part).
+/// Paths share their products through *scopes*: a scope is a sequence of layer tops passed
+/// under, its product is its parent's times one throughput, so every product is one
+/// multiplication whatever the nesting depth.
 #[derive(Debug, Clone)]
 struct WeightPlan {
     terms: Vec<WTerm>,
-    /// The throughput slots of every term, concatenated.
-    slots: Vec<u16>,
+    /// Scope `i + 1` = scope `parent` × `thr[slot]`; scope 0 is 1. Parents come first.
+    scopes: Vec<(u32, u16)>,
     /// Leaves, emission and transparency nodes, each with its own accumulator.
     targets: Vec<Target>,
 }
 
-/// One path of a [`WeightPlan`].
+/// One path of a [`WeightPlan`]: `c ⊙ scope` added to a target.
 #[derive(Debug, Clone, Copy)]
 struct WTerm {
     c: Vec3,
-    /// `slots[from..to]` are the throughput slots multiplied in.
-    from: u32,
-    to: u32,
+    /// The path's scope (its product of throughputs).
+    scope: u32,
     /// Index into [`WeightPlan::targets`].
     target: u32,
 }
@@ -827,13 +837,13 @@ fn compile_weights(
     let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
     let mut plan = WeightPlan {
         terms: Vec::new(),
-        slots: Vec::new(),
+        scopes: Vec::new(),
         targets: Vec::new(),
     };
     if nodes.is_empty() {
         return Some(plan);
     }
-    // Target index per node (leaves, emission, transparency), in node order.
+    // Target index per node (leaves, emission and transparency), in node order.
     let mut target_of = vec![u32::MAX; nodes.len()];
     for (i, node) in nodes.iter().enumerate() {
         let t = match *node {
@@ -848,12 +858,14 @@ fn compile_weights(
         target_of[i] = plan.targets.len() as u32;
         plan.targets.push(t);
     }
-    // Depth-first over paths with an explicit stack: (node, factor, slots so far).
-    let mut stack: Vec<(u32, Vec3, Vec<u16>)> = vec![(0, Vec3::ONE, Vec::new())];
-    while let Some((i, c, path)) = stack.pop() {
-        let mut push = |to: u32, f: Vec3, path: Vec<u16>| {
+    // (parent scope, slot) → scope, so that paths under the same tops share one scope.
+    let mut scope_of: HashMap<(u32, u16), u32> = HashMap::new();
+    // Depth-first over paths with an explicit stack: (node, factor, scope).
+    let mut stack: Vec<(u32, Vec3, u32)> = vec![(0, Vec3::ONE, 0)];
+    while let Some((i, c, scope)) = stack.pop() {
+        let mut push = |to: u32, f: Vec3, scope: u32| {
             if f != Vec3::ZERO {
-                stack.push((to, c * f, path));
+                stack.push((to, c * f, scope));
             }
         };
         match nodes[i as usize] {
@@ -861,31 +873,32 @@ fn compile_weights(
                 if plan.terms.len() >= MAX_WEIGHT_TERMS {
                     return None;
                 }
-                let from = plan.slots.len() as u32;
-                plan.slots.extend_from_slice(&path);
                 plan.terms.push(WTerm {
                     c,
-                    from,
-                    to: plan.slots.len() as u32,
+                    scope,
                     target: target_of[i as usize],
                 });
             }
             CNode::Layer { top, base, mode } => {
-                let mut below = path.clone();
-                below.push(thr_slot[top as usize][mode as usize]);
-                push(top, Vec3::ONE, path);
+                let slot = thr_slot[top as usize][mode as usize];
+                let next = plan.scopes.len() as u32 + 1;
+                let below = *scope_of.entry((scope, slot)).or_insert(next);
+                if below == next {
+                    plan.scopes.push((scope, slot));
+                }
+                push(top, Vec3::ONE, scope);
                 push(base, Vec3::ONE, below);
             }
             CNode::Mix { a, b, m } => {
                 let m = sat(reg(m));
-                push(a, Vec3::ONE - m, path.clone());
-                push(b, m, path);
+                push(a, Vec3::ONE - m, scope);
+                push(b, m, scope);
             }
             CNode::Add { a, b } => {
-                push(a, Vec3::ONE, path.clone());
-                push(b, Vec3::ONE, path);
+                push(a, Vec3::ONE, scope);
+                push(b, Vec3::ONE, scope);
             }
-            CNode::Multiply { f, c: r } => push(f, reg(r).max(Vec3::ZERO), path),
+            CNode::Multiply { f, c: r } => push(f, reg(r).max(Vec3::ZERO), scope),
         }
         if stack.len() > MAX_WEIGHT_TERMS * 4 {
             return None;

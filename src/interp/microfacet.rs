@@ -5,7 +5,7 @@
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
 use super::fresnel::{self, Fresnel};
-use super::ggx::{Ggx, Masking, g2};
+use super::ggx::{Ggx, GgxView, Masking, g2};
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
 use super::tables::{self, MuCurve, Row, TableId};
@@ -145,6 +145,8 @@ pub struct PreparedMicrofacetR {
     pub(super) fresnel: Fresnel,
     pub(super) v: Vec3,
     pub(super) lambda_v: f32,
+    /// The distribution's constants for `D` and `G2` at this view.
+    pub(super) view: GgxView,
     pub(super) g1_v: f32,
     pub(super) inv_4mu: f32,
     /// Turquin factor (1 when off).
@@ -271,6 +273,7 @@ impl MicrofacetR {
             fresnel: self.fresnel,
             v,
             lambda_v,
+            view: GgxView::new(&self.ggx, self.masking, lambda_v),
             g1_v: 1.0 / (1.0 + lambda_v),
             inv_4mu: 0.25 / safe_mu(v.z),
             scale: Vec3::ONE,
@@ -327,11 +330,8 @@ impl PreparedMicrofacetR {
         if self.delta || l.z <= 0.0 {
             return LobeEval::ZERO;
         }
-        let h = (self.v + l).normalize();
-        let vh = self.v.dot(h).max(0.0);
-        let d = self.ggx.d(h);
-        let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
-        let f = self.fresnel.eval(vh) * (d * g * self.inv_4mu) * self.scale;
+        let (vh2, _, d, dg) = self.view.reflect_squared(self.v, l);
+        let f = self.fresnel.eval_squared(vh2) * (dg * self.inv_4mu) * self.scale;
         let pdf = d * self.g1_v * self.inv_4mu;
         match self.e_row {
             None => LobeEval { f_cos: f, pdf },
@@ -348,8 +348,8 @@ impl PreparedMicrofacetR {
         if self.delta || l.z <= 0.0 {
             return 0.0;
         }
-        let h = (self.v + l).normalize();
-        let pdf = self.ggx.d(h) * self.g1_v * self.inv_4mu;
+        let (_, _, d, _) = self.view.reflect_squared(self.v, l);
+        let pdf = d * self.g1_v * self.inv_4mu;
         (1.0 - self.p_ms) * pdf + self.p_ms * pdf_cosine(l.z)
     }
 
@@ -479,6 +479,8 @@ pub struct PreparedDielectric {
     pub(super) eta: f32,
     pub(super) v: Vec3,
     pub(super) lambda_v: f32,
+    /// The distribution's constants for `D` and `G2` at this view.
+    pub(super) view: GgxView,
     pub(super) g1_v: f32,
     pub(super) inv_mu: f32,
     pub(super) refl: bool,
@@ -565,6 +567,7 @@ impl Dielectric {
             eta,
             v,
             lambda_v,
+            view: GgxView::new(&self.ggx, self.masking, lambda_v),
             g1_v: 1.0 / (1.0 + lambda_v),
             inv_mu: 1.0 / safe_mu(v.z),
             refl,
@@ -671,17 +674,14 @@ impl PreparedDielectric {
             if !self.refl {
                 return LobeEval::ZERO;
             }
-            // Fresnel from the unnormalised half vector (shared with the batched kernels).
-            let hu = self.v + l;
-            let hh = hu.length_squared();
-            let f = fresnel::dielectric_half(self.v.dot(hu), hh, self.eta * self.eta - 1.0);
-            let h = hu * (1.0 / hh.sqrt());
-            let d = self.ggx.d(h);
-            let g = g2(self.masking, self.lambda_v, self.ggx.lambda(l));
-            let q = 0.25 * d * self.inv_mu;
+            // D, G2 and the Fresnel term from the unnormalised half vector, as the batched
+            // kernels compute them.
+            let (vh, hh, d, dg) = self.view.reflect(self.v, l);
+            let f = fresnel::dielectric_half(vh, hh, self.eta * self.eta - 1.0);
+            let q = 0.25 * self.inv_mu;
             LobeEval {
-                f_cos: self.tint_r * (f * g * q),
-                pdf: self.p_reflect(f) * self.g1_v * q,
+                f_cos: self.tint_r * (f * dg * q),
+                pdf: self.p_reflect(f) * self.g1_v * d * q,
             }
         } else if l.z < 0.0 {
             if !self.trans {

@@ -8,8 +8,8 @@
 //! families fall back to the scalar lobe lane by lane. Results equal the scalar
 //! [`super::PreparedLobe::eval`] to relative 1e-5 (`tests/interp_soa_kernels.rs`).
 
-use super::fresnel::{Fresnel, dielectric_half, dielectric_half_quotient};
-use super::ggx::Masking;
+use super::fresnel::{self, Fresnel, dielectric_half, dielectric_half_quotient};
+use super::ggx::GgxView;
 use super::sheen::SheenMasking;
 use super::simd::{Level, call_widest, widest_versions};
 use super::ward::WardVariant;
@@ -451,7 +451,7 @@ impl<const W: usize> Kernel<W> {
                 if let Kernel::Conductor(x) = self {
                     for k in 0..W {
                         if let State::MicrofacetR(p) = &lane(k).state {
-                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
+                            x.g.set(k, p.v, &p.view);
                             x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
                             if let Fresnel::Conductor { eta, kappa } = p.fresnel {
                                 let (e2, k2) = (eta * eta, kappa * kappa);
@@ -479,7 +479,7 @@ impl<const W: usize> Kernel<W> {
                 if let Kernel::DielectricR(x) = self {
                     for k in 0..W {
                         if let State::Dielectric(p) = &lane(k).state {
-                            x.g.set(k, p.v, p.ggx.ax, p.ggx.ay, p.lambda_v, p.masking);
+                            x.g.set(k, p.v, &p.view);
                             x.e2m1[k] = p.eta * p.eta - 1.0;
                             let q = 0.25 * p.inv_mu;
                             x.pdf_c[k] = p.g1_v * q * lw.p[k];
@@ -714,36 +714,36 @@ impl<const W: usize> GgxX<W> {
         }
     }
 
-    fn set(&mut self, k: usize, v: Vec3, ax: f32, ay: f32, lambda_v: f32, m: Masking) {
+    fn set(&mut self, k: usize, v: Vec3, g: &GgxView) {
         self.v.set(k, v);
-        self.inv_ax[k] = 1.0 / ax;
-        self.inv_ay[k] = 1.0 / ay;
-        self.ax2[k] = ax * ax;
-        self.ay2[k] = ay * ay;
-        self.pi_axay[k] = PI * ax * ay;
-        (self.c_z[k], self.c_s[k]) = match m {
-            Masking::HeightCorrelated => (1.0 + 2.0 * lambda_v, 1.0),
-            Masking::Separable => (1.0 + lambda_v, 1.0 + lambda_v),
-        };
+        self.inv_ax[k] = g.inv_ax;
+        self.inv_ay[k] = g.inv_ay;
+        self.ax2[k] = g.ax2;
+        self.ay2[k] = g.ay2;
+        self.pi_axay[k] = g.pi_axay;
+        self.c_z[k] = g.c_z;
+        self.c_s[k] = g.c_s;
+    }
+
+    /// Lane `k`'s constants.
+    #[inline(always)]
+    fn lane(&self, k: usize) -> GgxView {
+        GgxView {
+            inv_ax: self.inv_ax[k],
+            inv_ay: self.inv_ay[k],
+            ax2: self.ax2[k],
+            ay2: self.ay2[k],
+            pi_axay: self.pi_axay[k],
+            c_z: self.c_z[k],
+            c_s: self.c_s[k],
+        }
     }
 
     /// Lane `k` at `(lx, ly, lz)` (`lz > 0` assumed by the caller's select): a Fresnel
-    /// argument, `|H|²`, `D(h)` and `D(h)·G2`.
-    ///
-    /// The scalar leaf divides seven times here; the divide unit bounds the vectorised
-    /// loops, so `D` and `G2` come from one reciprocal. With `H = V + L` unnormalised,
-    /// `T = (Hx/αx)² + (Hy/αy)² + Hz² = |H|² t`, so `D = |H|⁴/(π αx αy T²)`;
-    /// `Λl = (S/l_z − 1)/2` with `S = √(l_z² + αx² lx² + αy² ly²)` (`l_z` clamped at 1e-7,
-    /// as the scalar clamps `l_z²` at 1e-14), so `G2 = 2 l_z/(c_z l_z + c_s S)` for either
-    /// masking; with `P = π αx αy T² (c_z l_z + c_s S)`, `D = |H|⁴ (c_z l_z + c_s S)/P` and
-    /// `D G2 = |H|⁴ 2 l_z/P`.
-    ///
-    /// The Fresnel argument: with `SQUARED = false` (the dielectric) it is `V·H` itself,
-    /// which `fresnel::dielectric_half_quotient` takes with `|H|²` exactly as the scalar
-    /// leaf does (no normalisation: near total internal reflection the dielectric term
-    /// amplifies any difference in rounding). With `SQUARED = true` (the conductor, whose
-    /// Fresnel term is smooth and needs only `(V·h)²` and a product under a square root) it
-    /// is `min((V·H)²/|H|², 1)` from the same reciprocal as `D`.
+    /// argument, `|H|²`, `D(h)` and `D(h)·G2`, by the scalar leaves' own formulas
+    /// ([`GgxView::reflect`] with `SQUARED = false`, for the dielectric's Fresnel term of
+    /// `V·H` and `|H|²`; [`GgxView::reflect_squared`] with `SQUARED = true`, for the
+    /// conductor's of `(V·h)²`).
     #[inline(always)]
     fn reflect_terms<const SQUARED: bool>(
         &self,
@@ -753,25 +753,11 @@ impl<const W: usize> GgxX<W> {
         lz: f32,
     ) -> (f32, f32, f32, f32) {
         let (vx, vy, vz) = self.v.lane(k);
-        let (hx, hy, hz) = (vx + lx, vy + ly, vz + lz);
-        let hh = hx * hx + hy * hy + hz * hz;
-        let (tx, ty) = (hx * self.inv_ax[k], hy * self.inv_ay[k]);
-        let t = tx * tx + ty * ty + hz * hz;
-        let lzc = lz.max(1e-7);
-        let s = (lzc * lzc + self.ax2[k] * lx * lx + self.ay2[k] * ly * ly).sqrt();
-        let den_g = self.c_z[k] * lzc + self.c_s[k] * s;
-        let p = self.pi_axay[k] * t * t * den_g;
-        let vh_u = (vx * hx + vy * hy + vz * hz).max(0.0);
+        let (v, l) = (Vec3::new(vx, vy, vz), Vec3::new(lx, ly, lz));
         if SQUARED {
-            let r = 1.0 / (p * hh);
-            let hh3_r = hh * hh * hh * r;
-            let vh2 = (vh_u * vh_u * p * r).min(1.0);
-            (vh2, hh, hh3_r * den_g, hh3_r * (2.0 * lzc))
+            self.lane(k).reflect_squared(v, l)
         } else {
-            // The dielectric's Fresnel term takes `V·H` and `|H|²` as they are
-            // (`fresnel::dielectric_half_quotient`): no normalisation.
-            let hh2_r = hh * hh / p;
-            (vh_u, hh, hh2_r * den_g, hh2_r * (2.0 * lzc))
+            self.lane(k).reflect(v, l)
         }
     }
 
@@ -799,25 +785,6 @@ impl<const W: usize> GgxX<W> {
     }
 }
 
-/// One channel of [`super::fresnel::conductor`] at `c² = (V·h)²` (in [0, 1]), given
-/// `η² − κ²` and `4η²κ²`. The scalar's `½ (r_s + r_s·num/den)` is
-/// `r_s (c² |a+ib|² + s⁴)/den` (the `2ac s²` terms cancel in `den + num`), so the two
-/// quotients become one division; `2ac` is `2√(c² a²)`, one square root where the scalar
-/// takes two in sequence (`c`, then `a`).
-#[inline(always)]
-fn conductor1(c2: f32, e2mk2: f32, four_e2k2: f32) -> f32 {
-    let s2 = 1.0 - c2;
-    let t0 = e2mk2 - s2;
-    let ab2 = (t0 * t0 + four_e2k2).sqrt();
-    let a2 = (0.5 * (ab2 + t0)).max(0.0);
-    let two_ac = 2.0 * (c2 * a2).sqrt();
-    let s4 = s2 * s2;
-    let rs_num = ab2 - two_ac + c2;
-    let rs_den = ab2 + two_ac + c2;
-    let den = c2 * ab2 + two_ac * s2 + s4;
-    (rs_num * (c2 * ab2 + s4) / (rs_den * den).max(1e-30)).clamp(0.0, 1.0)
-}
-
 impl<const W: usize> ConductorX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
@@ -827,9 +794,9 @@ impl<const W: usize> ConductorX<W> {
             let lz = lw.sign[k] * l.z[k];
             let (c2, d, dg) = (vh2[k], d[k], dg[k]);
             let fr = [
-                conductor1(c2, self.e2mk2.x[k], self.four_e2k2.x[k]),
-                conductor1(c2, self.e2mk2.y[k], self.four_e2k2.y[k]),
-                conductor1(c2, self.e2mk2.z[k], self.four_e2k2.z[k]),
+                fresnel::conductor_c2(c2, self.e2mk2.x[k], self.four_e2k2.x[k]),
+                fresnel::conductor_c2(c2, self.e2mk2.y[k], self.four_e2k2.y[k]),
+                fresnel::conductor_c2(c2, self.e2mk2.z[k], self.four_e2k2.z[k]),
             ];
             let scale = self.scale_q.scaled(k, dg);
             let f = [0, 1, 2].map(|c| fr[c] * scale[c]);
