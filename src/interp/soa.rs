@@ -286,9 +286,8 @@ pub(super) struct DielectricX<const W: usize> {
     tint_q: Vec3x<W>,
 }
 
-/// The view-dependent GGX terms shared by the microfacet kernels, in the forms
-/// [`GgxX::reflect_terms`] needs (derived from the scalar prepare's fields in
-/// [`Kernel::rebuild`], so eval divides only where L enters).
+/// The view-dependent GGX terms shared by the microfacet kernels: each lane's
+/// [`GgxView`] (copied from the scalar prepare in [`Kernel::rebuild`]) as arrays.
 #[derive(Debug, Clone, Copy)]
 struct GgxX<const W: usize> {
     v: Vec3x<W>,
