@@ -126,15 +126,16 @@ fn microfacet_kernels_at_grazing_back_scatter() {
         let l = Vec3::new(-1.0, -d, e).normalize();
         (v, l)
     };
-    let cases: [(&str, Box<dyn Fn(&mut IrBuilder) -> Cl>, Vec<f32>); 2] = [
+    let conductor: fn(&mut IrBuilder) -> Cl = |b| conductor_leaf(b, Masking::HeightCorrelated);
+    let cases = [
         (
             "conductor",
-            Box::new(|b| conductor_leaf(b, Masking::HeightCorrelated)),
+            conductor,
             vec![0.05, 0.02, 0.2, 0.4, 1.4, 3.0, 2.5, 1.9],
         ),
         (
             "dielectric",
-            Box::new(dielectric_r_leaf),
+            dielectric_r_leaf,
             vec![0.05, 0.02, 1.5, 1.0, 1.0, 1.0],
         ),
     ];
