@@ -52,6 +52,16 @@ impl<'a, const W: usize> ShadingBatch<'a, W> {
         }
     }
 
+    /// Sets lane `k` to point `p`.
+    pub fn set_lane(&mut self, k: usize, p: &ShadingPoint<'a>) {
+        self.n[k] = p.n;
+        self.t[k] = p.t;
+        self.v[k] = p.v;
+        self.inputs[k] = p.inputs;
+        self.p[k] = p.p;
+        self.uv[k] = p.uv;
+    }
+
     /// Lane `k` as a scalar point.
     pub fn lane(&self, k: usize) -> ShadingPoint<'a> {
         ShadingPoint {

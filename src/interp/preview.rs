@@ -276,12 +276,9 @@ fn shade_row_batched_with(
     let mut filled = 0;
     let mut flush = |pts: &mut ShadingBatch<W>, cols: &[usize; W], n: usize, out: &mut [Rgb]| {
         // Pad a partial batch by repeating its last point (every lane must be a real point).
+        let last = pts.lane(n - 1);
         for k in n..W {
-            pts.n[k] = pts.n[n - 1];
-            pts.t[k] = pts.t[n - 1];
-            pts.v[k] = pts.v[n - 1];
-            pts.p[k] = pts.p[n - 1];
-            pts.uv[k] = pts.uv[n - 1];
+            pts.set_lane(k, &last);
         }
         material.prepare_batch_into(pts, scratch, batch);
         // AVX2 at most: a pixel's time is mostly the scalar prepare, and AVX-512 code lowers
@@ -299,11 +296,7 @@ fn shade_row_batched_with(
         let Some(p) = sphere_point(x, y, with_uv) else {
             continue;
         };
-        pts.n[filled] = p.n;
-        pts.t[filled] = p.t;
-        pts.v[filled] = p.v;
-        pts.p[filled] = p.p;
-        pts.uv[filled] = p.uv;
+        pts.set_lane(filled, &p.with_inputs(&opts.inputs));
         cols[filled] = i;
         filled += 1;
         if filled == W {

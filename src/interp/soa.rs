@@ -74,6 +74,12 @@ impl<const W: usize> Vec3x<W> {
 
 /// `W` GGX dielectric reflection lobes (mode R, height-correlated masking, exact Fresnel),
 /// parameters per lane.
+///
+/// A standalone kernel tuned for throughput (spec §6.4's single-lobe budget): it does not
+/// rescale the half vector as [`GgxView::core`] does, so when V and L are nearly opposite
+/// within about 1e-6 of the horizon (`|V + L|²` below about 1e-12) its powers of `|H|`
+/// underflow and the lane is NaN. Rescaling costs about 10 % here (measured in S8); the
+/// material path's kernels do rescale.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DielectricRBatch<const W: usize> {
     /// Width along the tangent (≥ 1e-3: the batch has no delta path).
