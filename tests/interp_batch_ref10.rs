@@ -47,7 +47,9 @@ fn ref10_batch_equals_scalar() {
         );
         // A view below the surface drops the one-sided lobes in that lane (the two-sided
         // dielectrics flip instead): those slots run with the lane masked.
-        masked += (0..W).filter(|&k| pb.lane(k).lobes().len() < 10).count();
+        masked += (0..W)
+            .filter(|&k| pb.lane(k).expect("a full batch").lobes().len() < 10)
+            .count();
         let scalar: Vec<Prepared> = (0..W).map(|k| m.prepare(&pts.lane(k))).collect();
         for _ in 0..20 {
             let ls: [Vec3; W] = std::array::from_fn(|k| {

@@ -55,7 +55,9 @@ fn check(
         let pb = m.prepare_batch(&batch);
         assert_eq!(pb.slot_count(), 1, "{name}: one slot");
         assert_eq!(pb.kernel_count(), 1, "{name}: the slot runs its SoA kernel");
-        masked += (0..W).filter(|&k| pb.lane(k).lobes().is_empty()).count();
+        masked += (0..W)
+            .filter(|&k| pb.lane(k).expect("a full batch").lobes().is_empty())
+            .count();
         let scalar: Vec<Prepared> = (0..W).map(|k| m.prepare(&batch.lane(k))).collect();
         for _ in 0..25 {
             // Half the directions on the normal's side, so most lanes respond.

@@ -77,25 +77,25 @@ impl<'a, const W: usize> ShadingBatch<'a, W> {
 
 /// One leaf across the lanes.
 #[derive(Debug, Clone, Copy)]
-struct Slot<const W: usize> {
+pub(super) struct Slot<const W: usize> {
     /// Where lane `k`'s lobe is in that lane's [`Prepared::lobes`] (meaningful where live).
-    index: [u8; W],
+    pub(super) index: [u8; W],
     /// Weights and probabilities (0 where not live) and flip signs, SoA.
-    lw: LaneWeights<W>,
+    pub(super) lw: LaneWeights<W>,
     /// Lane is live (the lobe survived prepare there).
-    live: [bool; W],
+    pub(super) live: [bool; W],
     /// Frame slot (the same for every lane: it is the leaf's).
-    frame: u8,
+    pub(super) frame: u8,
     /// The family's SoA kernel ([`Kernel::Scalar`]: lane by lane).
-    kernel: Kernel<W>,
+    pub(super) kernel: Kernel<W>,
 }
 
 /// `W` frames, structure of arrays.
 #[derive(Debug, Clone, Copy)]
-struct FrameX<const W: usize> {
-    x: Vec3x<W>,
-    y: Vec3x<W>,
-    z: Vec3x<W>,
+pub(super) struct FrameX<const W: usize> {
+    pub(super) x: Vec3x<W>,
+    pub(super) y: Vec3x<W>,
+    pub(super) z: Vec3x<W>,
 }
 
 impl<const W: usize> FrameX<W> {
@@ -112,7 +112,8 @@ impl<const W: usize> FrameX<W> {
         out
     }
 
-    fn set(&mut self, k: usize, f: &Frame) {
+    #[inline(always)]
+    pub(super) fn set(&mut self, k: usize, f: &Frame) {
         self.x.set(k, f.x);
         self.y.set(k, f.y);
         self.z.set(k, f.z);
@@ -136,12 +137,24 @@ impl<const W: usize> FrameX<W> {
 /// A material prepared for `W` points (§1.5).
 #[derive(Debug, Clone)]
 pub struct PreparedBatch<const W: usize> {
-    slots: [Slot<W>; MAX_LOBES],
-    count: usize,
-    frames: [FrameX<W>; MAX_LOBES],
-    frame_count: usize,
-    /// The scalar preparations, kept for `albedo`, `emission`, `sample` per lane.
+    pub(super) slots: [Slot<W>; MAX_LOBES],
+    pub(super) count: usize,
+    pub(super) frames: [FrameX<W>; MAX_LOBES],
+    pub(super) frame_count: usize,
+    /// The scalar preparations, kept for `sample` and inspection per lane (valid only when
+    /// `lanes_valid`).
     lanes: [Prepared; W],
+    /// `lanes` holds this batch's points ([`Material::prepare_batch_into`]), not only the
+    /// kernels ([`Material::prepare_batch_eval_into`]).
+    pub(super) lanes_valid: bool,
+    /// Per lane: `albedo().total()`, `emission()`, `transparency()` of the lane's
+    /// preparation.
+    pub(super) albedo: Vec3x<W>,
+    pub(super) emission: Vec3x<W>,
+    pub(super) transparency: Vec3x<W>,
+    /// Working memory of the lane-parallel prepare (throughputs, scope products, weight
+    /// sums), kept to avoid allocating per batch.
+    pub(super) work: Vec<Vec3x<W>>,
 }
 
 impl Material {
@@ -164,6 +177,25 @@ impl Material {
             self.prepare_into(&p.lane(k), scratch, &mut out.lanes[k]);
         }
         out.transpose();
+    }
+
+    /// Prepare `W` points for [`PreparedBatch::eval`], [`PreparedBatch::albedo`],
+    /// [`PreparedBatch::emission`] and [`PreparedBatch::transparency`] only: what a
+    /// sampling-free renderer such as the material preview needs. A material whose
+    /// registers are all constants, whose leaves share the point's frame and have batched
+    /// kernels is prepared lane-parallel, without per-lane records
+    /// ([`PreparedBatch::lane`] is then `None`); any other material, or a batch with a view
+    /// at or below some lane's horizon, goes through [`Material::prepare_batch_into`]. Both
+    /// ways give the same results to rounding.
+    pub fn prepare_batch_eval_into<const W: usize>(
+        &self,
+        p: &ShadingBatch<W>,
+        scratch: &mut Scratch,
+        out: &mut PreparedBatch<W>,
+    ) {
+        if !self.prepare_lanes(p, out) {
+            self.prepare_batch_into(p, scratch, out);
+        }
     }
 }
 
@@ -194,6 +226,11 @@ impl<const W: usize> PreparedBatch<W> {
             frames: [FrameX::identity(); MAX_LOBES],
             frame_count: 0,
             lanes,
+            lanes_valid: true,
+            albedo: Vec3x::zero(),
+            emission: Vec3x::zero(),
+            transparency: Vec3x::zero(),
+            work: Vec::new(),
         };
         b.transpose();
         b
@@ -244,7 +281,11 @@ impl<const W: usize> PreparedBatch<W> {
                 self.frames[f].set(k, &lane.frames[f]);
             }
             self.frame_count = self.frame_count.max(lane.frame_count);
+            self.albedo.set(k, lane.albedo().total());
+            self.emission.set(k, lane.emission());
+            self.transparency.set(k, lane.transparency());
         }
+        self.lanes_valid = true;
         for slot in &mut self.slots[..count] {
             let lanes = &self.lanes;
             let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
@@ -321,9 +362,26 @@ impl<const W: usize> PreparedBatch<W> {
             .count()
     }
 
-    /// The scalar preparation of lane `k` (for `albedo`, `emission`, `sample`).
-    pub fn lane(&self, k: usize) -> &Prepared {
-        &self.lanes[k]
+    /// The scalar preparation of lane `k` (for `sample` and inspection); `None` when the
+    /// batch was prepared lane-parallel by [`Material::prepare_batch_eval_into`].
+    pub fn lane(&self, k: usize) -> Option<&Prepared> {
+        self.lanes_valid.then(|| &self.lanes[k])
+    }
+
+    /// Lane `k`'s directional albedo `albedo().total()` (reflection plus transmission as
+    /// energy, [`Prepared::albedo`]).
+    pub fn albedo(&self, k: usize) -> Vec3 {
+        self.albedo.get(k)
+    }
+
+    /// Lane `k`'s emission ([`Prepared::emission`]).
+    pub fn emission(&self, k: usize) -> Vec3 {
+        self.emission.get(k)
+    }
+
+    /// Lane `k`'s straight-through transmittance ([`Prepared::transparency`]).
+    pub fn transparency(&self, k: usize) -> Vec3 {
+        self.transparency.get(k)
     }
 
     /// Number of leaf slots (leaves live in at least one lane).

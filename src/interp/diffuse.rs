@@ -250,11 +250,11 @@ impl OrenNayar {
 /// and the QON albedo curve.
 #[derive(Debug, Clone, Copy)]
 pub struct OrenNayarBound {
-    template: PreparedOrenNayar,
+    pub(super) template: PreparedOrenNayar,
     /// EON: `ρ_ms` and `ρ_ms/(π(1 − Ē))` (zero below the σ cut-off and for QON/FON).
-    rho_ms: Rgb,
-    ms_scale: Rgb,
-    qon: Option<MuCurve>,
+    pub(super) rho_ms: Rgb,
+    pub(super) ms_scale: Rgb,
+    pub(super) qon: Option<MuCurve>,
 }
 
 impl OrenNayar {

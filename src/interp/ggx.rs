@@ -140,6 +140,7 @@ pub struct GgxCore {
 
 impl GgxView {
     /// The view-fixed constants of a (non-delta) distribution, given `Λ(V)`.
+    #[inline]
     pub fn new(ggx: &Ggx, masking: Masking, lambda_v: f32) -> GgxView {
         let (c_z, c_s) = match masking {
             Masking::HeightCorrelated => (1.0 + 2.0 * lambda_v, 1.0),

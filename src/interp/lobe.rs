@@ -421,8 +421,8 @@ impl Lobe {
 /// constants. [`BoundLobe::prepare`] equals [`Lobe::prepare`].
 #[derive(Debug, Clone, Copy)]
 pub struct BoundLobe {
-    lobe: Lobe,
-    aux: Aux,
+    pub(super) lobe: Lobe,
+    pub(super) aux: Aux,
 }
 
 /// The per-family view-independent data of a [`BoundLobe`]. One per constant leaf, built
@@ -430,7 +430,7 @@ pub struct BoundLobe {
 /// would add an indirection to every prepare.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
-enum Aux {
+pub(super) enum Aux {
     None,
     Microfacet(MicrofacetBound),
     Dielectric(DielectricBound),

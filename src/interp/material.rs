@@ -61,6 +61,8 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 use std::f32::consts::TAU;
 
+mod lanes;
+
 /// The lobe index [`Sample::lobe`] reports for straight transmission through `Transparent`
 /// leaves.
 pub const TRANSPARENCY_LOBE: u8 = u8::MAX;
@@ -271,6 +273,9 @@ pub struct Material {
     /// The weight pass with every register read folded in, when the registers are
     /// constant (`const_regs`) and the DAG has few enough paths.
     w_plan: Option<WeightPlan>,
+    /// The lane-parallel prepare's per-leaf data, when the material qualifies
+    /// ([`lanes::LanePlan`]).
+    lanes: Option<lanes::LanePlan>,
     options: PrepareOptions,
 }
 
@@ -422,8 +427,9 @@ impl Material {
         let w_plan = const_regs
             .as_deref()
             .and_then(|regs| compile_weights(&nodes, &leaves, &thr_slot, regs));
-        Ok(Material {
+        let mut m = Material {
             w_plan,
+            lanes: None,
             const_regs,
             ir: ir.clone(),
             nodes,
@@ -436,7 +442,9 @@ impl Material {
             layout,
             rerun_for_mu,
             options,
-        })
+        };
+        m.lanes = lanes::LanePlan::new(&m);
+        Ok(m)
     }
 
     /// The IR this material was compiled from.

@@ -164,15 +164,15 @@ pub struct PreparedMicrofacetR {
 /// the Fresnel form the tables read and the albedo tables at the lobe's roughness.
 #[derive(Debug, Clone, Copy)]
 pub struct MicrofacetBound {
-    albedo_fresnel: Fresnel,
+    pub(super) albedo_fresnel: Fresnel,
     /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables), and
     /// in the one-off bound of [`MicrofacetR::prepare`] (direct lookups).
-    curves: Option<ReflectionCurves>,
+    pub(super) curves: Option<ReflectionCurves>,
 }
 
 /// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
 #[derive(Debug, Clone, Copy)]
-struct ReflectionCurves {
+pub(super) struct ReflectionCurves {
     e1: MuCurve,
     sq: Option<MuCurve>,
     h82: Option<MuCurve>,
@@ -181,7 +181,7 @@ struct ReflectionCurves {
 impl ReflectionCurves {
     /// [`reflection_albedo`] for the forms the curves were built for (One, Schlick, F82).
     #[inline]
-    fn albedo(&self, f: &Fresnel, mu: f32) -> Rgb {
+    pub(super) fn albedo(&self, f: &Fresnel, mu: f32) -> Rgb {
         let e1v = self.e1.at(mu);
         let sq = |c: &Option<MuCurve>| c.as_ref().map_or(0.0, |c| c.at(mu));
         let schlick = |f0: Rgb, f90: Rgb| f0 * e1v + (f90 - f0) * sq(&self.sq);
@@ -499,12 +499,12 @@ pub struct PreparedDielectric {
 /// below). Only height-correlated, non-delta lobes have them.
 #[derive(Debug, Clone, Copy)]
 pub struct DielectricBound {
-    curves: Option<[[MuCurve; 3]; 2]>,
+    pub(super) curves: Option<[[MuCurve; 3]; 2]>,
 }
 
 impl Dielectric {
     /// η, with invalid values replaced by 1.
-    fn eta0(&self) -> f32 {
+    pub(super) fn eta0(&self) -> f32 {
         if self.eta.is_finite() && self.eta > 0.0 {
             self.eta
         } else {

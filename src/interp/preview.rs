@@ -187,11 +187,8 @@ struct RowState {
 /// A sphere pixel's radiance (§1.6): the light through `direct` (`eval(L_light).f_cos`), the
 /// uniform environment through the albedo, emission, and the environment seen through
 /// transparency.
-fn radiance(opts: &PreviewOptions, direct: Rgb, prep: &Prepared) -> Rgb {
-    direct * opts.light
-        + opts.env * prep.albedo().total()
-        + prep.emission()
-        + prep.transparency() * opts.env
+fn radiance(opts: &PreviewOptions, direct: Rgb, albedo: Rgb, emission: Rgb, tau: Rgb) -> Rgb {
+    direct * opts.light + opts.env * albedo + emission + tau * opts.env
 }
 
 /// Shade row `j` with the scalar interpreter.
@@ -232,7 +229,13 @@ fn shade_row_with(
             }
         };
         *px = match opts.aov_leaf {
-            None => radiance(opts, direct, prep),
+            None => radiance(
+                opts,
+                direct,
+                prep.albedo().total(),
+                prep.emission(),
+                prep.transparency(),
+            ),
             Some(leaf) => {
                 let a = prep
                     .lobes()
@@ -280,15 +283,15 @@ fn shade_row_batched_with(
         for k in n..W {
             pts.set_lane(k, &last);
         }
-        material.prepare_batch_into(pts, scratch, batch);
+        material.prepare_batch_eval_into(pts, scratch, batch);
         // AVX2 at most: a pixel's time is mostly the scalar prepare, and AVX-512 code lowers
         // the core's clock for the code around it (measured: about 10 % slower 512² previews on
         // the AVX-512 reference machine, while bulk evaluation gains; BENCHMARKS.md, S7).
         let direct = (opts.light != Vec3::ZERO).then(|| batch.eval_at(Level::Avx2, &[l; W]));
         for (k, &i) in cols[..n].iter().enumerate() {
-            let prep = batch.lane(k);
             let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
-            out[i] = radiance(opts, d, prep);
+            let (a, e, t) = (batch.albedo(k), batch.emission(k), batch.transparency(k));
+            out[i] = radiance(opts, d, a, e, t);
         }
     };
     for i in 0..size {

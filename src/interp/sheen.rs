@@ -53,9 +53,9 @@ fn ck_ln_lambda(c: &[f32; 5], mu: f32) -> f32 {
 /// albedo curve and the terms of its clamped roughness.
 #[derive(Debug, Clone, Copy)]
 pub struct SheenCKBound {
-    curve: MuCurve,
-    half_inv_r: f32,
-    norm: f32,
+    pub(super) curve: MuCurve,
+    pub(super) half_inv_r: f32,
+    pub(super) norm: f32,
     coef: [f32; 5],
 }
 

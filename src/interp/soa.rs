@@ -48,6 +48,7 @@ impl<const W: usize> Vec3x<W> {
     }
 
     /// Lane `k`.
+    #[inline(always)]
     pub fn get(&self, k: usize) -> Vec3 {
         Vec3::new(self.x[k], self.y[k], self.z[k])
     }
@@ -65,6 +66,7 @@ impl<const W: usize> Vec3x<W> {
     }
 
     /// Sets lane `k`.
+    #[inline(always)]
     pub fn set(&mut self, k: usize, v: Vec3) {
         self.x[k] = v.x;
         self.y[k] = v.y;
@@ -248,100 +250,100 @@ pub(super) enum Kernel<const W: usize> {
 /// Oren–Nayar lanes (see [`super::diffuse::PreparedOrenNayar`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct OrenNayarX<const W: usize> {
-    v: Vec3x<W>,
+    pub(super) v: Vec3x<W>,
     /// `w ρ/π` (the slot's weight folded in).
-    rho_pi: Vec3x<W>,
-    a: [f32; W],
-    b: [f32; W],
+    pub(super) rho_pi: Vec3x<W>,
+    pub(super) a: [f32; W],
+    pub(super) b: [f32; W],
     /// 1 where a negative `s` is kept (FON, EON), else 0.
-    keep_negative_s: [f32; W],
+    pub(super) keep_negative_s: [f32; W],
     /// `w ρ_ms` (weighted).
-    ms: Vec3x<W>,
+    pub(super) ms: Vec3x<W>,
     /// EON's `Ê(μ) = af + c·g(μ)` (exact form): `af`.
-    af: [f32; W],
+    pub(super) af: [f32; W],
     /// ... and `c = σ af / π`.
-    c: [f32; W],
+    pub(super) c: [f32; W],
     /// The fast polynomial `Ê` (per slot).
-    fast: bool,
-    sigma: [f32; W],
+    pub(super) fast: bool,
+    pub(super) sigma: [f32; W],
 }
 
 /// Conductor lanes (see [`super::microfacet::PreparedMicrofacetR`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ConductorX<const W: usize> {
-    g: GgxX<W>,
+    pub(super) g: GgxX<W>,
     /// `p G1(V)/(4 μ_o)` (`p`: the slot's probability): the pdf term is `D` times this.
-    pdf_c: [f32; W],
+    pub(super) pdf_c: [f32; W],
     /// `η² − κ²` per channel.
-    e2mk2: Vec3x<W>,
+    pub(super) e2mk2: Vec3x<W>,
     /// `4 η² κ²` per channel.
-    four_e2k2: Vec3x<W>,
+    pub(super) four_e2k2: Vec3x<W>,
     /// `w scale/(4 μ_o)` (`w`: the slot's weight): the `f·μ_i` term is `F D G2` times this.
-    scale_q: Vec3x<W>,
+    pub(super) scale_q: Vec3x<W>,
 }
 
 /// Dielectric (mode R) lanes (see [`super::microfacet::PreparedDielectric`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct DielectricX<const W: usize> {
-    g: GgxX<W>,
+    pub(super) g: GgxX<W>,
     /// `η² − 1`.
-    e2m1: [f32; W],
+    pub(super) e2m1: [f32; W],
     /// `p G1(V)/(4 μ_o)`: the pdf term is `D` times this.
-    pdf_c: [f32; W],
+    pub(super) pdf_c: [f32; W],
     /// `w tint_r/(4 μ_o)`: the `f·μ_i` term is `F D G2` times this.
-    tint_q: Vec3x<W>,
+    pub(super) tint_q: Vec3x<W>,
 }
 
 /// The view-dependent GGX terms shared by the microfacet kernels: each lane's
 /// [`GgxView`] (copied from the scalar prepare in [`Kernel::rebuild`]) as arrays.
 #[derive(Debug, Clone, Copy)]
-struct GgxX<const W: usize> {
-    v: Vec3x<W>,
-    inv_ax: [f32; W],
-    inv_ay: [f32; W],
-    ax2: [f32; W],
-    ay2: [f32; W],
+pub(super) struct GgxX<const W: usize> {
+    pub(super) v: Vec3x<W>,
+    pub(super) inv_ax: [f32; W],
+    pub(super) inv_ay: [f32; W],
+    pub(super) ax2: [f32; W],
+    pub(super) ay2: [f32; W],
     /// `π αx αy`.
-    pi_axay: [f32; W],
+    pub(super) pi_axay: [f32; W],
     /// The masking as `c_z l_z + c_s S_l` (see [`GgxX::reflect_terms`]): height-correlated
     /// `(1 + 2Λv, 1)`, separable `(1 + Λv, 1 + Λv)`.
-    c_z: [f32; W],
-    c_s: [f32; W],
+    pub(super) c_z: [f32; W],
+    pub(super) c_s: [f32; W],
 }
 
 /// Ward lanes (see [`super::ward::PreparedWard`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct WardX<const W: usize> {
-    v: Vec3x<W>,
-    inv_ax2: [f32; W],
-    inv_ay2: [f32; W],
-    norm: [f32; W],
+    pub(super) v: Vec3x<W>,
+    pub(super) inv_ax2: [f32; W],
+    pub(super) inv_ay2: [f32; W],
+    pub(super) norm: [f32; W],
     /// The pdf normalisation times the slot's probability.
-    pdf_norm: [f32; W],
+    pub(super) pdf_norm: [f32; W],
     /// 1 for GM, 0 for classic.
-    gm: [f32; W],
+    pub(super) gm: [f32; W],
     /// Some lane is classic (else the loop skips the classic form's square root).
-    any_classic: bool,
+    pub(super) any_classic: bool,
     /// `w ρ_s` (weighted).
-    rho: Vec3x<W>,
+    pub(super) rho: Vec3x<W>,
 }
 
 /// Sheen CK lanes (see [`super::sheen::PreparedSheenCK`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct SheenCKX<const W: usize> {
-    v: Vec3x<W>,
-    half_inv_r: [f32; W],
-    norm: [f32; W],
+    pub(super) v: Vec3x<W>,
+    pub(super) half_inv_r: [f32; W],
+    pub(super) norm: [f32; W],
 }
 
 /// Sheen LTC lanes (see [`super::sheen::PreparedSheenLTC`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct SheenLTCX<const W: usize> {
-    ax_x: Vec3x<W>,
-    ax_y: Vec3x<W>,
-    a: [f32; W],
-    b: [f32; W],
-    e_hat: [f32; W],
+    pub(super) ax_x: Vec3x<W>,
+    pub(super) ax_y: Vec3x<W>,
+    pub(super) a: [f32; W],
+    pub(super) b: [f32; W],
+    pub(super) e_hat: [f32; W],
 }
 
 /// Accumulators of a batched evaluation: `Σ w f·μ_i` and `Σ p pdf` per lane.
@@ -363,6 +365,19 @@ pub(super) struct LaneWeights<const W: usize> {
 }
 
 use super::lobe::{PreparedLobe, State};
+
+/// `self` as family `$variant` (set to `$zero` first if it held another family).
+macro_rules! family_mut {
+    ($self:ident, $variant:ident, $zero:expr) => {{
+        if !matches!($self, Kernel::$variant(_)) {
+            *$self = Kernel::$variant($zero);
+        }
+        match $self {
+            Kernel::$variant(x) => x,
+            _ => unreachable!("the variant was set just above"),
+        }
+    }};
+}
 use super::vmath;
 
 impl<const W: usize> Kernel<W> {
@@ -393,78 +408,36 @@ impl<const W: usize> Kernel<W> {
         // lane overwrites everything the previous contents held.
         match &lobes(first).state {
             State::Lambert(_) if same(&|s| matches!(s, State::Lambert(_))) => {
-                if !matches!(self, Kernel::Lambert { .. }) {
-                    *self = Kernel::Lambert {
-                        rho_pi: Vec3x::zero(),
-                    };
-                }
-                if let Kernel::Lambert { rho_pi } = self {
-                    for k in 0..W {
-                        if let State::Lambert(p) = &lane(k).state {
-                            rho_pi.set(k, p.rho_pi * lw.w.get(k));
-                        }
+                let rho_pi = self.lambert_mut();
+                for k in 0..W {
+                    if let State::Lambert(p) = &lane(k).state {
+                        rho_pi.set(k, p.rho_pi * lw.w.get(k));
                     }
                 }
             }
             State::OrenNayar(p0)
                 if same(&|s| matches!(s, State::OrenNayar(p) if p.fast == p0.fast)) =>
             {
-                if !matches!(self, Kernel::OrenNayar(_)) {
-                    *self = Kernel::OrenNayar(OrenNayarX {
-                        v: Vec3x::zero(),
-                        rho_pi: Vec3x::zero(),
-                        a: [0.0; W],
-                        b: [0.0; W],
-                        keep_negative_s: [0.0; W],
-                        ms: Vec3x::zero(),
-                        af: [0.0; W],
-                        c: [0.0; W],
-                        fast: false,
-                        sigma: [0.0; W],
-                    });
-                }
-                if let Kernel::OrenNayar(x) = self {
-                    x.fast = p0.fast;
-                    for k in 0..W {
-                        if let State::OrenNayar(p) = &lane(k).state {
-                            x.v.set(k, p.v);
-                            x.rho_pi.set(k, p.rho_pi * lw.w.get(k));
-                            x.a[k] = p.a;
-                            x.b[k] = p.b;
-                            x.keep_negative_s[k] = flag(p.keep_negative_s);
-                            x.ms.set(k, p.ms * lw.w.get(k));
-                            let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
-                            x.af[k] = af;
-                            x.c[k] = p.sigma * af * FRAC_1_PI;
-                            x.sigma[k] = p.sigma;
-                        }
+                let x = self.oren_nayar_mut();
+                x.fast = p0.fast;
+                for k in 0..W {
+                    if let State::OrenNayar(p) = &lane(k).state {
+                        x.set(k, p, lw.w.get(k));
                     }
                 }
             }
             State::MicrofacetR(_)
                 if same(&|s| matches!(s, State::MicrofacetR(p) if conductor_ok(p))) =>
             {
-                if !matches!(self, Kernel::Conductor(_)) {
-                    *self = Kernel::Conductor(ConductorX {
-                        g: GgxX::zero(),
-                        pdf_c: [0.0; W],
-                        e2mk2: Vec3x::zero(),
-                        four_e2k2: Vec3x::zero(),
-                        scale_q: Vec3x::zero(),
-                    });
-                }
-                if let Kernel::Conductor(x) = self {
-                    for k in 0..W {
-                        if let State::MicrofacetR(p) = &lane(k).state {
-                            x.g.set(k, p.v, &p.view);
-                            x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
-                            if let Fresnel::Conductor { eta, kappa } = p.fresnel {
-                                let (e2, k2) = (eta * eta, kappa * kappa);
-                                x.e2mk2.set(k, e2 - k2);
-                                x.four_e2k2.set(k, 4.0 * e2 * k2);
-                            }
-                            x.scale_q.set(k, p.scale * p.inv_4mu * lw.w.get(k));
+                let x = self.conductor_mut();
+                for k in 0..W {
+                    if let State::MicrofacetR(p) = &lane(k).state {
+                        x.g.set(k, p.v, &p.view);
+                        x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
+                        if let Fresnel::Conductor { eta, kappa } = p.fresnel {
+                            x.set_ior(k, eta, kappa);
                         }
+                        x.scale_q.set(k, p.scale * p.inv_4mu * lw.w.get(k));
                     }
                 }
             }
@@ -473,53 +446,23 @@ impl<const W: usize> Kernel<W> {
                     &|s| matches!(s, State::Dielectric(p) if p.refl && !p.trans && !p.delta),
                 ) =>
             {
-                if !matches!(self, Kernel::DielectricR(_)) {
-                    *self = Kernel::DielectricR(DielectricX {
-                        g: GgxX::zero(),
-                        e2m1: [0.0; W],
-                        pdf_c: [0.0; W],
-                        tint_q: Vec3x::zero(),
-                    });
-                }
-                if let Kernel::DielectricR(x) = self {
-                    for k in 0..W {
-                        if let State::Dielectric(p) = &lane(k).state {
-                            x.g.set(k, p.v, &p.view);
-                            x.e2m1[k] = p.eta * p.eta - 1.0;
-                            let q = 0.25 * p.inv_mu;
-                            x.pdf_c[k] = p.g1_v * q * lw.p[k];
-                            x.tint_q.set(k, p.tint_r * q * lw.w.get(k));
-                        }
+                let x = self.dielectric_r_mut();
+                for k in 0..W {
+                    if let State::Dielectric(p) = &lane(k).state {
+                        x.g.set(k, p.v, &p.view);
+                        x.set(k, p.eta, p.g1_v, p.inv_mu, p.tint_r, lw.p[k], lw.w.get(k));
                     }
                 }
             }
             State::Ward(_) if same(&|s| matches!(s, State::Ward(_))) => {
-                if !matches!(self, Kernel::Ward(_)) {
-                    *self = Kernel::Ward(WardX {
-                        v: Vec3x::zero(),
-                        inv_ax2: [0.0; W],
-                        inv_ay2: [0.0; W],
-                        norm: [0.0; W],
-                        pdf_norm: [0.0; W],
-                        gm: [0.0; W],
-                        any_classic: false,
-                        rho: Vec3x::zero(),
-                    });
-                }
-                if let Kernel::Ward(x) = self {
-                    x.any_classic = (0..W).any(
-                        |k| matches!(&lane(k).state, State::Ward(p) if p.variant != WardVariant::Gm),
-                    );
-                    for k in 0..W {
-                        if let State::Ward(p) = &lane(k).state {
-                            x.v.set(k, p.v);
-                            x.inv_ax2[k] = p.core.inv_ax2;
-                            x.inv_ay2[k] = p.core.inv_ay2;
-                            x.norm[k] = p.core.norm;
-                            x.pdf_norm[k] = p.core.pdf_norm * lw.p[k];
-                            x.gm[k] = flag(p.variant == WardVariant::Gm);
-                            x.rho.set(k, p.rho * lw.w.get(k));
-                        }
+                let x = self.ward_mut();
+                x.any_classic = (0..W).any(
+                    |k| matches!(&lane(k).state, State::Ward(p) if p.variant != WardVariant::Gm),
+                );
+                for k in 0..W {
+                    if let State::Ward(p) = &lane(k).state {
+                        x.v.set(k, p.v);
+                        x.set(k, &p.core, p.variant, p.rho, lw.p[k], lw.w.get(k));
                     }
                 }
             }
@@ -528,47 +471,135 @@ impl<const W: usize> Kernel<W> {
                     &|s| matches!(s, State::SheenCK(p) if p.masking == SheenMasking::MaterialX),
                 ) =>
             {
-                if !matches!(self, Kernel::SheenCK(_)) {
-                    *self = Kernel::SheenCK(SheenCKX {
-                        v: Vec3x::zero(),
-                        half_inv_r: [0.0; W],
-                        norm: [0.0; W],
-                    });
-                }
-                if let Kernel::SheenCK(x) = self {
-                    for k in 0..W {
-                        if let State::SheenCK(p) = &lane(k).state {
-                            x.v.set(k, p.v);
-                            x.half_inv_r[k] = p.half_inv_r;
-                            x.norm[k] = p.norm;
-                        }
+                let x = self.sheen_ck_mut();
+                for k in 0..W {
+                    if let State::SheenCK(p) = &lane(k).state {
+                        x.v.set(k, p.v);
+                        x.half_inv_r[k] = p.half_inv_r;
+                        x.norm[k] = p.norm;
                     }
                 }
             }
             State::SheenLTC(_) if same(&|s| matches!(s, State::SheenLTC(_))) => {
-                if !matches!(self, Kernel::SheenLTC(_)) {
-                    *self = Kernel::SheenLTC(SheenLTCX {
-                        ax_x: Vec3x::zero(),
-                        ax_y: Vec3x::zero(),
-                        a: [0.0; W],
-                        b: [0.0; W],
-                        e_hat: [0.0; W],
-                    });
-                }
-                if let Kernel::SheenLTC(x) = self {
-                    for k in 0..W {
-                        if let State::SheenLTC(p) = &lane(k).state {
-                            x.ax_x.set(k, p.ax_x);
-                            x.ax_y.set(k, p.ax_y);
-                            x.a[k] = p.a;
-                            x.b[k] = p.b;
-                            x.e_hat[k] = p.e_hat;
-                        }
+                let x = self.sheen_ltc_mut();
+                for k in 0..W {
+                    if let State::SheenLTC(p) = &lane(k).state {
+                        x.set(k, p);
                     }
                 }
             }
             _ => *self = Kernel::Scalar,
         }
+    }
+
+    /// The Lambert lanes (`w ρ/π`), switching this kernel to that family first if it held
+    /// another (the `*_mut` accessors below do the same for their families). A kernel that
+    /// already has the family keeps its contents: callers overwrite every lane.
+    pub(super) fn lambert_mut(&mut self) -> &mut Vec3x<W> {
+        if !matches!(self, Kernel::Lambert { .. }) {
+            *self = Kernel::Lambert {
+                rho_pi: Vec3x::zero(),
+            };
+        }
+        match self {
+            Kernel::Lambert { rho_pi } => rho_pi,
+            _ => unreachable!("the variant was set just above"),
+        }
+    }
+
+    /// The Oren–Nayar lanes (see [`Kernel::lambert_mut`]).
+    pub(super) fn oren_nayar_mut(&mut self) -> &mut OrenNayarX<W> {
+        family_mut!(
+            self,
+            OrenNayar,
+            OrenNayarX {
+                v: Vec3x::zero(),
+                rho_pi: Vec3x::zero(),
+                a: [0.0; W],
+                b: [0.0; W],
+                keep_negative_s: [0.0; W],
+                ms: Vec3x::zero(),
+                af: [0.0; W],
+                c: [0.0; W],
+                fast: false,
+                sigma: [0.0; W],
+            }
+        )
+    }
+
+    /// The conductor lanes (see [`Kernel::lambert_mut`]).
+    pub(super) fn conductor_mut(&mut self) -> &mut ConductorX<W> {
+        family_mut!(
+            self,
+            Conductor,
+            ConductorX {
+                g: GgxX::zero(),
+                pdf_c: [0.0; W],
+                e2mk2: Vec3x::zero(),
+                four_e2k2: Vec3x::zero(),
+                scale_q: Vec3x::zero(),
+            }
+        )
+    }
+
+    /// The dielectric (mode R) lanes (see [`Kernel::lambert_mut`]).
+    pub(super) fn dielectric_r_mut(&mut self) -> &mut DielectricX<W> {
+        family_mut!(
+            self,
+            DielectricR,
+            DielectricX {
+                g: GgxX::zero(),
+                e2m1: [0.0; W],
+                pdf_c: [0.0; W],
+                tint_q: Vec3x::zero(),
+            }
+        )
+    }
+
+    /// The Ward lanes (see [`Kernel::lambert_mut`]).
+    pub(super) fn ward_mut(&mut self) -> &mut WardX<W> {
+        family_mut!(
+            self,
+            Ward,
+            WardX {
+                v: Vec3x::zero(),
+                inv_ax2: [0.0; W],
+                inv_ay2: [0.0; W],
+                norm: [0.0; W],
+                pdf_norm: [0.0; W],
+                gm: [0.0; W],
+                any_classic: false,
+                rho: Vec3x::zero(),
+            }
+        )
+    }
+
+    /// The Conty–Kulla sheen lanes (see [`Kernel::lambert_mut`]).
+    pub(super) fn sheen_ck_mut(&mut self) -> &mut SheenCKX<W> {
+        family_mut!(
+            self,
+            SheenCK,
+            SheenCKX {
+                v: Vec3x::zero(),
+                half_inv_r: [0.0; W],
+                norm: [0.0; W],
+            }
+        )
+    }
+
+    /// The LTC sheen lanes (see [`Kernel::lambert_mut`]).
+    pub(super) fn sheen_ltc_mut(&mut self) -> &mut SheenLTCX<W> {
+        family_mut!(
+            self,
+            SheenLTC,
+            SheenLTCX {
+                ax_x: Vec3x::zero(),
+                ax_y: Vec3x::zero(),
+                a: [0.0; W],
+                b: [0.0; W],
+                e_hat: [0.0; W],
+            }
+        )
     }
 
     /// Adds the slot's weighted response at local directions `l` (before the per-lane flip)
@@ -719,7 +750,8 @@ impl<const W: usize> GgxX<W> {
         }
     }
 
-    fn set(&mut self, k: usize, v: Vec3, g: &GgxView) {
+    #[inline(always)]
+    pub(super) fn set(&mut self, k: usize, v: Vec3, g: &GgxView) {
         self.v.set(k, v);
         self.inv_ax[k] = g.inv_ax;
         self.inv_ay[k] = g.inv_ay;
@@ -898,5 +930,91 @@ impl<const W: usize> SheenLTCX<W> {
             let d = lz.max(0.0) * FRAC_1_PI * kk * kk;
             add_valid(acc, lw, k, lz > 0.0, [self.e_hat[k] * d; 3], d);
         }
+    }
+}
+
+// Per-lane setters shared by `Kernel::rebuild` (from scalar records) and the lane-parallel
+// prepare (`material::lanes`), so that both fold the slot's weight and probability into
+// the same fields in the same order.
+
+impl<const W: usize> OrenNayarX<W> {
+    /// Lane `k` from a prepared lobe, with the slot's weight `w` folded in.
+    #[inline(always)]
+    pub(super) fn set(&mut self, k: usize, p: &super::diffuse::PreparedOrenNayar, w: Vec3) {
+        self.v.set(k, p.v);
+        self.rho_pi.set(k, p.rho_pi * w);
+        self.a[k] = p.a;
+        self.b[k] = p.b;
+        self.keep_negative_s[k] = flag(p.keep_negative_s);
+        self.ms.set(k, p.ms * w);
+        let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
+        self.af[k] = af;
+        self.c[k] = p.sigma * af * FRAC_1_PI;
+        self.sigma[k] = p.sigma;
+    }
+}
+
+impl<const W: usize> ConductorX<W> {
+    /// Lane `k`'s complex index (per channel).
+    #[inline(always)]
+    pub(super) fn set_ior(&mut self, k: usize, eta: Vec3, kappa: Vec3) {
+        let (e2, k2) = (eta * eta, kappa * kappa);
+        self.e2mk2.set(k, e2 - k2);
+        self.four_e2k2.set(k, 4.0 * e2 * k2);
+    }
+}
+
+impl<const W: usize> DielectricX<W> {
+    /// Lane `k`'s terms besides the GGX view, with the slot's probability `p` and weight `w`
+    /// folded in.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn set(
+        &mut self,
+        k: usize,
+        eta: f32,
+        g1_v: f32,
+        inv_mu: f32,
+        tint_r: Vec3,
+        p: f32,
+        w: Vec3,
+    ) {
+        self.e2m1[k] = eta * eta - 1.0;
+        let q = 0.25 * inv_mu;
+        self.pdf_c[k] = g1_v * q * p;
+        self.tint_q.set(k, tint_r * q * w);
+    }
+}
+
+impl<const W: usize> WardX<W> {
+    /// Lane `k`'s terms besides V, with the slot's probability `p` and weight `w` folded in.
+    #[inline(always)]
+    pub(super) fn set(
+        &mut self,
+        k: usize,
+        core: &super::ward::WardCore,
+        variant: WardVariant,
+        rho: Vec3,
+        p: f32,
+        w: Vec3,
+    ) {
+        self.inv_ax2[k] = core.inv_ax2;
+        self.inv_ay2[k] = core.inv_ay2;
+        self.norm[k] = core.norm;
+        self.pdf_norm[k] = core.pdf_norm * p;
+        self.gm[k] = flag(variant == WardVariant::Gm);
+        self.rho.set(k, rho * w);
+    }
+}
+
+impl<const W: usize> SheenLTCX<W> {
+    /// Lane `k` from a prepared lobe.
+    #[inline(always)]
+    pub(super) fn set(&mut self, k: usize, p: &super::sheen::PreparedSheenLTC) {
+        self.ax_x.set(k, p.ax_x);
+        self.ax_y.set(k, p.ax_y);
+        self.a[k] = p.a;
+        self.b[k] = p.b;
+        self.e_hat[k] = p.e_hat;
     }
 }

@@ -118,8 +118,8 @@ pub struct Ward {
 /// curve and its widths and normalisation (the classic norm at `μ_o = 1`).
 #[derive(Debug, Clone, Copy)]
 pub struct WardBound {
-    curve: MuCurve,
-    core: WardCore,
+    pub(super) curve: MuCurve,
+    pub(super) core: WardCore,
 }
 
 /// Prepared [`Ward`].

@@ -7,6 +7,7 @@ use vstructc::interp::{Eval, Frame, Prepared};
 
 /// `W` random frames and views; every fourth lane (`k % 4 == 0`) sees its surface from below
 /// (one-sided lobes masked, two-sided ones flipped), the others from above.
+#[allow(dead_code)] // not every test that includes this file uses every helper
 pub fn random_frames_and_views<const W: usize>(rng: &mut Rng) -> ([Frame; W], [Vec3; W]) {
     let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
     let views = std::array::from_fn(|k| {

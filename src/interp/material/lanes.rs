@@ -1,0 +1,554 @@
+//! The lane-parallel prepare of a uniform material (spec closures.md §1.5 and §6.1:
+//! structure-of-arrays batching for previews).
+//!
+//! [`Material::prepare_batch_into`] runs the scalar prepare once per lane and then
+//! transposes the per-lane records into the batch's kernels. Most of that work is the
+//! general algorithm's bookkeeping, repeated per lane. For a material whose registers are all
+//! constants (no inputs, textures or globals), whose leaves all use the point's own frame
+//! and all have a batched kernel, [`Material::prepare_lanes`] instead runs §1.4's steps
+//! once for all lanes, each step a loop over lanes the compiler vectorises:
+//!
+//! 1. frames and V in the frame, per lane (the batch falls back to the scalar path when
+//!    some lane's view is at or below the horizon: those lobes are inactive or flipped);
+//! 2. each leaf's albedo `E(μ_o)` (its baked curve, or its closed form);
+//! 3. the throughput pass and the compiled weight plan on lane arrays;
+//! 4. drop and selection per lane;
+//! 5. each surviving leaf's view terms, written straight into its kernel with the lane
+//!    weights folded in as [`super::super::soa::Kernel::rebuild`] folds them.
+//!
+//! Every formula is the scalar leaf's, in the same order, so each lane agrees with
+//! [`Material::prepare`] to rounding (`tests/interp_batch_lanes.rs`).
+
+use super::{Material, Target, ThrOp, clean, sat};
+use crate::interp::batch::{PreparedBatch, ShadingBatch};
+use crate::interp::diffuse::{
+    EON_SIGMA_MIN, OrenNayar, OrenNayarBound, OrenNayarVariant, eon_e_hat, eon_e_hat_fast,
+};
+use crate::interp::frame::Frame;
+use crate::interp::fresnel::Fresnel;
+use crate::interp::ggx::GgxView;
+use crate::interp::lobe::{Aux, Lobe};
+use crate::interp::math::{Rgb, lum, safe_mu};
+use crate::interp::microfacet::{
+    Compensation, Dielectric, DielectricMode, MicrofacetR, ReflectionCurves,
+};
+use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenMasking, sheen_ltc_albedo};
+use crate::interp::soa::{Kernel, LaneWeights, Vec3x};
+use crate::interp::tables::MuCurve;
+use crate::interp::ward::{Ward, WardBound, WardVariant};
+use crate::ir::MAX_LOBES;
+use crate::ir::algebra::leaf_throughput;
+use glam::Vec3;
+
+/// What the lane-parallel prepare keeps of one leaf: its family's view-independent data
+/// (from the leaf's [`crate::interp::lobe::BoundLobe`]). One per leaf, built at compile
+/// time, so the size difference between variants costs nothing worth boxing for.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy)]
+pub(super) enum LeafLanes {
+    /// Lambert (and the subsurface proxy): `ρ` and `ρ/π`.
+    Lambert { rho: Rgb, rho_pi: Rgb },
+    /// Oren–Nayar (any variant).
+    OrenNayar {
+        lobe: OrenNayar,
+        bound: OrenNayarBound,
+    },
+    /// GGX reflection with a conductor Fresnel, no compensation.
+    Conductor {
+        lobe: MicrofacetR,
+        curves: ReflectionCurves,
+        albedo_fresnel: Fresnel,
+    },
+    /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
+    DielectricR {
+        lobe: Dielectric,
+        eta: f32,
+        e_r: MuCurve,
+    },
+    /// Ward (classic or GM).
+    Ward { lobe: Ward, bound: WardBound },
+    /// Conty–Kulla sheen with the MaterialX masking.
+    SheenCK { bound: SheenCKBound },
+    /// LTC sheen.
+    SheenLTC { lobe: SheenLTC },
+}
+
+/// The per-leaf data of a material that [`Material::prepare_lanes`] can prepare.
+#[derive(Debug, Clone)]
+pub(in crate::interp) struct LanePlan {
+    leaves: Vec<LeafLanes>,
+}
+
+impl LanePlan {
+    /// The plan of `m`, or `None` when some part of it needs the general path: registers
+    /// that are not constants, a weight pass without a plan, frames of its own, or a leaf
+    /// without a batched kernel.
+    pub(super) fn new(m: &Material) -> Option<LanePlan> {
+        m.const_regs.as_ref()?;
+        m.w_plan.as_ref()?;
+        let own_frame = |f: &crate::ir::FrameSlot| {
+            f.normal.is_none() && f.tangent.is_none() && f.rotation.is_none()
+        };
+        if m.nodes.is_empty() || m.frames.len() != 1 || !own_frame(&m.frames[0]) {
+            return None;
+        }
+        let leaves = m
+            .leaves
+            .iter()
+            .map(|info| LeafLanes::new(info.const_lobe.as_ref()?))
+            .collect::<Option<Vec<_>>>()?;
+        Some(LanePlan { leaves })
+    }
+}
+
+impl LeafLanes {
+    /// The leaf's data when its family and configuration have a kernel (the same cases as
+    /// `Kernel::rebuild`, for views above the horizon).
+    fn new(b: &crate::interp::lobe::BoundLobe) -> Option<LeafLanes> {
+        Some(match (&b.lobe, &b.aux) {
+            (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => LeafLanes::Lambert {
+                rho: l.rho,
+                rho_pi: l.prepare().rho_pi,
+            },
+            (Lobe::OrenNayar(o), Aux::OrenNayar(bound)) => LeafLanes::OrenNayar {
+                lobe: *o,
+                bound: *bound,
+            },
+            (Lobe::MicrofacetR(m), Aux::Microfacet(bound))
+                if m.fresnel.is_conductor()
+                    && !m.ggx.is_delta()
+                    && m.comp == Compensation::None =>
+            {
+                LeafLanes::Conductor {
+                    lobe: *m,
+                    curves: bound.curves?,
+                    albedo_fresnel: bound.albedo_fresnel,
+                }
+            }
+            // Turquin's factor makes the tint view-dependent; the scalar prepare applies it
+            // only for `k > 0` (so a NaN strength is off too).
+            (Lobe::Dielectric(d), Aux::Dielectric(bound))
+                if d.mode == DielectricMode::R
+                    && !d.ggx.is_delta()
+                    && (d.turquin <= 0.0 || d.turquin.is_nan()) =>
+            {
+                LeafLanes::DielectricR {
+                    lobe: *d,
+                    eta: d.eta0(),
+                    e_r: bound.curves?[0][0],
+                }
+            }
+            (Lobe::Ward(w), Aux::Ward(bound)) => LeafLanes::Ward {
+                lobe: *w,
+                bound: *bound,
+            },
+            (Lobe::SheenCK(s), Aux::SheenCK(bound)) if s.masking == SheenMasking::MaterialX => {
+                LeafLanes::SheenCK { bound: *bound }
+            }
+            (Lobe::SheenLTC(s), _) => LeafLanes::SheenLTC { lobe: *s },
+            _ => return None,
+        })
+    }
+
+    /// The leaf's albedo `E(μ_o)` per lane (reflection only: none of these families
+    /// transmits), as its scalar prepare computes it.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    fn albedo<const W: usize>(&self, mu: &[f32; W], out: &mut Vec3x<W>) {
+        match self {
+            LeafLanes::Lambert { rho, .. } => {
+                for k in 0..W {
+                    out.set(k, *rho);
+                }
+            }
+            LeafLanes::OrenNayar { lobe, bound } => {
+                let t = &bound.template;
+                match lobe.variant {
+                    OrenNayarVariant::Qualitative => {
+                        for k in 0..W {
+                            let e = bound.qon.as_ref().map_or(1.0, |c| c.at(mu[k]));
+                            out.set(k, lobe.rho * e);
+                        }
+                    }
+                    OrenNayarVariant::Fujii => {
+                        for k in 0..W {
+                            out.set(k, lobe.rho * eon_e_hat(mu[k], t.sigma));
+                        }
+                    }
+                    OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => {
+                        for k in 0..W {
+                            out.set(k, eon_albedo(lobe, bound, mu[k]));
+                        }
+                    }
+                }
+            }
+            LeafLanes::Conductor {
+                curves,
+                albedo_fresnel,
+                ..
+            } => {
+                for k in 0..W {
+                    out.set(k, curves.albedo(albedo_fresnel, mu[k]).min(Vec3::ONE));
+                }
+            }
+            LeafLanes::DielectricR { lobe, e_r, .. } => {
+                for k in 0..W {
+                    out.set(k, lobe.tint_r * e_r.at(mu[k]));
+                }
+            }
+            LeafLanes::Ward { lobe, bound } => {
+                for k in 0..W {
+                    out.set(k, lobe.rho * bound.curve.at(mu[k]));
+                }
+            }
+            LeafLanes::SheenCK { bound } => {
+                for k in 0..W {
+                    out.set(k, Vec3::splat(bound.curve.at(mu[k])));
+                }
+            }
+            LeafLanes::SheenLTC { lobe } => {
+                let y = ltc_roughness(lobe);
+                for k in 0..W {
+                    out.set(k, Vec3::splat(sheen_ltc_albedo(mu[k].clamp(0.0, 1.0), y)));
+                }
+            }
+        }
+    }
+
+    /// Writes the leaf's view terms at local views `v` into `kernel`, with the slot's lane
+    /// weights and probabilities `lw` folded in as `Kernel::rebuild` folds them.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    fn fill<const W: usize>(&self, kernel: &mut Kernel<W>, v: &Vec3x<W>, lw: &LaneWeights<W>) {
+        match self {
+            LeafLanes::Lambert { rho_pi, .. } => {
+                let x = kernel.lambert_mut();
+                for k in 0..W {
+                    x.set(k, *rho_pi * lw.w.get(k));
+                }
+            }
+            LeafLanes::OrenNayar { lobe, bound } => {
+                let x = kernel.oren_nayar_mut();
+                x.fast = bound.template.fast;
+                let energy = matches!(
+                    lobe.variant,
+                    OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast
+                ) && bound.template.sigma >= EON_SIGMA_MIN;
+                for k in 0..W {
+                    let mut p = bound.template;
+                    p.v = v.get(k);
+                    if energy {
+                        p.ms = bound.ms_scale * (1.0 - eon_e_o(bound, v.z[k]));
+                    }
+                    x.set(k, &p, lw.w.get(k));
+                }
+            }
+            LeafLanes::Conductor { lobe, .. } => {
+                let x = kernel.conductor_mut();
+                let Fresnel::Conductor { eta, kappa } = lobe.fresnel else {
+                    return;
+                };
+                for k in 0..W {
+                    let vk = v.get(k);
+                    let lambda_v = lobe.ggx.lambda(vk);
+                    x.g.set(k, vk, &GgxView::new(&lobe.ggx, lobe.masking, lambda_v));
+                    let g1_v = 1.0 / (1.0 + lambda_v);
+                    let inv_4mu = 0.25 / safe_mu(vk.z);
+                    x.pdf_c[k] = g1_v * inv_4mu * lw.p[k];
+                    x.set_ior(k, eta, kappa);
+                    x.scale_q.set(k, Vec3::ONE * inv_4mu * lw.w.get(k));
+                }
+            }
+            LeafLanes::DielectricR { lobe, eta, .. } => {
+                let x = kernel.dielectric_r_mut();
+                for k in 0..W {
+                    let vk = v.get(k);
+                    let lambda_v = lobe.ggx.lambda(vk);
+                    x.g.set(k, vk, &GgxView::new(&lobe.ggx, lobe.masking, lambda_v));
+                    let g1_v = 1.0 / (1.0 + lambda_v);
+                    let inv_mu = 1.0 / safe_mu(vk.z);
+                    x.set(k, *eta, g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
+                }
+            }
+            LeafLanes::Ward { lobe, bound } => {
+                let x = kernel.ward_mut();
+                let classic = lobe.variant == WardVariant::Classic;
+                x.any_classic = classic;
+                for k in 0..W {
+                    let mut core = bound.core;
+                    if classic {
+                        core.norm = bound.core.norm / v.z[k].max(1e-7).sqrt();
+                    }
+                    x.v.set(k, v.get(k));
+                    x.set(k, &core, lobe.variant, lobe.rho, lw.p[k], lw.w.get(k));
+                }
+            }
+            LeafLanes::SheenCK { bound } => {
+                let x = kernel.sheen_ck_mut();
+                for k in 0..W {
+                    x.v.set(k, v.get(k));
+                    x.half_inv_r[k] = bound.half_inv_r;
+                    x.norm[k] = bound.norm;
+                }
+            }
+            LeafLanes::SheenLTC { lobe } => {
+                let x = kernel.sheen_ltc_mut();
+                for k in 0..W {
+                    x.set(k, &lobe.prepare(v.get(k)));
+                }
+            }
+        }
+    }
+}
+
+/// EON's `Ê(μ_o)` in the lobe's form (exact or polynomial).
+#[inline(always)]
+fn eon_e_o(bound: &OrenNayarBound, mu: f32) -> f32 {
+    let t = &bound.template;
+    if t.fast {
+        eon_e_hat_fast(mu, t.sigma)
+    } else {
+        eon_e_hat(mu, t.sigma)
+    }
+}
+
+/// An energy-preserving Oren–Nayar lobe's albedo (its scalar prepare's formula).
+#[inline(always)]
+fn eon_albedo(lobe: &OrenNayar, bound: &OrenNayarBound, mu: f32) -> Rgb {
+    if bound.template.sigma >= EON_SIGMA_MIN {
+        let e_o = eon_e_o(bound, mu);
+        lobe.rho * e_o + bound.rho_ms * (1.0 - e_o)
+    } else {
+        bound.template.albedo
+    }
+}
+
+/// The LTC sheen's roughness as its prepare clamps it.
+fn ltc_roughness(lobe: &SheenLTC) -> f32 {
+    if lobe.r.is_nan() {
+        1.0
+    } else {
+        lobe.r.clamp(0.01, 1.0)
+    }
+}
+
+/// `f(a, b)` lane by lane.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn zip<const W: usize>(a: &Vec3x<W>, b: &Vec3x<W>, f: impl Fn(Vec3, Vec3) -> Vec3) -> Vec3x<W> {
+    let mut out = Vec3x::zero();
+    for k in 0..W {
+        out.set(k, f(a.get(k), b.get(k)));
+    }
+    out
+}
+
+/// `v` in every lane.
+#[inline(always)]
+fn splat<const W: usize>(v: Vec3) -> Vec3x<W> {
+    Vec3x {
+        x: [v.x; W],
+        y: [v.y; W],
+        z: [v.z; W],
+    }
+}
+
+impl Material {
+    /// Prepares batch `p` lane-parallel into `out` (see the module documentation). Returns
+    /// false, leaving `out` to be overwritten by the general path, when this material has no
+    /// [`LanePlan`] or some lane's view is at or below the horizon.
+    pub(in crate::interp) fn prepare_lanes<const W: usize>(
+        &self,
+        p: &ShadingBatch<W>,
+        out: &mut PreparedBatch<W>,
+    ) -> bool {
+        let (Some(plan), Some(w_plan), Some(regs)) =
+            (&self.lanes, &self.w_plan, self.const_regs.as_deref())
+        else {
+            return false;
+        };
+        // Step 2: the point's frame and V in it.
+        let mut v = Vec3x::<W>::zero();
+        for k in 0..W {
+            let f = Frame::new(p.n[k], p.t[k]);
+            out.frames[0].set(k, &f);
+            v.set(k, f.to_local(p.v[k].normalize_or(Vec3::Z)));
+        }
+        if !(0..W).all(|k| v.z[k] > 0.0 && v.get(k).is_finite()) {
+            return false;
+        }
+        let reg = |r: crate::ir::Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
+        // Working arrays: albedos per leaf, throughput slots, scope products, plan targets.
+        let n_leaves = plan.leaves.len();
+        let (n_thr, n_scopes) = (self.thr_ops.len(), w_plan.scopes.len() + 1);
+        let need = n_leaves + n_thr + n_scopes + w_plan.targets.len();
+        // Taken out of the batch for the duration (the steps below also write the batch).
+        let mut work = std::mem::take(&mut out.work);
+        if work.len() < need {
+            work.resize(need, Vec3x::zero());
+        }
+        let (alb, rest) = work.split_at_mut(n_leaves);
+        let (thr, rest) = rest.split_at_mut(n_thr);
+        let (scope, acc) = rest.split_at_mut(n_scopes);
+        // The leaves' albedos (every leaf: all are needed for the throughputs, the drop
+        // and the selection).
+        for (leaf, a) in plan.leaves.iter().zip(alb.iter_mut()) {
+            leaf.albedo(&v.z, a);
+        }
+        // Step 3: throughputs, bottom-up (op `j` writes slot `j`).
+        for j in 0..n_thr {
+            let t = match self.thr_ops[j] {
+                ThrOp::Leaf { leaf, mode } => {
+                    let info = &self.leaves[leaf as usize];
+                    if info.layerable {
+                        let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
+                        let a = &alb[leaf as usize];
+                        zip(a, a, |e, _| leaf_throughput(mode, tint, ttint, e))
+                    } else {
+                        Vec3x::zero()
+                    }
+                }
+                ThrOp::One => splat(Vec3::ONE),
+                ThrOp::Layer { top, base } => {
+                    zip(&thr[top as usize], &thr[base as usize], |t, b| t * b)
+                }
+                ThrOp::Mix { a, b, m } => {
+                    let m = sat(reg(m));
+                    zip(&thr[a as usize], &thr[b as usize], |a, b| {
+                        (Vec3::ONE - m) * a + m * b
+                    })
+                }
+                ThrOp::Add { a, b } => zip(&thr[a as usize], &thr[b as usize], |a, b| {
+                    (a + b - Vec3::ONE).max(Vec3::ZERO)
+                }),
+                ThrOp::Multiply { f, c } => {
+                    let c = reg(c).max(Vec3::ZERO);
+                    let t = &thr[f as usize];
+                    zip(t, t, |t, _| sat(Vec3::ONE - c * (Vec3::ONE - t)))
+                }
+            };
+            thr[j] = t;
+        }
+        // Step 4: the weight plan (scope products, then each target's sum of terms).
+        scope[0] = splat(Vec3::ONE);
+        for (i, &(parent, slot)) in w_plan.scopes.iter().enumerate() {
+            scope[i + 1] = zip(&scope[parent as usize], &thr[slot as usize], |s, t| s * t);
+        }
+        for a in acc.iter_mut() {
+            *a = Vec3x::zero();
+        }
+        for t in &w_plan.terms {
+            let (c, s) = (t.c, &scope[t.scope as usize]);
+            let a = &mut acc[t.target as usize];
+            *a = zip(a, s, |a, s| a + c * s);
+        }
+        let mut weights = [Vec3x::<W>::zero(); MAX_LOBES];
+        out.emission = Vec3x::zero();
+        out.transparency = Vec3x::zero();
+        for (target, a) in w_plan.targets.iter().zip(acc.iter()) {
+            match *target {
+                Target::Leaf { leaf, tint } => {
+                    weights[leaf as usize] = zip(a, a, |a, _| clean(tint * a));
+                }
+                Target::Emission(e) => {
+                    out.emission = zip(&out.emission, a, |s, a| s + clean(a * e));
+                }
+                Target::Transparent(t) => {
+                    out.transparency = zip(&out.transparency, a, |s, a| s + clean(a * t));
+                }
+            }
+        }
+        // Steps 5–7 per lane: the weighted albedos, the drop, the selection; then each leaf
+        // that survives in some lane gets a slot.
+        let lanes = self.select_lanes(&weights[..n_leaves], alb, out);
+        let mut count = 0;
+        for (i, leaf) in plan.leaves.iter().enumerate() {
+            let (live, prob) = (&lanes.live[i], &lanes.prob[i]);
+            if !live.iter().any(|&l| l) {
+                continue;
+            }
+            let slot = &mut out.slots[count];
+            slot.frame = 0;
+            slot.live = *live;
+            for k in 0..W {
+                let on = live[k];
+                slot.lw
+                    .w
+                    .set(k, if on { weights[i].get(k) } else { Vec3::ZERO });
+                slot.lw.p[k] = if on { prob[k] } else { 0.0 };
+            }
+            slot.lw.sign = [1.0; W];
+            leaf.fill(&mut slot.kernel, &v, &slot.lw);
+            count += 1;
+        }
+        out.count = count;
+        out.frame_count = 1;
+        out.lanes_valid = false;
+        out.work = work;
+        true
+    }
+
+    /// Steps 5–7 of §1.4 per lane, as [`Material::prepare_into`] does them for one point:
+    /// the weighted albedo `A = w ⊙ E` of each leaf with a non-zero weight, the drop
+    /// (`maxc(A) ≤ threshold`), the lanes' total albedo (into `out.albedo`), and the
+    /// selection probabilities `lum(A_k)/Σ` (straight transmission taking part; by weight
+    /// when every albedo is 0; all 0 when nothing reflects).
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    fn select_lanes<const W: usize>(
+        &self,
+        weights: &[Vec3x<W>],
+        alb: &[Vec3x<W>],
+        out: &mut PreparedBatch<W>,
+    ) -> LaneSelection<W> {
+        let threshold = self.options.drop_threshold;
+        let mut sel = LaneSelection {
+            live: [[false; W]; MAX_LOBES],
+            prob: [[0.0; W]; MAX_LOBES],
+        };
+        let mut total = Vec3x::<W>::zero();
+        for k in 0..W {
+            let mut sum_a = Vec3::ZERO;
+            let mut sum = 0.0f32;
+            for (i, (w, a)) in weights.iter().zip(alb).enumerate() {
+                let w = w.get(k);
+                if w == Vec3::ZERO {
+                    continue;
+                }
+                let reflect = w * a.get(k);
+                if threshold > 0.0 && reflect.max_element() <= threshold {
+                    continue;
+                }
+                sel.live[i][k] = true;
+                sum_a += reflect;
+                let x = lum(reflect).max(0.0);
+                sel.prob[i][k] = x;
+                sum += x;
+            }
+            total.set(k, sum_a);
+            sum += lum(out.transparency.get(k)).max(0.0);
+            if sum.is_nan() || sum <= 0.0 {
+                sum = 0.0;
+                for (i, w) in weights.iter().enumerate() {
+                    if sel.live[i][k] {
+                        let x = lum(w.get(k)).max(0.0);
+                        sel.prob[i][k] = x;
+                        sum += x;
+                    }
+                }
+            }
+            let ok = sum > 0.0 && sum.is_finite();
+            for i in 0..weights.len() {
+                let x = sel.prob[i][k];
+                sel.prob[i][k] = if ok { x / sum } else { 0.0 };
+            }
+        }
+        out.albedo = total;
+        sel
+    }
+}
+
+/// Which leaves survive in which lanes, with their selection probabilities.
+struct LaneSelection<const W: usize> {
+    live: [[bool; W]; MAX_LOBES],
+    prob: [[f32; W]; MAX_LOBES],
+}

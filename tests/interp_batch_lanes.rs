@@ -1,0 +1,268 @@
+//! The lane-parallel prepare of uniform materials (`Material::prepare_batch_eval_into`, what
+//! the batched preview runs) equals the scalar path lane by lane (spec closures.md §1.5:
+//! relative 1e-5): evaluation, directional albedo, emission and transparency, over materials
+//! that use every kernel family, every tint mode, `mix`, `mul`, emission and transparency,
+//! with lobes dropped in some lanes and not in others. Batches it does not cover (a view
+//! below some lane's horizon, a material with inputs) go through the general path, which
+//! keeps the per-lane records.
+
+#[path = "common/lanes.rs"]
+mod lanes;
+use glam::Vec3;
+use lanes::assert_lanes_match;
+use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA, ref10_ir};
+use vstructc::interp::verify::Rng;
+use vstructc::interp::*;
+use vstructc::ir::{
+    Cl, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, SheenMasking, TintMode,
+    WardVariant,
+};
+
+const W: usize = 16;
+
+/// A GGX conductor with constant widths and gold's index.
+fn gold(b: &mut IrBuilder, ax: f32, ay: f32) -> Cl {
+    let (ax, ay) = (b.prog.constf(ax), b.prog.constf(ay));
+    let (eta, kappa) = (b.prog.constant3(GOLD_ETA), b.prog.constant3(GOLD_KAPPA));
+    let zero = b.prog.constf(0.0);
+    b.simple_leaf(
+        LeafKind::MicrofacetR {
+            alpha_x: ax,
+            alpha_y: ay,
+            fresnel: Fresnel::Conductor { eta, kappa },
+            masking: Masking::HeightCorrelated,
+            comp: zero,
+        },
+        "metal",
+    )
+}
+
+/// Every kernel family and tint mode, `mix` and `mul`, emission and transparency:
+/// `add(layer[Gray](sheenCK, mix(layer[Luminance](0.3 ward, QON),
+/// layer[MaxChannel](conductor, 0.8 lambert), 0.4)), add(emission, transparent))`.
+fn assorted_ir() -> MaterialIr {
+    let mut b = IrBuilder::new();
+    let r = b.prog.constf(0.45);
+    let sheen = b.simple_leaf(
+        LeafKind::SheenCk {
+            roughness: r,
+            masking: SheenMasking::MaterialX,
+        },
+        "sheen",
+    );
+    let (ax, ay, rho) = (
+        b.prog.constf(0.2),
+        b.prog.constf(0.35),
+        b.prog.constant3(Vec3::new(0.9, 0.8, 0.6)),
+    );
+    let ward = b.simple_leaf(
+        LeafKind::Ward {
+            alpha_x: ax,
+            alpha_y: ay,
+            rho_s: rho,
+            variant: WardVariant::Classic,
+        },
+        "ward",
+    );
+    let ward = reference::mul(&mut b, ward, 0.3);
+    let (rho, sigma) = (
+        b.prog.constant3(Vec3::new(0.6, 0.5, 0.4)),
+        b.prog.constf(0.7),
+    );
+    let qon = b.simple_leaf(LeafKind::OrenNayarQ { albedo: rho, sigma }, "qon");
+    let left = b.layer(ward, qon, TintMode::Luminance);
+    let metal = gold(&mut b, 0.15, 0.4);
+    let lam = reference::lambert(&mut b, Vec3::new(0.2, 0.5, 0.7), "diffuse");
+    let lam = reference::mul(&mut b, lam, 0.8);
+    let right = b.layer(metal, lam, TintMode::MaxChannel);
+    let m = b.prog.constf(0.4);
+    let mixed = b.mix(left, right, m);
+    let surface = b.layer(sheen, mixed, TintMode::Gray);
+    let (e, t) = (
+        b.prog.constant3(Vec3::new(0.1, 0.2, 0.05)),
+        b.prog.constant3(Vec3::new(0.2, 0.2, 0.3)),
+    );
+    let (glow, seen_through) = (b.emission(e), b.transparent(t));
+    let extra = b.add(glow, seen_through);
+    let root = b.add(surface, extra);
+    b.finish("assorted", RecipeId::Custom, root)
+        .expect("valid IR")
+}
+
+/// A tinted coat over an LTC sheen and a rough EON: `layer[Rgb](dielectric, layer[Rgb](LTC,
+/// EON))`.
+fn coated_ir() -> MaterialIr {
+    let mut b = IrBuilder::new();
+    let (ax, ay, eta) = (b.prog.constf(0.1), b.prog.constf(0.3), b.prog.constf(1.8));
+    let tint = b.prog.constant3(Vec3::new(0.9, 0.7, 0.5));
+    let coat = reference::dielectric_r_of(&mut b, [ax, ay, eta], tint, "coat");
+    let r = b.prog.constf(0.2);
+    let fuzz = b.simple_leaf(LeafKind::SheenLtc { roughness: r }, "fuzz");
+    let (rho, sigma) = (
+        b.prog.constant3(Vec3::new(0.7, 0.3, 0.2)),
+        b.prog.constf(0.9),
+    );
+    let eon = b.simple_leaf(LeafKind::OrenNayarE { albedo: rho, sigma }, "eon");
+    let base = b.layer(fuzz, eon, TintMode::Rgb);
+    let root = b.layer(coat, base, TintMode::Rgb);
+    b.finish("coated", RecipeId::Custom, root)
+        .expect("valid IR")
+}
+
+/// `W` random points seen from above (`below`: lane indices seen from below instead).
+fn batch(rng: &mut Rng, below: &[usize]) -> ShadingBatch<'static, W> {
+    let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
+    let vs = std::array::from_fn(|k| {
+        let v = rng.sphere();
+        let up = v.dot(frames[k].z) > 0.0;
+        if up != below.contains(&k) { v } else { -v }
+    });
+    ShadingBatch::new(
+        std::array::from_fn(|k| frames[k].z),
+        std::array::from_fn(|k| frames[k].x),
+        vs,
+    )
+}
+
+/// Relative 1e-5 with a floor of 1e-6, per channel.
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() <= 1e-5 * b.abs().max_element().max(1e-6)
+}
+
+/// Compares `pb` with the scalar preparation of each lane of `pts`: eval at random
+/// directions, albedo, emission, transparency.
+fn assert_batch_matches(
+    m: &Material,
+    pts: &ShadingBatch<W>,
+    pb: &PreparedBatch<W>,
+    rng: &mut Rng,
+    label: &str,
+) {
+    let scalar: Vec<Prepared> = (0..W).map(|k| m.prepare(&pts.lane(k))).collect();
+    for (k, s) in scalar.iter().enumerate() {
+        let (a, e, t) = (s.albedo().total(), s.emission(), s.transparency());
+        assert!(
+            close(pb.albedo(k), a),
+            "{label} lane {k}: albedo {} vs {a}",
+            pb.albedo(k)
+        );
+        assert!(close(pb.emission(k), e), "{label} lane {k}: emission");
+        assert!(
+            close(pb.transparency(k), t),
+            "{label} lane {k}: transparency"
+        );
+    }
+    for _ in 0..20 {
+        let ls: [Vec3; W] = std::array::from_fn(|k| {
+            let l = rng.sphere();
+            if l.dot(pts.n[k]) < 0.0 && rng.f32() < 0.8 {
+                -l
+            } else {
+                l
+            }
+        });
+        assert_lanes_match(&pb.eval(&ls), &scalar, &ls, label);
+    }
+}
+
+#[test]
+fn lane_parallel_prepare_equals_scalar() {
+    tables::init_all();
+    let cases = [
+        ("ref10", ref10_ir()),
+        ("assorted", assorted_ir()),
+        ("coated", coated_ir()),
+    ];
+    for (name, ir) in cases {
+        let m = Material::new(&ir).expect("compiles");
+        let mut rng = Rng::new(41);
+        let mut scratch = Scratch::default();
+        let mut pb = PreparedBatch::<W>::new_boxed();
+        for round in 0..25 {
+            let pts = batch(&mut rng, &[]);
+            m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
+            assert!(pb.lane(0).is_none(), "{name}: the lane-parallel path ran");
+            assert_eq!(
+                pb.kernel_count(),
+                pb.slot_count(),
+                "{name}: every slot has a kernel"
+            );
+            assert_batch_matches(&m, &pts, &pb, &mut rng, &format!("{name} round {round}"));
+        }
+    }
+}
+
+/// With a high drop threshold a lobe survives in some lanes and not in others: its slot is
+/// masked there, and the albedos and selection probabilities cover the survivors only.
+#[test]
+fn lane_parallel_prepare_drops_per_lane() {
+    tables::init_all();
+    let opts = PrepareOptions {
+        drop_threshold: 0.04,
+        ..PrepareOptions::default()
+    };
+    let m = Material::with_options(&ref10_ir(), opts).expect("compiles");
+    let mut rng = Rng::new(43);
+    let mut scratch = Scratch::default();
+    let mut pb = PreparedBatch::<W>::new_boxed();
+    let mut mixed_counts = 0;
+    for round in 0..25 {
+        let pts = batch(&mut rng, &[]);
+        m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
+        assert!(pb.lane(0).is_none(), "the lane-parallel path ran");
+        let counts: Vec<usize> = (0..W)
+            .map(|k| m.prepare(&pts.lane(k)).lobes().len())
+            .collect();
+        if counts.iter().any(|&c| c != counts[0]) {
+            mixed_counts += 1;
+        }
+        assert_batch_matches(&m, &pts, &pb, &mut rng, &format!("dropping round {round}"));
+    }
+    assert!(
+        mixed_counts > 0,
+        "some batch drops a lobe in some lanes only"
+    );
+}
+
+/// A lane seen from below, or a material with inputs, takes the general path (the records are
+/// kept); a batch reused across both paths gives what a fresh one gives.
+#[test]
+fn batches_outside_the_lane_parallel_path_fall_back() {
+    tables::init_all();
+    let m = Material::new(&ref10_ir()).expect("compiles");
+    let mut rng = Rng::new(47);
+    let mut scratch = Scratch::default();
+    let mut pb = PreparedBatch::<W>::new_boxed();
+    for round in 0..12 {
+        let below: &[usize] = if round % 2 == 0 { &[] } else { &[5] };
+        let pts = batch(&mut rng, below);
+        m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
+        assert_eq!(
+            pb.lane(0).is_some(),
+            !below.is_empty(),
+            "round {round}: path"
+        );
+        assert_batch_matches(&m, &pts, &pb, &mut rng, &format!("round {round}"));
+    }
+    // Parameters from an input: not uniform, so never lane-parallel.
+    let mut b = IrBuilder::new();
+    let col = vstructc::types::Type::scalar(vstructc::types::BaseType::Color);
+    let rho = b.input_slot(
+        "rho",
+        col,
+        vstructc::types::Value::Triple(vstructc::types::BaseType::Color, [0.5; 3]),
+    );
+    let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
+    let m = Material::new(
+        &b.finish("textured", RecipeId::Custom, lam)
+            .expect("valid IR"),
+    )
+    .expect("compiles");
+    let pts = batch(&mut rng, &[]);
+    m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
+    assert!(
+        pb.lane(0).is_some(),
+        "a material with inputs keeps the records"
+    );
+    assert_batch_matches(&m, &pts, &pb, &mut rng, "textured");
+}
