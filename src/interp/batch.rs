@@ -193,7 +193,19 @@ impl Material {
         scratch: &mut Scratch,
         out: &mut PreparedBatch<W>,
     ) {
-        if !self.prepare_lanes(p, out) {
+        self.prepare_batch_eval_at(Level::Avx512, p, scratch, out);
+    }
+
+    /// [`Material::prepare_batch_eval_into`] with the lane-parallel steps compiled for at most
+    /// `level` ([`super::simd`]; every level gives the same bits).
+    pub fn prepare_batch_eval_at<const W: usize>(
+        &self,
+        level: Level,
+        p: &ShadingBatch<W>,
+        scratch: &mut Scratch,
+        out: &mut PreparedBatch<W>,
+    ) {
+        if !self.prepare_lanes(level, p, out) {
             self.prepare_batch_into(p, scratch, out);
         }
     }

@@ -152,12 +152,14 @@ pub struct OrenNayar {
 }
 
 /// EON's `Ê(μ)` (directional albedo of `f_ss` at ρ = 1) by the exact closed form.
+#[inline(always)]
 pub fn eon_e_hat(mu: f32, sigma: f32) -> f32 {
     let af = 1.0 / (1.0 + EON_C1 * sigma);
     af + sigma * af * FRAC_1_PI * eon_g(mu)
 }
 
 /// EON's `Ê(μ)` by the polynomial fit in `1 − μ`.
+#[inline(always)]
 pub fn eon_e_hat_fast(mu: f32, sigma: f32) -> f32 {
     let m = 1.0 - mu.clamp(0.0, 1.0);
     let g = m * (0.057_108_53 + m * (0.491_881_87 + m * (-0.332_181_44 + m * 0.071_442_99)));
@@ -166,6 +168,7 @@ pub fn eon_e_hat_fast(mu: f32, sigma: f32) -> f32 {
 
 /// EON's `G(θ)`, `θ = acos μ`, rewritten without the `1/cosθ` singularity:
 /// `(sinθ/cosθ)(1 − sin³θ) = sinθ·μ(1 + s + s²)/(1 + s)` with `s = sinθ`.
+#[inline(always)]
 fn eon_g(mu: f32) -> f32 {
     let mu = mu.clamp(0.0, 1.0);
     let s = (1.0 - mu * mu).max(0.0).sqrt();

@@ -180,7 +180,7 @@ pub(super) struct ReflectionCurves {
 
 impl ReflectionCurves {
     /// [`reflection_albedo`] for the forms the curves were built for (One, Schlick, F82).
-    #[inline]
+    #[inline(always)]
     pub(super) fn albedo(&self, f: &Fresnel, mu: f32) -> Rgb {
         let e1v = self.e1.at(mu);
         let sq = |c: &Option<MuCurve>| c.as_ref().map_or(0.0, |c| c.at(mu));

@@ -213,6 +213,7 @@ pub struct SheenLTC {
 }
 
 /// The LTC sheen's fitted directional albedo `Ê(μ_o, r)` (clamped at 0).
+#[inline(always)]
 pub fn sheen_ltc_albedo(x: f32, y: f32) -> f32 {
     let s = y * (0.0206607 + 1.58491 * y) / (0.0379424 + y * (1.32227 + y));
     let m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y);
@@ -222,6 +223,7 @@ pub fn sheen_ltc_albedo(x: f32, y: f32) -> f32 {
 }
 
 /// The LTC coefficients `(a, b)` at `(μ_o, r)`.
+#[inline(always)]
 pub fn sheen_ltc_coefficients(x: f32, y: f32) -> (f32, f32) {
     let a = (2.58126 * x + 0.813703 * y) * y / (1.0 + 0.310327 * x * x + 2.60994 * x * y);
     let b = (1.0 - x).max(0.0).sqrt() * (y - 1.0) * y * y * y

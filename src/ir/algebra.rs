@@ -122,6 +122,7 @@ fn sat(v: Vec3) -> Vec3 {
 }
 
 /// Throughput of a layerable leaf in `mode` (§2.4), given `E` untinted.
+#[inline(always)]
 pub fn leaf_throughput(mode: TintMode, tint: Vec3, ttint: Vec3, e: Vec3) -> Vec3 {
     let tr_e = tint * e;
     let t = match mode {

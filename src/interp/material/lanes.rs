@@ -33,6 +33,7 @@ use crate::interp::microfacet::{
     Compensation, Dielectric, DielectricMode, MicrofacetR, ReflectionCurves,
 };
 use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenMasking, sheen_ltc_albedo};
+use crate::interp::simd::Level;
 use crate::interp::soa::{Kernel, LaneWeights, Vec3x};
 use crate::interp::tables::MuCurve;
 use crate::interp::ward::{Ward, WardBound, WardVariant};
@@ -354,10 +355,34 @@ fn splat<const W: usize>(v: Vec3) -> Vec3x<W> {
 }
 
 impl Material {
-    /// Prepares batch `p` lane-parallel into `out` (see the module documentation). Returns
+    /// Prepares batch `p` lane-parallel into `out` (see the module documentation), compiled
+    /// for the widest vector extension up to `level` that the CPU has (as the batched
+    /// kernels are, [`crate::interp::simd`]; every version computes the same bits). Returns
     /// false, leaving `out` to be overwritten by the general path, when this material has no
     /// [`LanePlan`] or some lane's view is at or below the horizon.
     pub(in crate::interp) fn prepare_lanes<const W: usize>(
+        &self,
+        level: Level,
+        p: &ShadingBatch<W>,
+        out: &mut PreparedBatch<W>,
+    ) -> bool {
+        if self.lanes.is_none() {
+            return false;
+        }
+        #[cfg(target_arch = "x86_64")]
+        match Ord::min(level, crate::interp::simd::level()) {
+            // SAFETY: `simd::level` found every feature the version is compiled with.
+            Level::Avx512 => unsafe { prepare_lanes_avx512(self, p, out) },
+            // SAFETY: as above.
+            Level::Avx2 => unsafe { prepare_lanes_avx2(self, p, out) },
+            Level::Baseline => self.prepare_lanes_body(p, out),
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.prepare_lanes_body(p, out)
+    }
+
+    #[inline(always)]
+    fn prepare_lanes_body<const W: usize>(
         &self,
         p: &ShadingBatch<W>,
         out: &mut PreparedBatch<W>,
@@ -494,6 +519,7 @@ impl Material {
     /// selection probabilities `lum(A_k)/Σ` (straight transmission taking part; by weight
     /// when every albedo is 0; all 0 when nothing reflects).
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
     fn select_lanes<const W: usize>(
         &self,
         weights: &[Vec3x<W>],
@@ -505,46 +531,70 @@ impl Material {
             live: [[false; W]; MAX_LOBES],
             prob: [[0.0; W]; MAX_LOBES],
         };
+        // Leaf by leaf, the lanes side by side. A lobe that does not survive adds exact
+        // zeros to the sums, which changes no bit of them.
         let mut total = Vec3x::<W>::zero();
-        for k in 0..W {
-            let mut sum_a = Vec3::ZERO;
-            let mut sum = 0.0f32;
-            for (i, (w, a)) in weights.iter().zip(alb).enumerate() {
+        let mut sum = [0.0f32; W];
+        for (i, (w, a)) in weights.iter().zip(alb).enumerate() {
+            for k in 0..W {
                 let w = w.get(k);
-                if w == Vec3::ZERO {
-                    continue;
-                }
                 let reflect = w * a.get(k);
-                if threshold > 0.0 && reflect.max_element() <= threshold {
-                    continue;
-                }
-                sel.live[i][k] = true;
-                sum_a += reflect;
-                let x = lum(reflect).max(0.0);
+                let dropped = threshold > 0.0 && reflect.max_element() <= threshold;
+                let kept = w != Vec3::ZERO && !dropped;
+                sel.live[i][k] = kept;
+                let x = if kept { lum(reflect).max(0.0) } else { 0.0 };
                 sel.prob[i][k] = x;
-                sum += x;
+                sum[k] += x;
+                total.set(k, total.get(k) + if kept { reflect } else { Vec3::ZERO });
             }
-            total.set(k, sum_a);
-            sum += lum(out.transparency.get(k)).max(0.0);
-            if sum.is_nan() || sum <= 0.0 {
-                sum = 0.0;
+        }
+        let mut ok = [false; W];
+        for k in 0..W {
+            sum[k] += lum(out.transparency.get(k)).max(0.0);
+            if sum[k].is_nan() || sum[k] <= 0.0 {
+                // Nothing reflects: by weight (rare, so lane by lane).
+                sum[k] = 0.0;
                 for (i, w) in weights.iter().enumerate() {
                     if sel.live[i][k] {
                         let x = lum(w.get(k)).max(0.0);
                         sel.prob[i][k] = x;
-                        sum += x;
+                        sum[k] += x;
                     }
                 }
             }
-            let ok = sum > 0.0 && sum.is_finite();
-            for i in 0..weights.len() {
-                let x = sel.prob[i][k];
-                sel.prob[i][k] = if ok { x / sum } else { 0.0 };
+            ok[k] = sum[k] > 0.0 && sum[k].is_finite();
+        }
+        for prob in &mut sel.prob[..weights.len()] {
+            for k in 0..W {
+                prob[k] = if ok[k] { prob[k] / sum[k] } else { 0.0 };
             }
         }
         out.albedo = total;
         sel
     }
+}
+
+/// [`Material::prepare_lanes`] compiled with AVX-512. Safety: the CPU must support AVX-512
+/// F, VL, DQ and BW, AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+unsafe fn prepare_lanes_avx512<const W: usize>(
+    m: &Material,
+    p: &ShadingBatch<W>,
+    out: &mut PreparedBatch<W>,
+) -> bool {
+    m.prepare_lanes_body(p, out)
+}
+
+/// [`Material::prepare_lanes`] compiled with AVX2. Safety: the CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn prepare_lanes_avx2<const W: usize>(
+    m: &Material,
+    p: &ShadingBatch<W>,
+    out: &mut PreparedBatch<W>,
+) -> bool {
+    m.prepare_lanes_body(p, out)
 }
 
 /// Which leaves survive in which lanes, with their selection probabilities.
