@@ -1,5 +1,6 @@
 //! Local shading frames (spec closures.md §0): tangent `x`, bitangent `y`, normal `z`.
 
+use super::vmath::select3;
 use glam::Vec3;
 
 /// An orthonormal frame; leaves work in its local coordinates.
@@ -17,14 +18,19 @@ impl Frame {
     /// The frame of normal `n` and tangent `t` (Gram–Schmidt). A zero or degenerate normal
     /// gives `+z`; a tangent parallel to the normal (or zero) is replaced by an arbitrary
     /// perpendicular one.
+    // Both alternatives are computed and blended without a branch (the values equal those of
+    // `normalize_or` and an `if`): the lane-parallel prepare builds a frame per lane in a
+    // loop the compiler vectorises only when it has no branch.
+    #[inline(always)]
     pub fn new(n: Vec3, t: Vec3) -> Frame {
-        let z = n.normalize_or(Vec3::Z);
+        let rcp = n.length_recip();
+        let z = select3(rcp.is_finite() & (rcp > 0.0), n * rcp, Vec3::Z);
         let tt = t - z * z.dot(t);
-        let x = if tt.length_squared() > 1e-12 {
-            tt.normalize()
-        } else {
-            z.any_orthonormal_vector()
-        };
+        let x = select3(
+            tt.length_squared() > 1e-12,
+            tt.normalize(),
+            z.any_orthonormal_vector(),
+        );
         Frame {
             x,
             y: z.cross(x),

@@ -188,11 +188,23 @@ impl ReflectionCurves {
         match *f {
             Fresnel::Schlick { f0, f90, .. } => schlick(f0, f90),
             Fresnel::F82 { f0, f90, a, .. } => {
-                (schlick(f0, f90) - a * sq(&self.h82)).max(Vec3::ZERO)
+                f82_albedo(f0, f90, a, e1v, sq(&self.sq), sq(&self.h82))
             }
             _ => Vec3::splat(e1v),
         }
     }
+
+    /// The F82 form's three curves `(E1, S_q, H82)`, when it has them.
+    pub(super) fn f82_curves(&self) -> Option<[MuCurve; 3]> {
+        Some([self.e1, self.sq?, self.h82?])
+    }
+}
+
+/// The F82 albedo of [`ReflectionCurves::albedo`] from the curves' values `E1`, `S_q`, `H82`
+/// at `μ_o` (also used by the lane-parallel prepare).
+#[inline(always)]
+pub(super) fn f82_albedo(f0: Rgb, f90: Rgb, a: Rgb, e1: f32, sq: f32, h82: f32) -> Rgb {
+    (f0 * e1 + (f90 - f0) * sq - a * h82).max(Vec3::ZERO)
 }
 
 impl MicrofacetR {

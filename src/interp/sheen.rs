@@ -254,11 +254,8 @@ impl SheenLTC {
         };
         let x = v.z.clamp(0.0, 1.0);
         let t = Vec3::new(v.x, v.y, 0.0);
-        let ax_x = if t.length_squared() > 1e-14 {
-            t.normalize()
-        } else {
-            Vec3::X
-        };
+        // Blended, not branched (see `Frame::new`).
+        let ax_x = super::vmath::select3(t.length_squared() > 1e-14, t.normalize(), Vec3::X);
         let (a, b) = sheen_ltc_coefficients(x, y);
         PreparedSheenLTC {
             ax_x,

@@ -412,8 +412,10 @@ pub fn axis_coord(x: f32) -> (usize, f32) {
     // the NaN).
     #[allow(clippy::manual_clamp)]
     let t = x.max(0.0).min(1.0) * (N - 1) as f32;
-    let i = (t as usize).min(N - 2);
-    (i, t - i as f32)
+    // Through `u32`: `t` is in [0, N − 1], and a 32-bit conversion vectorises where a
+    // 64-bit one does not (the lane-parallel prepare's curve lookups).
+    let i = (t as u32).min(N as u32 - 2);
+    (i as usize, t - i as f32)
 }
 
 /// Normalised axis coordinate of `√α` for GGX tables.

@@ -20,6 +20,16 @@ pub fn select(c: bool, a: f32, b: f32) -> f32 {
     f32::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
 }
 
+/// [`select`] per component of a vector.
+#[inline(always)]
+pub fn select3(c: bool, a: glam::Vec3, b: glam::Vec3) -> glam::Vec3 {
+    glam::Vec3::new(
+        select(c, a.x, b.x),
+        select(c, a.y, b.y),
+        select(c, a.z, b.z),
+    )
+}
+
 /// 1.5·2²³: adding it to |x| < 2²² rounds x to the nearest integer (ties to even) in the
 /// low mantissa bits.
 const ROUND_MAGIC: f32 = 12_582_912.0;

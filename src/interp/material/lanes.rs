@@ -30,15 +30,16 @@ use crate::interp::ggx::GgxView;
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{
-    Compensation, Dielectric, DielectricMode, MicrofacetR, ReflectionCurves,
+    Compensation, Dielectric, DielectricMode, MicrofacetR, f82_albedo,
 };
 use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenMasking, sheen_ltc_albedo};
 use crate::interp::simd::Level;
-use crate::interp::soa::{Kernel, LaneWeights, Vec3x};
+use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::MuCurve;
+use crate::interp::vmath::{select, select3};
 use crate::interp::ward::{Ward, WardBound, WardVariant};
-use crate::ir::MAX_LOBES;
 use crate::ir::algebra::leaf_throughput;
+use crate::ir::{MAX_LOBES, TintMode};
 use glam::Vec3;
 
 /// What the lane-parallel prepare keeps of one leaf: its family's view-independent data
@@ -54,11 +55,12 @@ pub(super) enum LeafLanes {
         lobe: OrenNayar,
         bound: OrenNayarBound,
     },
-    /// GGX reflection with a conductor Fresnel, no compensation.
+    /// GGX reflection with a conductor Fresnel, no compensation: the F82 fit's colours and
+    /// its albedo curves `(E1, S_q, H82)`.
     Conductor {
         lobe: MicrofacetR,
-        curves: ReflectionCurves,
-        albedo_fresnel: Fresnel,
+        f82: [Rgb; 3],
+        curves: [MuCurve; 3],
     },
     /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
     DielectricR {
@@ -120,10 +122,13 @@ impl LeafLanes {
                     && !m.ggx.is_delta()
                     && m.comp == Compensation::None =>
             {
+                let Fresnel::F82 { f0, f90, a, .. } = bound.albedo_fresnel else {
+                    return None;
+                };
                 LeafLanes::Conductor {
                     lobe: *m,
-                    curves: bound.curves?,
-                    albedo_fresnel: bound.albedo_fresnel,
+                    f82: [f0, f90, a],
+                    curves: bound.curves?.f82_curves()?,
                 }
             }
             // Turquin's factor makes the tint view-dependent; the scalar prepare applies it
@@ -164,32 +169,51 @@ impl LeafLanes {
             }
             LeafLanes::OrenNayar { lobe, bound } => {
                 let t = &bound.template;
-                match lobe.variant {
-                    OrenNayarVariant::Qualitative => {
+                // Each branch is decided once, outside the loop over lanes, so that the loop
+                // has none.
+                let energy = |e_hat: fn(f32, f32) -> f32, out: &mut Vec3x<W>| {
+                    for k in 0..W {
+                        let e_o = e_hat(mu[k], t.sigma);
+                        out.set(k, lobe.rho * e_o + bound.rho_ms * (1.0 - e_o));
+                    }
+                };
+                match (lobe.variant, &bound.qon) {
+                    (OrenNayarVariant::Qualitative, Some(c)) => {
                         for k in 0..W {
-                            let e = bound.qon.as_ref().map_or(1.0, |c| c.at(mu[k]));
-                            out.set(k, lobe.rho * e);
+                            out.set(k, lobe.rho * c.at(mu[k]));
                         }
                     }
-                    OrenNayarVariant::Fujii => {
+                    (OrenNayarVariant::Fujii, _) => {
                         for k in 0..W {
                             out.set(k, lobe.rho * eon_e_hat(mu[k], t.sigma));
                         }
                     }
-                    OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => {
+                    (OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast, _)
+                        if t.sigma >= EON_SIGMA_MIN =>
+                    {
+                        if t.fast {
+                            energy(eon_e_hat_fast, out);
+                        } else {
+                            energy(eon_e_hat, out);
+                        }
+                    }
+                    // EON below the σ cut-off is Lambert: the template's albedo (QON always
+                    // has its curve).
+                    _ => {
                         for k in 0..W {
-                            out.set(k, eon_albedo(lobe, bound, mu[k]));
+                            out.set(k, t.albedo);
                         }
                     }
                 }
             }
             LeafLanes::Conductor {
-                curves,
-                albedo_fresnel,
+                f82: [f0, f90, a],
+                curves: [e1, sq, h82],
                 ..
             } => {
                 for k in 0..W {
-                    out.set(k, curves.albedo(albedo_fresnel, mu[k]).min(Vec3::ONE));
+                    let (e1, sq, h82) = (e1.at(mu[k]), sq.at(mu[k]), h82.at(mu[k]));
+                    out.set(k, f82_albedo(*f0, *f90, *a, e1, sq, h82).min(Vec3::ONE));
                 }
             }
             LeafLanes::DielectricR { lobe, e_r, .. } => {
@@ -230,18 +254,27 @@ impl LeafLanes {
             }
             LeafLanes::OrenNayar { lobe, bound } => {
                 let x = kernel.oren_nayar_mut();
-                x.fast = bound.template.fast;
+                let t = &bound.template;
+                x.fast = t.fast;
                 let energy = matches!(
                     lobe.variant,
                     OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast
-                ) && bound.template.sigma >= EON_SIGMA_MIN;
-                for k in 0..W {
-                    let mut p = bound.template;
-                    p.v = v.get(k);
-                    if energy {
-                        p.ms = bound.ms_scale * (1.0 - eon_e_o(bound, v.z[k]));
+                ) && t.sigma >= EON_SIGMA_MIN;
+                // `ms` is the template's (0) unless EON's multiple scattering is on.
+                let fill = |e_hat: Option<fn(f32, f32) -> f32>, x: &mut OrenNayarX<W>| {
+                    for k in 0..W {
+                        let mut p = *t;
+                        p.v = v.get(k);
+                        if let Some(e_hat) = e_hat {
+                            p.ms = bound.ms_scale * (1.0 - e_hat(v.z[k], t.sigma));
+                        }
+                        x.set(k, &p, lw.w.get(k));
                     }
-                    x.set(k, &p, lw.w.get(k));
+                };
+                match (energy, t.fast) {
+                    (false, _) => fill(None, x),
+                    (true, true) => fill(Some(eon_e_hat_fast), x),
+                    (true, false) => fill(Some(eon_e_hat), x),
                 }
             }
             LeafLanes::Conductor { lobe, .. } => {
@@ -276,12 +309,14 @@ impl LeafLanes {
                 let classic = lobe.variant == WardVariant::Classic;
                 x.any_classic = classic;
                 for k in 0..W {
-                    let mut core = bound.core;
-                    if classic {
-                        core.norm = bound.core.norm / v.z[k].max(1e-7).sqrt();
-                    }
                     x.v.set(k, v.get(k));
-                    x.set(k, &core, lobe.variant, lobe.rho, lw.p[k], lw.w.get(k));
+                    x.set(k, &bound.core, lobe.variant, lobe.rho, lw.p[k], lw.w.get(k));
+                }
+                // The classic norm's only view-dependent part, `1/√μ_o` (as its prepare).
+                if classic {
+                    for k in 0..W {
+                        x.norm[k] = bound.core.norm / v.z[k].max(1e-7).sqrt();
+                    }
                 }
             }
             LeafLanes::SheenCK { bound } => {
@@ -299,28 +334,6 @@ impl LeafLanes {
                 }
             }
         }
-    }
-}
-
-/// EON's `Ê(μ_o)` in the lobe's form (exact or polynomial).
-#[inline(always)]
-fn eon_e_o(bound: &OrenNayarBound, mu: f32) -> f32 {
-    let t = &bound.template;
-    if t.fast {
-        eon_e_hat_fast(mu, t.sigma)
-    } else {
-        eon_e_hat(mu, t.sigma)
-    }
-}
-
-/// An energy-preserving Oren–Nayar lobe's albedo (its scalar prepare's formula).
-#[inline(always)]
-fn eon_albedo(lobe: &OrenNayar, bound: &OrenNayarBound, mu: f32) -> Rgb {
-    if bound.template.sigma >= EON_SIGMA_MIN {
-        let e_o = eon_e_o(bound, mu);
-        lobe.rho * e_o + bound.rho_ms * (1.0 - e_o)
-    } else {
-        bound.template.albedo
     }
 }
 
@@ -428,7 +441,15 @@ impl Material {
                     if info.layerable {
                         let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
                         let a = &alb[leaf as usize];
-                        zip(a, a, |e, _| leaf_throughput(mode, tint, ttint, e))
+                        // One loop per mode, each with the mode a constant (no branch inside).
+                        let thr_in =
+                            |m: TintMode| zip(a, a, |e, _| leaf_throughput(m, tint, ttint, e));
+                        match mode {
+                            TintMode::Rgb => thr_in(TintMode::Rgb),
+                            TintMode::Gray => thr_in(TintMode::Gray),
+                            TintMode::Luminance => thr_in(TintMode::Luminance),
+                            TintMode::MaxChannel => thr_in(TintMode::MaxChannel),
+                        }
                     } else {
                         Vec3x::zero()
                     }
@@ -497,10 +518,9 @@ impl Material {
             slot.live = *live;
             for k in 0..W {
                 let on = live[k];
-                slot.lw
-                    .w
-                    .set(k, if on { weights[i].get(k) } else { Vec3::ZERO });
-                slot.lw.p[k] = if on { prob[k] } else { 0.0 };
+                slot.lw.w.set(k, select3(on, weights[i].get(k), Vec3::ZERO));
+                let p = prob[k] / lanes.sum[k];
+                slot.lw.p[k] = select(on & lanes.ok[k], p, 0.0);
             }
             slot.lw.sign = [1.0; W];
             leaf.fill(&mut slot.kernel, &v, &slot.lw);
@@ -530,6 +550,8 @@ impl Material {
         let mut sel = LaneSelection {
             live: [[false; W]; MAX_LOBES],
             prob: [[0.0; W]; MAX_LOBES],
+            sum: [0.0; W],
+            ok: [false; W],
         };
         // Leaf by leaf, the lanes side by side. A lobe that does not survive adds exact
         // zeros to the sums, which changes no bit of them.
@@ -539,13 +561,15 @@ impl Material {
             for k in 0..W {
                 let w = w.get(k);
                 let reflect = w * a.get(k);
-                let dropped = threshold > 0.0 && reflect.max_element() <= threshold;
-                let kept = w != Vec3::ZERO && !dropped;
+                // `&` and `|`, not `&&` and `||`, and blends, not `if`s: a branch in a loop
+                // over lanes stops the vectoriser.
+                let dropped = (threshold > 0.0) & (reflect.max_element() <= threshold);
+                let kept = ((w.x != 0.0) | (w.y != 0.0) | (w.z != 0.0)) & !dropped;
                 sel.live[i][k] = kept;
-                let x = if kept { lum(reflect).max(0.0) } else { 0.0 };
+                let x = select(kept, lum(reflect).max(0.0), 0.0);
                 sel.prob[i][k] = x;
                 sum[k] += x;
-                total.set(k, total.get(k) + if kept { reflect } else { Vec3::ZERO });
+                total.set(k, total.get(k) + select3(kept, reflect, Vec3::ZERO));
             }
         }
         let mut ok = [false; W];
@@ -562,13 +586,12 @@ impl Material {
                     }
                 }
             }
-            ok[k] = sum[k] > 0.0 && sum[k].is_finite();
+            ok[k] = (sum[k] > 0.0) & sum[k].is_finite();
         }
-        for prob in &mut sel.prob[..weights.len()] {
-            for k in 0..W {
-                prob[k] = if ok[k] { prob[k] / sum[k] } else { 0.0 };
-            }
-        }
+        // The division by the sum happens as the slots are filled (a pass over every
+        // leaf here vectorised across leaves, with gathers).
+        sel.sum = sum;
+        sel.ok = ok;
         out.albedo = total;
         sel
     }
@@ -597,8 +620,12 @@ unsafe fn prepare_lanes_avx2<const W: usize>(
     m.prepare_lanes_body(p, out)
 }
 
-/// Which leaves survive in which lanes, with their selection probabilities.
+/// Which leaves survive in which lanes, with their selection probabilities
+/// `prob[i][k]/sum[k]` (0 where not `ok[k]`: nothing to select).
 struct LaneSelection<const W: usize> {
     live: [[bool; W]; MAX_LOBES],
+    /// `max(lum(A), 0)` (or of the weight, when every albedo of the lane is 0).
     prob: [[f32; W]; MAX_LOBES],
+    sum: [f32; W],
+    ok: [bool; W],
 }
