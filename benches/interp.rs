@@ -7,6 +7,8 @@
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
 //!   (V, L) pair (4096 pairs); the native prepare prepares the ten leaves with fixed weights
 //!   (no program, no throughput pass);
+//! * `ref10/batch16_prepare_lanes`: the lane-parallel prepare of 16 points
+//!   (`Material::prepare_batch_eval_into`, what the batched preview runs), ns per point;
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;
 //! * `preview512/{scalar,batched}`: a 512² material ball of `ref10`, one light, one thread.
 //!
@@ -270,6 +272,18 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
             })
         })
         .collect();
+    // The lane-parallel prepare (`prepare_batch_eval_into`) of 16 points (ns per point in
+    // the throughput line).
+    let mut scratch = Scratch::default();
+    let mut lanes = PreparedBatch::<W>::new_boxed();
+    g.throughput(Throughput::Elements(W as u64));
+    g.bench_function("batch16_prepare_lanes", |b| {
+        b.iter(|| {
+            m.prepare_batch_eval_into(black_box(&batch), &mut scratch, &mut lanes);
+            lanes.albedo(0)
+        })
+    });
+    g.throughput(Throughput::Elements(PAIRS as u64));
     g.bench_function("batch16_eval", |b| {
         b.iter(|| {
             let p = black_box(&pb);
