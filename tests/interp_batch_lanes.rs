@@ -14,28 +14,10 @@ use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA, ref10_ir};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
-    Cl, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, SheenMasking, TintMode,
-    WardVariant,
+    IrBuilder, LeafKind, MaterialIr, RecipeId, SheenMasking, TintMode, WardVariant,
 };
 
 const W: usize = 16;
-
-/// A GGX conductor with constant widths and gold's index.
-fn gold(b: &mut IrBuilder, ax: f32, ay: f32) -> Cl {
-    let (ax, ay) = (b.prog.constf(ax), b.prog.constf(ay));
-    let (eta, kappa) = (b.prog.constant3(GOLD_ETA), b.prog.constant3(GOLD_KAPPA));
-    let zero = b.prog.constf(0.0);
-    b.simple_leaf(
-        LeafKind::MicrofacetR {
-            alpha_x: ax,
-            alpha_y: ay,
-            fresnel: Fresnel::Conductor { eta, kappa },
-            masking: Masking::HeightCorrelated,
-            comp: zero,
-        },
-        "metal",
-    )
-}
 
 /// Every kernel family and tint mode, `mix` and `mul`, emission and transparency:
 /// `add(layer[Gray](sheenCK, mix(layer[Luminance](0.3 ward, QON),
@@ -71,7 +53,7 @@ fn assorted_ir() -> MaterialIr {
     );
     let qon = b.simple_leaf(LeafKind::OrenNayarQ { albedo: rho, sigma }, "qon");
     let left = b.layer(ward, qon, TintMode::Luminance);
-    let metal = gold(&mut b, 0.15, 0.4);
+    let metal = reference::conductor(&mut b, [0.15, 0.4], GOLD_ETA, GOLD_KAPPA, "metal");
     let lam = reference::lambert(&mut b, Vec3::new(0.2, 0.5, 0.7), "diffuse");
     let lam = reference::mul(&mut b, lam, 0.8);
     let right = b.layer(metal, lam, TintMode::MaxChannel);

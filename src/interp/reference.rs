@@ -39,6 +39,24 @@ pub fn dielectric_r_of(b: &mut IrBuilder, [ax, ay, eta]: [Reg; 3], tint: Reg, la
     )
 }
 
+/// A GGX conductor (height-correlated masking, no compensation) with constant widths and
+/// complex index `η + iκ` per channel.
+pub fn conductor(b: &mut IrBuilder, [ax, ay]: [f32; 2], eta: Vec3, kappa: Vec3, label: &str) -> Cl {
+    let (ax, ay) = (b.prog.constf(ax), b.prog.constf(ay));
+    let (eta, kappa) = (b.prog.constant3(eta), b.prog.constant3(kappa));
+    let zero = b.prog.constf(0.0);
+    b.simple_leaf(
+        LeafKind::MicrofacetR {
+            alpha_x: ax,
+            alpha_y: ay,
+            fresnel: Fresnel::Conductor { eta, kappa },
+            masking: Masking::HeightCorrelated,
+            comp: zero,
+        },
+        label,
+    )
+}
+
 /// A Lambert leaf with albedo `rho`.
 pub fn lambert(b: &mut IrBuilder, rho: Vec3, label: &str) -> Cl {
     let albedo = b.prog.constant3(rho);
@@ -114,19 +132,7 @@ pub fn ref10_ir() -> MaterialIr {
     let base = b.add(diffuse, wards);
     let base = b.layer(sheen, base, TintMode::Rgb);
     let dielectric_base = b.layer(spec, base, TintMode::Rgb);
-    let (eta, kappa) = (b.prog.constant3(GOLD_ETA), b.prog.constant3(GOLD_KAPPA));
-    let a = b.prog.constf(0.3);
-    let zero = b.prog.constf(0.0);
-    let metal = b.simple_leaf(
-        LeafKind::MicrofacetR {
-            alpha_x: a,
-            alpha_y: a,
-            fresnel: Fresnel::Conductor { eta, kappa },
-            masking: Masking::HeightCorrelated,
-            comp: zero,
-        },
-        "metal",
-    );
+    let metal = conductor(&mut b, [0.3, 0.3], GOLD_ETA, GOLD_KAPPA, "metal");
     let m = b.prog.constf(0.3);
     let mixed = b.mix(dielectric_base, metal, m);
     let coated = b.layer(coat, mixed, TintMode::Rgb);

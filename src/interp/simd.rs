@@ -59,22 +59,23 @@ pub fn level() -> Level {
 
 /// Inside an `impl` block: defines `unsafe fn $avx512(&self, ..)` and `unsafe fn $avx2(&self,
 /// ..)` (x86-64 only) that run `self.$body(..)` with AVX-512 or AVX2 enabled. `$body` must be
-/// `#[inline(always)]`. Callers check [`level`] first: calling a version the CPU lacks is
-/// undefined behaviour.
+/// `#[inline(always)]`; a generic body lists its generic parameters in brackets first
+/// (`[const W: usize] body(..)`). Callers check [`level`] first: calling a version the CPU
+/// lacks is undefined behaviour.
 macro_rules! widest_versions {
-    ($body:ident($($arg:ident: $ty:ty),*) -> $ret:ty, $avx512:ident, $avx2:ident) => {
+    ($([$($gen:tt)*])? $body:ident($($arg:ident: $ty:ty),*) -> $ret:ty, $avx512:ident, $avx2:ident) => {
         /// The body compiled with AVX-512. Safety: the CPU must support AVX-512 F, VL, DQ
         /// and BW, AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-        unsafe fn $avx512(&self, $($arg: $ty),*) -> $ret {
+        unsafe fn $avx512$(<$($gen)*>)?(&self, $($arg: $ty),*) -> $ret {
             self.$body($($arg),*)
         }
 
         /// The body compiled with AVX2. Safety: the CPU must support AVX2 and FMA.
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2,fma")]
-        unsafe fn $avx2(&self, $($arg: $ty),*) -> $ret {
+        unsafe fn $avx2$(<$($gen)*>)?(&self, $($arg: $ty),*) -> $ret {
             self.$body($($arg),*)
         }
     };

@@ -33,7 +33,7 @@ use crate::interp::microfacet::{
     Compensation, Dielectric, DielectricMode, MicrofacetR, f82_albedo,
 };
 use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenMasking, sheen_ltc_albedo};
-use crate::interp::simd::Level;
+use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::MuCurve;
 use crate::interp::vmath::{select, select3};
@@ -382,17 +382,19 @@ impl Material {
         if self.lanes.is_none() {
             return false;
         }
-        #[cfg(target_arch = "x86_64")]
-        match Ord::min(level, crate::interp::simd::level()) {
-            // SAFETY: `simd::level` found every feature the version is compiled with.
-            Level::Avx512 => unsafe { prepare_lanes_avx512(self, p, out) },
-            // SAFETY: as above.
-            Level::Avx2 => unsafe { prepare_lanes_avx2(self, p, out) },
-            Level::Baseline => self.prepare_lanes_body(p, out),
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        self.prepare_lanes_body(p, out)
+        call_widest!(
+            level,
+            self.prepare_lanes_body(p, out),
+            prepare_lanes_avx512,
+            prepare_lanes_avx2
+        )
     }
+
+    widest_versions!(
+        [const W: usize] prepare_lanes_body(p: &ShadingBatch<W>, out: &mut PreparedBatch<W>) -> bool,
+        prepare_lanes_avx512,
+        prepare_lanes_avx2
+    );
 
     #[inline(always)]
     fn prepare_lanes_body<const W: usize>(
@@ -595,29 +597,6 @@ impl Material {
         out.albedo = total;
         sel
     }
-}
-
-/// [`Material::prepare_lanes`] compiled with AVX-512. Safety: the CPU must support AVX-512
-/// F, VL, DQ and BW, AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-unsafe fn prepare_lanes_avx512<const W: usize>(
-    m: &Material,
-    p: &ShadingBatch<W>,
-    out: &mut PreparedBatch<W>,
-) -> bool {
-    m.prepare_lanes_body(p, out)
-}
-
-/// [`Material::prepare_lanes`] compiled with AVX2. Safety: the CPU must support AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn prepare_lanes_avx2<const W: usize>(
-    m: &Material,
-    p: &ShadingBatch<W>,
-    out: &mut PreparedBatch<W>,
-) -> bool {
-    m.prepare_lanes_body(p, out)
 }
 
 /// Which leaves survive in which lanes, with their selection probabilities
