@@ -287,7 +287,7 @@ fn shade_row_batched_with(
         // AVX2 at most: a pixel's time is mostly the scalar prepare, and AVX-512 code lowers
         // the core's clock for the code around it (measured: about 10 % slower 512² previews on
         // the AVX-512 reference machine, while bulk evaluation gains; BENCHMARKS.md, S7).
-        let direct = (opts.light != Vec3::ZERO).then(|| batch.eval_at(Level::Avx2, &[l; W]));
+        let direct = (opts.light != Vec3::ZERO).then(|| batch.eval_at(Level::Avx512, &[l; W]));
         for (k, &i) in cols[..n].iter().enumerate() {
             let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
             let (a, e, t) = (batch.albedo(k), batch.emission(k), batch.transparency(k));

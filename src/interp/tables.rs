@@ -406,7 +406,7 @@ pub fn init_all() {
 }
 
 /// Position on an axis: lower node index and blend weight, for `x` in [0, 1].
-#[inline]
+#[inline(always)]
 pub fn axis_coord(x: f32) -> (usize, f32) {
     // `f32::max` returns the other operand for NaN, so NaN maps to 0 (`clamp` would keep
     // the NaN).
@@ -497,9 +497,57 @@ impl MuCurve {
     #[inline]
     pub fn at(&self, mu: f32) -> f32 {
         let (i, w) = axis_coord(mu);
-        // `i ≤ N − 2` by construction, so both reads are in bounds.
+        self.at_coord(i, w)
+    }
+
+    /// The table at axis position `(i, w)` from [`axis_coord`].
+    #[inline(always)]
+    fn at_coord(&self, i: usize, w: f32) -> f32 {
+        // `i ≤ N − 2` from `axis_coord`; the `min` lets the compiler see it (no bounds
+        // check, so no branch in the loops over lanes).
+        let i = i.min(N - 2);
         let (a, b) = (self.nodes[i], self.nodes[i + 1]);
         a + (b - a) * w
+    }
+
+    /// The table at every lane's position in `c`: [`MuCurve::at`] of each lane's `μ`, bit
+    /// for bit.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub fn at_lanes<const W: usize>(&self, c: &LaneCoords<W>) -> [f32; W] {
+        let mut out = [0.0; W];
+        for k in 0..W {
+            out[k] = self.at_coord(c.i[k] as usize, c.w[k]);
+        }
+        out
+    }
+}
+
+/// [`axis_coord`] of one `μ` per lane, computed once and shared by every curve read at
+/// those `μ` (the lane-parallel prepare reads ten or so per batch).
+#[derive(Debug, Clone, Copy)]
+pub struct LaneCoords<const W: usize> {
+    /// Lower node indices (`≤ N − 2`).
+    pub i: [u32; W],
+    /// Blend weights.
+    pub w: [f32; W],
+}
+
+impl<const W: usize> LaneCoords<W> {
+    /// The coordinates of `mu` lane by lane.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub fn new(mu: &[f32; W]) -> LaneCoords<W> {
+        let mut c = LaneCoords {
+            i: [0; W],
+            w: [0.0; W],
+        };
+        for k in 0..W {
+            let (i, w) = axis_coord(mu[k]);
+            c.i[k] = i as u32;
+            c.w[k] = w;
+        }
+        c
     }
 }
 

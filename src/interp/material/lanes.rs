@@ -35,7 +35,7 @@ use crate::interp::microfacet::{
 use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenMasking, sheen_ltc_albedo};
 use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
-use crate::interp::tables::MuCurve;
+use crate::interp::tables::{LaneCoords, MuCurve};
 use crate::interp::vmath::{select, select3};
 use crate::interp::ward::{Ward, WardBound, WardVariant};
 use crate::ir::algebra::leaf_throughput;
@@ -160,7 +160,7 @@ impl LeafLanes {
     /// transmits), as its scalar prepare computes it.
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     #[inline(always)]
-    fn albedo<const W: usize>(&self, mu: &[f32; W], out: &mut Vec3x<W>) {
+    fn albedo<const W: usize>(&self, mu: &[f32; W], at: &LaneCoords<W>, out: &mut Vec3x<W>) {
         match self {
             LeafLanes::Lambert { rho, .. } => {
                 for k in 0..W {
@@ -179,8 +179,9 @@ impl LeafLanes {
                 };
                 match (lobe.variant, &bound.qon) {
                     (OrenNayarVariant::Qualitative, Some(c)) => {
+                        let c = c.at_lanes(at);
                         for k in 0..W {
-                            out.set(k, lobe.rho * c.at(mu[k]));
+                            out.set(k, lobe.rho * c[k]);
                         }
                     }
                     (OrenNayarVariant::Fujii, _) => {
@@ -211,24 +212,30 @@ impl LeafLanes {
                 curves: [e1, sq, h82],
                 ..
             } => {
+                let (e1, sq, h82) = (e1.at_lanes(at), sq.at_lanes(at), h82.at_lanes(at));
                 for k in 0..W {
-                    let (e1, sq, h82) = (e1.at(mu[k]), sq.at(mu[k]), h82.at(mu[k]));
-                    out.set(k, f82_albedo(*f0, *f90, *a, e1, sq, h82).min(Vec3::ONE));
+                    out.set(
+                        k,
+                        f82_albedo(*f0, *f90, *a, e1[k], sq[k], h82[k]).min(Vec3::ONE),
+                    );
                 }
             }
             LeafLanes::DielectricR { lobe, e_r, .. } => {
+                let e_r = e_r.at_lanes(at);
                 for k in 0..W {
-                    out.set(k, lobe.tint_r * e_r.at(mu[k]));
+                    out.set(k, lobe.tint_r * e_r[k]);
                 }
             }
             LeafLanes::Ward { lobe, bound } => {
+                let e = bound.curve.at_lanes(at);
                 for k in 0..W {
-                    out.set(k, lobe.rho * bound.curve.at(mu[k]));
+                    out.set(k, lobe.rho * e[k]);
                 }
             }
             LeafLanes::SheenCK { bound } => {
+                let e = bound.curve.at_lanes(at);
                 for k in 0..W {
-                    out.set(k, Vec3::splat(bound.curve.at(mu[k])));
+                    out.set(k, Vec3::splat(e[k]));
                 }
             }
             LeafLanes::SheenLTC { lobe } => {
@@ -432,8 +439,9 @@ impl Material {
         let (scope, acc) = rest.split_at_mut(n_scopes);
         // The leaves' albedos (every leaf: all are needed for the throughputs, the drop
         // and the selection).
+        let at = LaneCoords::new(&v.z);
         for (leaf, a) in plan.leaves.iter().zip(alb.iter_mut()) {
-            leaf.albedo(&v.z, a);
+            leaf.albedo(&v.z, &at, a);
         }
         // Step 3: throughputs, bottom-up (op `j` writes slot `j`).
         for j in 0..n_thr {
