@@ -20,7 +20,6 @@
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
-use super::simd::Level;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::{PI, TAU};
@@ -104,28 +103,39 @@ impl PreviewOptions {
 /// The geometry of one sphere pixel: normal, tangent, globals (`uv` only when `with_uv`:
 /// it costs an `atan2` and an `asin`, and a program that reads no global ignores it).
 fn sphere_point(x: f32, y: f32, with_uv: bool) -> Option<ShadingPoint<'static>> {
-    let r2 = x * x + y * y;
-    if r2 >= 1.0 {
+    if !on_sphere(x, y) {
         return None;
     }
-    let n = Vec3::new(x, y, (1.0 - r2).sqrt());
-    let t = if n.y.abs() > 0.999 {
-        Vec3::X
-    } else {
-        Vec3::Y.cross(n).normalize()
-    };
-    let uv = if with_uv {
-        Vec2::new(
-            0.5 + n.x.atan2(n.z) / TAU,
-            0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
-        )
-    } else {
-        Vec2::ZERO
-    };
+    let (n, t) = sphere_frame(x, y);
+    let uv = if with_uv { sphere_uv(n) } else { Vec2::ZERO };
     Some(
         ShadingPoint::new(n, t, Vec3::Z)
             .with_position(n)
             .with_uv(uv),
+    )
+}
+
+/// True when the pixel centre `(x, y)` lies on the sphere.
+#[inline(always)]
+fn on_sphere(x: f32, y: f32) -> bool {
+    x * x + y * y < 1.0
+}
+
+/// The sphere's normal and tangent at `(x, y)` (on the sphere). Branch-free, so that the
+/// batched path's loop over lanes vectorises.
+#[inline(always)]
+fn sphere_frame(x: f32, y: f32) -> (Vec3, Vec3) {
+    let n = Vec3::new(x, y, (1.0 - (x * x + y * y)).sqrt());
+    let t = Vec3::Y.cross(n).normalize();
+    let t = if n.y.abs() > 0.999 { Vec3::X } else { t };
+    (n, t)
+}
+
+/// The sphere's surface parameters at normal `n`.
+fn sphere_uv(n: Vec3) -> Vec2 {
+    Vec2::new(
+        0.5 + n.x.atan2(n.z) / TAU,
+        0.5 + n.y.clamp(-1.0, 1.0).asin() / PI,
     )
 }
 
@@ -187,6 +197,7 @@ struct RowState {
 /// A sphere pixel's radiance (§1.6): the light through `direct` (`eval(L_light).f_cos`), the
 /// uniform environment through the albedo, emission, and the environment seen through
 /// transparency.
+#[inline(always)]
 fn radiance(opts: &PreviewOptions, direct: Rgb, albedo: Rgb, emission: Rgb, tau: Rgb) -> Rgb {
     direct * opts.light + opts.env * albedo + emission + tau * opts.env
 }
@@ -273,42 +284,58 @@ fn shade_row_batched_with(
     let with_uv = !material.is_uniform();
     let mut pts = ShadingBatch::<W>::new([Vec3::Z; W], [Vec3::X; W], [Vec3::Z; W]);
     pts.inputs = [&opts.inputs[..]; W];
-    // The columns of this row's sphere pixels, filled straight into the batch's lanes (no
-    // per-row list of points).
+    let (_, y) = pixel_xy(0, j, size);
+    // The columns of this row's sphere pixels and their `x`, gathered a batch at a time; the
+    // lanes' geometry is then computed in one loop (no per-pixel `ShadingPoint`).
     let mut cols = [0usize; W];
+    let mut xs = [0.0f32; W];
     let mut filled = 0;
-    let mut flush = |pts: &mut ShadingBatch<W>, cols: &[usize; W], n: usize, out: &mut [Rgb]| {
+    let mut flush = |pts: &mut ShadingBatch<W>, cols: &[usize; W], xs: &mut [f32; W], n: usize| {
         // Pad a partial batch by repeating its last point (every lane must be a real point).
-        let last = pts.lane(n - 1);
-        for k in n..W {
-            pts.set_lane(k, &last);
+        let last = xs[n - 1];
+        xs[n..].fill(last);
+        for k in 0..W {
+            let (nk, tk) = sphere_frame(xs[k], y);
+            pts.n[k] = nk;
+            pts.t[k] = tk;
+            pts.p[k] = nk;
+        }
+        if with_uv {
+            for k in 0..W {
+                pts.uv[k] = sphere_uv(pts.n[k]);
+            }
         }
         material.prepare_batch_eval_into(pts, scratch, batch);
-        // AVX2 at most: a pixel's time is mostly the scalar prepare, and AVX-512 code lowers
-        // the core's clock for the code around it (measured: about 10 % slower 512² previews on
-        // the AVX-512 reference machine, while bulk evaluation gains; BENCHMARKS.md, S7).
-        let direct = (opts.light != Vec3::ZERO).then(|| batch.eval_at(Level::Avx512, &[l; W]));
-        for (k, &i) in cols[..n].iter().enumerate() {
-            let d = direct.as_ref().map_or(Vec3::ZERO, |e| e[k].f_cos);
+        let direct: [Rgb; W] = if opts.light == Vec3::ZERO {
+            [Vec3::ZERO; W]
+        } else {
+            let e = batch.eval(&[l; W]);
+            std::array::from_fn(|k| e[k].f_cos)
+        };
+        // All lanes in one loop (it vectorises), then the real ones to their pixels.
+        let rgb: [Rgb; W] = std::array::from_fn(|k| {
             let (a, e, t) = (batch.albedo(k), batch.emission(k), batch.transparency(k));
-            out[i] = radiance(opts, d, a, e, t);
+            radiance(opts, direct[k], a, e, t)
+        });
+        for (&i, c) in cols[..n].iter().zip(rgb) {
+            out[i] = c;
         }
     };
     for i in 0..size {
-        let (x, y) = pixel_xy(i, j, size);
-        let Some(p) = sphere_point(x, y, with_uv) else {
+        let (x, _) = pixel_xy(i, j, size);
+        if !on_sphere(x, y) {
             continue;
-        };
-        pts.set_lane(filled, &p.with_inputs(&opts.inputs));
+        }
         cols[filled] = i;
+        xs[filled] = x;
         filled += 1;
         if filled == W {
-            flush(&mut pts, &cols, W, out);
+            flush(&mut pts, &cols, &mut xs, W);
             filled = 0;
         }
     }
     if filled > 0 {
-        flush(&mut pts, &cols, filled, out);
+        flush(&mut pts, &cols, &mut xs, filled);
     }
 }
 
