@@ -294,15 +294,15 @@ fn shade_row_batched_with(
         // Pad a partial batch by repeating its last point (every lane must be a real point).
         let last = xs[n - 1];
         xs[n..].fill(last);
-        for k in 0..W {
-            let (nk, tk) = sphere_frame(xs[k], y);
+        for (k, &x) in xs.iter().enumerate() {
+            let (nk, tk) = sphere_frame(x, y);
             pts.n[k] = nk;
             pts.t[k] = tk;
             pts.p[k] = nk;
         }
         if with_uv {
-            for k in 0..W {
-                pts.uv[k] = sphere_uv(pts.n[k]);
+            for (uv, &n) in pts.uv.iter_mut().zip(&pts.n) {
+                *uv = sphere_uv(n);
             }
         }
         material.prepare_batch_eval_into(pts, scratch, batch);
