@@ -582,11 +582,18 @@ impl Material {
                 total.set(k, total.get(k) + select3(kept, reflect, Vec3::ZERO));
             }
         }
-        let mut ok = [false; W];
+        let mut none = false;
         for k in 0..W {
             sum[k] += lum(out.transparency.get(k)).max(0.0);
-            if sum[k].is_nan() || sum[k] <= 0.0 {
-                // Nothing reflects: by weight (rare, so lane by lane).
+            // NaN or ≤ 0 (`|`, no branch: see above).
+            none |= !(sum[k] > 0.0);
+        }
+        if none {
+            // Some lane where nothing reflects: by weight there (rare, so lane by lane).
+            for k in 0..W {
+                if sum[k] > 0.0 {
+                    continue;
+                }
                 sum[k] = 0.0;
                 for (i, w) in weights.iter().enumerate() {
                     if sel.live[i][k] {
@@ -596,6 +603,9 @@ impl Material {
                     }
                 }
             }
+        }
+        let mut ok = [false; W];
+        for k in 0..W {
             ok[k] = (sum[k] > 0.0) & sum[k].is_finite();
         }
         // The division by the sum happens as the slots are filled (a pass over every
