@@ -708,3 +708,30 @@ fn malformed_and_oversized_irs_are_errors() {
     assert_eq!(m.leaves().len(), 16);
     assert_eq!(m.prepare(&point(view(0.5))).lobes().len(), 16);
 }
+
+/// Seen from below, the two-sided lobes are flipped (the one-sided ones are inactive): the
+/// material's eval, which skips the per-lobe flip when no lobe is flipped, must then flip
+/// each lobe itself and agree with the lobes evaluated one by one.
+#[test]
+fn eval_from_below_flips_the_two_sided_lobes() {
+    tables::init_all();
+    let m = compile(&ref10_ir());
+    let mut rng = Rng::new(61);
+    for _ in 0..50 {
+        let v = -view(0.2 + 0.7 * rng.f32());
+        let p = m.prepare(&point(v));
+        assert!(
+            p.lobes().iter().any(|a| a.lobe.is_flipped()),
+            "a dielectric lobe is flipped"
+        );
+        for _ in 0..20 {
+            let l = rng.sphere();
+            let total = p.eval(l).f_cos;
+            let sum: Vec3 = (0..p.lobes().len()).map(|k| p.eval_lobe(k, l).f_cos).sum();
+            assert!(
+                (total - sum).abs().max_element() <= 1e-5 * sum.abs().max_element().max(1e-6),
+                "v {v} l {l}: eval {total} vs lobes {sum}"
+            );
+        }
+    }
+}

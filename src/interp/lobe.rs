@@ -496,7 +496,15 @@ impl PreparedLobe {
     // store-forwarding stall was half of `Prepared::eval`'s own time (perf annotate, S6).
     #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
-        let l = if self.flipped { flip(l) } else { l };
+        self.eval_unflipped(if self.flipped { flip(l) } else { l })
+    }
+
+    /// [`PreparedLobe::eval`] of a lobe that is not flipped ([`PreparedLobe::is_flipped`]),
+    /// or with `l` already flipped. The material's eval takes this path when no lobe is
+    /// flipped: the test of the flag, and the selection of `l` that follows it, sit at the
+    /// head of every lobe's dependency chain (measured: 4–12 ns per lobe).
+    #[inline(always)]
+    pub(super) fn eval_unflipped(&self, l: Vec3) -> LobeEval {
         match &self.state {
             State::Inactive | State::Emission(_) | State::Transparent(..) => LobeEval::ZERO,
             State::Lambert(p) => p.eval(l),

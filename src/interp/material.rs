@@ -598,6 +598,7 @@ impl Material {
                 out.lobes[count].lobe = out.lobes[k].lobe;
             }
             let a = &mut out.lobes[count];
+            out.flipped_any |= a.lobe.is_flipped();
             a.weight = w;
             a.albedo = albedo;
             a.frame = info.frame_slot;
@@ -1166,6 +1167,8 @@ pub struct Prepared {
     pub(super) count: usize,
     pub(super) frames: [Frame; MAX_LOBES],
     pub(super) frame_count: usize,
+    /// Some lobe is flipped (seen from below): `eval` then flips per lobe.
+    flipped_any: bool,
     v: Vec3,
     emission: Rgb,
     transparency: Rgb,
@@ -1194,6 +1197,7 @@ impl Prepared {
             count: 0,
             frames: [Frame::default(); MAX_LOBES],
             frame_count: 0,
+            flipped_any: false,
             v,
             emission: Vec3::ZERO,
             transparency: Vec3::ZERO,
@@ -1205,6 +1209,7 @@ impl Prepared {
     pub(super) fn reset(&mut self, v: Vec3) {
         self.count = 0;
         self.frame_count = 0;
+        self.flipped_any = false;
         self.v = v;
         self.emission = Vec3::ZERO;
         self.transparency = Vec3::ZERO;
@@ -1268,13 +1273,14 @@ impl Prepared {
     /// contribute nothing.
     #[inline]
     pub fn eval(&self, l: Vec3) -> Eval {
-        if self.frame_count == 1 {
-            // One frame (the common case): one transform, no frame table.
+        if self.frame_count == 1 && !self.flipped_any {
+            // One frame, no lobe flipped (the common case): one transform, no frame table,
+            // no per-lobe flip.
             let l = self.frames[0].to_local(l);
             let mut f_cos = Vec3::ZERO;
             let mut pdf = 0.0;
             for lobe in &self.lobes[..self.count] {
-                let e = lobe.lobe.eval(l);
+                let e = lobe.lobe.eval_unflipped(l);
                 f_cos += lobe.weight * e.f_cos;
                 pdf += lobe.prob * e.pdf;
             }
