@@ -586,7 +586,7 @@ impl Material {
         for k in 0..W {
             sum[k] += lum(out.transparency.get(k)).max(0.0);
             // NaN or ≤ 0 (`|`, no branch: see above).
-            none |= !(sum[k] > 0.0);
+            none |= sum[k].is_nan() | (sum[k] <= 0.0);
         }
         if none {
             // Some lane where nothing reflects: by weight there (rare, so lane by lane).
