@@ -13,9 +13,7 @@ use lanes::assert_lanes_match;
 use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA, ref10_ir};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
-use vstructc::ir::{
-    IrBuilder, LeafKind, MaterialIr, RecipeId, SheenMasking, TintMode, WardVariant,
-};
+use vstructc::ir::{IrBuilder, LeafKind, MaterialIr, RecipeId, TintMode, WardVariant};
 
 const W: usize = 16;
 
@@ -24,14 +22,7 @@ const W: usize = 16;
 /// layer[MaxChannel](conductor, 0.8 lambert), 0.4)), add(emission, transparent))`.
 fn assorted_ir() -> MaterialIr {
     let mut b = IrBuilder::new();
-    let r = b.prog.constf(0.45);
-    let sheen = b.simple_leaf(
-        LeafKind::SheenCk {
-            roughness: r,
-            masking: SheenMasking::MaterialX,
-        },
-        "sheen",
-    );
+    let sheen = reference::sheen_ck(&mut b, 0.45, "sheen");
     let (ax, ay, rho) = (
         b.prog.constf(0.2),
         b.prog.constf(0.35),

@@ -8,12 +8,12 @@
 use glam::{Vec2, Vec3};
 use vstructc::diag::{Diagnostics, Error};
 use vstructc::interp::material::{PrepareOptions, TRANSPARENCY_LOBE};
-use vstructc::interp::reference::{dielectric_r, lambert, mul, ref10_ir};
+use vstructc::interp::reference::{self, dielectric_r, lambert, mul, ref10_ir};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, IrBuilder, Leaf, LeafKind, Masking, MaterialIr, Node,
-    NodeId, ProgramBuilder, RecipeId, SheenMasking, TintMode,
+    NodeId, ProgramBuilder, RecipeId, TintMode,
 };
 use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 use vstructc::types::{BaseType, Type, Value};
@@ -45,14 +45,7 @@ fn sheen_ltc(b: &mut IrBuilder, r: f32) -> Cl {
 }
 
 fn sheen_ck(b: &mut IrBuilder, r: f32) -> Cl {
-    let r = b.prog.constf(r);
-    b.simple_leaf(
-        LeafKind::SheenCk {
-            roughness: r,
-            masking: SheenMasking::MaterialX,
-        },
-        "sheen",
-    )
+    reference::sheen_ck(b, r, "sheen")
 }
 
 fn schlick_metal(b: &mut IrBuilder, alpha: f32, f0: f32, comp: f32) -> Cl {

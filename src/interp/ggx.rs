@@ -138,6 +138,31 @@ pub struct GgxCore {
     pub lz: f32,
 }
 
+/// What every GGX lobe's prepare computes at view `v`: `Λ(V)`, the [`GgxView`] and
+/// `G1(V) = 1/(1 + Λ(V))` (the scalar leaves and the lane-parallel prepare share it).
+#[derive(Debug, Clone, Copy)]
+pub struct ViewTerms {
+    /// `Λ(V)`.
+    pub lambda_v: f32,
+    /// The view-fixed constants of `D` and `D·G2`.
+    pub view: GgxView,
+    /// `G1(V)`.
+    pub g1_v: f32,
+}
+
+impl ViewTerms {
+    /// The terms of `ggx` with `masking` at `v` (local frame, `v.z > 0`).
+    #[inline(always)]
+    pub fn new(ggx: &Ggx, masking: Masking, v: Vec3) -> ViewTerms {
+        let lambda_v = ggx.lambda(v);
+        ViewTerms {
+            lambda_v,
+            view: GgxView::new(ggx, masking, lambda_v),
+            g1_v: 1.0 / (1.0 + lambda_v),
+        }
+    }
+}
+
 impl GgxView {
     /// The view-fixed constants of a (non-delta) distribution, given `Λ(V)`.
     #[inline]

@@ -5,7 +5,7 @@
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
 use super::fresnel::{self, Fresnel};
-use super::ggx::{Ggx, GgxView, Masking, g2};
+use super::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
 use super::tables::{self, MuCurve, Row, TableId};
@@ -278,15 +278,15 @@ impl MicrofacetR {
         let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
         let f_average = || clamp1(albedo_fresnel.average());
         let alpha = self.ggx.lookup_alpha();
-        let lambda_v = self.ggx.lambda(v);
+        let t = ViewTerms::new(&self.ggx, self.masking, v);
         let mut p = PreparedMicrofacetR {
             ggx: self.ggx,
             masking: self.masking,
             fresnel: self.fresnel,
             v,
-            lambda_v,
-            view: GgxView::new(&self.ggx, self.masking, lambda_v),
-            g1_v: 1.0 / (1.0 + lambda_v),
+            lambda_v: t.lambda_v,
+            view: t.view,
+            g1_v: t.g1_v,
             inv_4mu: 0.25 / safe_mu(v.z),
             scale: Vec3::ONE,
             ms: Vec3::ZERO,
@@ -562,7 +562,7 @@ impl Dielectric {
     ) -> PreparedDielectric {
         let eta0 = self.eta0();
         let eta = if flipped { 1.0 / eta0 } else { eta0 };
-        let lambda_v = self.ggx.lambda(v);
+        let t = ViewTerms::new(&self.ggx, self.masking, v);
         let refl = self.mode != DielectricMode::T;
         let trans = self.mode != DielectricMode::R;
         let alpha = self.ggx.lookup_alpha();
@@ -578,9 +578,9 @@ impl Dielectric {
             masking: self.masking,
             eta,
             v,
-            lambda_v,
-            view: GgxView::new(&self.ggx, self.masking, lambda_v),
-            g1_v: 1.0 / (1.0 + lambda_v),
+            lambda_v: t.lambda_v,
+            view: t.view,
+            g1_v: t.g1_v,
             inv_mu: 1.0 / safe_mu(v.z),
             refl,
             trans,

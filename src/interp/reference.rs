@@ -57,6 +57,18 @@ pub fn conductor(b: &mut IrBuilder, [ax, ay]: [f32; 2], eta: Vec3, kappa: Vec3, 
     )
 }
 
+/// A Conty–Kulla sheen leaf of constant roughness `r` with the MaterialX masking.
+pub fn sheen_ck(b: &mut IrBuilder, r: f32, label: &str) -> Cl {
+    let roughness = b.prog.constf(r);
+    b.simple_leaf(
+        LeafKind::SheenCk {
+            roughness,
+            masking: SheenMasking::MaterialX,
+        },
+        label,
+    )
+}
+
 /// A Lambert leaf with albedo `rho`.
 pub fn lambert(b: &mut IrBuilder, rho: Vec3, label: &str) -> Cl {
     let albedo = b.prog.constant3(rho);
@@ -106,14 +118,7 @@ pub fn ref10_ir() -> MaterialIr {
     let coat = dielectric_r(&mut b, 0.05, 0.05, 1.5, "coat");
     let coat = mul(&mut b, coat, 0.7);
     let spec = dielectric_r(&mut b, 0.2, 0.4, 1.5, "specular");
-    let r_ck = b.prog.constf(0.3);
-    let sheen = b.simple_leaf(
-        LeafKind::SheenCk {
-            roughness: r_ck,
-            masking: SheenMasking::MaterialX,
-        },
-        "sheen",
-    );
+    let sheen = sheen_ck(&mut b, 0.3, "sheen");
     let sheen = mul(&mut b, sheen, 0.5);
     let lam = lambert(&mut b, Vec3::splat(0.5), "diffuse");
     let lam = mul(&mut b, lam, 0.4);

@@ -26,7 +26,7 @@ use crate::interp::diffuse::{
 };
 use crate::interp::frame::Frame;
 use crate::interp::fresnel::Fresnel;
-use crate::interp::ggx::GgxView;
+use crate::interp::ggx::ViewTerms;
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{
@@ -291,11 +291,10 @@ impl LeafLanes {
                 };
                 for k in 0..W {
                     let vk = v.get(k);
-                    let lambda_v = lobe.ggx.lambda(vk);
-                    x.g.set(k, vk, &GgxView::new(&lobe.ggx, lobe.masking, lambda_v));
-                    let g1_v = 1.0 / (1.0 + lambda_v);
+                    let t = ViewTerms::new(&lobe.ggx, lobe.masking, vk);
+                    x.g.set(k, vk, &t.view);
                     let inv_4mu = 0.25 / safe_mu(vk.z);
-                    x.pdf_c[k] = g1_v * inv_4mu * lw.p[k];
+                    x.pdf_c[k] = t.g1_v * inv_4mu * lw.p[k];
                     x.set_ior(k, eta, kappa);
                     x.scale_q.set(k, Vec3::ONE * inv_4mu * lw.w.get(k));
                 }
@@ -304,11 +303,10 @@ impl LeafLanes {
                 let x = kernel.dielectric_r_mut();
                 for k in 0..W {
                     let vk = v.get(k);
-                    let lambda_v = lobe.ggx.lambda(vk);
-                    x.g.set(k, vk, &GgxView::new(&lobe.ggx, lobe.masking, lambda_v));
-                    let g1_v = 1.0 / (1.0 + lambda_v);
+                    let t = ViewTerms::new(&lobe.ggx, lobe.masking, vk);
+                    x.g.set(k, vk, &t.view);
                     let inv_mu = 1.0 / safe_mu(vk.z);
-                    x.set(k, *eta, g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
+                    x.set(k, *eta, t.g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
                 }
             }
             LeafLanes::Ward { lobe, bound } => {
