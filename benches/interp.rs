@@ -4,6 +4,10 @@
 //! * `ref10/interp_eval`: `Prepared::eval` per (V, L), V prepared once (4096 L);
 //! * `ref10/native_eval`: the ten leaves called directly (concrete types, no dispatch, fixed
 //!   weights), same L, including the world → local transform;
+//! * `ref10/interp_eval_paired`: `interp_eval` with a `native_eval` pass run between every
+//!   two timed passes; after the row it prints both evals' mean over the same passes and
+//!   the interpreter's overhead (the figure for the budget: the separate rows run minutes
+//!   apart, and this host's speed changes by up to 40 % between phases);
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
 //!   (V, L) pair (4096 pairs); the native prepare prepares the ten leaves with fixed weights
 //!   (no program, no throughput pass);
@@ -208,28 +212,60 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     }
     let mut g = c.benchmark_group("ref10");
     g.throughput(Throughput::Elements(PAIRS as u64));
-    g.bench_function("interp_eval", |b| {
-        b.iter(|| {
-            let p = black_box(&prep);
-            let mut acc = Vec3::ZERO;
-            for l in &ls {
-                let e = p.eval(*l);
-                acc += e.f_cos + Vec3::splat(e.pdf);
-            }
-            acc
-        })
-    });
+    // One pass of each eval over the 4096 directions.
+    let pass_interp = |p: &Prepared| {
+        let mut acc = Vec3::ZERO;
+        for l in &ls {
+            let e = p.eval(*l);
+            acc += e.f_cos + Vec3::splat(e.pdf);
+        }
+        acc
+    };
+    let pass_native = |p: &Native| {
+        let mut acc = Vec3::ZERO;
+        for l in &ls {
+            let (f, pdf) = p.eval(*l);
+            acc += f + Vec3::splat(pdf);
+        }
+        acc
+    };
+    g.bench_function("interp_eval", |b| b.iter(|| pass_interp(black_box(&prep))));
     g.bench_function("native_eval", |b| {
-        b.iter(|| {
-            let p = black_box(&native);
-            let mut acc = Vec3::ZERO;
-            for l in &ls {
-                let (f, pdf) = p.eval(*l);
-                acc += f + Vec3::splat(pdf);
+        b.iter(|| pass_native(black_box(&native)))
+    });
+    // The two evals interleaved pass by pass, so that both see the same host phases: on this
+    // shared VM the two rows above, measured a minute apart, can each be 40 % off. Criterion
+    // times the interpreter's passes; the hand-written passes run between them, and the
+    // means of both over the same passes are printed after the row. `sums` holds
+    // (interpreter ns, hand-written ns, passes) over every sample, warm-up included.
+    let sums = std::cell::Cell::new((0u64, 0u64, 0u64));
+    g.bench_function("interp_eval_paired", |b| {
+        b.iter_custom(|iters| {
+            let (mut ti, mut tn) = (0, 0);
+            for _ in 0..iters {
+                let t0 = cpu_time::thread_cpu_ns();
+                black_box(pass_interp(black_box(&prep)));
+                let t1 = cpu_time::thread_cpu_ns();
+                black_box(pass_native(black_box(&native)));
+                tn += cpu_time::thread_cpu_ns() - t1;
+                ti += t1 - t0;
             }
-            acc
+            let (si, sn, n) = sums.get();
+            sums.set((si + ti, sn + tn, n + iters));
+            ti
         })
     });
+    let (si, sn, n) = sums.get();
+    if sn > 0 {
+        let per_eval = |t: u64| t as f64 / (n as f64 * PAIRS as f64);
+        println!(
+            "ref10/interp_eval_paired: interpreter {:.1} ns, hand-written {:.1} ns per eval over \
+             the same {n} interleaved passes: overhead {:+.1} %",
+            per_eval(si),
+            per_eval(sn),
+            (si as f64 / sn as f64 - 1.0) * 100.0
+        );
+    }
     g.bench_function("interp_prepare_eval", |b| {
         let mut scratch = Scratch::default();
         let mut p = Prepared::new();

@@ -8,7 +8,7 @@ use criterion::measurement::{Measurement, ValueFormatter};
 /// The current thread's on-CPU time in ns: `clock_gettime(CLOCK_THREAD_CPUTIME_ID)` (exact),
 /// else `/proc/thread-self/schedstat` (which only advances at scheduler ticks, so short
 /// iterations read as zero and criterion refuses the sample), else 0.
-fn thread_cpu_ns() -> u64 {
+pub fn thread_cpu_ns() -> u64 {
     let mut ts = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
