@@ -6,8 +6,8 @@
 //!   weights), same L, including the world → local transform;
 //! * `ref10/interp_eval_paired`: `interp_eval` with a `native_eval` pass run between every
 //!   two timed passes; after the row it prints both evals' mean over the same passes and
-//!   the interpreter's overhead (the figure for the budget: the separate rows run minutes
-//!   apart, and this host's speed changes by up to 40 % between phases);
+//!   the interpreter's overhead (the figure for the budget: the separate rows run a minute
+//!   apart, and this host's speed changes by about 1.5× between phases);
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
 //!   (V, L) pair (4096 pairs); the native prepare prepares the ten leaves with fixed weights
 //!   (no program, no throughput pass);
@@ -234,7 +234,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
         b.iter(|| pass_native(black_box(&native)))
     });
     // The two evals interleaved pass by pass, so that both see the same host phases: on this
-    // shared VM the two rows above, measured a minute apart, can each be 40 % off. Criterion
+    // shared VM the two rows above, measured a minute apart, can read 1.5× off. Criterion
     // times the interpreter's passes; the hand-written passes run between them, and the
     // means of both over the same passes are printed after the row. `sums` holds
     // (interpreter ns, hand-written ns, passes) over every sample, warm-up included.
@@ -247,8 +247,8 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
                 black_box(pass_interp(black_box(&prep)));
                 let t1 = cpu_time::thread_cpu_ns();
                 black_box(pass_native(black_box(&native)));
-                tn += cpu_time::thread_cpu_ns() - t1;
-                ti += t1 - t0;
+                tn += cpu_time::thread_cpu_ns().saturating_sub(t1);
+                ti += t1.saturating_sub(t0);
             }
             let (si, sn, n) = sums.get();
             sums.set((si + ti, sn + tn, n + iters));
