@@ -6,6 +6,7 @@ mod leaves_ref;
 
 use glam::Vec3;
 use leaves_ref::*;
+use proptest::prelude::*;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
 use vstructc::interp::fresnel::{self, Fresnel};
 use vstructc::interp::verify::Rng;
@@ -531,4 +532,28 @@ fn leaves_match_f64_formulas_at_random_directions() {
         |v, l| sheen_ltc(0.4f32.into(), d(v), d(l)),
         false,
     );
+}
+
+/// A channel value for the conductor property: 0, a physical range, or a non-finite value.
+fn channel(range: std::ops::Range<f32>, odd: f32) -> impl Strategy<Value = f32> {
+    prop_oneof![Just(0.0f32), range, Just(odd)]
+}
+
+proptest! {
+    /// The three-channel conductor Fresnel (computed side by side in SIMD registers) equals
+    /// the one-channel form the batched kernels use, bit for bit, NaN included.
+    #[test]
+    fn conductor_channels_match_the_one_channel_form(
+        c2 in 0.0f32..=1.0,
+        eta in proptest::array::uniform3(channel(0.0..8.0, f32::NAN)),
+        kappa in proptest::array::uniform3(channel(0.0..12.0, f32::INFINITY)),
+    ) {
+        let (eta, kappa) = (Vec3::from(eta), Vec3::from(kappa));
+        let rgb = fresnel::conductor_squared(c2, eta, kappa);
+        for k in 0..3 {
+            let (e2, k2) = (eta[k] * eta[k], kappa[k] * kappa[k]);
+            let one = fresnel::conductor_c2(c2, e2 - k2, 4.0 * e2 * k2);
+            prop_assert_eq!(rgb[k].to_bits(), one.to_bits(), "channel {}", k);
+        }
+    }
 }

@@ -5,7 +5,7 @@
 
 use super::math::{Rgb, pow_q, pow5};
 use super::vmath::select;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// `μ̄ = 1/7`, the angle (cosine) at which F82 forms are pinned.
 pub const MU_BAR: f32 = 1.0 / 7.0;
@@ -110,12 +110,28 @@ pub fn conductor(mu: f32, eta: Rgb, kappa: Rgb) -> Rgb {
 /// [`conductor`] at the squared cosine `c² ∈ [0, 1]`.
 #[inline]
 pub fn conductor_squared(c2: f32, eta: Rgb, kappa: Rgb) -> Rgb {
+    // The three channels of `conductor_c2` side by side in SIMD registers (`Vec3A`): the
+    // same operations in the same order, so the same bits, with two square roots and one
+    // division for all three channels.
+    let (eta, kappa) = (Vec3A::from(eta), Vec3A::from(kappa));
     let (e2, k2) = (eta * eta, kappa * kappa);
-    let (a, b) = (e2 - k2, 4.0 * e2 * k2);
+    let (e2mk2, four_e2k2) = (e2 - k2, 4.0 * e2 * k2);
+    let s2 = 1.0 - c2;
+    let t0 = e2mk2 - Vec3A::splat(s2);
+    let ab2 = (t0 * t0 + four_e2k2).sqrt();
+    let a2 = (0.5 * (ab2 + t0)).max(Vec3A::ZERO);
+    let two_ac = 2.0 * (c2 * a2).sqrt();
+    let s4 = s2 * s2;
+    let rs_num = ab2 - two_ac + Vec3A::splat(c2);
+    let rs_den = ab2 + two_ac + Vec3A::splat(c2);
+    let den = c2 * ab2 + two_ac * s2 + Vec3A::splat(s4);
+    let r = rs_num * (c2 * ab2 + Vec3A::splat(s4)) / (rs_den * den).max(Vec3A::splat(1e-30));
+    // `f32::clamp` per channel, as `conductor_c2` (a NaN stays NaN).
+    let r = Vec3::from(r);
     Vec3::new(
-        conductor_c2(c2, a.x, b.x),
-        conductor_c2(c2, a.y, b.y),
-        conductor_c2(c2, a.z, b.z),
+        r.x.clamp(0.0, 1.0),
+        r.y.clamp(0.0, 1.0),
+        r.z.clamp(0.0, 1.0),
     )
 }
 
@@ -125,8 +141,8 @@ pub fn conductor_squared(c2: f32, eta: Rgb, kappa: Rgb) -> Rgb {
 /// `½ (r_s + r_s·num/den)`, `r_s = (|a+ib|² − 2ac + c²)/(|a+ib|² + 2ac + c²)`,
 /// `num/den = (c²|a+ib|² ∓ 2ac s² + s⁴)`; the `2ac s²` terms cancel in `den + num`, so it is
 /// `r_s (c² |a+ib|² + s⁴)/den`, one division; and `2ac = 2√(c² a²)` is one square root
-/// where the textbook form takes two in sequence (`c`, then `a`). Shared by the scalar leaves
-/// and the batched kernels.
+/// where the textbook form takes two in sequence (`c`, then `a`). The batched kernels call it
+/// per lane; [`conductor_squared`] runs the same steps on three channels at once.
 #[inline(always)]
 pub fn conductor_c2(c2: f32, e2mk2: f32, four_e2k2: f32) -> f32 {
     let s2 = 1.0 - c2;
