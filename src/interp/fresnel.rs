@@ -6,6 +6,7 @@
 use super::math::{Rgb, pow_q, pow5};
 use super::vmath::select;
 use glam::{Vec3, Vec3A};
+use std::ops::{Add, Div, Mul, Sub};
 
 /// `μ̄ = 1/7`, the angle (cosine) at which F82 forms are pinned.
 pub const MU_BAR: f32 = 1.0 / 7.0;
@@ -107,27 +108,15 @@ pub fn conductor(mu: f32, eta: Rgb, kappa: Rgb) -> Rgb {
     conductor_squared(c * c, eta, kappa)
 }
 
-/// [`conductor`] at the squared cosine `c² ∈ [0, 1]`.
+/// [`conductor`] at the squared cosine `c² ∈ [0, 1]`: the three channels of
+/// [`conductor_c2`] side by side in SIMD registers (two `sqrtps` and one `divps` for RGB), with
+/// the same bits.
 #[inline]
 pub fn conductor_squared(c2: f32, eta: Rgb, kappa: Rgb) -> Rgb {
-    // The three channels of `conductor_c2` side by side in SIMD registers (`Vec3A`): the
-    // same operations in the same order, so the same bits, with two square roots and one
-    // division for all three channels.
     let (eta, kappa) = (Vec3A::from(eta), Vec3A::from(kappa));
     let (e2, k2) = (eta * eta, kappa * kappa);
-    let (e2mk2, four_e2k2) = (e2 - k2, 4.0 * e2 * k2);
-    let s2 = 1.0 - c2;
-    let t0 = e2mk2 - Vec3A::splat(s2);
-    let ab2 = (t0 * t0 + four_e2k2).sqrt();
-    let a2 = (0.5 * (ab2 + t0)).max(Vec3A::ZERO);
-    let two_ac = 2.0 * (c2 * a2).sqrt();
-    let s4 = s2 * s2;
-    let rs_num = ab2 - two_ac + Vec3A::splat(c2);
-    let rs_den = ab2 + two_ac + Vec3A::splat(c2);
-    let den = c2 * ab2 + two_ac * s2 + Vec3A::splat(s4);
-    let r = rs_num * (c2 * ab2 + Vec3A::splat(s4)) / (rs_den * den).max(Vec3A::splat(1e-30));
-    // `f32::clamp` per channel, as `conductor_c2` (a NaN stays NaN).
-    let r = Vec3::from(r);
+    let r = Vec3::from(conductor_unclamped(c2, e2 - k2, 4.0 * e2 * k2));
+    // `f32::clamp` per channel, as in `conductor_c2` (a NaN stays NaN).
     Vec3::new(
         r.x.clamp(0.0, 1.0),
         r.y.clamp(0.0, 1.0),
@@ -142,19 +131,66 @@ pub fn conductor_squared(c2: f32, eta: Rgb, kappa: Rgb) -> Rgb {
 /// `num/den = (c²|a+ib|² ∓ 2ac s² + s⁴)`; the `2ac s²` terms cancel in `den + num`, so it is
 /// `r_s (c² |a+ib|² + s⁴)/den`, one division; and `2ac = 2√(c² a²)` is one square root
 /// where the textbook form takes two in sequence (`c`, then `a`). The batched kernels call it
-/// per lane; [`conductor_squared`] runs the same steps on three channels at once.
+/// per lane.
 #[inline(always)]
 pub fn conductor_c2(c2: f32, e2mk2: f32, four_e2k2: f32) -> f32 {
+    conductor_unclamped(c2, e2mk2, four_e2k2).clamp(0.0, 1.0)
+}
+
+/// The arithmetic of [`conductor_c2`] before the clamp, for one channel (`f32`) or three side
+/// by side (`Vec3A`): one formula, so the scalar leaves and the kernels agree bit for bit.
+#[inline(always)]
+fn conductor_unclamped<T: Channels>(c2: f32, e2mk2: T, four_e2k2: T) -> T {
     let s2 = 1.0 - c2;
-    let t0 = e2mk2 - s2;
+    let (c2v, s2v, s4) = (T::splat(c2), T::splat(s2), T::splat(s2 * s2));
+    let t0 = e2mk2 - s2v;
     let ab2 = (t0 * t0 + four_e2k2).sqrt();
-    let a2 = (0.5 * (ab2 + t0)).max(0.0);
-    let two_ac = 2.0 * (c2 * a2).sqrt();
-    let s4 = s2 * s2;
-    let rs_num = ab2 - two_ac + c2;
-    let rs_den = ab2 + two_ac + c2;
-    let den = c2 * ab2 + two_ac * s2 + s4;
-    (rs_num * (c2 * ab2 + s4) / (rs_den * den).max(1e-30)).clamp(0.0, 1.0)
+    let a2 = (T::splat(0.5) * (ab2 + t0)).max(T::splat(0.0));
+    let two_ac = T::splat(2.0) * (c2v * a2).sqrt();
+    let rs_num = ab2 - two_ac + c2v;
+    let rs_den = ab2 + two_ac + c2v;
+    let den = c2v * ab2 + two_ac * s2v + s4;
+    rs_num * (c2v * ab2 + s4) / (rs_den * den).max(T::splat(1e-30))
+}
+
+/// What [`conductor_unclamped`] needs of its channel type. `max` returns `o` where `self` is
+/// NaN in both implementations (`f32::max`, `maxps`).
+trait Channels:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    fn splat(x: f32) -> Self;
+    fn sqrt(self) -> Self;
+    fn max(self, o: Self) -> Self;
+}
+
+impl Channels for f32 {
+    #[inline(always)]
+    fn splat(x: f32) -> f32 {
+        x
+    }
+    #[inline(always)]
+    fn sqrt(self) -> f32 {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn max(self, o: f32) -> f32 {
+        f32::max(self, o)
+    }
+}
+
+impl Channels for Vec3A {
+    #[inline(always)]
+    fn splat(x: f32) -> Vec3A {
+        Vec3A::splat(x)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Vec3A {
+        Vec3A::sqrt(self)
+    }
+    #[inline(always)]
+    fn max(self, o: Vec3A) -> Vec3A {
+        Vec3A::max(self, o)
+    }
 }
 
 /// Conductor reflectance at normal incidence: `((η − 1)² + κ²)/((η + 1)² + κ²)`.
