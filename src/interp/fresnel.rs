@@ -116,12 +116,9 @@ pub fn conductor_squared(c2: f32, eta: Rgb, kappa: Rgb) -> Rgb {
     let (eta, kappa) = (Vec3A::from(eta), Vec3A::from(kappa));
     let (e2, k2) = (eta * eta, kappa * kappa);
     let r = Vec3::from(conductor_unclamped(c2, e2 - k2, 4.0 * e2 * k2));
-    // `f32::clamp` per channel, as in `conductor_c2` (a NaN stays NaN).
-    Vec3::new(
-        r.x.clamp(0.0, 1.0),
-        r.y.clamp(0.0, 1.0),
-        r.z.clamp(0.0, 1.0),
-    )
+    // `f32::clamp` per channel, as in `conductor_c2` (a NaN stays NaN; `Vec3::clamp` would
+    // make it 0).
+    Vec3::from_array(r.to_array().map(|c| c.clamp(0.0, 1.0)))
 }
 
 /// One channel of [`conductor`] at `c² = (V·h)²` (in [0, 1]), given `η² − κ²` and `4η²κ²`.
