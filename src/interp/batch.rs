@@ -174,7 +174,7 @@ impl Material {
         out: &mut PreparedBatch<W>,
     ) {
         for k in 0..W {
-            self.prepare_into(&p.lane(k), scratch, &mut out.lanes[k]);
+            self.prepare_lobes(&p.lane(k), scratch, &mut out.lanes[k]);
         }
         out.transpose();
     }

@@ -62,6 +62,7 @@ use std::collections::HashMap;
 use std::f32::consts::TAU;
 
 mod lanes;
+mod packs;
 
 /// The lobe index [`Sample::lobe`] reports for straight transmission through `Transparent`
 /// leaves.
@@ -191,6 +192,10 @@ pub struct PrepareOptions {
     /// Whether reflection lobes also respond when seen from below (transmission lobes are
     /// always two-sided).
     pub sides: Sides,
+    /// Whether [`Prepared::eval`] runs same-family lobes together, one per SIMD lane (the
+    /// batched path's kernels; equal to the lobe-by-lobe sum to relative 1e-5). Off, every
+    /// lobe is evaluated alone with its scalar leaf.
+    pub pack_lobes: bool,
 }
 
 impl Default for PrepareOptions {
@@ -198,6 +203,7 @@ impl Default for PrepareOptions {
         PrepareOptions {
             drop_threshold: DEFAULT_DROP_THRESHOLD,
             sides: Sides::Front,
+            pack_lobes: true,
         }
     }
 }
@@ -276,6 +282,9 @@ pub struct Material {
     /// The lane-parallel prepare's per-leaf data, when the material qualifies
     /// ([`lanes::LanePlan`]).
     lanes: Option<lanes::LanePlan>,
+    /// `eval`'s lobe packs when every leaf survives and is active, when every leaf is a
+    /// constant (their kernel keys are then known at compile time).
+    pack_grouping: Option<packs::Grouping>,
     options: PrepareOptions,
 }
 
@@ -427,8 +436,10 @@ impl Material {
         let w_plan = const_regs
             .as_deref()
             .and_then(|regs| compile_weights(&nodes, &leaves, &thr_slot, regs));
+        let pack_grouping = static_grouping(&leaves, options.sides);
         let mut m = Material {
             w_plan,
+            pack_grouping,
             lanes: None,
             const_regs,
             ir: ir.clone(),
@@ -513,6 +524,34 @@ impl Material {
     /// As [`Material::prepare_with`], overwriting `out` (whatever it held): the cheapest
     /// form when many points are prepared in a row, since a [`Prepared`] is a few KB.
     pub fn prepare_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+        self.prepare_lobes(p, s, out);
+        if !self.options.pack_lobes {
+            return;
+        }
+        let lobes = &out.lobes[..out.count];
+        match &self.pack_grouping {
+            // Lobe k is leaf k when none was dropped; an inactive lobe has no kernel key.
+            Some(g)
+                if lobes.len() == self.leaves.len()
+                    && lobes.iter().all(|a| !a.lobe.is_inactive()) =>
+            {
+                out.plan.build_from(g, lobes)
+            }
+            _ => out.plan.build(lobes),
+        }
+    }
+
+    /// [`Material::prepare_into`] without planning `eval`'s lobe packs, whatever
+    /// [`PrepareOptions::pack_lobes`] says: every lobe is then evaluated alone. For callers
+    /// that evaluate once per prepare (the material preview), where filling the packs costs
+    /// more than it saves; the results are the same to relative 1e-5.
+    pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+        self.prepare_lobes(p, s, out);
+    }
+
+    /// Steps 1–7 of §1.4 into `out`, without planning `eval`'s lobe packs ([`packs`]): the
+    /// batched path reads the lobes, never a lane's own `eval`.
+    pub(super) fn prepare_lobes(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let v = p.v.normalize_or(Vec3::Z);
         out.reset(v);
         // Step 1: the program, with the point's inputs (fallbacks where missing). A program
@@ -1003,6 +1042,19 @@ fn compile_throughput(nodes: &[CNode], need: &[u8]) -> (Vec<[u16; 4]>, Vec<ThrOp
     (slot, ops)
 }
 
+/// The lobe packs of a material whose leaves are all constants, for the prepare where
+/// every leaf survives and is active (`None` when some leaf reads a register that is not a
+/// constant: its kernel key may then vary by point). A constant leaf's key does not depend
+/// on the view, so preparing it at the normal gives the key of every active prepare.
+fn static_grouping(leaves: &[LeafInfo], sides: Sides) -> Option<packs::Grouping> {
+    let mut keys = [None; MAX_LOBES];
+    for (key, info) in keys.iter_mut().zip(leaves) {
+        let lobe = info.const_lobe.as_ref()?.prepare(Vec3::Z, sides);
+        *key = crate::interp::soa::kernel_key(&lobe.state);
+    }
+    Some(packs::Grouping::of_keys(&keys[..leaves.len()]))
+}
+
 fn sat(v: Vec3) -> Vec3 {
     v.clamp(Vec3::ZERO, Vec3::ONE)
 }
@@ -1174,6 +1226,8 @@ pub struct Prepared {
     transparency: Rgb,
     /// Probability of choosing straight transmission in `sample`.
     p_transparency: f32,
+    /// Which lobes `eval` runs alone and which in packs.
+    plan: packs::EvalPlan,
 }
 
 impl Default for Prepared {
@@ -1202,6 +1256,7 @@ impl Prepared {
             emission: Vec3::ZERO,
             transparency: Vec3::ZERO,
             p_transparency: 0.0,
+            plan: packs::EvalPlan::empty(),
         }
     }
 
@@ -1214,6 +1269,7 @@ impl Prepared {
         self.emission = Vec3::ZERO;
         self.transparency = Vec3::ZERO;
         self.p_transparency = 0.0;
+        self.plan.clear();
     }
 
     /// An empty preparation (no lobes), e.g. as the target of [`Material::prepare_into`].
@@ -1269,6 +1325,13 @@ impl Prepared {
         self.v
     }
 
+    /// How many of [`Prepared::lobes`] [`Prepared::eval`] runs in lobe packs (several
+    /// lobes of one family side by side, see [`PrepareOptions::pack_lobes`]); the others
+    /// are evaluated one by one. For inspection and tests.
+    pub fn packed_lobe_count(&self) -> usize {
+        self.count - self.plan.solo(self.count).len()
+    }
+
     /// `Σ_k w_k ⊙ f_k(V, L)·|μ_i|` and the mixture pdf at world direction `l`. Delta lobes
     /// contribute nothing.
     #[inline]
@@ -1277,9 +1340,9 @@ impl Prepared {
             // One frame, no lobe flipped (the common case): one transform, no frame table,
             // no per-lobe flip.
             let l = self.frames[0].to_local(l);
-            let mut f_cos = Vec3::ZERO;
-            let mut pdf = 0.0;
-            for lobe in &self.lobes[..self.count] {
+            let (mut f_cos, mut pdf) = self.plan.eval_one_frame(l);
+            for &k in self.plan.solo(self.count) {
+                let lobe = &self.lobes[k as usize];
                 let e = lobe.lobe.eval_unflipped(l);
                 f_cos += lobe.weight * e.f_cos;
                 pdf += lobe.prob * e.pdf;
@@ -1290,9 +1353,9 @@ impl Prepared {
         for (loc, f) in local.iter_mut().zip(&self.frames[..self.frame_count]) {
             *loc = f.to_local(l);
         }
-        let mut f_cos = Vec3::ZERO;
-        let mut pdf = 0.0;
-        for lobe in &self.lobes[..self.count] {
+        let (mut f_cos, mut pdf) = self.plan.eval_frames(&local);
+        for &k in self.plan.solo(self.count) {
+            let lobe = &self.lobes[k as usize];
             let e = lobe.lobe.eval(local[lobe.frame as usize]);
             f_cos += lobe.weight * e.f_cos;
             pdf += lobe.prob * e.pdf;

@@ -226,7 +226,8 @@ fn shade_row_with(
             continue;
         };
         let p = p.with_inputs(&opts.inputs);
-        material.prepare_into(&p, scratch, prep);
+        // One eval follows each prepare: planning lobe packs would not pay for itself.
+        material.prepare_unpacked_into(&p, scratch, prep);
         let direct = if opts.light == Vec3::ZERO {
             Vec3::ZERO
         } else {

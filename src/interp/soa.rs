@@ -403,11 +403,24 @@ impl<const W: usize> Kernel<W> {
         };
         // Dead lanes borrow the first live lane's parameters.
         let lane = |k: usize| if live[k] { lobes(k) } else { lobes(first) };
-        let same = |f: &dyn Fn(&State) -> bool| (0..W).all(|k| f(&lane(k).state));
-        // Every arm checks with `same` that all lanes hold its family, so filling lane by
-        // lane overwrites everything the previous contents held.
-        match &lobes(first).state {
-            State::Lambert(_) if same(&|s| matches!(s, State::Lambert(_))) => {
+        let key = kernel_key(&lobes(first).state);
+        if key.is_none() || (0..W).any(|k| kernel_key(&lane(k).state) != key) {
+            *self = Kernel::Scalar;
+            return;
+        }
+        self.fill_lanes(lane, lw);
+    }
+
+    /// The lanes of [`Kernel::rebuild`] once checked: `lane(k)` is lane `k`'s lobe (a live
+    /// lane's for dead lanes), every one with the same [`kernel_key`] (not `None`). Filling
+    /// lane by lane overwrites everything the previous contents of the family held.
+    pub(super) fn fill_lanes<'a>(
+        &mut self,
+        lane: impl Fn(usize) -> &'a PreparedLobe,
+        lw: &LaneWeights<W>,
+    ) {
+        match &lane(0).state {
+            State::Lambert(_) => {
                 let rho_pi = self.lambert_mut();
                 for k in 0..W {
                     if let State::Lambert(p) = &lane(k).state {
@@ -415,9 +428,7 @@ impl<const W: usize> Kernel<W> {
                     }
                 }
             }
-            State::OrenNayar(p0)
-                if same(&|s| matches!(s, State::OrenNayar(p) if p.fast == p0.fast)) =>
-            {
+            State::OrenNayar(p0) => {
                 let x = self.oren_nayar_mut();
                 x.fast = p0.fast;
                 for k in 0..W {
@@ -426,9 +437,7 @@ impl<const W: usize> Kernel<W> {
                     }
                 }
             }
-            State::MicrofacetR(_)
-                if same(&|s| matches!(s, State::MicrofacetR(p) if conductor_ok(p))) =>
-            {
+            State::MicrofacetR(_) => {
                 let x = self.conductor_mut();
                 for k in 0..W {
                     if let State::MicrofacetR(p) = &lane(k).state {
@@ -441,11 +450,7 @@ impl<const W: usize> Kernel<W> {
                     }
                 }
             }
-            State::Dielectric(_)
-                if same(
-                    &|s| matches!(s, State::Dielectric(p) if p.refl && !p.trans && !p.delta),
-                ) =>
-            {
+            State::Dielectric(_) => {
                 let x = self.dielectric_r_mut();
                 for k in 0..W {
                     if let State::Dielectric(p) = &lane(k).state {
@@ -454,7 +459,7 @@ impl<const W: usize> Kernel<W> {
                     }
                 }
             }
-            State::Ward(_) if same(&|s| matches!(s, State::Ward(_))) => {
+            State::Ward(_) => {
                 let x = self.ward_mut();
                 x.any_classic = (0..W).any(
                     |k| matches!(&lane(k).state, State::Ward(p) if p.variant != WardVariant::Gm),
@@ -466,11 +471,7 @@ impl<const W: usize> Kernel<W> {
                     }
                 }
             }
-            State::SheenCK(_)
-                if same(
-                    &|s| matches!(s, State::SheenCK(p) if p.masking == SheenMasking::MaterialX),
-                ) =>
-            {
+            State::SheenCK(_) => {
                 let x = self.sheen_ck_mut();
                 for k in 0..W {
                     if let State::SheenCK(p) = &lane(k).state {
@@ -480,7 +481,7 @@ impl<const W: usize> Kernel<W> {
                     }
                 }
             }
-            State::SheenLTC(_) if same(&|s| matches!(s, State::SheenLTC(_))) => {
+            State::SheenLTC(_) => {
                 let x = self.sheen_ltc_mut();
                 for k in 0..W {
                     if let State::SheenLTC(p) = &lane(k).state {
@@ -618,6 +619,26 @@ impl<const W: usize> Kernel<W> {
         }
         true
     }
+}
+
+/// The number of distinct [`kernel_key`]s.
+pub(super) const KERNEL_KEYS: usize = 8;
+
+/// The kernel a prepared lobe would get: lobes with equal keys can share one kernel's lanes
+/// ([`Kernel::rebuild`] and the scalar path's lobe packs); `None` for the states no kernel
+/// covers (they are evaluated with the scalar leaf).
+pub(super) fn kernel_key(s: &State) -> Option<u8> {
+    Some(match s {
+        State::Lambert(_) => 0,
+        // The `Ê` form is per kernel, not per lane.
+        State::OrenNayar(p) => 1 + u8::from(p.fast),
+        State::MicrofacetR(p) if conductor_ok(p) => 3,
+        State::Dielectric(p) if p.refl && !p.trans && !p.delta => 4,
+        State::Ward(_) => 5,
+        State::SheenCK(p) if p.masking == SheenMasking::MaterialX => 6,
+        State::SheenLTC(_) => 7,
+        _ => return None,
+    })
 }
 
 /// A conductor lobe the kernel covers: conductor Fresnel, not a delta, no Kulla–Conty part.

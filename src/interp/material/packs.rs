@@ -1,0 +1,314 @@
+//! Lobe packs: the scalar [`Prepared::eval`]'s lobes of one family evaluated together, one
+//! lobe per SIMD lane.
+//!
+//! A whole lobe is the interpreter's instruction (spec closures.md §6.1). When several
+//! surviving lobes of a prepared point belong to one family that has a batched kernel
+//! ([`Kernel`], the kernels of the batched path, §1.5), the end of `prepare` puts up to
+//! [`PACK_LANES`] of them in one kernel with the lane axis running over lobes instead of
+//! points, and `eval` runs that kernel once with the same L in every lane: ref10's three
+//! Ward lobes become one instruction, its two GGX dielectrics another. The kernels compute
+//! the scalar leaf's formula per lane with polynomial transcendentals, so a pack's sum
+//! equals the lobes' own evaluations to relative 1e-5 (the batched path's tolerance, §1.5;
+//! `tests/interp_packs.rs`). [`super::PrepareOptions::pack_lobes`] turns packing off.
+//!
+//! Four lanes are one SSE register, the baseline x86-64 width; a family with more than four
+//! lobes fills several packs. Lobes no kernel covers, and a family's only lobe, are
+//! evaluated alone.
+
+use super::{ActiveLobe, MAX_LOBES};
+use crate::interp::lobe::PreparedLobe;
+use crate::interp::soa::{Acc, KERNEL_KEYS, Kernel, LaneWeights, Vec3x, kernel_key};
+use glam::Vec3;
+
+/// Lobes per pack.
+pub(super) const PACK_LANES: usize = 4;
+
+/// Packs per prepared point: a material has at most `MAX_LOBES` lobes, so four packs cover
+/// every family that has two to four lobes; further lobes are evaluated alone.
+const MAX_PACKS: usize = 4;
+
+/// Every lobe index, for an unplanned [`EvalPlan`] (every lobe alone).
+const ALL_LOBES: [u8; MAX_LOBES] = {
+    let mut all = [0u8; MAX_LOBES];
+    let mut k = 0;
+    while k < MAX_LOBES {
+        all[k] = k as u8;
+        k += 1;
+    }
+    all
+};
+
+/// Up to [`PACK_LANES`] lobes of one family in one kernel.
+#[derive(Debug, Clone, Copy)]
+struct LobePack {
+    kernel: Kernel<PACK_LANES>,
+    /// Lane weights, probabilities and flip signs (0 and 1 in unused lanes).
+    lw: LaneWeights<PACK_LANES>,
+    /// Each lane's frame (unused lanes repeat lane 0's).
+    frame: [u8; PACK_LANES],
+}
+
+/// Which lobes run alone and which share packs: a function of the lobes' kernel keys
+/// only, so a material whose leaves are all constants computes it once, at compile time,
+/// for the case where every leaf survives ([`super::Material`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Grouping {
+    /// Indices (into the prepared lobes) of the lobes evaluated alone.
+    solo: [u8; MAX_LOBES],
+    solo_count: u8,
+    /// Each pack's lobe indices (the first `pack_len[p]`).
+    packs: [[u8; PACK_LANES]; MAX_PACKS],
+    pack_len: [u8; MAX_PACKS],
+    pack_count: u8,
+}
+
+impl Grouping {
+    /// Every lobe alone.
+    fn none() -> Grouping {
+        Grouping {
+            solo: ALL_LOBES,
+            solo_count: 0,
+            packs: [[0; PACK_LANES]; MAX_PACKS],
+            pack_len: [0; MAX_PACKS],
+            pack_count: 0,
+        }
+    }
+
+    /// The lobes of each kernel key, in lobe order, fill packs of up to [`PACK_LANES`];
+    /// a key's single remaining lobe, and lobes without a key, run alone.
+    pub(super) fn of_keys(keys: &[Option<u8>]) -> Grouping {
+        // One pass sorts the lobes by key (no pairwise comparisons: this runs per prepare).
+        let mut by_key = [[0u8; MAX_LOBES]; KERNEL_KEYS];
+        let mut per_key = [0usize; KERNEL_KEYS];
+        let mut g = Grouping::none();
+        let mut solo = 0;
+        for (k, key) in keys.iter().enumerate().take(MAX_LOBES) {
+            match key {
+                Some(key) => {
+                    let key = usize::from(*key);
+                    by_key[key][per_key[key]] = k as u8;
+                    per_key[key] += 1;
+                }
+                None => {
+                    g.solo[solo] = k as u8;
+                    solo += 1;
+                }
+            }
+        }
+        let mut packs = 0;
+        for (members, &n) in by_key.iter().zip(&per_key) {
+            for chunk in members[..n].chunks(PACK_LANES) {
+                if chunk.len() >= 2 && packs < MAX_PACKS {
+                    g.packs[packs][..chunk.len()].copy_from_slice(chunk);
+                    g.pack_len[packs] = chunk.len() as u8;
+                    packs += 1;
+                } else {
+                    g.solo[solo..solo + chunk.len()].copy_from_slice(chunk);
+                    solo += chunk.len();
+                }
+            }
+        }
+        g.solo_count = solo as u8;
+        g.pack_count = packs as u8;
+        g
+    }
+}
+
+/// How [`super::Prepared::eval`] runs the surviving lobes: some alone, the others in packs.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct EvalPlan {
+    grouping: Grouping,
+    packs: [LobePack; MAX_PACKS],
+    /// The plan describes the current lobes; when false every lobe is evaluated alone.
+    valid: bool,
+}
+
+impl EvalPlan {
+    /// No plan (every lobe alone).
+    pub(super) fn empty() -> EvalPlan {
+        let pack = LobePack {
+            kernel: Kernel::Scalar,
+            lw: LaneWeights {
+                w: Vec3x::zero(),
+                p: [0.0; PACK_LANES],
+                sign: [1.0; PACK_LANES],
+            },
+            frame: [0; PACK_LANES],
+        };
+        EvalPlan {
+            grouping: Grouping::none(),
+            packs: [pack; MAX_PACKS],
+            valid: false,
+        }
+    }
+
+    /// Forgets the plan: `eval` runs every lobe alone until [`EvalPlan::build`].
+    pub(super) fn clear(&mut self) {
+        self.valid = false;
+    }
+
+    /// Plans `lobes` (weights and probabilities final) from their kernel keys.
+    pub(super) fn build(&mut self, lobes: &[ActiveLobe]) {
+        let mut keys = [None; MAX_LOBES];
+        for (key, a) in keys.iter_mut().zip(lobes) {
+            *key = kernel_key(&a.lobe.state);
+        }
+        self.build_from(&Grouping::of_keys(&keys[..lobes.len()]), lobes);
+    }
+
+    /// Plans `lobes` with `grouping`, which must be [`Grouping::of_keys`] of their keys.
+    pub(super) fn build_from(&mut self, grouping: &Grouping, lobes: &[ActiveLobe]) {
+        self.grouping = *grouping;
+        for (pack, (members, &n)) in self.packs.iter_mut().zip(
+            grouping.packs[..grouping.pack_count as usize]
+                .iter()
+                .zip(&grouping.pack_len),
+        ) {
+            pack.fill(lobes, &members[..n as usize]);
+        }
+        self.valid = true;
+    }
+
+    /// The lobes `eval` runs alone, of `count` surviving lobes.
+    #[inline(always)]
+    pub(super) fn solo(&self, count: usize) -> &[u8] {
+        if self.valid {
+            &self.grouping.solo[..self.grouping.solo_count as usize]
+        } else {
+            &ALL_LOBES[..count]
+        }
+    }
+
+    /// The packs' weighted sum `Σ w f·μ_i` and `Σ p pdf` at local direction `l` (every
+    /// lobe in one frame).
+    #[inline(always)]
+    pub(super) fn eval_one_frame(&self, l: Vec3) -> (Vec3, f32) {
+        let l = Vec3x {
+            x: [l.x; PACK_LANES],
+            y: [l.y; PACK_LANES],
+            z: [l.z; PACK_LANES],
+        };
+        self.run(|_| l)
+    }
+
+    /// As [`EvalPlan::eval_one_frame`] with L given per frame (`local[f]`).
+    #[inline(always)]
+    pub(super) fn eval_frames(&self, local: &[Vec3; MAX_LOBES]) -> (Vec3, f32) {
+        self.run(|p: &LobePack| {
+            let mut l = Vec3x::zero();
+            for (k, &f) in p.frame.iter().enumerate() {
+                l.set(k, local[f as usize]);
+            }
+            l
+        })
+    }
+
+    #[inline(always)]
+    fn run(&self, l: impl Fn(&LobePack) -> Vec3x<PACK_LANES>) -> (Vec3, f32) {
+        let count = self.grouping.pack_count as usize;
+        if !self.valid || count == 0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let mut acc = Acc {
+            f: Vec3x::zero(),
+            pdf: [0.0; PACK_LANES],
+        };
+        for p in &self.packs[..count] {
+            // Packs only hold kernels (`LobePack::fill`), never `Kernel::Scalar`.
+            p.kernel.accumulate(&l(p), &p.lw, &mut acc);
+        }
+        let sum = |x: &[f32; PACK_LANES]| (x[0] + x[1]) + (x[2] + x[3]);
+        (
+            Vec3::new(sum(&acc.f.x), sum(&acc.f.y), sum(&acc.f.z)),
+            sum(&acc.pdf),
+        )
+    }
+}
+
+impl LobePack {
+    /// Loads `members` (indices into `lobes`, two to [`PACK_LANES`] lobes of one kernel
+    /// key) into the lanes.
+    fn fill(&mut self, lobes: &[ActiveLobe], members: &[u8]) {
+        for k in 0..PACK_LANES {
+            let (w, p, sign, frame) = match members.get(k) {
+                Some(&m) => {
+                    let a = &lobes[m as usize];
+                    let sign = if a.lobe.is_flipped() { -1.0 } else { 1.0 };
+                    (a.weight, a.prob, sign, a.frame)
+                }
+                None => (Vec3::ZERO, 0.0, 1.0, self.frame[0]),
+            };
+            self.lw.w.set(k, w);
+            self.lw.p[k] = p;
+            self.lw.sign[k] = sign;
+            self.frame[k] = frame;
+        }
+        debug_assert!(members.len() >= 2, "a pack has two lobes or more");
+        debug_assert!(
+            members.iter().all(|&m| {
+                let key = kernel_key(&lobes[m as usize].lobe.state);
+                key.is_some() && key == kernel_key(&lobes[members[0] as usize].lobe.state)
+            }),
+            "a pack's lobes share one kernel key"
+        );
+        // Unused lanes repeat the last lobe (with weight and probability 0).
+        let last = members.len() - 1;
+        let lanes: [&PreparedLobe; PACK_LANES] =
+            std::array::from_fn(|k| &lobes[members[k.min(last)] as usize].lobe);
+        self.kernel.fill_lanes(|k| lanes[k], &self.lw);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The packs' members and the lone lobes of `keys`, each list in plan order.
+    fn plan(keys: &[Option<u8>]) -> (Vec<Vec<u8>>, Vec<u8>) {
+        let g = Grouping::of_keys(keys);
+        let packs = (0..g.pack_count as usize)
+            .map(|p| g.packs[p][..g.pack_len[p] as usize].to_vec())
+            .collect();
+        (packs, g.solo[..g.solo_count as usize].to_vec())
+    }
+
+    /// Every lobe index appears exactly once, in a pack or alone.
+    fn assert_partition(keys: &[Option<u8>]) {
+        let (packs, solo) = plan(keys);
+        let mut all: Vec<u8> = packs.into_iter().flatten().chain(solo).collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..keys.len() as u8).collect::<Vec<_>>(), "{keys:?}");
+    }
+
+    #[test]
+    fn lobes_group_by_key_and_lone_ones_run_alone() {
+        let keys = [Some(5), Some(5), Some(5), None, Some(4), Some(4), Some(3)];
+        let (packs, solo) = plan(&keys);
+        assert_eq!(packs, vec![vec![4, 5], vec![0, 1, 2]]);
+        assert_eq!(solo, vec![3, 6]);
+        assert_partition(&keys);
+    }
+
+    #[test]
+    fn a_family_larger_than_a_pack_fills_several() {
+        let (packs, solo) = plan(&[Some(1); 6]);
+        assert_eq!(packs, vec![vec![0, 1, 2, 3], vec![4, 5]]);
+        assert!(solo.is_empty());
+        // Four and a lone fifth: the fifth is evaluated alone.
+        let (packs, solo) = plan(&[Some(1); 5]);
+        assert_eq!(packs, vec![vec![0, 1, 2, 3]]);
+        assert_eq!(solo, vec![4]);
+    }
+
+    #[test]
+    fn packs_beyond_the_limit_run_alone() {
+        // Eight families of two lobes: four packs, eight lobes alone.
+        let keys: Vec<Option<u8>> = (0..MAX_LOBES).map(|k| Some((k / 2) as u8)).collect();
+        let (packs, solo) = plan(&keys);
+        assert_eq!(packs.len(), MAX_PACKS);
+        assert_eq!(solo.len(), MAX_LOBES - 2 * MAX_PACKS);
+        assert_partition(&keys);
+        assert_partition(&[None; MAX_LOBES]);
+        assert_partition(&[]);
+    }
+}
