@@ -79,6 +79,8 @@ fn lobes() -> Vec<(&'static str, Lobe)> {
                 masking: SheenMasking::Original,
             }),
         ),
+        ("sheen ltc", Lobe::SheenLTC(SheenLTC { r: 0.4 })),
+        ("sheen ltc clamped", Lobe::SheenLTC(SheenLTC { r: 0.001 })),
         ("conductor", mf(gold, Compensation::None)),
         ("schlick turquin", mf(schlick, Compensation::Turquin(0.8))),
         ("schlick kc", mf(schlick, Compensation::KullaConty)),

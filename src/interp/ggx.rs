@@ -72,9 +72,7 @@ impl Ggx {
     /// Smith `Λ(ω)`, written as `x / (2(1 + √(1 + x)))` to avoid cancellation.
     #[inline]
     pub fn lambda(&self, w: Vec3) -> f32 {
-        let z2 = (w.z * w.z).max(1e-14);
-        let x = (self.ax * self.ax * w.x * w.x + self.ay * self.ay * w.y * w.y) / z2;
-        x / (2.0 * (1.0 + (1.0 + x).sqrt()))
+        lambda_squared(self.ax * self.ax, self.ay * self.ay, w)
     }
 
     /// `G1(ω) = 1/(1 + Λ(ω))`.
@@ -93,6 +91,14 @@ impl Ggx {
         let m = Vec3::new(r * c, r * s, z) + vh;
         Vec3::new(self.ax * m.x, self.ay * m.y, m.z.max(0.0)).normalize_or(Vec3::Z)
     }
+}
+
+/// [`Ggx::lambda`] from the squared widths `α_x²`, `α_y²`.
+#[inline(always)]
+fn lambda_squared(ax2: f32, ay2: f32, w: Vec3) -> f32 {
+    let z2 = (w.z * w.z).max(1e-14);
+    let x = (ax2 * w.x * w.x + ay2 * w.y * w.y) / z2;
+    x / (2.0 * (1.0 + (1.0 + x).sqrt()))
 }
 
 /// GGX reflection with the view fixed, in the division-light form shared by the scalar
@@ -154,10 +160,18 @@ impl ViewTerms {
     /// The terms of `ggx` with `masking` at `v` (local frame, `v.z > 0`).
     #[inline(always)]
     pub fn new(ggx: &Ggx, masking: Masking, v: Vec3) -> ViewTerms {
-        let lambda_v = ggx.lambda(v);
+        ViewTerms::from_constants(&GgxView::constants(ggx), masking, v)
+    }
+
+    /// [`ViewTerms::new`] from the distribution's [`GgxView::constants`], computed once per
+    /// lobe by its bind: the two divisions and three products that do not depend on the
+    /// view are not repeated per prepare (the same operations, so the same bits).
+    #[inline(always)]
+    pub fn from_constants(c: &GgxView, masking: Masking, v: Vec3) -> ViewTerms {
+        let lambda_v = lambda_squared(c.ax2, c.ay2, v);
         ViewTerms {
             lambda_v,
-            view: GgxView::new(ggx, masking, lambda_v),
+            view: c.with_lambda(masking, lambda_v),
             g1_v: 1.0 / (1.0 + lambda_v),
         }
     }
@@ -167,19 +181,31 @@ impl GgxView {
     /// The view-fixed constants of a (non-delta) distribution, given `Λ(V)`.
     #[inline]
     pub fn new(ggx: &Ggx, masking: Masking, lambda_v: f32) -> GgxView {
-        let (c_z, c_s) = match masking {
-            Masking::HeightCorrelated => (1.0 + 2.0 * lambda_v, 1.0),
-            Masking::Separable => (1.0 + lambda_v, 1.0 + lambda_v),
-        };
+        GgxView::constants(ggx).with_lambda(masking, lambda_v)
+    }
+
+    /// The view-independent part of [`GgxView::new`] (`c_z = c_s = 1` until
+    /// [`ViewTerms::from_constants`] sets them for a view).
+    pub fn constants(ggx: &Ggx) -> GgxView {
         GgxView {
             inv_ax: 1.0 / ggx.ax,
             inv_ay: 1.0 / ggx.ay,
             ax2: ggx.ax * ggx.ax,
             ay2: ggx.ay * ggx.ay,
             pi_axay: PI * ggx.ax * ggx.ay,
-            c_z,
-            c_s,
+            c_z: 1.0,
+            c_s: 1.0,
         }
+    }
+
+    /// These constants with the masking's coefficients at `Λ(V) = lambda_v`.
+    #[inline(always)]
+    fn with_lambda(&self, masking: Masking, lambda_v: f32) -> GgxView {
+        let (c_z, c_s) = match masking {
+            Masking::HeightCorrelated => (1.0 + 2.0 * lambda_v, 1.0),
+            Masking::Separable => (1.0 + lambda_v, 1.0 + lambda_v),
+        };
+        GgxView { c_z, c_s, ..*self }
     }
 
     /// The intermediate values at view `v` and light `l` (`l_z > 0`). `H` is `V + L` times

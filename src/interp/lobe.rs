@@ -24,7 +24,7 @@ use super::microfacet::{
     PreparedDielectric, PreparedMicrofacetR,
 };
 use super::sheen::{
-    PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenMasking,
+    PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking,
 };
 use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward, WardBound};
 use glam::Vec3;
@@ -316,6 +316,7 @@ impl Lobe {
             Lobe::Dielectric(d) => Aux::Dielectric(d.bind()),
             Lobe::Ward(w) => Aux::Ward(w.bind()),
             Lobe::SheenCK(s) => Aux::SheenCK(s.bind()),
+            Lobe::SheenLTC(s) => Aux::SheenLTC(s.bind()),
             Lobe::OrenNayar(o) => Aux::OrenNayar(o.bind()),
             _ => Aux::None,
         };
@@ -409,7 +410,13 @@ impl Lobe {
                     _ => s.prepare(v),
                 }
             ),
-            Lobe::SheenLTC(s) => put!(SheenLTC, s.prepare(v)),
+            Lobe::SheenLTC(s) => put!(
+                SheenLTC,
+                match aux {
+                    Aux::SheenLTC(b) => s.prepare_bound(v, b),
+                    _ => s.prepare(v),
+                }
+            ),
             Lobe::Emission(_) | Lobe::Transparent(_) => out.state = State::Inactive,
         }
     }
@@ -436,6 +443,7 @@ pub(super) enum Aux {
     Dielectric(DielectricBound),
     Ward(WardBound),
     SheenCK(SheenCKBound),
+    SheenLTC(SheenLTCBound),
     OrenNayar(OrenNayarBound),
 }
 

@@ -165,6 +165,8 @@ pub struct PreparedMicrofacetR {
 #[derive(Debug, Clone, Copy)]
 pub struct MicrofacetBound {
     pub(super) albedo_fresnel: Fresnel,
+    /// The distribution's view-independent constants ([`GgxView::constants`]).
+    pub(super) ggx_view: GgxView,
     /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables), and
     /// in the one-off bound of [`MicrofacetR::prepare`] (direct lookups).
     pub(super) curves: Option<ReflectionCurves>,
@@ -232,6 +234,7 @@ impl MicrofacetR {
         // reused.
         let bound = MicrofacetBound {
             albedo_fresnel: self.albedo_fresnel(),
+            ggx_view: GgxView::constants(&self.ggx),
             curves: None,
         };
         self.prepare_bound(v, &bound)
@@ -259,6 +262,7 @@ impl MicrofacetR {
         };
         MicrofacetBound {
             albedo_fresnel,
+            ggx_view: GgxView::constants(&self.ggx),
             curves: curves.map(|(sq, h82)| ReflectionCurves {
                 e1: MuCurve::new2(e1_table(self.masking), y),
                 sq,
@@ -278,7 +282,7 @@ impl MicrofacetR {
         let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
         let f_average = || clamp1(albedo_fresnel.average());
         let alpha = self.ggx.lookup_alpha();
-        let t = ViewTerms::new(&self.ggx, self.masking, v);
+        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
         let mut p = PreparedMicrofacetR {
             ggx: self.ggx,
             masking: self.masking,
@@ -512,6 +516,8 @@ pub struct PreparedDielectric {
 #[derive(Debug, Clone, Copy)]
 pub struct DielectricBound {
     pub(super) curves: Option<[[MuCurve; 3]; 2]>,
+    /// The distribution's view-independent constants ([`GgxView::constants`]).
+    pub(super) ggx_view: GgxView,
 }
 
 impl Dielectric {
@@ -526,8 +532,12 @@ impl Dielectric {
 
     /// The view-independent part of [`Dielectric::prepare`].
     pub fn bind(&self) -> DielectricBound {
+        let ggx_view = GgxView::constants(&self.ggx);
         if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
-            return DielectricBound { curves: None };
+            return DielectricBound {
+                curves: None,
+                ggx_view,
+            };
         }
         let y = tables::ggx_axis(self.ggx.lookup_alpha());
         let at = |eta: f32| {
@@ -542,13 +552,18 @@ impl Dielectric {
         let eta0 = self.eta0();
         DielectricBound {
             curves: Some([at(eta0), at(1.0 / eta0)]),
+            ggx_view,
         }
     }
 
     /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
     /// below the surface (the frame was flipped), so η is inverted.
     pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
-        self.prepare_bound(v, flipped, &DielectricBound { curves: None })
+        let bound = DielectricBound {
+            curves: None,
+            ggx_view: GgxView::constants(&self.ggx),
+        };
+        self.prepare_bound(v, flipped, &bound)
     }
 
     /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
@@ -562,7 +577,7 @@ impl Dielectric {
     ) -> PreparedDielectric {
         let eta0 = self.eta0();
         let eta = if flipped { 1.0 / eta0 } else { eta0 };
-        let t = ViewTerms::new(&self.ggx, self.masking, v);
+        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
         let refl = self.mode != DielectricMode::T;
         let trans = self.mode != DielectricMode::R;
         let alpha = self.ggx.lookup_alpha();

@@ -215,11 +215,47 @@ pub struct SheenLTC {
 /// The LTC sheen's fitted directional albedo `Ê(μ_o, r)` (clamped at 0).
 #[inline(always)]
 pub fn sheen_ltc_albedo(x: f32, y: f32) -> f32 {
-    let s = y * (0.0206607 + 1.58491 * y) / (0.0379424 + y * (1.32227 + y));
-    let m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y);
-    let o = y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y));
-    let q = (x - m) / s;
-    (super::vmath::exp(-0.5 * q * q) / (s * (2.0 * PI).sqrt()) + o).max(0.0)
+    SheenLTCBound::at_roughness(y).albedo(x)
+}
+
+/// The view-independent part of a [`SheenLTC`] lobe: its clamped roughness and the three
+/// roughness-only rational fits of `Ê` (three divisions a prepare would otherwise repeat;
+/// the same operations in the same order, so the same bits).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SheenLTCBound {
+    /// Roughness as the fits take it (clamped to [0.01, 1]; NaN reads 1).
+    y: f32,
+    /// Width, mean and offset of `Ê`'s Gaussian in `μ_o`.
+    s: f32,
+    m: f32,
+    o: f32,
+    /// `s·√(2π)`.
+    s_norm: f32,
+}
+
+impl SheenLTCBound {
+    /// The fits at roughness `y` (already clamped).
+    #[inline(always)]
+    fn at_roughness(y: f32) -> SheenLTCBound {
+        let s = y * (0.0206607 + 1.58491 * y) / (0.0379424 + y * (1.32227 + y));
+        let m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y);
+        let o =
+            y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y));
+        SheenLTCBound {
+            y,
+            s,
+            m,
+            o,
+            s_norm: s * (2.0 * PI).sqrt(),
+        }
+    }
+
+    /// `Ê(x)` at `x = μ_o` (clamped at 0).
+    #[inline(always)]
+    pub fn albedo(&self, x: f32) -> f32 {
+        let q = (x - self.m) / self.s;
+        (super::vmath::exp(-0.5 * q * q) / self.s_norm + self.o).max(0.0)
+    }
 }
 
 /// The LTC coefficients `(a, b)` at `(μ_o, r)`.
@@ -243,15 +279,26 @@ pub struct PreparedSheenLTC {
 }
 
 impl SheenLTC {
-    /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
-    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
-    #[inline(always)]
-    pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
+    /// The view-independent part of [`SheenLTC::prepare`].
+    pub fn bind(&self) -> SheenLTCBound {
         let y = if self.r.is_nan() {
             1.0
         } else {
             self.r.clamp(0.01, 1.0)
         };
+        SheenLTCBound::at_roughness(y)
+    }
+
+    /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
+    pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
+        self.prepare_bound(v, &self.bind())
+    }
+
+    /// [`SheenLTC::prepare`] with the result of [`SheenLTC::bind`].
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
+    pub fn prepare_bound(&self, v: Vec3, fit: &SheenLTCBound) -> PreparedSheenLTC {
+        let y = fit.y;
         let x = v.z.clamp(0.0, 1.0);
         let t = Vec3::new(v.x, v.y, 0.0);
         // Blended, not branched (see `Frame::new`).
@@ -262,7 +309,7 @@ impl SheenLTC {
             ax_y: Vec3::Z.cross(ax_x),
             a: a.max(1e-7),
             b,
-            e_hat: sheen_ltc_albedo(x, y),
+            e_hat: fit.albedo(x),
         }
     }
 }

@@ -26,13 +26,13 @@ use crate::interp::diffuse::{
 };
 use crate::interp::frame::Frame;
 use crate::interp::fresnel::Fresnel;
-use crate::interp::ggx::ViewTerms;
+use crate::interp::ggx::{GgxView, ViewTerms};
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{
     Compensation, Dielectric, DielectricMode, MicrofacetR, f82_albedo,
 };
-use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenMasking, sheen_ltc_albedo};
+use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking};
 use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::{LaneCoords, MuCurve};
@@ -59,12 +59,14 @@ pub(super) enum LeafLanes {
     /// its albedo curves `(E1, S_q, H82)`.
     Conductor {
         lobe: MicrofacetR,
+        ggx_view: GgxView,
         f82: [Rgb; 3],
         curves: [MuCurve; 3],
     },
     /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
     DielectricR {
         lobe: Dielectric,
+        ggx_view: GgxView,
         eta: f32,
         e_r: MuCurve,
     },
@@ -73,7 +75,10 @@ pub(super) enum LeafLanes {
     /// Conty–Kulla sheen with the MaterialX masking.
     SheenCK { bound: SheenCKBound },
     /// LTC sheen.
-    SheenLTC { lobe: SheenLTC },
+    SheenLTC {
+        lobe: SheenLTC,
+        bound: SheenLTCBound,
+    },
 }
 
 /// The per-leaf data of a material that [`Material::prepare_lanes`] can prepare.
@@ -127,6 +132,7 @@ impl LeafLanes {
                 };
                 LeafLanes::Conductor {
                     lobe: *m,
+                    ggx_view: bound.ggx_view,
                     f82: [f0, f90, a],
                     curves: bound.curves?.f82_curves()?,
                 }
@@ -140,6 +146,7 @@ impl LeafLanes {
             {
                 LeafLanes::DielectricR {
                     lobe: *d,
+                    ggx_view: bound.ggx_view,
                     eta: d.eta0(),
                     e_r: bound.curves?[0][0],
                 }
@@ -151,7 +158,10 @@ impl LeafLanes {
             (Lobe::SheenCK(s), Aux::SheenCK(bound)) if s.masking == SheenMasking::MaterialX => {
                 LeafLanes::SheenCK { bound: *bound }
             }
-            (Lobe::SheenLTC(s), _) => LeafLanes::SheenLTC { lobe: *s },
+            (Lobe::SheenLTC(s), Aux::SheenLTC(bound)) => LeafLanes::SheenLTC {
+                lobe: *s,
+                bound: *bound,
+            },
             _ => return None,
         })
     }
@@ -238,10 +248,9 @@ impl LeafLanes {
                     out.set(k, Vec3::splat(e[k]));
                 }
             }
-            LeafLanes::SheenLTC { lobe } => {
-                let y = ltc_roughness(lobe);
+            LeafLanes::SheenLTC { bound, .. } => {
                 for k in 0..W {
-                    out.set(k, Vec3::splat(sheen_ltc_albedo(mu[k].clamp(0.0, 1.0), y)));
+                    out.set(k, Vec3::splat(bound.albedo(mu[k].clamp(0.0, 1.0))));
                 }
             }
         }
@@ -284,14 +293,14 @@ impl LeafLanes {
                     (true, false) => fill(Some(eon_e_hat), x),
                 }
             }
-            LeafLanes::Conductor { lobe, .. } => {
+            LeafLanes::Conductor { lobe, ggx_view, .. } => {
                 let x = kernel.conductor_mut();
                 let Fresnel::Conductor { eta, kappa } = lobe.fresnel else {
                     return;
                 };
                 for k in 0..W {
                     let vk = v.get(k);
-                    let t = ViewTerms::new(&lobe.ggx, lobe.masking, vk);
+                    let t = ViewTerms::from_constants(ggx_view, lobe.masking, vk);
                     x.g.set(k, vk, &t.view);
                     let inv_4mu = 0.25 / safe_mu(vk.z);
                     x.pdf_c[k] = t.g1_v * inv_4mu * lw.p[k];
@@ -299,11 +308,16 @@ impl LeafLanes {
                     x.scale_q.set(k, Vec3::ONE * inv_4mu * lw.w.get(k));
                 }
             }
-            LeafLanes::DielectricR { lobe, eta, .. } => {
+            LeafLanes::DielectricR {
+                lobe,
+                ggx_view,
+                eta,
+                ..
+            } => {
                 let x = kernel.dielectric_r_mut();
                 for k in 0..W {
                     let vk = v.get(k);
-                    let t = ViewTerms::new(&lobe.ggx, lobe.masking, vk);
+                    let t = ViewTerms::from_constants(ggx_view, lobe.masking, vk);
                     x.g.set(k, vk, &t.view);
                     let inv_mu = 1.0 / safe_mu(vk.z);
                     x.set(k, *eta, t.g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
@@ -332,22 +346,13 @@ impl LeafLanes {
                     x.norm[k] = bound.norm;
                 }
             }
-            LeafLanes::SheenLTC { lobe } => {
+            LeafLanes::SheenLTC { lobe, bound } => {
                 let x = kernel.sheen_ltc_mut();
                 for k in 0..W {
-                    x.set(k, &lobe.prepare(v.get(k)));
+                    x.set(k, &lobe.prepare_bound(v.get(k), bound));
                 }
             }
         }
-    }
-}
-
-/// The LTC sheen's roughness as its prepare clamps it.
-fn ltc_roughness(lobe: &SheenLTC) -> f32 {
-    if lobe.r.is_nan() {
-        1.0
-    } else {
-        lobe.r.clamp(0.01, 1.0)
     }
 }
 
