@@ -14,7 +14,10 @@
 //! * `ref10/batch16_prepare_lanes`: the lane-parallel prepare of 16 points
 //!   (`Material::prepare_batch_eval_into`, what the batched preview runs), ns per point;
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;
-//! * `preview512/{scalar,batched}`: a 512² material ball of `ref10`, one light, one thread.
+//! * `preview512/{scalar,scalar_general,batched}`: a 512² material ball of `ref10`, one
+//!   light, one thread: one pixel at a time (`scalar`: ref10 is uniform, so each pixel is
+//!   prepared by the uniform-material prepare at one lane; `scalar_general`: by the general
+//!   `prepare_into`, as a material with inputs would be), or 16 at a time (`batched`).
 //!
 //! Times are the thread's on-CPU time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`): the
 //! machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"
@@ -339,10 +342,16 @@ fn bench_preview(c: &mut Criterion<CpuTime>) {
     let m = Material::new(&ref10_ir()).expect("ref10 compiles");
     let mut g = c.benchmark_group("preview512");
     g.sample_size(10);
-    for (name, batched) in [("scalar", false), ("batched", true)] {
+    let paths = [
+        ("scalar", false, false),
+        ("scalar_general", false, true),
+        ("batched", true, false),
+    ];
+    for (name, batched, general_prepare) in paths {
         let opts = PreviewOptions {
             size: 512,
             batched,
+            general_prepare,
             parallel: false,
             ..PreviewOptions::default()
         };

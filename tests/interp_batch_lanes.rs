@@ -83,7 +83,7 @@ fn coated_ir() -> MaterialIr {
 }
 
 /// `W` random points seen from above (`below`: lane indices seen from below instead).
-fn batch(rng: &mut Rng, below: &[usize]) -> ShadingBatch<'static, W> {
+fn batch<const W: usize>(rng: &mut Rng, below: &[usize]) -> ShadingBatch<'static, W> {
     let frames: [Frame; W] = std::array::from_fn(|_| Frame::new(rng.sphere(), rng.sphere()));
     let vs = std::array::from_fn(|k| {
         let v = rng.sphere();
@@ -104,7 +104,7 @@ fn close(a: Vec3, b: Vec3) -> bool {
 
 /// Compares `pb` with the scalar preparation of each lane of `pts`: eval at random
 /// directions, albedo, emission, transparency.
-fn assert_batch_matches(
+fn assert_batch_matches<const W: usize>(
     m: &Material,
     pts: &ShadingBatch<W>,
     pb: &PreparedBatch<W>,
@@ -140,6 +140,13 @@ fn assert_batch_matches(
 
 #[test]
 fn lane_parallel_prepare_equals_scalar() {
+    lane_parallel_prepare_equals_scalar_at::<W>();
+    // One lane is the scalar preview's path for uniform materials; four, a narrow batch.
+    lane_parallel_prepare_equals_scalar_at::<1>();
+    lane_parallel_prepare_equals_scalar_at::<4>();
+}
+
+fn lane_parallel_prepare_equals_scalar_at<const W: usize>() {
     tables::init_all();
     let cases = [
         ("ref10", ref10_ir()),
@@ -148,11 +155,12 @@ fn lane_parallel_prepare_equals_scalar() {
     ];
     for (name, ir) in cases {
         let m = Material::new(&ir).expect("compiles");
+        assert!(m.prepares_lanes(), "{name} qualifies");
         let mut rng = Rng::new(41);
         let mut scratch = Scratch::default();
         let mut pb = PreparedBatch::<W>::new_boxed();
         for round in 0..25 {
-            let pts = batch(&mut rng, &[]);
+            let pts = batch::<W>(&mut rng, &[]);
             m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
             assert!(pb.lane(0).is_none(), "{name}: the lane-parallel path ran");
             assert_eq!(
@@ -180,7 +188,7 @@ fn lane_parallel_prepare_drops_per_lane() {
     let mut pb = PreparedBatch::<W>::new_boxed();
     let mut mixed_counts = 0;
     for round in 0..25 {
-        let pts = batch(&mut rng, &[]);
+        let pts = batch::<W>(&mut rng, &[]);
         m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
         assert!(pb.lane(0).is_none(), "the lane-parallel path ran");
         let counts: Vec<usize> = (0..W)
@@ -231,11 +239,72 @@ fn batches_outside_the_lane_parallel_path_fall_back() {
             .expect("valid IR"),
     )
     .expect("compiles");
-    let pts = batch(&mut rng, &[]);
+    let pts = batch::<W>(&mut rng, &[]);
     m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
     assert!(
         pb.lane(0).is_some(),
         "a material with inputs keeps the records"
     );
     assert_batch_matches(&m, &pts, &pb, &mut rng, "textured");
+}
+
+/// The preview's three ways of shading a pixel agree to relative 1e-5 (§1.5): the general
+/// prepare one pixel at a time, the scalar path of a uniform material (the lane-parallel
+/// prepare at one lane), and the batched path. Materials with inputs take the general
+/// prepare on the scalar path.
+#[test]
+fn preview_paths_agree() {
+    use vstructc::interp::preview::{PreviewOptions, render_ball};
+    tables::init_all();
+    let textured = {
+        let mut b = IrBuilder::new();
+        let col = vstructc::types::Type::scalar(vstructc::types::BaseType::Color);
+        let fallback = vstructc::types::Value::Triple(vstructc::types::BaseType::Color, [0.5; 3]);
+        let rho = b.input_slot("rho", col, fallback);
+        let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
+        b.finish("textured", RecipeId::Custom, lam)
+            .expect("valid IR")
+    };
+    let cases = [ref10_ir(), assorted_ir(), coated_ir(), textured];
+    for ir in cases {
+        let m = Material::new(&ir).expect("compiles");
+        let base = PreviewOptions {
+            size: 48,
+            parallel: false,
+            ..PreviewOptions::default()
+        };
+        let general = render_ball(
+            &m,
+            &PreviewOptions {
+                general_prepare: true,
+                ..base.clone()
+            },
+            &|_| {},
+        );
+        let scalar = render_ball(&m, &base, &|_| {});
+        let batched = render_ball(
+            &m,
+            &PreviewOptions {
+                batched: true,
+                ..base.clone()
+            },
+            &|_| {},
+        );
+        let lit = general
+            .pixels
+            .iter()
+            .filter(|p| p.max_element() > 0.1)
+            .count();
+        assert!(lit > 100, "{}: the ball is lit ({lit} pixels)", ir.name);
+        for (k, g) in general.pixels.iter().enumerate() {
+            for (path, img) in [("scalar", &scalar), ("batched", &batched)] {
+                let p = img.pixels[k];
+                assert!(
+                    (p - *g).abs().max_element() <= 1e-5 * g.max_element().max(1e-3),
+                    "{} pixel {k}: {path} {p} vs general {g}",
+                    ir.name
+                );
+            }
+        }
+    }
 }

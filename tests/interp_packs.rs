@@ -304,3 +304,28 @@ fn sample_weights_use_the_packed_eval() {
     }
     assert!(checked > 500, "most samples carry energy ({checked})");
 }
+
+/// `eval_f_cos` leaves out the densities only: its value is `eval`'s `f_cos`, bit for bit,
+/// with and without packs, in one frame or several, seen from above or below.
+#[test]
+fn eval_f_cos_is_evals_f_cos() {
+    tables::init_all();
+    let mut rng = Rng::new(89);
+    for ir in [ref10_ir(), crowded_ir()] {
+        for (pack_lobes, sides) in [(true, Sides::Both), (false, Sides::Front)] {
+            let opts = PrepareOptions {
+                pack_lobes,
+                sides,
+                ..PrepareOptions::default()
+            };
+            let m = Material::with_options(&ir, opts).expect("compiles");
+            for round in 0..50 {
+                let p = m.prepare(&point(&mut rng, round % 2 == 1));
+                for _ in 0..8 {
+                    let l = rng.sphere();
+                    assert_eq!(p.eval_f_cos(l), p.eval(l).f_cos, "{} at {l}", ir.name);
+                }
+            }
+        }
+    }
+}

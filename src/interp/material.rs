@@ -475,6 +475,14 @@ impl Material {
         self.const_regs.is_some()
     }
 
+    /// True when the material qualifies for the uniform-material prepare that
+    /// [`Material::prepare_batch_eval_into`] runs lane-parallel: constant registers, one
+    /// frame (the point's), a batched kernel for every leaf. (A batch with a view at or
+    /// below some lane's horizon still takes the general path.)
+    pub fn prepares_lanes(&self) -> bool {
+        self.lanes.is_some()
+    }
+
     /// The options.
     pub fn options(&self) -> PrepareOptions {
         self.options
@@ -1336,6 +1344,20 @@ impl Prepared {
     /// contribute nothing.
     #[inline]
     pub fn eval(&self, l: Vec3) -> Eval {
+        self.eval_with::<true>(l)
+    }
+
+    /// [`Prepared::eval`]'s `f_cos` alone, for callers that need no density (the material
+    /// preview): the lobes' pdf arithmetic is left out.
+    #[inline]
+    pub fn eval_f_cos(&self, l: Vec3) -> Rgb {
+        self.eval_with::<false>(l).f_cos
+    }
+
+    /// [`Prepared::eval`], with the mixture pdf only when `PDF` (else 0): every leaf eval is
+    /// inlined here, so the compiler drops what is not summed.
+    #[inline(always)]
+    fn eval_with<const PDF: bool>(&self, l: Vec3) -> Eval {
         if self.frame_count == 1 && !self.flipped_any {
             // One frame, no lobe flipped (the common case): one transform, no frame table,
             // no per-lobe flip.
@@ -1345,7 +1367,9 @@ impl Prepared {
                 let lobe = &self.lobes[k as usize];
                 let e = lobe.lobe.eval_unflipped(l);
                 f_cos += lobe.weight * e.f_cos;
-                pdf += lobe.prob * e.pdf;
+                if PDF {
+                    pdf += lobe.prob * e.pdf;
+                }
             }
             return Eval { f_cos, pdf };
         }
@@ -1358,7 +1382,9 @@ impl Prepared {
             let lobe = &self.lobes[k as usize];
             let e = lobe.lobe.eval(local[lobe.frame as usize]);
             f_cos += lobe.weight * e.f_cos;
-            pdf += lobe.prob * e.pdf;
+            if PDF {
+                pdf += lobe.prob * e.pdf;
+            }
         }
         Eval { f_cos, pdf }
     }

@@ -15,7 +15,12 @@
 //!   its albedo `A_k`), without emission and transparency.
 //!
 //! Rows are independent; [`render_ball`] shades them in parallel with rayon (or serially),
-//! with the scalar or the batched interpreter.
+//! with the scalar or the batched interpreter. The scalar path shades one pixel at a time;
+//! for a material the uniform-material prepare covers ([`Material::prepares_lanes`]) it
+//! prepares each pixel with it at one lane, which writes the leaves' view terms straight
+//! into their kernels instead of building lobe records (`sample` and `lobes` are not
+//! needed here); other materials, and AOVs, take [`Material::prepare_into`]'s general
+//! path.
 
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
@@ -72,6 +77,11 @@ pub struct PreviewOptions {
     pub inputs: Vec<f32>,
     /// Use the batched interpreter ([`PREVIEW_LANES`] points at a time).
     pub batched: bool,
+    /// One point at a time, prepare every pixel with the general prepare (lobe records, as
+    /// [`Material::prepare_into`]) even when the material qualifies for the uniform-material
+    /// prepare ([`Material::prepares_lanes`]), which the scalar path otherwise uses at
+    /// one lane. For comparisons; the two agree to relative 1e-5.
+    pub general_prepare: bool,
     /// Shade rows in parallel (rayon's global pool).
     pub parallel: bool,
 }
@@ -86,6 +96,7 @@ impl Default for PreviewOptions {
             aov_leaf: None,
             inputs: Vec::new(),
             batched: false,
+            general_prepare: false,
             parallel: true,
         }
     }
@@ -160,15 +171,21 @@ pub fn render_ball(
     let done = std::sync::atomic::AtomicUsize::new(0);
     // Working memory per worker, not per row: a 16-lane batch is ~120 KB, and building one
     // per row cost a quarter of a batched preview.
+    let one_lane = !opts.batched
+        && !opts.general_prepare
+        && opts.aov_leaf.is_none()
+        && material.prepares_lanes();
     let init = || RowState {
         scratch: Scratch::default(),
         prep: Prepared::new(),
         batch: opts.batched.then(PreparedBatch::<PREVIEW_LANES>::new_boxed),
+        lane: one_lane.then(PreparedBatch::<1>::new_boxed),
     };
     let row = |st: &mut RowState, (j, out): (usize, &mut [Rgb])| {
-        match &mut st.batch {
-            Some(batch) => shade_row_batched_with(material, opts, j, out, &mut st.scratch, batch),
-            None => shade_row_with(material, opts, j, out, &mut st.scratch, &mut st.prep),
+        match (&mut st.batch, &mut st.lane) {
+            (Some(batch), _) => shade_row_lanes(material, opts, j, out, &mut st.scratch, batch),
+            (None, Some(lane)) => shade_row_lanes(material, opts, j, out, &mut st.scratch, lane),
+            (None, None) => shade_row_with(material, opts, j, out, &mut st.scratch, &mut st.prep),
         }
         progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
     };
@@ -191,7 +208,10 @@ pub fn render_ball(
 struct RowState {
     scratch: Scratch,
     prep: Prepared,
+    /// The batched path's lanes.
     batch: Option<Box<PreparedBatch<PREVIEW_LANES>>>,
+    /// The scalar path's one lane, for a material the uniform-material prepare covers.
+    lane: Option<Box<PreparedBatch<1>>>,
 }
 
 /// A sphere pixel's radiance (§1.6): the light through `direct` (`eval(L_light).f_cos`), the
@@ -202,7 +222,7 @@ fn radiance(opts: &PreviewOptions, direct: Rgb, albedo: Rgb, emission: Rgb, tau:
     direct * opts.light + opts.env * albedo + emission + tau * opts.env
 }
 
-/// Shade row `j` with the scalar interpreter.
+/// Shade row `j` with the scalar interpreter's general prepare.
 pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
     let (mut scratch, mut prep) = (Scratch::default(), Prepared::new());
     shade_row_with(material, opts, j, out, &mut scratch, &mut prep);
@@ -232,7 +252,7 @@ fn shade_row_with(
             Vec3::ZERO
         } else {
             match opts.aov_leaf {
-                None => prep.eval(l).f_cos,
+                None => prep.eval_f_cos(l),
                 Some(leaf) => prep
                     .lobes()
                     .iter()
@@ -264,19 +284,19 @@ fn shade_row_with(
 pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
     let mut scratch = Scratch::default();
     let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
-    shade_row_batched_with(material, opts, j, out, &mut scratch, &mut batch);
+    shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
 }
 
-/// [`shade_row_batched`] with caller-owned working memory.
-fn shade_row_batched_with(
+/// Shade row `j` `W` pixels at a time with caller-owned working memory (the batched path
+/// at [`PREVIEW_LANES`], the scalar path of a uniform material at one lane).
+fn shade_row_lanes<const W: usize>(
     material: &Material,
     opts: &PreviewOptions,
     j: usize,
     out: &mut [Rgb],
     scratch: &mut Scratch,
-    batch: &mut PreparedBatch<PREVIEW_LANES>,
+    batch: &mut PreparedBatch<W>,
 ) {
-    const W: usize = PREVIEW_LANES;
     if opts.aov_leaf.is_some() {
         return shade_row(material, opts, j, out);
     }
