@@ -308,3 +308,65 @@ fn preview_paths_agree() {
         }
     }
 }
+
+/// `W` lights: each below lane `k`'s surface (`below`) or above it.
+fn lights<const W: usize>(rng: &mut Rng, pts: &ShadingBatch<W>, below: bool) -> [Vec3; W] {
+    std::array::from_fn(|k| {
+        let l = rng.sphere();
+        if (l.dot(pts.n[k]) < 0.0) == below {
+            l
+        } else {
+            -l
+        }
+    })
+}
+
+/// A kernel slot whose lanes all see the light from below adds nothing (every kernel family
+/// reflects only) and is skipped: the batch still equals the scalar path, zero from the
+/// front, and, for lobes flipped to face a view from below, the flipped response.
+#[test]
+fn lights_below_every_lane() {
+    fn at<const W: usize>() {
+        let mut rng = Rng::new(97);
+        let mut scratch = Scratch::default();
+        let mut pb = PreparedBatch::<W>::new_boxed();
+        for ir in [ref10_ir(), assorted_ir(), coated_ir()] {
+            let m = Material::new(&ir).expect("compiles");
+            for round in 0..20 {
+                let pts = batch::<W>(&mut rng, &[]);
+                m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
+                let scalar: Vec<Prepared> = (0..W).map(|k| m.prepare(&pts.lane(k))).collect();
+                let ls = lights(&mut rng, &pts, true);
+                let label = format!("{} W = {W} round {round}", ir.name);
+                assert_lanes_match(&pb.eval(&ls), &scalar, &ls, &label);
+                assert!(
+                    pb.eval(&ls)
+                        .iter()
+                        .all(|e| e.f_cos == Vec3::ZERO && e.pdf == 0.0)
+                );
+            }
+            // Two-sided: views from below flip the lobes, and light from below then reflects.
+            let opts = PrepareOptions {
+                sides: Sides::Both,
+                ..PrepareOptions::default()
+            };
+            let m = Material::with_options(&ir, opts).expect("compiles");
+            let all: Vec<usize> = (0..W).collect();
+            let mut lit = 0;
+            for round in 0..20 {
+                let pts = batch::<W>(&mut rng, &all);
+                m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
+                let scalar: Vec<Prepared> = (0..W).map(|k| m.prepare(&pts.lane(k))).collect();
+                let ls = lights(&mut rng, &pts, true);
+                let e = pb.eval(&ls);
+                lit += e.iter().filter(|e| e.f_cos.max_element() > 0.0).count();
+                let label = format!("{} flipped W = {W} round {round}", ir.name);
+                assert_lanes_match(&e, &scalar, &ls, &label);
+            }
+            assert!(lit > 10 * W, "{}: flipped lobes respond ({lit})", ir.name);
+        }
+    }
+    tables::init_all();
+    at::<1>();
+    at::<16>();
+}

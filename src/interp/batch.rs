@@ -339,6 +339,13 @@ impl<const W: usize> PreparedBatch<W> {
                 frame = slot.frame as usize;
                 loc = self.frames[frame].local(&world);
             }
+            // Every kernel family reflects only: a lane adds exact zeros unless L lies above
+            // its (possibly flipped) surface. A slot whose lanes all see L from below is
+            // skipped (with one lane, the preview's unlit pixels); the sums are unchanged.
+            let kernel = !matches!(slot.kernel, Kernel::Scalar);
+            if kernel && !(0..W).any(|k| slot.lw.sign[k] * loc.z[k] > 0.0) {
+                continue;
+            }
             if !slot.kernel.accumulate(&loc, &slot.lw, &mut acc) {
                 self.scalar_slot(slot, &loc, &mut acc);
             }
