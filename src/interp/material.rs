@@ -282,8 +282,9 @@ pub struct Material {
     /// The lane-parallel prepare's per-leaf data, when the material qualifies
     /// ([`lanes::LanePlan`]).
     lanes: Option<lanes::LanePlan>,
-    /// `eval`'s lobe packs when every leaf survives and is active, when every leaf is a
-    /// constant (their kernel keys are then known at compile time).
+    /// Which lobes `eval` packs together in a prepare where every leaf survives and is
+    /// active; known at compile time when every leaf is a constant (`None` otherwise, and
+    /// the grouping is made per prepare).
     pack_grouping: Option<packs::Grouping>,
     options: PrepareOptions,
 }

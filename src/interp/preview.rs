@@ -19,8 +19,8 @@
 //! for a material the uniform-material prepare covers ([`Material::prepares_lanes`]) it
 //! prepares each pixel with it at one lane, which writes the leaves' view terms straight
 //! into their kernels instead of building lobe records (`sample` and `lobes` are not
-//! needed here); other materials, and AOVs, take [`Material::prepare_into`]'s general
-//! path.
+//! needed here); other materials, and AOVs, take the general prepare
+//! ([`Material::prepare_unpacked_into`]).
 
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
