@@ -290,6 +290,7 @@ impl SheenLTC {
     }
 
     /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
+    #[inline(always)]
     pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
         self.prepare_bound(v, &self.bind())
     }
