@@ -322,8 +322,8 @@ fn lights<const W: usize>(rng: &mut Rng, pts: &ShadingBatch<W>, below: bool) -> 
 }
 
 /// A kernel slot whose lanes all see the light from below adds nothing (every kernel family
-/// reflects only) and is skipped: the batch still equals the scalar path, zero from the
-/// front, and, for lobes flipped to face a view from below, the flipped response.
+/// reflects only), and narrow batches skip it: the batch still equals the scalar path, zero
+/// from the front, and, for lobes flipped to face a view from below, the flipped response.
 #[test]
 fn lights_below_every_lane() {
     fn at<const W: usize>() {

@@ -174,7 +174,7 @@ impl Material {
         out: &mut PreparedBatch<W>,
     ) {
         for k in 0..W {
-            self.prepare_lobes(&p.lane(k), scratch, &mut out.lanes[k]);
+            self.prepare_unpacked_into(&p.lane(k), scratch, &mut out.lanes[k]);
         }
         out.transpose();
     }
@@ -210,6 +210,9 @@ impl Material {
         }
     }
 }
+
+/// The widest batch whose eval skips kernel slots lit from below in every lane.
+const SKIP_BELOW_MAX_LANES: usize = 4;
 
 impl<const W: usize> PreparedBatch<W> {
     /// An empty batch (every lane without lobes), to be filled by
@@ -340,10 +343,13 @@ impl<const W: usize> PreparedBatch<W> {
                 loc = self.frames[frame].local(&world);
             }
             // Every kernel family reflects only: a lane adds exact zeros unless L lies above
-            // its (possibly flipped) surface. A slot whose lanes all see L from below is
-            // skipped (with one lane, the preview's unlit pixels); the sums are unchanged.
+            // its (possibly flipped) surface, so a slot whose lanes all see L from below is
+            // skipped; the sums are unchanged. Only narrow batches test it (with one lane, the
+            // preview's unlit pixels): across 16 lanes it almost never holds, and the test
+            // cost 16-lane evals 4 % more instructions.
+            let narrow = W <= SKIP_BELOW_MAX_LANES;
             let kernel = !matches!(slot.kernel, Kernel::Scalar);
-            if kernel && !(0..W).any(|k| slot.lw.sign[k] * loc.z[k] > 0.0) {
+            if narrow && kernel && !(0..W).any(|k| slot.lw.sign[k] * loc.z[k] > 0.0) {
                 continue;
             }
             if !slot.kernel.accumulate(&loc, &slot.lw, &mut acc) {

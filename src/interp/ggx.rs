@@ -178,13 +178,7 @@ impl ViewTerms {
 }
 
 impl GgxView {
-    /// The view-fixed constants of a (non-delta) distribution, given `Λ(V)`.
-    #[inline]
-    pub fn new(ggx: &Ggx, masking: Masking, lambda_v: f32) -> GgxView {
-        GgxView::constants(ggx).with_lambda(masking, lambda_v)
-    }
-
-    /// The view-independent part of [`GgxView::new`] (`c_z = c_s = 1` until
+    /// The view-independent constants of a (non-delta) distribution (`c_z = c_s = 1` until
     /// [`ViewTerms::from_constants`] sets them for a view).
     pub fn constants(ggx: &Ggx) -> GgxView {
         GgxView {

@@ -533,7 +533,7 @@ impl Material {
     /// As [`Material::prepare_with`], overwriting `out` (whatever it held): the cheapest
     /// form when many points are prepared in a row, since a [`Prepared`] is a few KB.
     pub fn prepare_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
-        self.prepare_lobes(p, s, out);
+        self.prepare_unpacked_into(p, s, out);
         if !self.options.pack_lobes {
             return;
         }
@@ -550,17 +550,12 @@ impl Material {
         }
     }
 
-    /// [`Material::prepare_into`] without planning `eval`'s lobe packs, whatever
-    /// [`PrepareOptions::pack_lobes`] says: every lobe is then evaluated alone. For callers
-    /// that evaluate once per prepare (the material preview), where filling the packs costs
-    /// more than it saves; the results are the same to relative 1e-5.
+    /// Steps 1–7 of §1.4 into `out`: [`Material::prepare_into`] without planning `eval`'s
+    /// lobe packs, whatever [`PrepareOptions::pack_lobes`] says, so every lobe is evaluated
+    /// alone. For callers that evaluate once per prepare (the material preview), where
+    /// filling the packs costs more than it saves, and for the batched path, which reads
+    /// the lobes and never a lane's own `eval`; the results are the same to relative 1e-5.
     pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
-        self.prepare_lobes(p, s, out);
-    }
-
-    /// Steps 1–7 of §1.4 into `out`, without planning `eval`'s lobe packs ([`packs`]): the
-    /// batched path reads the lobes, never a lane's own `eval`.
-    pub(super) fn prepare_lobes(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let v = p.v.normalize_or(Vec3::Z);
         out.reset(v);
         // Step 1: the program, with the point's inputs (fallbacks where missing). A program

@@ -63,10 +63,10 @@ pub(super) struct Grouping {
 }
 
 impl Grouping {
-    /// Every lobe alone.
-    fn none() -> Grouping {
+    /// No lobes (what [`Grouping::of_keys`] fills in).
+    fn empty() -> Grouping {
         Grouping {
-            solo: ALL_LOBES,
+            solo: [0; MAX_LOBES],
             solo_count: 0,
             packs: [[0; PACK_LANES]; MAX_PACKS],
             pack_len: [0; MAX_PACKS],
@@ -80,7 +80,7 @@ impl Grouping {
         // One pass sorts the lobes by key (no pairwise comparisons: this runs per prepare).
         let mut by_key = [[0u8; MAX_LOBES]; KERNEL_KEYS];
         let mut per_key = [0usize; KERNEL_KEYS];
-        let mut g = Grouping::none();
+        let mut g = Grouping::empty();
         let mut solo = 0;
         for (k, key) in keys.iter().enumerate().take(MAX_LOBES) {
             match key {
@@ -136,7 +136,7 @@ impl EvalPlan {
             frame: [0; PACK_LANES],
         };
         EvalPlan {
-            grouping: Grouping::none(),
+            grouping: Grouping::empty(),
             packs: [pack; MAX_PACKS],
             valid: false,
         }
