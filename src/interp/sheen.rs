@@ -299,6 +299,17 @@ impl SheenLTC {
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, fit: &SheenLTCBound) -> PreparedSheenLTC {
+        Self::prepare_bound_with_albedo(v, fit, fit.albedo(v.z.clamp(0.0, 1.0)))
+    }
+
+    /// [`SheenLTC::prepare_bound`] given its albedo `e_hat` (`fit.albedo(μ_o)`, clamped
+    /// `μ_o`), for callers that have already computed it.
+    #[inline(always)]
+    pub(super) fn prepare_bound_with_albedo(
+        v: Vec3,
+        fit: &SheenLTCBound,
+        e_hat: f32,
+    ) -> PreparedSheenLTC {
         let y = fit.y;
         let x = v.z.clamp(0.0, 1.0);
         let t = Vec3::new(v.x, v.y, 0.0);
@@ -310,7 +321,7 @@ impl SheenLTC {
             ax_y: Vec3::Z.cross(ax_x),
             a: a.max(1e-7),
             b,
-            e_hat: fit.albedo(x),
+            e_hat,
         }
     }
 }

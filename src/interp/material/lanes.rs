@@ -74,11 +74,8 @@ pub(super) enum LeafLanes {
     Ward { lobe: Ward, bound: WardBound },
     /// Conty–Kulla sheen with the MaterialX masking.
     SheenCK { bound: SheenCKBound },
-    /// LTC sheen.
-    SheenLTC {
-        lobe: SheenLTC,
-        bound: SheenLTCBound,
-    },
+    /// LTC sheen (its fits at the lobe's roughness).
+    SheenLTC { bound: SheenLTCBound },
 }
 
 /// The per-leaf data of a material that [`Material::prepare_lanes`] can prepare.
@@ -158,19 +155,24 @@ impl LeafLanes {
             (Lobe::SheenCK(s), Aux::SheenCK(bound)) if s.masking == SheenMasking::MaterialX => {
                 LeafLanes::SheenCK { bound: *bound }
             }
-            (Lobe::SheenLTC(s), Aux::SheenLTC(bound)) => LeafLanes::SheenLTC {
-                lobe: *s,
-                bound: *bound,
-            },
+            (Lobe::SheenLTC(_), Aux::SheenLTC(bound)) => LeafLanes::SheenLTC { bound: *bound },
             _ => return None,
         })
     }
 
     /// The leaf's albedo `E(μ_o)` per lane (reflection only: none of these families
-    /// transmits), as its scalar prepare computes it.
+    /// transmits), as its scalar prepare computes it. Families whose view terms reuse a
+    /// scalar of the albedo also leave it in `e_hat` for [`LeafLanes::fill`]: EON's `Ê(μ_o)`
+    /// (energy variants) and the LTC sheen's `Ê` (the albedo itself).
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     #[inline(always)]
-    fn albedo<const W: usize>(&self, mu: &[f32; W], at: &LaneCoords<W>, out: &mut Vec3x<W>) {
+    fn albedo<const W: usize>(
+        &self,
+        mu: &[f32; W],
+        at: &LaneCoords<W>,
+        out: &mut Vec3x<W>,
+        e_hat: &mut [f32; W],
+    ) {
         match self {
             LeafLanes::Lambert { rho, .. } => {
                 for k in 0..W {
@@ -181,9 +183,10 @@ impl LeafLanes {
                 let t = &bound.template;
                 // Each branch is decided once, outside the loop over lanes, so that the loop
                 // has none.
-                let energy = |e_hat: fn(f32, f32) -> f32, out: &mut Vec3x<W>| {
+                let mut energy = |e_of: fn(f32, f32) -> f32, out: &mut Vec3x<W>| {
                     for k in 0..W {
-                        let e_o = e_hat(mu[k], t.sigma);
+                        let e_o = e_of(mu[k], t.sigma);
+                        e_hat[k] = e_o;
                         out.set(k, lobe.rho * e_o + bound.rho_ms * (1.0 - e_o));
                     }
                 };
@@ -248,19 +251,28 @@ impl LeafLanes {
                     out.set(k, Vec3::splat(e[k]));
                 }
             }
-            LeafLanes::SheenLTC { bound, .. } => {
+            LeafLanes::SheenLTC { bound } => {
                 for k in 0..W {
-                    out.set(k, Vec3::splat(bound.albedo(mu[k].clamp(0.0, 1.0))));
+                    e_hat[k] = bound.albedo(mu[k].clamp(0.0, 1.0));
+                    out.set(k, Vec3::splat(e_hat[k]));
                 }
             }
         }
     }
 
     /// Writes the leaf's view terms at local views `v` into `kernel`, with the slot's lane
-    /// weights and probabilities `lw` folded in as `Kernel::rebuild` folds them.
+    /// weights and probabilities `lw` folded in as `Kernel::rebuild` folds them; `e_hat` is
+    /// what [`LeafLanes::albedo`] left there (computing it once saves an `acos` or an `exp`
+    /// per lane).
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     #[inline(always)]
-    fn fill<const W: usize>(&self, kernel: &mut Kernel<W>, v: &Vec3x<W>, lw: &LaneWeights<W>) {
+    fn fill<const W: usize>(
+        &self,
+        kernel: &mut Kernel<W>,
+        v: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+        e_hat: &[f32; W],
+    ) {
         match self {
             LeafLanes::Lambert { rho_pi, .. } => {
                 let x = kernel.lambert_mut();
@@ -276,21 +288,24 @@ impl LeafLanes {
                     lobe.variant,
                     OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast
                 ) && t.sigma >= EON_SIGMA_MIN;
-                // `ms` is the template's (0) unless EON's multiple scattering is on.
-                let fill = |e_hat: Option<fn(f32, f32) -> f32>, x: &mut OrenNayarX<W>| {
+                // `ms` is the template's (0) unless EON's multiple scattering is on; then
+                // `e_hat` holds `Ê(μ_o)` (the albedo's, by the same form).
+                // One loop per case, with no branch inside (it would stop the vectoriser).
+                let e = *e_hat;
+                let fill = |with_ms: bool, x: &mut OrenNayarX<W>| {
                     for k in 0..W {
                         let mut p = *t;
                         p.v = v.get(k);
-                        if let Some(e_hat) = e_hat {
-                            p.ms = bound.ms_scale * (1.0 - e_hat(v.z[k], t.sigma));
+                        if with_ms {
+                            p.ms = bound.ms_scale * (1.0 - e[k]);
                         }
                         x.set(k, &p, lw.w.get(k));
                     }
                 };
-                match (energy, t.fast) {
-                    (false, _) => fill(None, x),
-                    (true, true) => fill(Some(eon_e_hat_fast), x),
-                    (true, false) => fill(Some(eon_e_hat), x),
+                if energy {
+                    fill(true, x);
+                } else {
+                    fill(false, x);
                 }
             }
             LeafLanes::Conductor { lobe, ggx_view, .. } => {
@@ -346,10 +361,14 @@ impl LeafLanes {
                     x.norm[k] = bound.norm;
                 }
             }
-            LeafLanes::SheenLTC { lobe, bound } => {
+            LeafLanes::SheenLTC { bound } => {
                 let x = kernel.sheen_ltc_mut();
+                let e = *e_hat;
                 for k in 0..W {
-                    x.set(k, &lobe.prepare_bound(v.get(k), bound));
+                    x.set(
+                        k,
+                        &SheenLTC::prepare_bound_with_albedo(v.get(k), bound, e[k]),
+                    );
                 }
             }
         }
@@ -431,20 +450,22 @@ impl Material {
         // Working arrays: albedos per leaf, throughput slots, scope products, plan targets.
         let n_leaves = plan.leaves.len();
         let (n_thr, n_scopes) = (self.thr_ops.len(), w_plan.scopes.len() + 1);
-        let need = n_leaves + n_thr + n_scopes + w_plan.targets.len();
+        let need = 2 * n_leaves + n_thr + n_scopes + w_plan.targets.len();
         // Taken out of the batch for the duration (the steps below also write the batch).
         let mut work = std::mem::take(&mut out.work);
         if work.len() < need {
             work.resize(need, Vec3x::zero());
         }
         let (alb, rest) = work.split_at_mut(n_leaves);
+        // Per leaf, `x` holds the albedo's scalar that `fill` reuses (see `LeafLanes::albedo`).
+        let (e_hat, rest) = rest.split_at_mut(n_leaves);
         let (thr, rest) = rest.split_at_mut(n_thr);
         let (scope, acc) = rest.split_at_mut(n_scopes);
         // The leaves' albedos (every leaf: all are needed for the throughputs, the drop
         // and the selection).
         let at = LaneCoords::new(&v.z);
-        for (leaf, a) in plan.leaves.iter().zip(alb.iter_mut()) {
-            leaf.albedo(&v.z, &at, a);
+        for ((leaf, a), e) in plan.leaves.iter().zip(alb.iter_mut()).zip(e_hat.iter_mut()) {
+            leaf.albedo(&v.z, &at, a, &mut e.x);
         }
         // Step 3: throughputs, bottom-up (op `j` writes slot `j`).
         for j in 0..n_thr {
@@ -536,7 +557,7 @@ impl Material {
                 slot.lw.p[k] = select(on & lanes.ok[k], p, 0.0);
             }
             slot.lw.sign = [1.0; W];
-            leaf.fill(&mut slot.kernel, &v, &slot.lw);
+            leaf.fill(&mut slot.kernel, &v, &slot.lw, &e_hat[i].x);
             count += 1;
         }
         out.count = count;
