@@ -16,6 +16,7 @@
 
 use super::frame::Frame;
 use super::material::{Eval, Material, Prepared, Scratch, ShadingPoint};
+use super::math::Rgb;
 use super::simd::{Level, call_widest, widest_versions};
 use super::soa::{Acc, Kernel, LaneWeights, Vec3x};
 use crate::ir::MAX_LOBES;
@@ -322,10 +323,46 @@ impl<const W: usize> PreparedBatch<W> {
         call_widest!(level, self.eval_lanes(l), eval_avx512, eval_avx2)
     }
 
+    /// [`PreparedBatch::eval`]'s `f_cos` alone, for callers that need no density (the
+    /// batched material preview): the kernels leave their pdf arithmetic out, as
+    /// [`Prepared::eval_f_cos`] does.
+    pub fn eval_f_cos(&self, l: &[Vec3; W]) -> [Rgb; W] {
+        self.eval_f_cos_at(Level::Avx512, l)
+    }
+
+    /// [`PreparedBatch::eval_f_cos`] with the kernels compiled for at most `level`.
+    pub fn eval_f_cos_at(&self, level: Level, l: &[Vec3; W]) -> [Rgb; W] {
+        call_widest!(
+            level,
+            self.f_cos_lanes(l),
+            eval_f_cos_avx512,
+            eval_f_cos_avx2
+        )
+    }
+
     widest_versions!(eval_lanes(l: &[Vec3; W]) -> [Eval; W], eval_avx512, eval_avx2);
+
+    widest_versions!(f_cos_lanes(l: &[Vec3; W]) -> [Rgb; W], eval_f_cos_avx512, eval_f_cos_avx2);
 
     #[inline(always)]
     fn eval_lanes(&self, l: &[Vec3; W]) -> [Eval; W] {
+        let acc = self.accumulate::<true>(l);
+        std::array::from_fn(|k| Eval {
+            f_cos: acc.f.get(k),
+            pdf: acc.pdf[k],
+        })
+    }
+
+    #[inline(always)]
+    fn f_cos_lanes(&self, l: &[Vec3; W]) -> [Rgb; W] {
+        let acc = self.accumulate::<false>(l);
+        std::array::from_fn(|k| acc.f.get(k))
+    }
+
+    /// The slots' sums at world directions `l`; `acc.pdf` is the mixture density only
+    /// when `PDF` (else the kernels leave it out, and callers ignore it).
+    #[inline(always)]
+    fn accumulate<const PDF: bool>(&self, l: &[Vec3; W]) -> Acc<W> {
         let world = Vec3x::from_vecs(l);
         let mut acc = Acc {
             f: Vec3x::zero(),
@@ -352,14 +389,11 @@ impl<const W: usize> PreparedBatch<W> {
             if narrow && kernel && !(0..W).any(|k| slot.lw.sign[k] * loc.z[k] > 0.0) {
                 continue;
             }
-            if !slot.kernel.accumulate(&loc, &slot.lw, &mut acc) {
+            if !slot.kernel.accumulate::<PDF>(&loc, &slot.lw, &mut acc) {
                 self.scalar_slot(slot, &loc, &mut acc);
             }
         }
-        std::array::from_fn(|k| Eval {
-            f_cos: acc.f.get(k),
-            pdf: acc.pdf[k],
-        })
+        acc
     }
 
     /// A slot without a kernel: the scalar leaf lane by lane. Kept out of line so that the

@@ -1358,7 +1358,7 @@ impl Prepared {
             // One frame, no lobe flipped (the common case): one transform, no frame table,
             // no per-lobe flip.
             let l = self.frames[0].to_local(l);
-            let (mut f_cos, mut pdf) = self.plan.eval_one_frame(l);
+            let (mut f_cos, mut pdf) = self.plan.eval_one_frame::<PDF>(l);
             for &k in self.plan.solo(self.count) {
                 let lobe = &self.lobes[k as usize];
                 let e = lobe.lobe.eval_unflipped(l);
@@ -1373,7 +1373,7 @@ impl Prepared {
         for (loc, f) in local.iter_mut().zip(&self.frames[..self.frame_count]) {
             *loc = f.to_local(l);
         }
-        let (mut f_cos, mut pdf) = self.plan.eval_frames(&local);
+        let (mut f_cos, mut pdf) = self.plan.eval_frames::<PDF>(&local);
         for &k in self.plan.solo(self.count) {
             let lobe = &self.lobes[k as usize];
             let e = lobe.lobe.eval(local[lobe.frame as usize]);

@@ -369,8 +369,7 @@ fn shade_row_lanes<const W: usize>(
         let direct: [Rgb; W] = if opts.light == Vec3::ZERO {
             [Vec3::ZERO; W]
         } else {
-            let e = batch.eval(&[l; W]);
-            std::array::from_fn(|k| e[k].f_cos)
+            batch.eval_f_cos(&[l; W])
         };
         // All lanes in one loop (it vectorises), then the real ones to their pixels.
         let rgb: [Rgb; W] = std::array::from_fn(|k| {

@@ -606,16 +606,24 @@ impl<const W: usize> Kernel<W> {
     /// Adds the slot's weighted response at local directions `l` (before the per-lane flip)
     /// to `acc`. Returns false for [`Kernel::Scalar`] (the caller evaluates lane by lane).
     #[inline(always)]
-    pub(super) fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) -> bool {
+    ///
+    /// With `PDF` false the densities are neither computed nor added (`acc.pdf` is left as
+    /// it was): for callers that read only `f·μ_i`, such as the material preview.
+    pub(super) fn accumulate<const PDF: bool>(
+        &self,
+        l: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+        acc: &mut Acc<W>,
+    ) -> bool {
         match self {
             Kernel::Scalar => return false,
-            Kernel::Lambert { rho_pi } => lambert(rho_pi, l, lw, acc),
-            Kernel::OrenNayar(x) => x.accumulate(l, lw, acc),
-            Kernel::Conductor(x) => x.accumulate(l, lw, acc),
-            Kernel::DielectricR(x) => x.accumulate(l, lw, acc),
-            Kernel::Ward(x) => x.accumulate(l, lw, acc),
-            Kernel::SheenCK(x) => x.accumulate(l, lw, acc),
-            Kernel::SheenLTC(x) => x.accumulate(l, lw, acc),
+            Kernel::Lambert { rho_pi } => lambert::<W, PDF>(rho_pi, l, lw, acc),
+            Kernel::OrenNayar(x) => x.accumulate::<PDF>(l, lw, acc),
+            Kernel::Conductor(x) => x.accumulate::<PDF>(l, lw, acc),
+            Kernel::DielectricR(x) => x.accumulate::<PDF>(l, lw, acc),
+            Kernel::Ward(x) => x.accumulate::<PDF>(l, lw, acc),
+            Kernel::SheenCK(x) => x.accumulate::<PDF>(l, lw, acc),
+            Kernel::SheenLTC(x) => x.accumulate::<PDF>(l, lw, acc),
         }
         true
     }
@@ -662,26 +670,42 @@ fn pick(c: bool, a: f32, b: f32) -> f32 {
 
 /// `acc += w ⊙ f_rgb`, `pdf += p·pdf` for lane `k`.
 #[inline(always)]
-fn add_rgb<const W: usize>(acc: &mut Acc<W>, lw: &LaneWeights<W>, k: usize, f: [f32; 3], pdf: f32) {
+fn add_rgb<const W: usize, const PDF: bool>(
+    acc: &mut Acc<W>,
+    lw: &LaneWeights<W>,
+    k: usize,
+    f: [f32; 3],
+    pdf: f32,
+) {
     acc.f.x[k] += lw.w.x[k] * f[0];
     acc.f.y[k] += lw.w.y[k] * f[1];
     acc.f.z[k] += lw.w.z[k] * f[2];
-    acc.pdf[k] += lw.p[k] * pdf;
+    if PDF {
+        acc.pdf[k] += lw.p[k] * pdf;
+    }
 }
 
 /// `acc += f_rgb`, `pdf += pdf` for lane `k`, where `valid` holds (bit masks, no branch):
 /// for kernels whose constants already carry the slot's weight and probability.
 #[inline(always)]
-fn add_baked<const W: usize>(acc: &mut Acc<W>, k: usize, valid: bool, f: [f32; 3], pdf: f32) {
+fn add_baked<const W: usize, const PDF: bool>(
+    acc: &mut Acc<W>,
+    k: usize,
+    valid: bool,
+    f: [f32; 3],
+    pdf: f32,
+) {
     acc.f.x[k] += keep(valid, f[0]);
     acc.f.y[k] += keep(valid, f[1]);
     acc.f.z[k] += keep(valid, f[2]);
-    acc.pdf[k] += keep(valid, pdf);
+    if PDF {
+        acc.pdf[k] += keep(valid, pdf);
+    }
 }
 
 /// [`add_rgb`] of `f` and `pdf` where `valid` holds, nothing elsewhere (bit masks, no branch).
 #[inline(always)]
-fn add_valid<const W: usize>(
+fn add_valid<const W: usize, const PDF: bool>(
     acc: &mut Acc<W>,
     lw: &LaneWeights<W>,
     k: usize,
@@ -689,7 +713,7 @@ fn add_valid<const W: usize>(
     f: [f32; 3],
     pdf: f32,
 ) {
-    add_rgb(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
+    add_rgb::<W, PDF>(acc, lw, k, f.map(|c| keep(valid, c)), keep(valid, pdf));
 }
 
 /// 1 where `c` holds, else 0 (per-lane flags the kernels blend with).
@@ -705,29 +729,39 @@ fn lane_l<const W: usize>(l: &Vec3x<W>, lw: &LaneWeights<W>, k: usize) -> (f32, 
 
 #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
 #[inline(always)]
-fn lambert<const W: usize>(rho_pi: &Vec3x<W>, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+fn lambert<const W: usize, const PDF: bool>(
+    rho_pi: &Vec3x<W>,
+    l: &Vec3x<W>,
+    lw: &LaneWeights<W>,
+    acc: &mut Acc<W>,
+) {
     for k in 0..W {
         let (_, _, lz) = lane_l(l, lw, k);
         // `rho_pi` carries the weight (see `Kernel::rebuild`).
         let f = rho_pi.scaled(k, lz);
-        add_baked(acc, k, lz > 0.0, f, lw.p[k] * (lz * FRAC_1_PI));
+        add_baked::<W, PDF>(acc, k, lz > 0.0, f, lw.p[k] * (lz * FRAC_1_PI));
     }
 }
 
 impl<const W: usize> OrenNayarX<W> {
     #[inline(always)]
-    fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn accumulate<const PDF: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         // The `Ê` form is the same for every lane: one loop per form, no branch inside.
         if self.fast {
-            self.run::<true>(l, lw, acc)
+            self.run::<true, PDF>(l, lw, acc)
         } else {
-            self.run::<false>(l, lw, acc)
+            self.run::<false, PDF>(l, lw, acc)
         }
     }
 
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn run<const FAST: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn run<const FAST: bool, const PDF: bool>(
+        &self,
+        l: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+        acc: &mut Acc<W>,
+    ) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
             let (vx, vy, vz) = self.v.lane(k);
@@ -743,7 +777,7 @@ impl<const W: usize> OrenNayarX<W> {
             let ms = (1.0 - e_hat) * lz;
             let (single, multiple) = (self.rho_pi.scaled(k, ss), self.ms.scaled(k, ms));
             let f = [0, 1, 2].map(|c| single[c] + multiple[c]);
-            add_baked(acc, k, valid, f, lw.p[k] * (lz * FRAC_1_PI));
+            add_baked::<W, PDF>(acc, k, valid, f, lw.p[k] * (lz * FRAC_1_PI));
         }
     }
 }
@@ -846,7 +880,7 @@ impl<const W: usize> GgxX<W> {
 impl<const W: usize> ConductorX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn accumulate<const PDF: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         let [vh2, _, d, dg] = self.g.reflect_pass::<true>(l, lw);
         for k in 0..W {
             let lz = lw.sign[k] * l.z[k];
@@ -858,7 +892,7 @@ impl<const W: usize> ConductorX<W> {
             ];
             let scale = self.scale_q.scaled(k, dg);
             let f = [0, 1, 2].map(|c| fr[c] * scale[c]);
-            add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
+            add_baked::<W, PDF>(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
     }
 }
@@ -866,32 +900,37 @@ impl<const W: usize> ConductorX<W> {
 impl<const W: usize> DielectricX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn accumulate<const PDF: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         let [m, hh, d, dg] = self.g.reflect_pass::<false>(l, lw);
         for k in 0..W {
             let lz = lw.sign[k] * l.z[k];
             let (d, dg) = (d[k], dg[k]);
             let fr = dielectric_half(m[k], hh[k], self.e2m1[k]);
             let f = self.tint_q.scaled(k, fr * dg);
-            add_baked(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
+            add_baked::<W, PDF>(acc, k, lz > 0.0, f, d * self.pdf_c[k]);
         }
     }
 }
 
 impl<const W: usize> WardX<W> {
     #[inline(always)]
-    fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn accumulate<const PDF: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         // GM alone (ref10's three Ward lobes) needs no square root: one loop per case.
         if self.any_classic {
-            self.run::<true>(l, lw, acc)
+            self.run::<true, PDF>(l, lw, acc)
         } else {
-            self.run::<false>(l, lw, acc)
+            self.run::<false, PDF>(l, lw, acc)
         }
     }
 
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn run<const CLASSIC: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn run<const CLASSIC: bool, const PDF: bool>(
+        &self,
+        l: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+        acc: &mut Acc<W>,
+    ) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
             let (vx, vy, vz) = self.v.lane(k);
@@ -915,7 +954,7 @@ impl<const W: usize> WardX<W> {
             };
             let pdf = self.pdf_norm[k] * ex * hh2 * hh2 * r;
             let valid = (lz > 0.0) & (ex > 0.0);
-            add_baked(acc, k, valid, self.rho.scaled(k, f), pdf);
+            add_baked::<W, PDF>(acc, k, valid, self.rho.scaled(k, f), pdf);
         }
     }
 }
@@ -923,7 +962,7 @@ impl<const W: usize> WardX<W> {
 impl<const W: usize> SheenCKX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn accumulate<const PDF: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
             let (vx, vy, vz) = self.v.lane(k);
@@ -932,7 +971,7 @@ impl<const W: usize> SheenCKX<W> {
             let d = self.norm[k] * vmath::pow_pos(sin2, self.half_inv_r[k]);
             let (mi, mo) = (lz, vz);
             let f = d * mi / (4.0 * (mi + mo - mi * mo));
-            add_valid(acc, lw, k, lz > 0.0, [f; 3], 0.5 * FRAC_1_PI);
+            add_valid::<W, PDF>(acc, lw, k, lz > 0.0, [f; 3], 0.5 * FRAC_1_PI);
         }
     }
 }
@@ -940,7 +979,7 @@ impl<const W: usize> SheenCKX<W> {
 impl<const W: usize> SheenLTCX<W> {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn accumulate(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
+    fn accumulate<const PDF: bool>(&self, l: &Vec3x<W>, lw: &LaneWeights<W>, acc: &mut Acc<W>) {
         for k in 0..W {
             let (lx, ly, lz) = lane_l(l, lw, k);
             let wx = lx * self.ax_x.x[k] + ly * self.ax_x.y[k] + lz * self.ax_x.z[k];
@@ -949,7 +988,7 @@ impl<const W: usize> SheenLTCX<W> {
             let (px, py, pz) = (a * wx + b * lz, a * wy, lz);
             let kk = a / (px * px + py * py + pz * pz).max(1e-30);
             let d = lz.max(0.0) * FRAC_1_PI * kk * kk;
-            add_valid(acc, lw, k, lz > 0.0, [self.e_hat[k] * d; 3], d);
+            add_valid::<W, PDF>(acc, lw, k, lz > 0.0, [self.e_hat[k] * d; 3], d);
         }
     }
 }

@@ -180,21 +180,21 @@ impl EvalPlan {
     }
 
     /// The packs' weighted sum `Σ w f·μ_i` and `Σ p pdf` at local direction `l` (every
-    /// lobe in one frame).
+    /// lobe in one frame); the density is 0 unless `PDF`.
     #[inline(always)]
-    pub(super) fn eval_one_frame(&self, l: Vec3) -> (Vec3, f32) {
+    pub(super) fn eval_one_frame<const PDF: bool>(&self, l: Vec3) -> (Vec3, f32) {
         let l = Vec3x {
             x: [l.x; PACK_LANES],
             y: [l.y; PACK_LANES],
             z: [l.z; PACK_LANES],
         };
-        self.run(|_| l)
+        self.run::<PDF>(|_| l)
     }
 
     /// As [`EvalPlan::eval_one_frame`] with L given per frame (`local[f]`).
     #[inline(always)]
-    pub(super) fn eval_frames(&self, local: &[Vec3; MAX_LOBES]) -> (Vec3, f32) {
-        self.run(|p: &LobePack| {
+    pub(super) fn eval_frames<const PDF: bool>(&self, local: &[Vec3; MAX_LOBES]) -> (Vec3, f32) {
+        self.run::<PDF>(|p: &LobePack| {
             let mut l = Vec3x::zero();
             for (k, &f) in p.frame.iter().enumerate() {
                 l.set(k, local[f as usize]);
@@ -204,7 +204,7 @@ impl EvalPlan {
     }
 
     #[inline(always)]
-    fn run(&self, l: impl Fn(&LobePack) -> Vec3x<PACK_LANES>) -> (Vec3, f32) {
+    fn run<const PDF: bool>(&self, l: impl Fn(&LobePack) -> Vec3x<PACK_LANES>) -> (Vec3, f32) {
         let count = self.grouping.pack_count as usize;
         if !self.valid || count == 0 {
             return (Vec3::ZERO, 0.0);
@@ -215,7 +215,7 @@ impl EvalPlan {
         };
         for p in &self.packs[..count] {
             // Packs only hold kernels (`LobePack::fill`), never `Kernel::Scalar`.
-            p.kernel.accumulate(&l(p), &p.lw, &mut acc);
+            p.kernel.accumulate::<PDF>(&l(p), &p.lw, &mut acc);
         }
         let sum = |x: &[f32; PACK_LANES]| (x[0] + x[1]) + (x[2] + x[3]);
         (
