@@ -345,15 +345,14 @@ fn shade_row_lanes<const W: usize>(
     let mut pts = ShadingBatch::<W>::new([Vec3::Z; W], [Vec3::X; W], [Vec3::Z; W]);
     pts.inputs = [&opts.inputs[..]; W];
     let (_, y) = pixel_xy(0, j, size);
-    // The columns of this row's sphere pixels and their `x`, gathered a batch at a time; the
-    // lanes' geometry is then computed in one loop (no per-pixel `ShadingPoint`).
-    let mut cols = [0usize; W];
-    let mut xs = [0.0f32; W];
-    let mut filled = 0;
-    let mut flush = |pts: &mut ShadingBatch<W>, cols: &[usize; W], xs: &mut [f32; W], n: usize| {
-        // Pad a partial batch by repeating its last point (every lane must be a real point).
-        let last = xs[n - 1];
-        xs[n..].fill(last);
+    // The row's run of sphere columns, `W` consecutive columns a batch: the lanes' geometry
+    // is computed in one loop (no per-pixel `ShadingPoint`), and the results go to one
+    // contiguous stretch of the row.
+    let span = sphere_span(j, size);
+    for start in span.clone().step_by(W) {
+        let n = (span.end - start).min(W);
+        // A partial batch repeats its last point (every lane must be a real point).
+        let xs: [f32; W] = std::array::from_fn(|k| pixel_xy(start + k.min(n - 1), j, size).0);
         for (k, &x) in xs.iter().enumerate() {
             let (nk, tk) = sphere_frame(x, y);
             pts.n[k] = nk;
@@ -365,7 +364,7 @@ fn shade_row_lanes<const W: usize>(
                 *uv = sphere_uv(n);
             }
         }
-        material.prepare_batch_eval_into(pts, scratch, batch);
+        material.prepare_batch_eval_into(&pts, scratch, batch);
         let direct: [Rgb; W] = if opts.light == Vec3::ZERO {
             [Vec3::ZERO; W]
         } else {
@@ -376,22 +375,7 @@ fn shade_row_lanes<const W: usize>(
             let (a, e, t) = (batch.albedo(k), batch.emission(k), batch.transparency(k));
             radiance(opts, direct[k], a, e, t)
         });
-        for (&i, c) in cols[..n].iter().zip(rgb) {
-            out[i] = c;
-        }
-    };
-    for i in sphere_span(j, size) {
-        let (x, _) = pixel_xy(i, j, size);
-        cols[filled] = i;
-        xs[filled] = x;
-        filled += 1;
-        if filled == W {
-            flush(&mut pts, &cols, &mut xs, W);
-            filled = 0;
-        }
-    }
-    if filled > 0 {
-        flush(&mut pts, &cols, &mut xs, filled);
+        out[start..start + n].copy_from_slice(&rgb[..n]);
     }
 }
 

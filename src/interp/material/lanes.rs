@@ -628,10 +628,8 @@ impl Material {
                 }
             }
         }
-        let mut ok = [false; W];
-        for k in 0..W {
-            ok[k] = (sum[k] > 0.0) & sum[k].is_finite();
-        }
+        // Positive and finite (a NaN fails both tests).
+        let ok: [bool; W] = std::array::from_fn(|k| (sum[k] > 0.0) & (sum[k] < f32::INFINITY));
         // The division by the sum happens as the slots are filled (a pass over every
         // leaf here vectorised across leaves, with gathers).
         sel.sum = sum;
