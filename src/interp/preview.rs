@@ -139,7 +139,8 @@ fn sphere_frame(x: f32, y: f32) -> (Vec3, Vec3) {
     let n = Vec3::new(x, y, (1.0 - (x * x + y * y)).sqrt());
     // `normalize((0, 1, 0) × N)` written out: the cross product is `(N_z, 0, −N_x)`, and
     // its squared length sums the same terms in the same order, so the bits are those of
-    // `cross` and `normalize`, in straight-line arithmetic that vectorises across a batch.
+    // `cross` and `normalize` (but for the sign of `T_y`'s zero), in straight-line
+    // arithmetic that vectorises across a batch.
     let r = 1.0 / (n.z * n.z + n.x * n.x).sqrt();
     let t = Vec3::new(n.z * r, 0.0, -n.x * r);
     let t = if n.y.abs() > 0.999 { Vec3::X } else { t };
@@ -154,12 +155,10 @@ fn sphere_uv(n: Vec3) -> Vec2 {
     )
 }
 
-/// Pixel centre of column `i` / row `j` in an image of side `size`.
 /// The columns of row `j` whose pixel centres lie on the sphere: one run, since the test
 /// is `x² < 1 − y²` and `x` grows with the column. The run's ends are guessed from the
 /// circle's edge and settled with [`on_sphere`] itself, so it holds exactly the columns that
-/// test accepts, and the other columns cost nothing (testing each was a division per pixel,
-/// 3 % of a batched preview).
+/// test accepts, and the other columns cost nothing (testing each was a division per pixel).
 fn sphere_span(j: usize, size: usize) -> std::ops::Range<usize> {
     let (_, y) = pixel_xy(0, j, size);
     let on = |i: usize| on_sphere(pixel_xy(i, j, size).0, y);
@@ -189,6 +188,7 @@ fn sphere_span(j: usize, size: usize) -> std::ops::Range<usize> {
     lo..hi
 }
 
+/// Pixel centre of column `i` / row `j` in an image of side `size`.
 fn pixel_xy(i: usize, j: usize, size: usize) -> (f32, f32) {
     let s = size as f32;
     (
