@@ -10,7 +10,10 @@
 //!   apart, and this host's speed changes by about 1.5× between phases);
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
 //!   (V, L) pair (4096 pairs); the native prepare prepares the ten leaves with fixed weights
-//!   (no program, no throughput pass);
+//!   (no program, no throughput pass), their view-independent parts bound once as the
+//!   interpreter binds its constant leaves (before S13 it prepared them unbound, which
+//!   redid each conductor's F82 fit and the table lookups at every point and roughly
+//!   doubled its time);
 //! * `ref10/batch16_prepare_lanes`: the lane-parallel prepare of 16 points
 //!   (`Material::prepare_batch_eval_into`, what the batched preview runs), ns per point;
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;
@@ -35,14 +38,16 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use std::hint::black_box;
 use vstructc::interp::diffuse::{
-    Lambert, OrenNayar, OrenNayarVariant, PreparedLambert, PreparedOrenNayar,
+    Lambert, OrenNayar, OrenNayarBound, OrenNayarVariant, PreparedLambert, PreparedOrenNayar,
 };
-use vstructc::interp::microfacet::{PreparedDielectric, PreparedMicrofacetR};
+use vstructc::interp::microfacet::{
+    DielectricBound, MicrofacetBound, PreparedDielectric, PreparedMicrofacetR,
+};
 use vstructc::interp::preview::{PreviewOptions, render_ball};
 use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA, ref10_ir};
-use vstructc::interp::sheen::{PreparedSheenCK, PreparedSheenLTC};
+use vstructc::interp::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCKBound, SheenLTCBound};
 use vstructc::interp::verify::Rng;
-use vstructc::interp::ward::PreparedWard;
+use vstructc::interp::ward::{PreparedWard, WardBound};
 use vstructc::interp::*;
 
 const PAIRS: usize = 4096;
@@ -109,6 +114,36 @@ fn leaves() -> Leaves {
     }
 }
 
+/// The leaves with their view-independent parts computed once (`bind`: a conductor's F82
+/// fit, the albedo curves at each lobe's roughness and index, the roughness-only constants),
+/// as a hand-written shader with these constant parameters would precompute them, and as
+/// the interpreter does for constant leaves at compile time.
+struct BoundLeaves {
+    leaves: Leaves,
+    metal: MicrofacetBound,
+    ward: [WardBound; 3],
+    eon: OrenNayarBound,
+    sheen: SheenCKBound,
+    spec: DielectricBound,
+    coat: DielectricBound,
+    fuzz: SheenLTCBound,
+}
+
+impl BoundLeaves {
+    fn new(leaves: Leaves) -> BoundLeaves {
+        BoundLeaves {
+            metal: leaves.metal.bind(),
+            ward: leaves.ward.map(|w| w.bind()),
+            eon: leaves.eon.bind(),
+            sheen: leaves.sheen.bind(),
+            spec: leaves.spec.bind(),
+            coat: leaves.coat.bind(),
+            fuzz: leaves.fuzz.bind(),
+            leaves,
+        }
+    }
+}
+
 /// The hand-written form: concrete prepared leaves and fixed weights.
 struct Native {
     frame: Frame,
@@ -126,22 +161,23 @@ struct Native {
 
 impl Native {
     #[inline(always)]
-    fn prepare(l: &Leaves, frame: Frame, v: Vec3, w: [Vec3; 10], p: [f32; 10]) -> Native {
+    fn prepare(b: &BoundLeaves, frame: Frame, v: Vec3, w: [Vec3; 10], p: [f32; 10]) -> Native {
         let v = frame.to_local(v);
+        let l = &b.leaves;
         Native {
             frame,
-            metal: l.metal.prepare(v),
+            metal: l.metal.prepare_bound(v, &b.metal),
             ward: [
-                l.ward[0].prepare(v),
-                l.ward[1].prepare(v),
-                l.ward[2].prepare(v),
+                l.ward[0].prepare_bound(v, &b.ward[0]),
+                l.ward[1].prepare_bound(v, &b.ward[1]),
+                l.ward[2].prepare_bound(v, &b.ward[2]),
             ],
-            eon: l.eon.prepare(v),
+            eon: l.eon.prepare_bound(v, &b.eon),
             lambert: l.lambert.prepare(),
-            sheen: l.sheen.prepare(v),
-            spec: l.spec.prepare(v, false),
-            coat: l.coat.prepare(v, false),
-            fuzz: l.fuzz.prepare(v),
+            sheen: l.sheen.prepare_bound(v, &b.sheen),
+            spec: l.spec.prepare_bound(v, false, &b.spec),
+            coat: l.coat.prepare_bound(v, false, &b.coat),
+            fuzz: l.fuzz.prepare_bound(v, &b.fuzz),
             w,
             p,
         }
@@ -191,7 +227,7 @@ fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
 fn bench_ref10(c: &mut Criterion<CpuTime>) {
     tables::init_all();
     let m = Material::new(&ref10_ir()).expect("ref10 compiles");
-    let lv = leaves();
+    let lv = BoundLeaves::new(leaves());
     let pairs = pairs();
     let (f0, v0, _) = pairs[0];
     let point = |f: &Frame, v: Vec3| ShadingPoint::new(f.z, f.x, v);
@@ -342,6 +378,12 @@ fn bench_preview(c: &mut Criterion<CpuTime>) {
     let m = Material::new(&ref10_ir()).expect("ref10 compiles");
     let mut g = c.benchmark_group("preview512");
     g.sample_size(10);
+    // A render takes 15–130 ms: criterion's linear sampling (samples of 1×…10× a base count
+    // of iterations, estimated by a slope) makes the longest samples decide the estimate, and
+    // on a host that drifts between phases those are the ones most likely to straddle a
+    // change. Flat sampling (every sample the same count, the estimate their mean) is what
+    // criterion recommends for benchmarks this long.
+    g.sampling_mode(criterion::SamplingMode::Flat);
     let paths = [
         ("scalar", false, false),
         ("scalar_general", false, true),

@@ -541,6 +541,8 @@ impl Material {
         // Steps 5–7 per lane: the weighted albedos, the drop, the selection; then each leaf
         // that survives in some lane gets a slot.
         let lanes = self.select_lanes(&weights[..n_leaves], alb, out);
+        // Copied out of the selection, so that the loop over leaves keeps them in registers.
+        let (sum, ok) = (lanes.sum, lanes.ok);
         let mut count = 0;
         for (i, leaf) in plan.leaves.iter().enumerate() {
             let (live, prob) = (&lanes.live[i], &lanes.prob[i]);
@@ -553,8 +555,8 @@ impl Material {
             for k in 0..W {
                 let on = live[k];
                 slot.lw.w.set(k, select3(on, weights[i].get(k), Vec3::ZERO));
-                let p = prob[k] / lanes.sum[k];
-                slot.lw.p[k] = select(on & lanes.ok[k], p, 0.0);
+                let p = prob[k] / sum[k];
+                slot.lw.p[k] = select(on & ok[k], p, 0.0);
             }
             slot.lw.sign = [1.0; W];
             leaf.fill(&mut slot.kernel, &v, &slot.lw, &e_hat[i].x);
