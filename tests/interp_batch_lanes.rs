@@ -370,3 +370,65 @@ fn lights_below_every_lane() {
     at::<1>();
     at::<16>();
 }
+
+/// `Material::prepare_batch_f_cos_into` (the batched preview's prepare: no selection
+/// probabilities) gives the same `f·μ_i`, albedo, emission and transparency as
+/// `prepare_batch_eval_into`, bit for bit, with every materials' lanes prepared
+/// lane-parallel and with views below a lane's horizon (the general path, densities kept);
+/// `eval`'s pdf is NaN exactly where the probabilities were left out.
+#[test]
+fn prepare_without_densities_keeps_f_cos_and_albedo() {
+    fn at<const W: usize>() {
+        tables::init_all();
+        for (name, ir) in [
+            ("ref10", ref10_ir()),
+            ("assorted", assorted_ir()),
+            ("coated", coated_ir()),
+        ] {
+            let m = Material::new(&ir).expect("compiles");
+            let mut rng = Rng::new(43);
+            let mut scratch = Scratch::default();
+            let (mut full, mut lean) = (
+                PreparedBatch::<W>::new_boxed(),
+                PreparedBatch::<W>::new_boxed(),
+            );
+            for round in 0..20 {
+                // Every other round a view below the horizon in lane 0 (the general path).
+                let below: &[usize] = if round % 2 == 1 { &[0] } else { &[] };
+                let pts = batch::<W>(&mut rng, below);
+                m.prepare_batch_eval_into(&pts, &mut scratch, &mut full);
+                m.prepare_batch_f_cos_into(&pts, &mut scratch, &mut lean);
+                let label = format!("{name} W={W} round {round}");
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                for k in 0..W {
+                    assert_eq!(
+                        bits(lean.albedo(k)),
+                        bits(full.albedo(k)),
+                        "{label}: albedo"
+                    );
+                    assert_eq!(bits(lean.emission(k)), bits(full.emission(k)), "{label}");
+                    assert_eq!(
+                        bits(lean.transparency(k)),
+                        bits(full.transparency(k)),
+                        "{label}"
+                    );
+                }
+                for _ in 0..10 {
+                    let ls: [Vec3; W] = std::array::from_fn(|_| rng.sphere());
+                    let (want, got) = (full.eval(&ls), lean.eval_f_cos(&ls));
+                    let lean_pdf = lean.eval(&ls);
+                    for k in 0..W {
+                        assert_eq!(bits(got[k]), bits(want[k].f_cos), "{label} lane {k}");
+                        assert_eq!(
+                            lean_pdf[k].pdf.is_nan(),
+                            below.is_empty(),
+                            "{label} lane {k}: pdf NaN only after the lane-parallel path"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    at::<16>();
+    at::<1>();
+}

@@ -148,6 +148,9 @@ pub struct PreparedBatch<const W: usize> {
     /// `lanes` holds this batch's points ([`Material::prepare_batch_into`]), not only the
     /// kernels ([`Material::prepare_batch_eval_into`]).
     pub(super) lanes_valid: bool,
+    /// The slots carry the selection probabilities, so [`PreparedBatch::eval`] has its
+    /// densities (false after [`Material::prepare_batch_f_cos_into`]'s lane-parallel path).
+    pub(super) densities: bool,
     /// Per lane: `albedo().total()`, `emission()`, `transparency()` of the lane's
     /// preparation.
     pub(super) albedo: Vec3x<W>,
@@ -206,7 +209,22 @@ impl Material {
         scratch: &mut Scratch,
         out: &mut PreparedBatch<W>,
     ) {
-        if !self.prepare_lanes(level, p, out) {
+        if !self.prepare_lanes::<W, true>(level, p, out) {
+            self.prepare_batch_into(p, scratch, out);
+        }
+    }
+
+    /// [`Material::prepare_batch_eval_into`] for [`PreparedBatch::eval_f_cos`] and the
+    /// per-lane albedo, emission and transparency alone (the batched material preview): the
+    /// lane-parallel path leaves out step 7's selection probabilities, which only the
+    /// densities read. After that path [`PreparedBatch::eval`]'s pdf is NaN.
+    pub fn prepare_batch_f_cos_into<const W: usize>(
+        &self,
+        p: &ShadingBatch<W>,
+        scratch: &mut Scratch,
+        out: &mut PreparedBatch<W>,
+    ) {
+        if !self.prepare_lanes::<W, false>(Level::Avx512, p, out) {
             self.prepare_batch_into(p, scratch, out);
         }
     }
@@ -243,6 +261,7 @@ impl<const W: usize> PreparedBatch<W> {
             frame_count: 0,
             lanes,
             lanes_valid: true,
+            densities: true,
             albedo: Vec3x::zero(),
             emission: Vec3x::zero(),
             transparency: Vec3x::zero(),
@@ -302,6 +321,7 @@ impl<const W: usize> PreparedBatch<W> {
             self.transparency.set(k, lane.transparency());
         }
         self.lanes_valid = true;
+        self.densities = true;
         for slot in &mut self.slots[..count] {
             let lanes = &self.lanes;
             let lobe = |k: usize| &lanes[k].lobes[slot.index[k] as usize].lobe;
@@ -311,7 +331,8 @@ impl<const W: usize> PreparedBatch<W> {
     }
 
     /// `eval` per lane at world directions `l` (equal to the scalar [`Prepared::eval`] to
-    /// relative 1e-5). The kernels run in the widest vector extension the CPU has
+    /// relative 1e-5; the pdf is NaN after [`Material::prepare_batch_f_cos_into`], which
+    /// computes no selection probabilities). The kernels run in the widest vector extension the CPU has
     /// ([`super::simd`]); the results do not depend on which.
     pub fn eval(&self, l: &[Vec3; W]) -> [Eval; W] {
         self.eval_at(Level::Avx512, l)
@@ -349,7 +370,7 @@ impl<const W: usize> PreparedBatch<W> {
         let acc = self.accumulate::<true>(l);
         std::array::from_fn(|k| Eval {
             f_cos: acc.f.get(k),
-            pdf: acc.pdf[k],
+            pdf: if self.densities { acc.pdf[k] } else { f32::NAN },
         })
     }
 

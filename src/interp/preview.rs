@@ -364,7 +364,7 @@ fn shade_row_lanes<const W: usize>(
                 *uv = sphere_uv(n);
             }
         }
-        material.prepare_batch_eval_into(&pts, scratch, batch);
+        material.prepare_batch_f_cos_into(&pts, scratch, batch);
         let direct: [Rgb; W] = if opts.light == Vec3::ZERO {
             [Vec3::ZERO; W]
         } else {

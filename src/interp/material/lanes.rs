@@ -396,13 +396,20 @@ fn splat<const W: usize>(v: Vec3) -> Vec3x<W> {
     }
 }
 
+/// Whether the lane-parallel prepare computes step 7's selection probabilities (a type, so
+/// that the compiled versions of [`Material::prepare_lanes`] infer it from an argument).
+#[derive(Debug, Clone, Copy)]
+pub(in crate::interp) struct Densities<const ON: bool>;
+
 impl Material {
     /// Prepares batch `p` lane-parallel into `out` (see the module documentation), compiled
     /// for the widest vector extension up to `level` that the CPU has (as the batched
     /// kernels are, [`crate::interp::simd`]; every version computes the same bits). Returns
     /// false, leaving `out` to be overwritten by the general path, when this material has no
-    /// [`LanePlan`] or some lane's view is at or below the horizon.
-    pub(in crate::interp) fn prepare_lanes<const W: usize>(
+    /// [`LanePlan`] or some lane's view is at or below the horizon. Without `PDF` the slots
+    /// get no selection probabilities (their `lw.p` are 0 and `out.densities` is false):
+    /// for callers that read only `f·μ_i` and the albedos.
+    pub(in crate::interp) fn prepare_lanes<const W: usize, const PDF: bool>(
         &self,
         level: Level,
         p: &ShadingBatch<W>,
@@ -413,23 +420,28 @@ impl Material {
         }
         call_widest!(
             level,
-            self.prepare_lanes_body(p, out),
+            self.prepare_lanes_body(p, out, Densities::<PDF>),
             prepare_lanes_avx512,
             prepare_lanes_avx2
         )
     }
 
     widest_versions!(
-        [const W: usize] prepare_lanes_body(p: &ShadingBatch<W>, out: &mut PreparedBatch<W>) -> bool,
+        [const W: usize, const PDF: bool] prepare_lanes_body(
+            p: &ShadingBatch<W>,
+            out: &mut PreparedBatch<W>,
+            densities: Densities<PDF>
+        ) -> bool,
         prepare_lanes_avx512,
         prepare_lanes_avx2
     );
 
     #[inline(always)]
-    fn prepare_lanes_body<const W: usize>(
+    fn prepare_lanes_body<const W: usize, const PDF: bool>(
         &self,
         p: &ShadingBatch<W>,
         out: &mut PreparedBatch<W>,
+        _densities: Densities<PDF>,
     ) -> bool {
         let (Some(plan), Some(w_plan), Some(regs)) =
             (&self.lanes, &self.w_plan, self.const_regs.as_deref())
@@ -540,7 +552,7 @@ impl Material {
         }
         // Steps 5–7 per lane: the weighted albedos, the drop, the selection; then each leaf
         // that survives in some lane gets a slot.
-        let lanes = self.select_lanes(&weights[..n_leaves], alb, out);
+        let lanes = self.select_lanes::<W, PDF>(&weights[..n_leaves], alb, out);
         // Copied out of the selection, so that the loop over leaves keeps them in registers.
         let (sum, ok) = (lanes.sum, lanes.ok);
         let mut count = 0;
@@ -555,8 +567,11 @@ impl Material {
             for k in 0..W {
                 let on = live[k];
                 slot.lw.w.set(k, select3(on, weights[i].get(k), Vec3::ZERO));
-                let p = prob[k] / sum[k];
-                slot.lw.p[k] = select(on & ok[k], p, 0.0);
+                slot.lw.p[k] = if PDF {
+                    select(on & ok[k], prob[k] / sum[k], 0.0)
+                } else {
+                    0.0
+                };
             }
             slot.lw.sign = [1.0; W];
             leaf.fill(&mut slot.kernel, &v, &slot.lw, &e_hat[i].x);
@@ -565,6 +580,7 @@ impl Material {
         out.count = count;
         out.frame_count = 1;
         out.lanes_valid = false;
+        out.densities = PDF;
         out.work = work;
         true
     }
@@ -573,10 +589,11 @@ impl Material {
     /// the weighted albedo `A = w ⊙ E` of each leaf with a non-zero weight, the drop
     /// (`maxc(A) ≤ threshold`), the lanes' total albedo (into `out.albedo`), and the
     /// selection probabilities `lum(A_k)/Σ` (straight transmission taking part; by weight
-    /// when every albedo is 0; all 0 when nothing reflects).
+    /// when every albedo is 0; all 0 when nothing reflects). Without `PDF` only the lanes
+    /// that survive and the total albedo: the probabilities and sums stay 0.
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     #[inline(always)]
-    fn select_lanes<const W: usize>(
+    fn select_lanes<const W: usize, const PDF: bool>(
         &self,
         weights: &[Vec3x<W>],
         alb: &[Vec3x<W>],
@@ -602,11 +619,17 @@ impl Material {
                 let dropped = (threshold > 0.0) & (reflect.max_element() <= threshold);
                 let kept = ((w.x != 0.0) | (w.y != 0.0) | (w.z != 0.0)) & !dropped;
                 sel.live[i][k] = kept;
-                let x = select(kept, lum(reflect).max(0.0), 0.0);
-                sel.prob[i][k] = x;
-                sum[k] += x;
+                if PDF {
+                    let x = select(kept, lum(reflect).max(0.0), 0.0);
+                    sel.prob[i][k] = x;
+                    sum[k] += x;
+                }
                 total.set(k, total.get(k) + select3(kept, reflect, Vec3::ZERO));
             }
+        }
+        out.albedo = total;
+        if !PDF {
+            return sel;
         }
         let mut none = false;
         for k in 0..W {
@@ -636,7 +659,6 @@ impl Material {
         // leaf here vectorised across leaves, with gathers).
         sel.sum = sum;
         sel.ok = ok;
-        out.albedo = total;
         sel
     }
 }
