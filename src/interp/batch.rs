@@ -332,8 +332,8 @@ impl<const W: usize> PreparedBatch<W> {
 
     /// `eval` per lane at world directions `l` (equal to the scalar [`Prepared::eval`] to
     /// relative 1e-5; the pdf is NaN after [`Material::prepare_batch_f_cos_into`], which
-    /// computes no selection probabilities). The kernels run in the widest vector extension the CPU has
-    /// ([`super::simd`]); the results do not depend on which.
+    /// computes no selection probabilities). The kernels run in the widest vector extension
+    /// the CPU has ([`super::simd`]); the results do not depend on which.
     pub fn eval(&self, l: &[Vec3; W]) -> [Eval; W] {
         self.eval_at(Level::Avx512, l)
     }
@@ -443,7 +443,8 @@ impl<const W: usize> PreparedBatch<W> {
     }
 
     /// The scalar preparation of lane `k` (for `sample` and inspection); `None` when the
-    /// batch was prepared lane-parallel by [`Material::prepare_batch_eval_into`].
+    /// batch was prepared lane-parallel by [`Material::prepare_batch_eval_into`] or
+    /// [`Material::prepare_batch_f_cos_into`].
     pub fn lane(&self, k: usize) -> Option<&Prepared> {
         self.lanes_valid.then(|| &self.lanes[k])
     }

@@ -157,15 +157,9 @@ pub struct ViewTerms {
 }
 
 impl ViewTerms {
-    /// The terms of `ggx` with `masking` at `v` (local frame, `v.z > 0`).
-    #[inline(always)]
-    pub fn new(ggx: &Ggx, masking: Masking, v: Vec3) -> ViewTerms {
-        ViewTerms::from_constants(&GgxView::constants(ggx), masking, v)
-    }
-
-    /// [`ViewTerms::new`] from the distribution's [`GgxView::constants`], computed once per
-    /// lobe by its bind: the two divisions and three products that do not depend on the
-    /// view are not repeated per prepare (the same operations, so the same bits).
+    /// The terms with `masking` at `v` (local frame, `v.z > 0`), from the distribution's
+    /// [`GgxView::constants`], computed once per lobe by its bind: the two divisions and
+    /// three products that do not depend on the view are not repeated per prepare.
     #[inline(always)]
     pub fn from_constants(c: &GgxView, masking: Masking, v: Vec3) -> ViewTerms {
         let lambda_v = lambda_squared(c.ax2, c.ay2, v);

@@ -77,8 +77,8 @@ pub struct PreviewOptions {
     pub inputs: Vec<f32>,
     /// Use the batched interpreter ([`PREVIEW_LANES`] points at a time).
     pub batched: bool,
-    /// One point at a time, prepare every pixel with the general prepare (lobe records, as
-    /// [`Material::prepare_into`]) even when the material qualifies for the uniform-material
+    /// One point at a time, prepare every pixel with the general prepare (lobe records,
+    /// [`Material::prepare_unpacked_into`]) even when the material qualifies for the uniform-material
     /// prepare ([`Material::prepares_lanes`]), which the scalar path otherwise uses at
     /// one lane. For comparisons; the two agree to relative 1e-5.
     pub general_prepare: bool,
@@ -111,19 +111,15 @@ impl PreviewOptions {
     }
 }
 
-/// The geometry of one sphere pixel: normal, tangent, globals (`uv` only when `with_uv`:
-/// it costs an `atan2` and an `asin`, and a program that reads no global ignores it).
-fn sphere_point(x: f32, y: f32, with_uv: bool) -> Option<ShadingPoint<'static>> {
-    if !on_sphere(x, y) {
-        return None;
-    }
+/// The geometry of the sphere pixel at `(x, y)` (on the sphere: a column of
+/// [`sphere_span`]): normal, tangent, globals (`uv` only when `with_uv`: it costs an `atan2`
+/// and an `asin`, and a program that reads no global ignores it).
+fn sphere_point(x: f32, y: f32, with_uv: bool) -> ShadingPoint<'static> {
     let (n, t) = sphere_frame(x, y);
     let uv = if with_uv { sphere_uv(n) } else { Vec2::ZERO };
-    Some(
-        ShadingPoint::new(n, t, Vec3::Z)
-            .with_position(n)
-            .with_uv(uv),
-    )
+    ShadingPoint::new(n, t, Vec3::Z)
+        .with_position(n)
+        .with_uv(uv)
 }
 
 /// True when the pixel centre `(x, y)` lies on the sphere.
@@ -171,7 +167,7 @@ fn sphere_span(j: usize, size: usize) -> std::ops::Range<usize> {
     };
     let half = (1.0 - y * y).max(0.0).sqrt();
     let edge = ((1.1 - half) * size as f32 / 2.2).clamp(0.0, centre as f32) as usize;
-    let mut lo = edge.min(centre);
+    let mut lo = edge;
     while lo > 0 && on(lo - 1) {
         lo -= 1;
     }
@@ -279,12 +275,9 @@ fn shade_row_with(
     let l = opts.light_dir.normalize_or(Vec3::Z);
     let with_uv = !material.is_uniform();
     let span = sphere_span(j, size);
-    for (i, px) in out.iter_mut().enumerate().take(span.end).skip(span.start) {
+    for (i, px) in span.clone().zip(&mut out[span]) {
         let (x, y) = pixel_xy(i, j, size);
-        let Some(p) = sphere_point(x, y, with_uv) else {
-            continue;
-        };
-        let p = p.with_inputs(&opts.inputs);
+        let p = sphere_point(x, y, with_uv).with_inputs(&opts.inputs);
         // One eval follows each prepare: planning lobe packs would not pay for itself.
         material.prepare_unpacked_into(&p, scratch, prep);
         let direct = if opts.light == Vec3::ZERO {
