@@ -8,79 +8,17 @@
 
 #[path = "common/lanes.rs"]
 mod lanes;
+#[path = "common/uniform_materials.rs"]
+mod uniform_materials;
 use glam::Vec3;
 use lanes::assert_lanes_match;
-use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA, ref10_ir};
+use uniform_materials::{assorted_ir, coated_ir};
+use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
-use vstructc::ir::{IrBuilder, LeafKind, MaterialIr, RecipeId, TintMode, WardVariant};
+use vstructc::ir::{IrBuilder, LeafKind, RecipeId};
 
 const W: usize = 16;
-
-/// Every kernel family and tint mode, `mix` and `mul`, emission and transparency:
-/// `add(layer[Gray](sheenCK, mix(layer[Luminance](0.3 ward, QON),
-/// layer[MaxChannel](conductor, 0.8 lambert), 0.4)), add(emission, transparent))`.
-fn assorted_ir() -> MaterialIr {
-    let mut b = IrBuilder::new();
-    let sheen = reference::sheen_ck(&mut b, 0.45, "sheen");
-    let (ax, ay, rho) = (
-        b.prog.constf(0.2),
-        b.prog.constf(0.35),
-        b.prog.constant3(Vec3::new(0.9, 0.8, 0.6)),
-    );
-    let ward = b.simple_leaf(
-        LeafKind::Ward {
-            alpha_x: ax,
-            alpha_y: ay,
-            rho_s: rho,
-            variant: WardVariant::Classic,
-        },
-        "ward",
-    );
-    let ward = reference::mul(&mut b, ward, 0.3);
-    let (rho, sigma) = (
-        b.prog.constant3(Vec3::new(0.6, 0.5, 0.4)),
-        b.prog.constf(0.7),
-    );
-    let qon = b.simple_leaf(LeafKind::OrenNayarQ { albedo: rho, sigma }, "qon");
-    let left = b.layer(ward, qon, TintMode::Luminance);
-    let metal = reference::conductor(&mut b, [0.15, 0.4], GOLD_ETA, GOLD_KAPPA, "metal");
-    let lam = reference::lambert(&mut b, Vec3::new(0.2, 0.5, 0.7), "diffuse");
-    let lam = reference::mul(&mut b, lam, 0.8);
-    let right = b.layer(metal, lam, TintMode::MaxChannel);
-    let m = b.prog.constf(0.4);
-    let mixed = b.mix(left, right, m);
-    let surface = b.layer(sheen, mixed, TintMode::Gray);
-    let (e, t) = (
-        b.prog.constant3(Vec3::new(0.1, 0.2, 0.05)),
-        b.prog.constant3(Vec3::new(0.2, 0.2, 0.3)),
-    );
-    let (glow, seen_through) = (b.emission(e), b.transparent(t));
-    let extra = b.add(glow, seen_through);
-    let root = b.add(surface, extra);
-    b.finish("assorted", RecipeId::Custom, root)
-        .expect("valid IR")
-}
-
-/// A tinted coat over an LTC sheen and a rough EON: `layer[Rgb](dielectric, layer[Rgb](LTC,
-/// EON))`.
-fn coated_ir() -> MaterialIr {
-    let mut b = IrBuilder::new();
-    let (ax, ay, eta) = (b.prog.constf(0.1), b.prog.constf(0.3), b.prog.constf(1.8));
-    let tint = b.prog.constant3(Vec3::new(0.9, 0.7, 0.5));
-    let coat = reference::dielectric_r_of(&mut b, [ax, ay, eta], tint, "coat");
-    let r = b.prog.constf(0.2);
-    let fuzz = b.simple_leaf(LeafKind::SheenLtc { roughness: r }, "fuzz");
-    let (rho, sigma) = (
-        b.prog.constant3(Vec3::new(0.7, 0.3, 0.2)),
-        b.prog.constf(0.9),
-    );
-    let eon = b.simple_leaf(LeafKind::OrenNayarE { albedo: rho, sigma }, "eon");
-    let base = b.layer(fuzz, eon, TintMode::Rgb);
-    let root = b.layer(coat, base, TintMode::Rgb);
-    b.finish("coated", RecipeId::Custom, root)
-        .expect("valid IR")
-}
 
 /// `W` random points seen from above (`below`: lane indices seen from below instead).
 fn batch<const W: usize>(rng: &mut Rng, below: &[usize]) -> ShadingBatch<'static, W> {

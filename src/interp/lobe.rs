@@ -464,6 +464,48 @@ impl BoundLobe {
     pub(super) fn prepare_into(&self, v: Vec3, sides: Sides, out: &mut PreparedLobe) {
         self.lobe.prepare_aux_into(v, sides, &self.aux, out)
     }
+
+    /// [`BoundLobe::prepare_into`] for a view above the surface (`v.z > 0` and finite,
+    /// where no lobe flips or goes inactive, whatever the sides), returning the reflected
+    /// part of the lobe's albedo: the per-leaf step of the uniform-material prepare. The
+    /// horizon and flip tests, and the second dispatch of [`PreparedLobe::albedo`], are
+    /// left out; the record and the albedo are the same bits.
+    #[inline(always)]
+    pub(super) fn prepare_above_into(&self, v: Vec3, out: &mut PreparedLobe) -> Rgb {
+        debug_assert!(v.z > 0.0 && v.is_finite());
+        out.kind = self.lobe.kind();
+        out.flipped = false;
+        // As `prepare_aux_into`'s `put!`: the state is written over the record's own when
+        // it holds the same family; the albedo is read from the value before it is stored.
+        macro_rules! put {
+            ($variant:ident, $value:expr) => {{
+                let p = $value;
+                let albedo = p.albedo().reflect;
+                match &mut out.state {
+                    State::$variant(q) => *q = p,
+                    s => *s = State::$variant(p),
+                }
+                albedo
+            }};
+        }
+        match (&self.lobe, &self.aux) {
+            (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => put!(Lambert, l.prepare()),
+            (Lobe::OrenNayar(o), Aux::OrenNayar(b)) => put!(OrenNayar, o.prepare_bound(v, b)),
+            (Lobe::MicrofacetR(m), Aux::Microfacet(b)) => {
+                put!(MicrofacetR, m.prepare_bound(v, b))
+            }
+            (Lobe::Dielectric(d), Aux::Dielectric(b)) => {
+                put!(Dielectric, d.prepare_bound(v, false, b))
+            }
+            (Lobe::Ward(w), Aux::Ward(c)) => put!(Ward, w.prepare_bound(v, c)),
+            (Lobe::SheenCK(s), Aux::SheenCK(c)) => put!(SheenCK, s.prepare_bound(v, c)),
+            (Lobe::SheenLTC(s), Aux::SheenLTC(b)) => put!(SheenLTC, s.prepare_bound(v, b)),
+            _ => {
+                self.prepare_into(v, Sides::Front, out);
+                out.albedo().reflect
+            }
+        }
+    }
 }
 
 impl PreparedLobe {

@@ -63,6 +63,7 @@ use std::f32::consts::TAU;
 
 mod lanes;
 mod packs;
+mod uniform;
 
 /// The lobe index [`Sample::lobe`] reports for straight transmission through `Transparent`
 /// leaves.
@@ -282,6 +283,9 @@ pub struct Material {
     /// The lane-parallel prepare's per-leaf data, when the material qualifies
     /// ([`lanes::LanePlan`]).
     lanes: Option<lanes::LanePlan>,
+    /// The fused scalar prepare's constants, when the material qualifies
+    /// ([`uniform::UniformPlan`]).
+    uniform: Option<uniform::UniformPlan>,
     /// Which lobes `eval` packs together in a prepare where every leaf survives and is
     /// active; known at compile time when every leaf is a constant (`None` otherwise, and
     /// the grouping is made per prepare).
@@ -442,6 +446,7 @@ impl Material {
             w_plan,
             pack_grouping,
             lanes: None,
+            uniform: None,
             const_regs,
             ir: ir.clone(),
             nodes,
@@ -456,6 +461,7 @@ impl Material {
             options,
         };
         m.lanes = lanes::LanePlan::new(&m);
+        m.uniform = uniform::UniformPlan::new(&m);
         Ok(m)
     }
 
@@ -482,6 +488,15 @@ impl Material {
     /// below some lane's horizon still takes the general path.)
     pub fn prepares_lanes(&self) -> bool {
         self.lanes.is_some()
+    }
+
+    /// True when [`Material::prepare`] and its variants prepare a point seen from above its
+    /// surface by the fused form of the steps for uniform materials (every material that
+    /// [`Material::prepares_lanes`], unless its closure DAG needs more working slots than
+    /// the fused form keeps on the stack). The results are those of
+    /// [`Material::prepare_general_into`], bit for bit.
+    pub fn prepares_uniform(&self) -> bool {
+        self.uniform.is_some()
     }
 
     /// The options.
@@ -555,7 +570,25 @@ impl Material {
     /// alone. For callers that evaluate once per prepare (the material preview), where
     /// filling the packs costs more than it saves, and for the batched path, which reads
     /// the lobes and never a lane's own `eval`; the results are the same to relative 1e-5.
+    ///
+    /// A uniform material ([`Material::prepares_lanes`]) seen from above its surface is
+    /// prepared by a fused form of the steps, over fixed arrays with its constants folded
+    /// in; it computes the same bits as [`Material::prepare_general_into`].
     pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+        if let Some(plan) = &self.uniform {
+            let v = p.v.normalize_or(Vec3::Z);
+            out.reset(v);
+            if self.prepare_uniform_into(plan, p, v, out) {
+                return;
+            }
+        }
+        self.prepare_general_into(p, s, out);
+    }
+
+    /// [`Material::prepare_unpacked_into`] by the general algorithm, whatever the material:
+    /// the program, frames from registers, and the throughput and weight passes over
+    /// [`Scratch`]'s per-node arrays. For comparisons and tests; the results are the same.
+    pub fn prepare_general_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let v = p.v.normalize_or(Vec3::Z);
         out.reset(v);
         // Step 1: the program, with the point's inputs (fallbacks where missing). A program

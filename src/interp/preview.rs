@@ -19,8 +19,9 @@
 //! for a material the uniform-material prepare covers ([`Material::prepares_lanes`]) it
 //! prepares each pixel with it at one lane, which writes the leaves' view terms straight
 //! into their kernels instead of building lobe records (`sample` and `lobes` are not
-//! needed here); other materials, and AOVs, take the general prepare
-//! ([`Material::prepare_unpacked_into`]).
+//! needed here); other materials, and AOVs, take the prepare that builds lobe records
+//! ([`Material::prepare_unpacked_into`]; [`PreviewOptions::general_prepare`] forces its
+//! general form).
 
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
@@ -78,7 +79,7 @@ pub struct PreviewOptions {
     /// Use the batched interpreter ([`PREVIEW_LANES`] points at a time).
     pub batched: bool,
     /// One point at a time, prepare every pixel with the general prepare (lobe records,
-    /// [`Material::prepare_unpacked_into`]) even when the material qualifies for the uniform-material
+    /// [`Material::prepare_general_into`]) even when the material qualifies for the uniform-material
     /// prepare ([`Material::prepares_lanes`]), which the scalar path otherwise uses at
     /// one lane. For comparisons; the two agree to relative 1e-5.
     pub general_prepare: bool,
@@ -279,7 +280,11 @@ fn shade_row_with(
         let (x, y) = pixel_xy(i, j, size);
         let p = sphere_point(x, y, with_uv).with_inputs(&opts.inputs);
         // One eval follows each prepare: planning lobe packs would not pay for itself.
-        material.prepare_unpacked_into(&p, scratch, prep);
+        if opts.general_prepare {
+            material.prepare_general_into(&p, scratch, prep);
+        } else {
+            material.prepare_unpacked_into(&p, scratch, prep);
+        }
         let direct = if opts.light == Vec3::ZERO {
             Vec3::ZERO
         } else {

@@ -1,0 +1,227 @@
+//! The scalar prepare of a uniform material: §1.4's seven steps for one point, fused into
+//! one pass over fixed arrays.
+//!
+//! [`Material::prepare_general_into`] runs the steps for any material: the program, frames
+//! from registers, leaves prepared only when some layer or weight reads them, a throughput
+//! pass that looks its registers up, and the per-node arrays of a [`super::Scratch`]. For
+//! the materials the lane-parallel prepare covers ([`super::lanes::LanePlan`]: constant
+//! registers, a compiled weight plan, one frame, the point's own) most of that is decided
+//! at compile time, and what is left per point is short:
+//!
+//! 1. the point's frame and V in it (a view at or below the horizon, or not finite, goes to
+//!    the general path: lobes there may be inactive or flipped);
+//! 2. every leaf's record from its bound constant lobe, and its albedo;
+//! 3. the throughput steps with their registers folded to constants ([`UniformThr`]);
+//! 4. the weight plan's scopes and terms;
+//! 5. and 6. the weighted albedos and the drop, compacting the records;
+//! 7. the selection probabilities.
+//!
+//! Every formula is the general path's, in the same order, so the two agree bit for bit
+//! (`tests/interp_uniform.rs`).
+
+use super::{ActiveLobe, Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
+use crate::interp::frame::Frame;
+use crate::interp::math::lum;
+use crate::ir::algebra::leaf_throughput;
+use crate::ir::{MAX_LOBES, Reg, TintMode};
+use glam::Vec3;
+
+/// Throughput steps, scopes and weight targets a uniform plan may have: the per-point
+/// arrays are fixed, on the stack. A material with more takes the general path.
+const MAX_UNIFORM_SLOTS: usize = 32;
+
+/// One step of the throughput pass with its registers read at compile time (the
+/// [`ThrOp`] it comes from says what each computes).
+#[derive(Debug, Clone, Copy)]
+enum UniformThr {
+    /// A layerable leaf's throughput in `mode`, with its tints.
+    Leaf {
+        leaf: u8,
+        mode: TintMode,
+        tint: Vec3,
+        ttint: Vec3,
+    },
+    /// A constant: 0 for a leaf that is not layerable, 1 for emission and transparency.
+    Const(Vec3),
+    /// `T_top · T_base`.
+    Layer { top: u8, base: u8 },
+    /// `(1 − m) T_a + m T_b`, `m` saturated.
+    Mix { a: u8, b: u8, m: Vec3 },
+    /// `max(T_a + T_b − 1, 0)`.
+    Add { a: u8, b: u8 },
+    /// `sat(1 − c (1 − T_f))`, `c` clamped at 0.
+    Multiply { f: u8, c: Vec3 },
+}
+
+/// What [`Material::prepare_uniform_into`] needs beyond the material's weight plan: the
+/// throughput steps with constants folded in.
+#[derive(Debug, Clone)]
+pub(super) struct UniformPlan {
+    thr: Vec<UniformThr>,
+}
+
+impl UniformPlan {
+    /// The plan of `m`, or `None` when it needs the general path: no lane plan (see the
+    /// module documentation), a leaf without a bound constant lobe, or more steps, scopes or
+    /// targets than [`MAX_UNIFORM_SLOTS`].
+    pub(super) fn new(m: &Material) -> Option<UniformPlan> {
+        m.lanes.as_ref()?;
+        let regs = m.const_regs.as_deref()?;
+        let w_plan = m.w_plan.as_ref()?;
+        if m.leaves.iter().any(|info| info.const_lobe.is_none())
+            || m.thr_ops.len() > MAX_UNIFORM_SLOTS
+            || w_plan.scopes.len() + 1 > MAX_UNIFORM_SLOTS
+            || w_plan.targets.len() > MAX_UNIFORM_SLOTS
+        {
+            return None;
+        }
+        let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
+        let thr = m
+            .thr_ops
+            .iter()
+            .map(|op| match *op {
+                ThrOp::Leaf { leaf, mode } => {
+                    let info = &m.leaves[leaf as usize];
+                    if info.layerable {
+                        UniformThr::Leaf {
+                            leaf,
+                            mode,
+                            tint: reg(info.leaf.tint),
+                            ttint: reg(info.leaf.ttint),
+                        }
+                    } else {
+                        UniformThr::Const(Vec3::ZERO)
+                    }
+                }
+                ThrOp::One => UniformThr::Const(Vec3::ONE),
+                ThrOp::Layer { top, base } => UniformThr::Layer {
+                    top: top as u8,
+                    base: base as u8,
+                },
+                ThrOp::Mix { a, b, m } => UniformThr::Mix {
+                    a: a as u8,
+                    b: b as u8,
+                    m: sat(reg(m)),
+                },
+                ThrOp::Add { a, b } => UniformThr::Add {
+                    a: a as u8,
+                    b: b as u8,
+                },
+                ThrOp::Multiply { f, c } => UniformThr::Multiply {
+                    f: f as u8,
+                    c: reg(c).max(Vec3::ZERO),
+                },
+            })
+            .collect();
+        Some(UniformPlan { thr })
+    }
+}
+
+impl Material {
+    /// Steps 1–7 of §1.4 for a material with a [`UniformPlan`], into `out` (already reset
+    /// to view `v`). Returns false, having written only `out`'s frame, when the view is at
+    /// or below the horizon of the point's frame or not finite: the general path then
+    /// prepares the point.
+    pub(super) fn prepare_uniform_into(
+        &self,
+        plan: &UniformPlan,
+        p: &ShadingPoint,
+        v: Vec3,
+        out: &mut Prepared,
+    ) -> bool {
+        let (Some(w_plan), Some(_)) = (&self.w_plan, &self.const_regs) else {
+            return false;
+        };
+        // Step 2: the point's frame (the general path's `build_frames` for a frame without
+        // registers) and V in it.
+        let frame = Frame::new(p.n, p.t);
+        out.frames[0] = frame;
+        out.frame_count = 1;
+        let v_local = frame.to_local(v);
+        if !(v_local.z > 0.0 && v_local.is_finite()) {
+            return false;
+        }
+        // Every leaf's record and albedo (all leaves are constants, so each is bound).
+        let n = self.leaves.len();
+        let mut albedos = [Vec3::ZERO; MAX_LOBES];
+        for ((info, a), alb) in self.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
+            let Some(lobe) = &info.const_lobe else {
+                return false;
+            };
+            // Every family of the plan reflects only (its transmitted parts are 0).
+            *alb = lobe.prepare_above_into(v_local, &mut a.lobe);
+        }
+        // Step 3: throughputs, bottom-up (step `j` writes slot `j`).
+        let mut thr = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
+        for (j, op) in plan.thr.iter().enumerate() {
+            thr[j] = match *op {
+                UniformThr::Leaf {
+                    leaf,
+                    mode,
+                    tint,
+                    ttint,
+                } => leaf_throughput(mode, tint, ttint, albedos[leaf as usize]),
+                UniformThr::Const(c) => c,
+                UniformThr::Layer { top, base } => thr[top as usize] * thr[base as usize],
+                UniformThr::Mix { a, b, m } => {
+                    (Vec3::ONE - m) * thr[a as usize] + m * thr[b as usize]
+                }
+                UniformThr::Add { a, b } => {
+                    (thr[a as usize] + thr[b as usize] - Vec3::ONE).max(Vec3::ZERO)
+                }
+                UniformThr::Multiply { f, c } => sat(Vec3::ONE - c * (Vec3::ONE - thr[f as usize])),
+            };
+        }
+        // Step 4: the weight plan (scope products, then each target's sum of its terms).
+        let mut scope = [Vec3::ONE; MAX_UNIFORM_SLOTS];
+        for (i, &(parent, slot)) in w_plan.scopes.iter().enumerate() {
+            scope[i + 1] = scope[parent as usize] * thr[slot as usize];
+        }
+        let mut acc = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
+        for t in &w_plan.terms {
+            acc[t.target as usize] += t.c * scope[t.scope as usize];
+        }
+        let mut weights = [Vec3::ZERO; MAX_LOBES];
+        for (target, &a) in w_plan.targets.iter().zip(&acc) {
+            match *target {
+                Target::Leaf { leaf, tint } => weights[leaf as usize] = clean(tint * a),
+                Target::Emission(e) => out.emission += clean(a * e),
+                Target::Transparent(t) => out.transparency += clean(a * t),
+            }
+        }
+        // Steps 5 and 6: weighted albedos and the drop, compacting the records in place.
+        let threshold = self.options.drop_threshold;
+        let mut lums = [0.0f32; MAX_LOBES];
+        let mut count = 0;
+        for k in 0..n {
+            let w = weights[k];
+            if w == Vec3::ZERO {
+                continue;
+            }
+            let reflect = w * albedos[k];
+            if threshold > 0.0 && reflect.max_element() <= threshold {
+                continue;
+            }
+            if count != k {
+                out.lobes[count].lobe = out.lobes[k].lobe;
+            }
+            let a: &mut ActiveLobe = &mut out.lobes[count];
+            a.weight = w;
+            a.albedo = Albedo {
+                reflect,
+                transmit: Vec3::ZERO,
+                transmit_radiance: Vec3::ZERO,
+            };
+            a.frame = 0;
+            a.leaf = k as u8;
+            lums[count] = lum(reflect).max(0.0);
+            count += 1;
+        }
+        out.count = count;
+        // A lobe flips only for a view below its surface (`v_local.z > 0` here).
+        out.flipped_any = false;
+        // Step 7: selection probabilities.
+        out.select(&lums);
+        true
+    }
+}

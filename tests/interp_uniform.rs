@@ -1,0 +1,188 @@
+//! The fused scalar prepare of uniform materials (what `Material::prepare` runs for a
+//! material with constant registers and the point's own frame, seen from above) computes
+//! the general algorithm's bits (`Material::prepare_general_into`): the same surviving
+//! lobes with the same records, weights, albedos and selection probabilities, the same
+//! emission and transparency, hence the same `eval` and `sample`. Covered over materials
+//! that use every batched family, every tint mode, `mix`, `mul`, emission and
+//! transparency; with lobes dropped, with two-sided lobes, and with views below the
+//! horizon, where the fused form hands the point to the general path.
+
+#[path = "common/uniform_materials.rs"]
+mod uniform_materials;
+use glam::Vec3;
+use uniform_materials::{assorted_ir, coated_ir, stacked_ir};
+use vstructc::interp::reference::ref10_ir;
+use vstructc::interp::verify::Rng;
+use vstructc::interp::*;
+use vstructc::ir::{IrBuilder, LeafKind, MaterialIr, RecipeId};
+
+fn cases() -> [(&'static str, MaterialIr); 4] {
+    [
+        ("ref10", ref10_ir()),
+        ("assorted", assorted_ir()),
+        ("coated", coated_ir()),
+        ("stacked", stacked_ir()),
+    ]
+}
+
+/// Every option set the fused form must honour: the default, no dropping, a threshold high
+/// enough to drop lobes, two-sided lobes, and no lobe packs.
+fn option_sets() -> [PrepareOptions; 5] {
+    let d = PrepareOptions::default();
+    [
+        d,
+        PrepareOptions {
+            drop_threshold: 0.0,
+            ..d
+        },
+        PrepareOptions {
+            drop_threshold: 0.05,
+            ..d
+        },
+        PrepareOptions {
+            sides: Sides::Both,
+            ..d
+        },
+        PrepareOptions {
+            pack_lobes: false,
+            ..d
+        },
+    ]
+}
+
+/// A random point; every third is seen from below, every fifth at a grazing angle.
+fn point(rng: &mut Rng, i: usize) -> ShadingPoint<'static> {
+    let f = Frame::new(rng.sphere(), rng.sphere());
+    let mut v = rng.sphere();
+    if (v.dot(f.z) < 0.0) != (i % 3 == 0) {
+        v = -v;
+    }
+    if i % 5 == 0 {
+        // Nearly in the tangent plane, on the side chosen above.
+        let side = v.dot(f.z).signum();
+        v = (f.x + f.z * (side * 1e-3)).normalize();
+    }
+    ShadingPoint::new(f.z, f.x, v)
+}
+
+/// Asserts two preparations hold the same bits (`{:?}` prints every float exactly, and
+/// `-0.0` apart from `0.0`).
+fn assert_same(fused: &Prepared, general: &Prepared, rng: &mut Rng, label: &str) {
+    assert_eq!(
+        format!("{:?}", fused.lobes()),
+        format!("{:?}", general.lobes()),
+        "{label}: lobes"
+    );
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    assert_eq!(bits(fused.emission()), bits(general.emission()), "{label}");
+    assert_eq!(
+        bits(fused.transparency()),
+        bits(general.transparency()),
+        "{label}"
+    );
+    assert_eq!(
+        format!("{:?}", fused.albedo()),
+        format!("{:?}", general.albedo()),
+        "{label}: albedo"
+    );
+    assert_eq!(
+        fused.view().to_array(),
+        general.view().to_array(),
+        "{label}"
+    );
+    for _ in 0..8 {
+        let l = rng.sphere();
+        let (a, b) = (fused.eval(l), general.eval(l));
+        assert_eq!(bits(a.f_cos), bits(b.f_cos), "{label}: eval at {l}");
+        assert_eq!(a.pdf.to_bits(), b.pdf.to_bits(), "{label}: pdf at {l}");
+        let u = [rng.f32(), rng.f32(), rng.f32()];
+        assert_eq!(
+            format!("{:?}", fused.sample(u)),
+            format!("{:?}", general.sample(u)),
+            "{label}: sample at {u:?}"
+        );
+    }
+}
+
+#[test]
+fn fused_prepare_equals_general_bit_for_bit() {
+    tables::init_all();
+    for (name, ir) in cases() {
+        for (o, options) in option_sets().into_iter().enumerate() {
+            let m = Material::with_options(&ir, options).expect("compiles");
+            assert!(
+                m.prepares_uniform(),
+                "{name} qualifies for the fused prepare"
+            );
+            let mut rng = Rng::new(97);
+            let mut scratch = Scratch::default();
+            let (mut fused, mut general) = (Prepared::new(), Prepared::new());
+            let mut dropped = 0;
+            for i in 0..300 {
+                let p = point(&mut rng, i);
+                m.prepare_unpacked_into(&p, &mut scratch, &mut fused);
+                m.prepare_general_into(&p, &mut scratch, &mut general);
+                dropped += m.leaves().len() - fused.lobes().len();
+                assert_same(
+                    &fused,
+                    &general,
+                    &mut rng,
+                    &format!("{name} options {o} point {i}"),
+                );
+                // `prepare_into` is the same preparation with `eval`'s lobe packs planned from
+                // the records (their sums agree to rounding, tests/interp_packs.rs).
+                m.prepare_into(&p, &mut scratch, &mut fused);
+                assert_eq!(
+                    format!("{:?}", fused.lobes()),
+                    format!("{:?}", general.lobes()),
+                    "{name} options {o} point {i}: packed"
+                );
+            }
+            if options.drop_threshold >= 0.05 {
+                assert!(dropped > 0, "{name}: the high threshold drops some lobes");
+            }
+        }
+    }
+}
+
+/// A record left by another material's prepare (other families at every index) is
+/// overwritten completely: preparing into a used `Prepared` equals preparing into a new one.
+#[test]
+fn fused_prepare_overwrites_a_used_record() {
+    tables::init_all();
+    let ms: Vec<Material> = cases()
+        .iter()
+        .map(|(_, ir)| Material::new(ir).expect("compiles"))
+        .collect();
+    let mut rng = Rng::new(5);
+    let mut scratch = Scratch::default();
+    let mut used = Prepared::new();
+    for i in 0..200 {
+        let p = point(&mut rng, i);
+        for m in &ms {
+            m.prepare_into(&p, &mut scratch, &mut used);
+            let fresh = m.prepare(&p);
+            assert_same(&used, &fresh, &mut rng, &format!("{} point {i}", m.name()));
+        }
+    }
+}
+
+/// A material whose parameters come from an input is not uniform: the general path
+/// prepares it.
+#[test]
+fn materials_with_inputs_are_not_fused() {
+    let mut b = IrBuilder::new();
+    let col = vstructc::types::Type::scalar(vstructc::types::BaseType::Color);
+    let rho = b.input_slot(
+        "rho",
+        col,
+        vstructc::types::Value::Triple(vstructc::types::BaseType::Color, [0.5; 3]),
+    );
+    let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
+    let m = Material::new(
+        &b.finish("textured", RecipeId::Custom, lam)
+            .expect("valid IR"),
+    )
+    .expect("compiles");
+    assert!(!m.is_uniform() && !m.prepares_uniform());
+}
