@@ -1341,10 +1341,12 @@ impl Prepared {
             }
             return;
         }
+        // One division: the probabilities are the shares times its reciprocal.
+        let inv = 1.0 / sum;
         for (l, x) in self.lobes[..n].iter_mut().zip(a) {
-            l.prob = x / sum;
+            l.prob = x * inv;
         }
-        self.p_transparency = if by_weight { 0.0 } else { tau / sum };
+        self.p_transparency = if by_weight { 0.0 } else { tau * inv };
     }
 
     /// The lobes that survived step 6, with weights, albedos and probabilities.

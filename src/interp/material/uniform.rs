@@ -12,8 +12,9 @@
 //!    the general path: lobes there may be inactive or flipped);
 //! 2. every leaf's record from its bound constant lobe, and its albedo;
 //! 3. the throughput steps with their registers folded to constants ([`UniformThr`]);
-//! 4. the weight plan's scopes and terms;
-//! 5. and 6. the weighted albedos and the drop, compacting the records;
+//! 4. the weight plan's scopes and terms, and each target's sum;
+//! 5. and 6. in the same pass over the targets, each leaf's weighted albedo and the drop,
+//!    compacting the records;
 //! 7. the selection probabilities.
 //!
 //! Every formula is the general path's, in the same order, so the two agree bit for bit
@@ -28,7 +29,7 @@ use glam::Vec3;
 
 /// Throughput steps, scopes and weight targets a uniform plan may have: the per-point
 /// arrays are fixed, on the stack. A material with more takes the general path.
-const MAX_UNIFORM_SLOTS: usize = 32;
+const MAX_UNIFORM_SLOTS: usize = 16;
 
 /// One step of the throughput pass with its registers read at compile time (the
 /// [`ThrOp`] it comes from says what each computes).
@@ -62,8 +63,8 @@ pub(super) struct UniformPlan {
 
 impl UniformPlan {
     /// The plan of `m`, or `None` when it needs the general path: no lane plan (see the
-    /// module documentation), a leaf without a bound constant lobe, or more steps, scopes or
-    /// targets than [`MAX_UNIFORM_SLOTS`].
+    /// module documentation), a leaf without a bound constant lobe, more steps, scopes or
+    /// targets than [`MAX_UNIFORM_SLOTS`], or leaf targets out of leaf order.
     pub(super) fn new(m: &Material) -> Option<UniformPlan> {
         m.lanes.as_ref()?;
         let regs = m.const_regs.as_deref()?;
@@ -73,6 +74,15 @@ impl UniformPlan {
             || w_plan.scopes.len() + 1 > MAX_UNIFORM_SLOTS
             || w_plan.targets.len() > MAX_UNIFORM_SLOTS
         {
+            return None;
+        }
+        // The fused pass compacts records as it meets leaf targets, so they must come in
+        // leaf order (they do: both follow the nodes; checked rather than assumed).
+        let leaf_targets = w_plan.targets.iter().filter_map(|t| match t {
+            Target::Leaf { leaf, .. } => Some(*leaf),
+            _ => None,
+        });
+        if !leaf_targets.eq(0..m.leaves.len() as u8) {
             return None;
         }
         let reg = |r: Reg| regs.get(r.index()).copied().unwrap_or(Vec3::ZERO);
@@ -142,7 +152,6 @@ impl Material {
             return false;
         }
         // Every leaf's record and albedo (all leaves are constants, so each is bound).
-        let n = self.leaves.len();
         let mut albedos = [Vec3::ZERO; MAX_LOBES];
         for ((info, a), alb) in self.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
             let Some(lobe) = &info.const_lobe else {
@@ -181,20 +190,24 @@ impl Material {
         for t in &w_plan.terms {
             acc[t.target as usize] += t.c * scope[t.scope as usize];
         }
-        let mut weights = [Vec3::ZERO; MAX_LOBES];
-        for (target, &a) in w_plan.targets.iter().zip(&acc) {
-            match *target {
-                Target::Leaf { leaf, tint } => weights[leaf as usize] = clean(tint * a),
-                Target::Emission(e) => out.emission += clean(a * e),
-                Target::Transparent(t) => out.transparency += clean(a * t),
-            }
-        }
-        // Steps 5 and 6: weighted albedos and the drop, compacting the records in place.
+        // Each target's weight, and for a leaf steps 5 and 6 at once: its weighted albedo
+        // and the drop, compacting the records in place. Leaf targets come in leaf order
+        // (both follow the nodes), so a record only ever moves down.
         let threshold = self.options.drop_threshold;
         let mut lums = [0.0f32; MAX_LOBES];
         let mut count = 0;
-        for k in 0..n {
-            let w = weights[k];
+        for (target, &a) in w_plan.targets.iter().zip(&acc) {
+            let (k, w) = match *target {
+                Target::Leaf { leaf, tint } => (leaf as usize, clean(tint * a)),
+                Target::Emission(e) => {
+                    out.emission += clean(a * e);
+                    continue;
+                }
+                Target::Transparent(t) => {
+                    out.transparency += clean(a * t);
+                    continue;
+                }
+            };
             if w == Vec3::ZERO {
                 continue;
             }
