@@ -22,6 +22,7 @@
 
 use super::{ActiveLobe, Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
 use crate::interp::frame::Frame;
+use crate::interp::lobe::BoundLobe;
 use crate::interp::math::lum;
 use crate::ir::algebra::leaf_throughput;
 use crate::ir::{MAX_LOBES, Reg, TintMode};
@@ -58,6 +59,9 @@ enum UniformThr {
 /// throughput steps with constants folded in.
 #[derive(Debug, Clone)]
 pub(super) struct UniformPlan {
+    /// Every leaf's bound constant lobe, in leaf order (side by side, not inside the
+    /// larger [`super::LeafInfo`]s).
+    leaves: Vec<BoundLobe>,
     thr: Vec<UniformThr>,
 }
 
@@ -69,8 +73,12 @@ impl UniformPlan {
         m.lanes.as_ref()?;
         let regs = m.const_regs.as_deref()?;
         let w_plan = m.w_plan.as_ref()?;
-        if m.leaves.iter().any(|info| info.const_lobe.is_none())
-            || m.thr_ops.len() > MAX_UNIFORM_SLOTS
+        let leaves = m
+            .leaves
+            .iter()
+            .map(|info| info.const_lobe)
+            .collect::<Option<Vec<_>>>()?;
+        if m.thr_ops.len() > MAX_UNIFORM_SLOTS
             || w_plan.scopes.len() + 1 > MAX_UNIFORM_SLOTS
             || w_plan.targets.len() > MAX_UNIFORM_SLOTS
         {
@@ -123,7 +131,7 @@ impl UniformPlan {
                 },
             })
             .collect();
-        Some(UniformPlan { thr })
+        Some(UniformPlan { leaves, thr })
     }
 }
 
@@ -153,10 +161,7 @@ impl Material {
         }
         // Every leaf's record and albedo (all leaves are constants, so each is bound).
         let mut albedos = [Vec3::ZERO; MAX_LOBES];
-        for ((info, a), alb) in self.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
-            let Some(lobe) = &info.const_lobe else {
-                return false;
-            };
+        for ((lobe, a), alb) in plan.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
             // Every family of the plan reflects only (its transmitted parts are 0).
             *alb = lobe.prepare_above_into(v_local, &mut a.lobe);
         }
