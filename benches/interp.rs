@@ -9,7 +9,7 @@
 //!   the interpreter's overhead (the figure for the budget: the separate rows run a minute
 //!   apart, and this host's speed changes by about 1.5× between phases);
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
-//!   (V, L) pair (4096 pairs); the native prepare prepares the ten leaves with fixed weights
+//!   (V, L) pair (4096 pairs; ref10 is uniform, so `prepare_into` runs its fused form); the native prepare prepares the ten leaves with fixed weights
 //!   (no program, no throughput pass), their view-independent parts bound once as the
 //!   interpreter binds its constant leaves (before S13 it prepared them unbound, which
 //!   redid each conductor's F82 fit and the table lookups at every point and roughly
@@ -20,7 +20,8 @@
 //! * `preview512/{scalar,scalar_general,batched}`: a 512² material ball of `ref10`, one
 //!   light, one thread: one pixel at a time (`scalar`: ref10 is uniform, so each pixel is
 //!   prepared by the uniform-material prepare at one lane; `scalar_general`: by the general
-//!   `prepare_into`, as a material with inputs would be), or 16 at a time (`batched`).
+//!   algorithm, `prepare_general_into`, as a material with inputs would be), or 16 at a
+//!   time (`batched`).
 //!
 //! Times are the thread's on-CPU time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`): the
 //! machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"

@@ -16,7 +16,9 @@
 //! [`Scratch`]: [`Material::prepare_with`] takes one from the caller, [`Material::prepare`]
 //! uses a per-thread scratch (allocated on a thread's first call, reused afterwards). The
 //! result, [`Prepared`], is a fixed array of `MAX_LOBES` [`ActiveLobe`]s and never allocates;
-//! `eval` and `sample` neither.
+//! `eval` and `sample` neither. A uniform material seen from above its surface is prepared by
+//! a fused form of the same steps over fixed arrays (`material/uniform.rs`), with the same
+//! results as the general form, [`Material::prepare_general_into`].
 //!
 //! # Choices where the spec is silent
 //! * Frames whose normal comes from a register: the program runs once with every frame's
