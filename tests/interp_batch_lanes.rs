@@ -12,11 +12,10 @@ mod lanes;
 mod uniform_materials;
 use glam::Vec3;
 use lanes::assert_lanes_match;
-use uniform_materials::{assorted_ir, coated_ir};
+use uniform_materials::{assorted_ir, coated_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
-use vstructc::ir::{IrBuilder, LeafKind, RecipeId};
 
 const W: usize = 16;
 
@@ -164,19 +163,7 @@ fn batches_outside_the_lane_parallel_path_fall_back() {
         assert_batch_matches(&m, &pts, &pb, &mut rng, &format!("round {round}"));
     }
     // Parameters from an input: not uniform, so never lane-parallel.
-    let mut b = IrBuilder::new();
-    let col = vstructc::types::Type::scalar(vstructc::types::BaseType::Color);
-    let rho = b.input_slot(
-        "rho",
-        col,
-        vstructc::types::Value::Triple(vstructc::types::BaseType::Color, [0.5; 3]),
-    );
-    let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
-    let m = Material::new(
-        &b.finish("textured", RecipeId::Custom, lam)
-            .expect("valid IR"),
-    )
-    .expect("compiles");
+    let m = Material::new(&textured_ir()).expect("compiles");
     let pts = batch::<W>(&mut rng, &[]);
     m.prepare_batch_eval_into(&pts, &mut scratch, &mut pb);
     assert!(
@@ -194,16 +181,7 @@ fn batches_outside_the_lane_parallel_path_fall_back() {
 fn preview_paths_agree() {
     use vstructc::interp::preview::{PreviewOptions, render_ball};
     tables::init_all();
-    let textured = {
-        let mut b = IrBuilder::new();
-        let col = vstructc::types::Type::scalar(vstructc::types::BaseType::Color);
-        let fallback = vstructc::types::Value::Triple(vstructc::types::BaseType::Color, [0.5; 3]);
-        let rho = b.input_slot("rho", col, fallback);
-        let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
-        b.finish("textured", RecipeId::Custom, lam)
-            .expect("valid IR")
-    };
-    let cases = [ref10_ir(), assorted_ir(), coated_ir(), textured];
+    let cases = [ref10_ir(), assorted_ir(), coated_ir(), textured_ir()];
     for ir in cases {
         let m = Material::new(&ir).expect("compiles");
         let base = PreviewOptions {

@@ -10,11 +10,11 @@
 #[path = "common/uniform_materials.rs"]
 mod uniform_materials;
 use glam::Vec3;
-use uniform_materials::{assorted_ir, coated_ir, stacked_ir};
+use uniform_materials::{assorted_ir, coated_ir, stacked_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
-use vstructc::ir::{IrBuilder, LeafKind, MaterialIr, RecipeId};
+use vstructc::ir::MaterialIr;
 
 fn cases() -> [(&'static str, MaterialIr); 4] {
     [
@@ -168,21 +168,27 @@ fn fused_prepare_overwrites_a_used_record() {
 }
 
 /// A material whose parameters come from an input is not uniform: the general path
-/// prepares it.
+/// prepares it, whatever its inputs.
 #[test]
 fn materials_with_inputs_are_not_fused() {
-    let mut b = IrBuilder::new();
-    let col = vstructc::types::Type::scalar(vstructc::types::BaseType::Color);
-    let rho = b.input_slot(
-        "rho",
-        col,
-        vstructc::types::Value::Triple(vstructc::types::BaseType::Color, [0.5; 3]),
-    );
-    let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
-    let m = Material::new(
-        &b.finish("textured", RecipeId::Custom, lam)
-            .expect("valid IR"),
-    )
-    .expect("compiles");
+    tables::init_all();
+    let m = Material::new(&textured_ir()).expect("compiles");
     assert!(!m.is_uniform() && !m.prepares_uniform());
+    let mut rng = Rng::new(11);
+    let mut scratch = Scratch::default();
+    let (mut a, mut b) = (Prepared::new(), Prepared::new());
+    for i in 0..50 {
+        let inputs = [rng.f32(), rng.f32(), rng.f32()];
+        let p = point(&mut rng, i).with_inputs(&inputs);
+        m.prepare_unpacked_into(&p, &mut scratch, &mut a);
+        m.prepare_general_into(&p, &mut scratch, &mut b);
+        assert_same(&a, &b, &mut rng, &format!("textured point {i}"));
+        if !a.lobes().is_empty() {
+            assert_eq!(
+                a.lobes()[0].albedo.reflect.to_array(),
+                inputs,
+                "the input reaches the lobe"
+            );
+        }
+    }
 }

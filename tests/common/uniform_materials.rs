@@ -1,6 +1,7 @@
 //! Uniform materials (constant registers, the point's own frame) that together use every
-//! batched kernel family, every tint mode, `mix`, `mul`, emission and transparency: shared
-//! by the tests of the lane-parallel and the fused scalar prepare.
+//! batched kernel family, every tint mode, `mix`, `mul`, emission and transparency, and one
+//! that is not uniform: shared by the tests of the lane-parallel and the fused scalar
+//! prepare.
 
 use glam::Vec3;
 use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA};
@@ -127,5 +128,18 @@ pub fn stacked_ir() -> MaterialIr {
     let base = reference::lambert(&mut b, Vec3::new(0.6, 0.5, 0.4), "base");
     let root = b.layer(top, base, TintMode::Rgb);
     b.finish("stacked", RecipeId::Custom, root)
+        .expect("valid IR")
+}
+
+/// Not uniform: a Lambert whose albedo is an input (fallback 0.5 grey), so its parameters may
+/// change from point to point.
+#[allow(dead_code)] // not every test that includes this file uses every material
+pub fn textured_ir() -> MaterialIr {
+    use vstructc::types::{BaseType, Type, Value};
+    let mut b = IrBuilder::new();
+    let fallback = Value::Triple(BaseType::Color, [0.5; 3]);
+    let rho = b.input_slot("rho", Type::scalar(BaseType::Color), fallback);
+    let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
+    b.finish("textured", RecipeId::Custom, lam)
         .expect("valid IR")
 }
