@@ -257,7 +257,9 @@ fn radiance(opts: &PreviewOptions, direct: Rgb, albedo: Rgb, emission: Rgb, tau:
     direct * opts.light + opts.env * albedo + emission + tau * opts.env
 }
 
-/// Shade row `j` with the scalar interpreter's general prepare.
+/// Shade row `j` one point at a time with the prepare that builds lobe records
+/// ([`Material::prepare_unpacked_into`], or its general form with
+/// [`PreviewOptions::general_prepare`]).
 pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
     let (mut scratch, mut prep) = (Scratch::default(), Prepared::new());
     shade_row_with(material, opts, j, out, &mut scratch, &mut prep);
