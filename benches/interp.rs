@@ -9,11 +9,11 @@
 //!   the interpreter's overhead (the figure for the budget: the separate rows run a minute
 //!   apart, and this host's speed changes by about 1.5× between phases);
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
-//!   (V, L) pair (4096 pairs; ref10 is uniform, so `prepare_into` runs its fused form); the native prepare prepares the ten leaves with fixed weights
-//!   (no program, no throughput pass), their view-independent parts bound once as the
-//!   interpreter binds its constant leaves (before S13 it prepared them unbound, which
-//!   redid each conductor's F82 fit and the table lookups at every point and roughly
-//!   doubled its time);
+//!   (V, L) pair (4096 pairs; ref10 is uniform, so `prepare_into` runs its fused form); the
+//!   native prepare prepares the ten leaves with fixed weights (no program, no throughput
+//!   pass), their view-independent parts bound once as the interpreter binds its constant
+//!   leaves (before S13 it prepared them unbound, which redid each conductor's F82 fit and
+//!   the table lookups at every point and roughly doubled its time);
 //! * `ref10/batch16_prepare_lanes`: the lane-parallel prepare of 16 points
 //!   (`Material::prepare_batch_eval_into`, what the batched preview runs), ns per point;
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;

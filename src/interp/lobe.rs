@@ -218,6 +218,19 @@ pub struct PreparedLobe {
     pub(super) state: State,
 }
 
+/// Writes family `$variant`'s prepared state `$value` into record `$out`. A record at a
+/// fixed index usually held the same family at the previous prepare: then the new state is
+/// written over the old one field by field, with no temporary (copying a freshly written
+/// temporary stalls store forwarding).
+macro_rules! write_state {
+    ($out:expr, $variant:ident, $value:expr) => {
+        match &mut $out.state {
+            State::$variant(p) => *p = $value,
+            s => *s = State::$variant($value),
+        }
+    };
+}
+
 #[derive(Debug, Clone, Copy)]
 pub(super) enum State {
     Inactive,
@@ -358,15 +371,9 @@ impl Lobe {
             out.state = State::Inactive;
             return;
         }
-        // A record at a fixed index usually held the same family at the previous prepare:
-        // then the new state is written over the old one field by field, with no temporary
-        // (copying a freshly written temporary stalls store forwarding).
         macro_rules! put {
             ($variant:ident, $value:expr) => {
-                match &mut out.state {
-                    State::$variant(p) => *p = $value,
-                    s => *s = State::$variant($value),
-                }
+                write_state!(out, $variant, $value)
             };
         }
         match self {
@@ -475,16 +482,12 @@ impl BoundLobe {
         debug_assert!(v.z > 0.0 && v.is_finite());
         out.kind = self.lobe.kind();
         out.flipped = false;
-        // As `prepare_aux_into`'s `put!`: the state is written over the record's own when
-        // it holds the same family; the albedo is read from the value before it is stored.
+        // The albedo is read from the value before it is stored.
         macro_rules! put {
             ($variant:ident, $value:expr) => {{
                 let p = $value;
                 let albedo = p.albedo().reflect;
-                match &mut out.state {
-                    State::$variant(q) => *q = p,
-                    s => *s = State::$variant(p),
-                }
+                write_state!(out, $variant, p);
                 albedo
             }};
         }

@@ -53,7 +53,7 @@ use super::microfacet::{
 use super::sheen::{SheenCK, SheenLTC, SheenMasking as LobeSheenMasking};
 use super::ward::{MiaHighlight3, Ward, WardVariant as LobeWardVariant};
 use crate::diag::{Diagnostic, Error};
-use crate::ir::algebra::AlbedoSource;
+use crate::ir::algebra::{AlbedoSource, add_throughput, mix_throughput, mul_throughput};
 use crate::ir::{
     DielectricMode, FrameSlot, Fresnel, Globals, Leaf, LeafKind, MAX_LOBES, Masking, MaterialIr,
     Node, NodeId, OpCode, Reg, RunContext, SheenMasking, TintMode, WardVariant,
@@ -672,16 +672,8 @@ impl Material {
             if threshold > 0.0 && a_max.max_element() <= threshold {
                 continue;
             }
-            if count != k {
-                out.lobes[count].lobe = out.lobes[k].lobe;
-            }
-            let a = &mut out.lobes[count];
-            out.flipped_any |= a.lobe.is_flipped();
-            a.weight = w;
-            a.albedo = albedo;
-            a.frame = info.frame_slot;
-            a.leaf = k as u8;
-            lums[count] = lum(albedo.reflect + albedo.transmit_radiance).max(0.0);
+            lums[count] = out.keep(count, k, w, albedo, info.frame_slot);
+            out.flipped_any |= out.lobes[count].lobe.is_flipped();
             count += 1;
         }
         out.count = count;
@@ -777,16 +769,10 @@ impl Material {
                 ThrOp::One => Vec3::ONE,
                 ThrOp::Layer { top, base } => thr[top as usize] * thr[base as usize],
                 ThrOp::Mix { a, b, m } => {
-                    let m = sat(reg(m));
-                    (Vec3::ONE - m) * thr[a as usize] + m * thr[b as usize]
+                    mix_throughput(thr[a as usize], thr[b as usize], sat(reg(m)))
                 }
-                ThrOp::Add { a, b } => {
-                    (thr[a as usize] + thr[b as usize] - Vec3::ONE).max(Vec3::ZERO)
-                }
-                ThrOp::Multiply { f, c } => {
-                    let c = reg(c).max(Vec3::ZERO);
-                    sat(Vec3::ONE - c * (Vec3::ONE - thr[f as usize]))
-                }
+                ThrOp::Add { a, b } => add_throughput(thr[a as usize], thr[b as usize]),
+                ThrOp::Multiply { f, c } => mul_throughput(thr[f as usize], reg(c).max(Vec3::ZERO)),
             };
             thr.push(t);
         }
@@ -1314,6 +1300,22 @@ impl Prepared {
     /// An empty preparation (no lobes), e.g. as the target of [`Material::prepare_into`].
     pub fn new() -> Prepared {
         Prepared::empty(Vec3::Z)
+    }
+
+    /// Step 6's survivor: leaf `k`'s record (prepared at index `k`) becomes lobe `at ≤ k`
+    /// with its weight, albedo and frame. Returns step 7's share, `max(lum(A_k), 0)` with
+    /// transmission in the radiance convention.
+    #[inline(always)]
+    fn keep(&mut self, at: usize, k: usize, weight: Rgb, albedo: Albedo, frame: u8) -> f32 {
+        if at != k {
+            self.lobes[at].lobe = self.lobes[k].lobe;
+        }
+        let a = &mut self.lobes[at];
+        a.weight = weight;
+        a.albedo = albedo;
+        a.frame = frame;
+        a.leaf = k as u8;
+        lum(albedo.reflect + albedo.transmit_radiance).max(0.0)
     }
 
     /// Step 7: `p_k = lum(A_k)/Σ lum(A_j)` (straight transmission takes part with

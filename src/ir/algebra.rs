@@ -134,6 +134,24 @@ pub fn leaf_throughput(mode: TintMode, tint: Vec3, ttint: Vec3, e: Vec3) -> Vec3
     sat(t)
 }
 
+/// Throughput of `mix(a, b, m)` (§2.4) from its children's, `m` already saturated.
+#[inline(always)]
+pub fn mix_throughput(ta: Vec3, tb: Vec3, m: Vec3) -> Vec3 {
+    (Vec3::ONE - m) * ta + m * tb
+}
+
+/// Throughput of `add(a, b)` (§2.4) from its children's.
+#[inline(always)]
+pub fn add_throughput(ta: Vec3, tb: Vec3) -> Vec3 {
+    (ta + tb - Vec3::ONE).max(Vec3::ZERO)
+}
+
+/// Throughput of `mul(f, c)` (§2.4) from its child's, `c` already clamped at 0.
+#[inline(always)]
+pub fn mul_throughput(tf: Vec3, c: Vec3) -> Vec3 {
+    sat(Vec3::ONE - c * (Vec3::ONE - tf))
+}
+
 /// Flatten the closure DAG of `ir` for one point: `regs` is the program's register file,
 /// `mu_o` the view cosine per frame, `albedo` supplies `E(μ_o)` of leaves that lie in the
 /// top of some layer (the only ones whose albedo matters).
@@ -189,16 +207,16 @@ pub fn flatten(ir: &MaterialIr, regs: &[Vec3], mu_o: &[f32], albedo: &dyn Albedo
             Node::Mix { a, b, m } => {
                 let m = sat(reg(*m));
                 let (ta, tb) = (thr[a.index()], thr[b.index()]);
-                std::array::from_fn(|k| (Vec3::ONE - m) * ta[k] + m * tb[k])
+                std::array::from_fn(|k| mix_throughput(ta[k], tb[k], m))
             }
             Node::Add { a, b } => {
                 let (ta, tb) = (thr[a.index()], thr[b.index()]);
-                std::array::from_fn(|k| (ta[k] + tb[k] - Vec3::ONE).max(Vec3::ZERO))
+                std::array::from_fn(|k| add_throughput(ta[k], tb[k]))
             }
             Node::Multiply { f, c } => {
                 let c = reg(*c).max(Vec3::ZERO);
                 let tf = thr[f.index()];
-                std::array::from_fn(|k| sat(Vec3::ONE - c * (Vec3::ONE - tf[k])))
+                std::array::from_fn(|k| mul_throughput(tf[k], c))
             }
         };
         thr[i] = t;

@@ -38,7 +38,7 @@ use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::{LaneCoords, MuCurve};
 use crate::interp::vmath::{select, select3};
 use crate::interp::ward::{Ward, WardBound, WardVariant};
-use crate::ir::algebra::leaf_throughput;
+use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, TintMode};
 use glam::Vec3;
 
@@ -507,16 +507,14 @@ impl Material {
                 ThrOp::Mix { a, b, m } => {
                     let m = sat(reg(m));
                     zip(&thr[a as usize], &thr[b as usize], |a, b| {
-                        (Vec3::ONE - m) * a + m * b
+                        mix_throughput(a, b, m)
                     })
                 }
-                ThrOp::Add { a, b } => zip(&thr[a as usize], &thr[b as usize], |a, b| {
-                    (a + b - Vec3::ONE).max(Vec3::ZERO)
-                }),
+                ThrOp::Add { a, b } => zip(&thr[a as usize], &thr[b as usize], add_throughput),
                 ThrOp::Multiply { f, c } => {
                     let c = reg(c).max(Vec3::ZERO);
                     let t = &thr[f as usize];
-                    zip(t, t, |t, _| sat(Vec3::ONE - c * (Vec3::ONE - t)))
+                    zip(t, t, |t, _| mul_throughput(t, c))
                 }
             };
             thr[j] = t;

@@ -20,11 +20,10 @@
 //! Every formula is the general path's, in the same order, so the two agree bit for bit
 //! (`tests/interp_uniform.rs`).
 
-use super::{ActiveLobe, Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
+use super::{Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
 use crate::interp::frame::Frame;
 use crate::interp::lobe::BoundLobe;
-use crate::interp::math::lum;
-use crate::ir::algebra::leaf_throughput;
+use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, Reg, TintMode};
 use glam::Vec3;
 
@@ -147,7 +146,8 @@ impl Material {
         v: Vec3,
         out: &mut Prepared,
     ) -> bool {
-        let (Some(w_plan), Some(_)) = (&self.w_plan, &self.const_regs) else {
+        // A plan exists only with a weight plan (`UniformPlan::new`).
+        let Some(w_plan) = &self.w_plan else {
             return false;
         };
         // Step 2: the point's frame (the general path's `build_frames` for a frame without
@@ -177,13 +177,9 @@ impl Material {
                 } => leaf_throughput(mode, tint, ttint, albedos[leaf as usize]),
                 UniformThr::Const(c) => c,
                 UniformThr::Layer { top, base } => thr[top as usize] * thr[base as usize],
-                UniformThr::Mix { a, b, m } => {
-                    (Vec3::ONE - m) * thr[a as usize] + m * thr[b as usize]
-                }
-                UniformThr::Add { a, b } => {
-                    (thr[a as usize] + thr[b as usize] - Vec3::ONE).max(Vec3::ZERO)
-                }
-                UniformThr::Multiply { f, c } => sat(Vec3::ONE - c * (Vec3::ONE - thr[f as usize])),
+                UniformThr::Mix { a, b, m } => mix_throughput(thr[a as usize], thr[b as usize], m),
+                UniformThr::Add { a, b } => add_throughput(thr[a as usize], thr[b as usize]),
+                UniformThr::Multiply { f, c } => mul_throughput(thr[f as usize], c),
             };
         }
         // Step 4: the weight plan (scope products, then each target's sum of its terms).
@@ -220,19 +216,11 @@ impl Material {
             if threshold > 0.0 && reflect.max_element() <= threshold {
                 continue;
             }
-            if count != k {
-                out.lobes[count].lobe = out.lobes[k].lobe;
-            }
-            let a: &mut ActiveLobe = &mut out.lobes[count];
-            a.weight = w;
-            a.albedo = Albedo {
+            let albedo = Albedo {
                 reflect,
-                transmit: Vec3::ZERO,
-                transmit_radiance: Vec3::ZERO,
+                ..Albedo::default()
             };
-            a.frame = 0;
-            a.leaf = k as u8;
-            lums[count] = lum(reflect).max(0.0);
+            lums[count] = out.keep(count, k, w, albedo, 0);
             count += 1;
         }
         out.count = count;
