@@ -170,6 +170,10 @@ pub struct MicrofacetBound {
     /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables), and
     /// in the one-off bound of [`MicrofacetR::prepare`] (direct lookups).
     pub(super) curves: Option<ReflectionCurves>,
+    /// [`Ggx::lookup_alpha`], computed once.
+    pub(super) alpha: f32,
+    /// The distribution is a delta ([`Ggx::is_delta`]).
+    pub(super) delta: bool,
 }
 
 /// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
@@ -236,6 +240,8 @@ impl MicrofacetR {
             albedo_fresnel: self.albedo_fresnel(),
             ggx_view: GgxView::constants(&self.ggx),
             curves: None,
+            alpha: self.ggx.lookup_alpha(),
+            delta: self.ggx.is_delta(),
         };
         self.prepare_bound(v, &bound)
     }
@@ -268,6 +274,8 @@ impl MicrofacetR {
                 sq,
                 h82,
             }),
+            alpha: self.ggx.lookup_alpha(),
+            delta: self.ggx.is_delta(),
         }
     }
 
@@ -281,7 +289,7 @@ impl MicrofacetR {
         let conductor = self.fresnel.is_conductor();
         let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
         let f_average = || clamp1(albedo_fresnel.average());
-        let alpha = self.ggx.lookup_alpha();
+        let alpha = bound.alpha;
         let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
         let mut p = PreparedMicrofacetR {
             ggx: self.ggx,
@@ -296,7 +304,7 @@ impl MicrofacetR {
             ms: Vec3::ZERO,
             e_row: None,
             p_ms: 0.0,
-            delta: self.ggx.is_delta(),
+            delta: bound.delta,
             albedo: Vec3::ZERO,
         };
         if p.delta {
@@ -518,6 +526,23 @@ pub struct DielectricBound {
     pub(super) curves: Option<[[MuCurve; 3]; 2]>,
     /// The distribution's view-independent constants ([`GgxView::constants`]).
     pub(super) ggx_view: GgxView,
+    /// The lobe's view-independent scalars.
+    pub(super) consts: DielectricConsts,
+}
+
+/// The scalars of a dielectric's `prepare` that do not depend on the view, computed once
+/// per bind rather than per point.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct DielectricConsts {
+    /// [`Dielectric::eta0`].
+    eta0: f32,
+    /// The distribution is a delta.
+    delta: bool,
+    /// [`Ggx::lookup_alpha`].
+    alpha: f32,
+    /// `max(lum(tint_r), 0)` before any Turquin factor, and `max(lum(tint_t), 0)`.
+    lum_r: f32,
+    lum_t: f32,
 }
 
 impl Dielectric {
@@ -530,13 +555,26 @@ impl Dielectric {
         }
     }
 
+    /// The view-independent scalars of [`Dielectric::prepare`].
+    fn consts(&self) -> DielectricConsts {
+        DielectricConsts {
+            eta0: self.eta0(),
+            delta: self.ggx.is_delta(),
+            alpha: self.ggx.lookup_alpha(),
+            lum_r: lum(self.tint_r).max(0.0),
+            lum_t: lum(self.tint_t).max(0.0),
+        }
+    }
+
     /// The view-independent part of [`Dielectric::prepare`].
     pub fn bind(&self) -> DielectricBound {
         let ggx_view = GgxView::constants(&self.ggx);
+        let consts = self.consts();
         if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
             return DielectricBound {
                 curves: None,
                 ggx_view,
+                consts,
             };
         }
         let y = tables::ggx_axis(self.ggx.lookup_alpha());
@@ -549,10 +587,11 @@ impl Dielectric {
             };
             ids.map(|t| MuCurve::new3(t, y, z))
         };
-        let eta0 = self.eta0();
+        let eta0 = consts.eta0;
         DielectricBound {
             curves: Some([at(eta0), at(1.0 / eta0)]),
             ggx_view,
+            consts,
         }
     }
 
@@ -562,6 +601,7 @@ impl Dielectric {
         let bound = DielectricBound {
             curves: None,
             ggx_view: GgxView::constants(&self.ggx),
+            consts: self.consts(),
         };
         self.prepare_bound(v, flipped, &bound)
     }
@@ -575,18 +615,19 @@ impl Dielectric {
         flipped: bool,
         bound: &DielectricBound,
     ) -> PreparedDielectric {
-        let eta0 = self.eta0();
-        let eta = if flipped { 1.0 / eta0 } else { eta0 };
+        let c = &bound.consts;
+        let eta = if flipped { 1.0 / c.eta0 } else { c.eta0 };
         let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
         let refl = self.mode != DielectricMode::T;
         let trans = self.mode != DielectricMode::R;
-        let alpha = self.ggx.lookup_alpha();
+        let alpha = c.alpha;
         // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
-        let tint_r = if self.turquin > 0.0 {
+        let (tint_r, lum_r) = if self.turquin > 0.0 {
             let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
-            self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha)
+            let tint_r = self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha);
+            (tint_r, lum(tint_r).max(0.0))
         } else {
-            self.tint_r
+            (self.tint_r, c.lum_r)
         };
         let mut p = PreparedDielectric {
             ggx: self.ggx,
@@ -601,10 +642,10 @@ impl Dielectric {
             trans,
             tint_r,
             tint_t: self.tint_t,
-            lum_r: lum(tint_r).max(0.0),
-            lum_t: lum(self.tint_t).max(0.0),
+            lum_r,
+            lum_t: c.lum_t,
             t_fresnel: self.t_fresnel,
-            delta: self.ggx.is_delta(),
+            delta: c.delta,
             albedo: LobeAlbedo::default(),
         };
         let [er, et, etn] = if p.delta {
