@@ -167,6 +167,52 @@ fn fused_prepare_overwrites_a_used_record() {
     }
 }
 
+/// Preparing the same material (or a clone) into the same `Prepared` again refreshes its
+/// lobe packs in place, writing only their view, weight and probability terms; that gives
+/// the bits of packs filled afresh. Another material in between, a view from below (the
+/// general path) and dropped lobes each make the next prepare fill the packs whole.
+#[test]
+fn packs_refreshed_in_place_equal_packs_filled_afresh() {
+    tables::init_all();
+    let cases = cases();
+    // Other materials that keep every lobe (so their packs carry their own stamps).
+    let keep_all = PrepareOptions {
+        drop_threshold: 0.0,
+        ..PrepareOptions::default()
+    };
+    let others: Vec<Material> = cases
+        .iter()
+        .map(|(_, ir)| Material::with_options(ir, keep_all).expect("compiles"))
+        .collect();
+    for (name, ir) in &cases {
+        for (o, options) in option_sets().into_iter().enumerate() {
+            if !options.pack_lobes {
+                continue;
+            }
+            let m = Material::with_options(ir, options).expect("compiles");
+            let clone = m.clone();
+            let mut rng = Rng::new(31);
+            let mut scratch = Scratch::default();
+            let mut reused = Prepared::new();
+            for i in 0..300 {
+                let p = point(&mut rng, i);
+                if i % 7 == 0 {
+                    others[i / 7 % others.len()].prepare_into(&p, &mut scratch, &mut reused);
+                }
+                let by = if i % 4 == 0 { &clone } else { &m };
+                by.prepare_into(&p, &mut scratch, &mut reused);
+                let afresh = m.prepare(&p);
+                assert_same(
+                    &reused,
+                    &afresh,
+                    &mut rng,
+                    &format!("{name} options {o} point {i}"),
+                );
+            }
+        }
+    }
+}
+
 /// A material whose parameters come from an input is not uniform: the general path
 /// prepares it, whatever its inputs.
 #[test]

@@ -550,14 +550,18 @@ impl Material {
     /// As [`Material::prepare_with`], overwriting `out` (whatever it held): the cheapest
     /// form when many points are prepared in a row, since a [`Prepared`] is a few KB.
     pub fn prepare_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
-        self.prepare_unpacked_into(p, s, out);
+        let fused = self.prepare_steps(p, s, out);
         if !self.options.pack_lobes {
             return;
         }
         let lobes = &out.lobes[..out.count];
-        match &self.pack_grouping {
+        match (&self.pack_grouping, fused) {
+            // Every leaf survived the fused prepare: lobe k is leaf k, none flipped.
+            (Some(g), Some(stamp)) if lobes.len() == self.leaves.len() => {
+                out.plan.build_stamped(stamp, g, lobes)
+            }
             // Lobe k is leaf k when none was dropped; an inactive lobe has no kernel key.
-            Some(g)
+            (Some(g), _)
                 if lobes.len() == self.leaves.len()
                     && lobes.iter().all(|a| !a.lobe.is_inactive()) =>
             {
@@ -577,14 +581,21 @@ impl Material {
     /// prepared by a fused form of the steps, over fixed arrays with its constants folded
     /// in; it computes the same bits as [`Material::prepare_general_into`].
     pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+        self.prepare_steps(p, s, out);
+    }
+
+    /// [`Material::prepare_unpacked_into`], returning the uniform plan's stamp when the
+    /// fused form prepared the point.
+    fn prepare_steps(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> Option<u64> {
         if let Some(plan) = &self.uniform {
             let v = p.v.normalize_or(Vec3::Z);
             out.reset(v);
             if self.prepare_uniform_into(plan, p, v, out) {
-                return;
+                return Some(plan.stamp);
             }
         }
         self.prepare_general_into(p, s, out);
+        None
     }
 
     /// [`Material::prepare_unpacked_into`] by the general algorithm, whatever the material:

@@ -419,21 +419,18 @@ impl<const W: usize> Kernel<W> {
         lane: impl Fn(usize) -> &'a PreparedLobe,
         lw: &LaneWeights<W>,
     ) {
+        // The family and the lanes' view-independent terms here, the rest in
+        // `refresh_lanes`, so that a refresh writes the same bits as a fill.
         match &lane(0).state {
             State::Lambert(_) => {
-                let rho_pi = self.lambert_mut();
-                for k in 0..W {
-                    if let State::Lambert(p) = &lane(k).state {
-                        rho_pi.set(k, p.rho_pi * lw.w.get(k));
-                    }
-                }
+                self.lambert_mut();
             }
             State::OrenNayar(p0) => {
                 let x = self.oren_nayar_mut();
                 x.fast = p0.fast;
                 for k in 0..W {
                     if let State::OrenNayar(p) = &lane(k).state {
-                        x.set(k, p, lw.w.get(k));
+                        x.set_consts(k, p);
                     }
                 }
             }
@@ -441,12 +438,10 @@ impl<const W: usize> Kernel<W> {
                 let x = self.conductor_mut();
                 for k in 0..W {
                     if let State::MicrofacetR(p) = &lane(k).state {
-                        x.g.set(k, p.v, &p.view);
-                        x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
+                        x.g.set_consts(k, &p.view);
                         if let Fresnel::Conductor { eta, kappa } = p.fresnel {
                             x.set_ior(k, eta, kappa);
                         }
-                        x.scale_q.set(k, p.scale * p.inv_4mu * lw.w.get(k));
                     }
                 }
             }
@@ -454,8 +449,8 @@ impl<const W: usize> Kernel<W> {
                 let x = self.dielectric_r_mut();
                 for k in 0..W {
                     if let State::Dielectric(p) = &lane(k).state {
-                        x.g.set(k, p.v, &p.view);
-                        x.set(k, p.eta, p.g1_v, p.inv_mu, p.tint_r, lw.p[k], lw.w.get(k));
+                        x.g.set_consts(k, &p.view);
+                        x.set_eta(k, p.eta);
                     }
                 }
             }
@@ -466,8 +461,7 @@ impl<const W: usize> Kernel<W> {
                 );
                 for k in 0..W {
                     if let State::Ward(p) = &lane(k).state {
-                        x.v.set(k, p.v);
-                        x.set(k, &p.core, p.variant, p.rho, lw.p[k], lw.w.get(k));
+                        x.set_consts(k, &p.core, p.variant);
                     }
                 }
             }
@@ -475,21 +469,86 @@ impl<const W: usize> Kernel<W> {
                 let x = self.sheen_ck_mut();
                 for k in 0..W {
                     if let State::SheenCK(p) = &lane(k).state {
-                        x.v.set(k, p.v);
                         x.half_inv_r[k] = p.half_inv_r;
                         x.norm[k] = p.norm;
                     }
                 }
             }
             State::SheenLTC(_) => {
-                let x = self.sheen_ltc_mut();
+                self.sheen_ltc_mut();
+            }
+            _ => {
+                *self = Kernel::Scalar;
+                return;
+            }
+        }
+        self.refresh_lanes(lane, lw);
+    }
+
+    /// The part of [`Kernel::fill_lanes`] that depends on the view, the weights or the
+    /// probabilities: all a refill needs when the kernel already holds the same lobes'
+    /// view-independent terms (the same leaves of the same material, none flipped, filled
+    /// by `fill_lanes` at an earlier point). A kernel of another family is left as it is.
+    pub(super) fn refresh_lanes<'a>(
+        &mut self,
+        lane: impl Fn(usize) -> &'a PreparedLobe,
+        lw: &LaneWeights<W>,
+    ) {
+        match self {
+            Kernel::Scalar => {}
+            Kernel::Lambert { rho_pi } => {
+                for k in 0..W {
+                    if let State::Lambert(p) = &lane(k).state {
+                        rho_pi.set(k, p.rho_pi * lw.w.get(k));
+                    }
+                }
+            }
+            Kernel::OrenNayar(x) => {
+                for k in 0..W {
+                    if let State::OrenNayar(p) = &lane(k).state {
+                        x.set_view(k, p, lw.w.get(k));
+                    }
+                }
+            }
+            Kernel::Conductor(x) => {
+                for k in 0..W {
+                    if let State::MicrofacetR(p) = &lane(k).state {
+                        x.g.set_view(k, p.v, &p.view);
+                        x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
+                        x.scale_q.set(k, p.scale * p.inv_4mu * lw.w.get(k));
+                    }
+                }
+            }
+            Kernel::DielectricR(x) => {
+                for k in 0..W {
+                    if let State::Dielectric(p) = &lane(k).state {
+                        x.g.set_view(k, p.v, &p.view);
+                        x.set_view(k, p.g1_v, p.inv_mu, p.tint_r, lw.p[k], lw.w.get(k));
+                    }
+                }
+            }
+            Kernel::Ward(x) => {
+                for k in 0..W {
+                    if let State::Ward(p) = &lane(k).state {
+                        x.v.set(k, p.v);
+                        x.set_view(k, &p.core, p.rho, lw.p[k], lw.w.get(k));
+                    }
+                }
+            }
+            Kernel::SheenCK(x) => {
+                for k in 0..W {
+                    if let State::SheenCK(p) = &lane(k).state {
+                        x.v.set(k, p.v);
+                    }
+                }
+            }
+            Kernel::SheenLTC(x) => {
                 for k in 0..W {
                     if let State::SheenLTC(p) = &lane(k).state {
                         x.set(k, p);
                     }
                 }
             }
-            _ => *self = Kernel::Scalar,
         }
     }
 
@@ -807,12 +866,24 @@ impl<const W: usize> GgxX<W> {
 
     #[inline(always)]
     pub(super) fn set(&mut self, k: usize, v: Vec3, g: &GgxView) {
-        self.v.set(k, v);
+        self.set_consts(k, g);
+        self.set_view(k, v, g);
+    }
+
+    /// Lane `k`'s view-independent constants.
+    #[inline(always)]
+    fn set_consts(&mut self, k: usize, g: &GgxView) {
         self.inv_ax[k] = g.inv_ax;
         self.inv_ay[k] = g.inv_ay;
         self.ax2[k] = g.ax2;
         self.ay2[k] = g.ay2;
         self.pi_axay[k] = g.pi_axay;
+    }
+
+    /// Lane `k`'s view and the masking coefficients at it.
+    #[inline(always)]
+    fn set_view(&mut self, k: usize, v: Vec3, g: &GgxView) {
+        self.v.set(k, v);
         self.c_z[k] = g.c_z;
         self.c_s[k] = g.c_s;
     }
@@ -1001,16 +1072,28 @@ impl<const W: usize> OrenNayarX<W> {
     /// Lane `k` from a prepared lobe, with the slot's weight `w` folded in.
     #[inline(always)]
     pub(super) fn set(&mut self, k: usize, p: &super::diffuse::PreparedOrenNayar, w: Vec3) {
-        self.v.set(k, p.v);
-        self.rho_pi.set(k, p.rho_pi * w);
+        self.set_consts(k, p);
+        self.set_view(k, p, w);
+    }
+
+    /// Lane `k`'s view-independent terms.
+    #[inline(always)]
+    fn set_consts(&mut self, k: usize, p: &super::diffuse::PreparedOrenNayar) {
         self.a[k] = p.a;
         self.b[k] = p.b;
         self.keep_negative_s[k] = flag(p.keep_negative_s);
-        self.ms.set(k, p.ms * w);
         let af = 1.0 / (1.0 + super::diffuse::EON_C1 * p.sigma);
         self.af[k] = af;
         self.c[k] = p.sigma * af * FRAC_1_PI;
         self.sigma[k] = p.sigma;
+    }
+
+    /// Lane `k`'s view and weighted albedos.
+    #[inline(always)]
+    fn set_view(&mut self, k: usize, p: &super::diffuse::PreparedOrenNayar, w: Vec3) {
+        self.v.set(k, p.v);
+        self.rho_pi.set(k, p.rho_pi * w);
+        self.ms.set(k, p.ms * w);
     }
 }
 
@@ -1039,7 +1122,19 @@ impl<const W: usize> DielectricX<W> {
         p: f32,
         w: Vec3,
     ) {
+        self.set_eta(k, eta);
+        self.set_view(k, g1_v, inv_mu, tint_r, p, w);
+    }
+
+    /// Lane `k`'s index (view-independent for a lobe that is not flipped).
+    #[inline(always)]
+    fn set_eta(&mut self, k: usize, eta: f32) {
         self.e2m1[k] = eta * eta - 1.0;
+    }
+
+    /// Lane `k`'s view terms with the probability `p` and weight `w` folded in.
+    #[inline(always)]
+    fn set_view(&mut self, k: usize, g1_v: f32, inv_mu: f32, tint_r: Vec3, p: f32, w: Vec3) {
         let q = 0.25 * inv_mu;
         self.pdf_c[k] = g1_v * q * p;
         self.tint_q.set(k, tint_r * q * w);
@@ -1058,11 +1153,24 @@ impl<const W: usize> WardX<W> {
         p: f32,
         w: Vec3,
     ) {
+        self.set_consts(k, core, variant);
+        self.set_view(k, core, rho, p, w);
+    }
+
+    /// Lane `k`'s view-independent terms.
+    #[inline(always)]
+    fn set_consts(&mut self, k: usize, core: &super::ward::WardCore, variant: WardVariant) {
         self.inv_ax2[k] = core.inv_ax2;
         self.inv_ay2[k] = core.inv_ay2;
+        self.gm[k] = flag(variant == WardVariant::Gm);
+    }
+
+    /// Lane `k`'s norm (view-dependent in the classic form) and its terms with the
+    /// probability `p` and weight `w` folded in.
+    #[inline(always)]
+    fn set_view(&mut self, k: usize, core: &super::ward::WardCore, rho: Vec3, p: f32, w: Vec3) {
         self.norm[k] = core.norm;
         self.pdf_norm[k] = core.pdf_norm * p;
-        self.gm[k] = flag(variant == WardVariant::Gm);
         self.rho.set(k, rho * w);
     }
 }

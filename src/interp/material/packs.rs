@@ -121,6 +121,10 @@ pub(super) struct EvalPlan {
     packs: [LobePack; MAX_PACKS],
     /// The plan describes the current lobes; when false every lobe is evaluated alone.
     valid: bool,
+    /// The [`super::uniform::UniformPlan::stamp`] of the material whose leaves, all of
+    /// them, in leaf order and none flipped, the packs' view-independent terms belong to
+    /// (see [`EvalPlan::build_stamped`]); 0 when they may belong to anything else.
+    stamp: u64,
 }
 
 impl EvalPlan {
@@ -139,6 +143,7 @@ impl EvalPlan {
             grouping: Grouping::empty(),
             packs: [pack; MAX_PACKS],
             valid: false,
+            stamp: 0,
         }
     }
 
@@ -158,6 +163,7 @@ impl EvalPlan {
 
     /// Plans `lobes` with `grouping`, which must be [`Grouping::of_keys`] of their keys.
     pub(super) fn build_from(&mut self, grouping: &Grouping, lobes: &[ActiveLobe]) {
+        self.stamp = 0;
         self.grouping = *grouping;
         for (pack, (members, &n)) in self.packs.iter_mut().zip(
             grouping.packs[..grouping.pack_count as usize]
@@ -165,6 +171,28 @@ impl EvalPlan {
                 .zip(&grouping.pack_len),
         ) {
             pack.fill(lobes, &members[..n as usize]);
+        }
+        self.valid = true;
+    }
+
+    /// [`EvalPlan::build_from`] for the lobes of the fused prepare of the uniform material
+    /// with `stamp` when every leaf survived (lobe `k` is leaf `k`, none flipped), and
+    /// `grouping` is the material's grouping. The lobes' view-independent terms are then
+    /// the same at every point, so when the packs already hold them (the previous plan was
+    /// built here with the same stamp) only the view, weight and probability terms are
+    /// written ([`Kernel::refresh_lanes`]); the packs end with the same bits either way.
+    pub(super) fn build_stamped(&mut self, stamp: u64, grouping: &Grouping, lobes: &[ActiveLobe]) {
+        if self.stamp != stamp {
+            self.build_from(grouping, lobes);
+            self.stamp = stamp;
+            return;
+        }
+        for (pack, (members, &n)) in self.packs.iter_mut().zip(
+            grouping.packs[..grouping.pack_count as usize]
+                .iter()
+                .zip(&grouping.pack_len),
+        ) {
+            pack.refresh(lobes, &members[..n as usize]);
         }
         self.valid = true;
     }
@@ -256,6 +284,21 @@ impl LobePack {
         let lanes: [&PreparedLobe; PACK_LANES] =
             std::array::from_fn(|k| &lobes[members[k.min(last)] as usize].lobe);
         self.kernel.fill_lanes(|k| lanes[k], &self.lw);
+    }
+
+    /// [`LobePack::fill`] of the same lobes, unflipped, as the fill before: the lanes'
+    /// signs and frames, and the kernel's view-independent terms, are already right.
+    fn refresh(&mut self, lobes: &[ActiveLobe], members: &[u8]) {
+        for (k, &m) in members.iter().enumerate() {
+            let a = &lobes[m as usize];
+            debug_assert!(!a.lobe.is_flipped() && self.frame[k] == a.frame);
+            self.lw.w.set(k, a.weight);
+            self.lw.p[k] = a.prob;
+        }
+        let last = members.len() - 1;
+        let lanes: [&PreparedLobe; PACK_LANES] =
+            std::array::from_fn(|k| &lobes[members[k.min(last)] as usize].lobe);
+        self.kernel.refresh_lanes(|k| lanes[k], &self.lw);
     }
 }
 

@@ -26,6 +26,7 @@ use crate::interp::lobe::BoundLobe;
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, Reg, TintMode};
 use glam::Vec3;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Throughput steps, scopes and weight targets a uniform plan may have: the per-point
 /// arrays are fixed, on the stack. A material with more takes the general path.
@@ -58,6 +59,10 @@ enum UniformThr {
 /// throughput steps with constants folded in.
 #[derive(Debug, Clone)]
 pub(super) struct UniformPlan {
+    /// Unique per compiled material (clones share it, with their constants): lets a
+    /// [`Prepared`] tell that its lobe packs hold this material's constants
+    /// ([`super::packs::EvalPlan::build_stamped`]).
+    pub(super) stamp: u64,
     /// Every leaf's bound constant lobe, in leaf order (side by side, not inside the
     /// larger [`super::LeafInfo`]s).
     leaves: Vec<BoundLobe>,
@@ -130,7 +135,10 @@ impl UniformPlan {
                 },
             })
             .collect();
-        Some(UniformPlan { leaves, thr })
+        // Relaxed: the counter only has to hand out distinct values.
+        static NEXT_STAMP: AtomicU64 = AtomicU64::new(1);
+        let stamp = NEXT_STAMP.fetch_add(1, Ordering::Relaxed);
+        Some(UniformPlan { stamp, leaves, thr })
     }
 }
 
