@@ -213,6 +213,66 @@ fn packs_refreshed_in_place_equal_packs_filled_afresh() {
     }
 }
 
+/// `layer[Rgb](mul(coat, 2), add(lambert(ρ = 0.3), mul(lambert(ρ = 1), 0.06)))`, whose
+/// leaves are the faint Lambert, the grey one and the coat, in that order. Under the coat
+/// the faint Lambert's weighted albedo is about 0.055 at normal views and 0.036 at
+/// grazing ones, so a drop threshold of 0.05 drops it at grazing views only (the others
+/// stay above 0.07), and the grey Lambert's record then moves into its slot.
+fn droppy_ir() -> MaterialIr {
+    use vstructc::interp::reference::{dielectric_r_of, lambert, mul};
+    use vstructc::ir::{IrBuilder, RecipeId, TintMode};
+    let mut b = IrBuilder::new();
+    let (ax, ay, eta, one) = (
+        b.prog.constf(0.2),
+        b.prog.constf(0.2),
+        b.prog.constf(1.5),
+        b.prog.constf(1.0),
+    );
+    let coat = dielectric_r_of(&mut b, [ax, ay, eta], one, "coat");
+    let coat = mul(&mut b, coat, 2.0);
+    let faint = lambert(&mut b, Vec3::ONE, "faint");
+    let faint = mul(&mut b, faint, 0.06);
+    let grey = lambert(&mut b, Vec3::splat(0.3), "grey");
+    let base = b.add(grey, faint);
+    let root = b.layer(coat, base, TintMode::Rgb);
+    b.finish("droppy", RecipeId::Custom, root)
+        .expect("valid IR")
+}
+
+/// A dropped lobe moves the records after it down, so a record of one family may sit in
+/// the slot of another leaf of that family with other constants: the next prepare into
+/// the same `Prepared` must write its records whole, not only their view-dependent fields.
+#[test]
+fn records_moved_by_a_drop_are_written_whole_at_the_next_point() {
+    tables::init_all();
+    let options = PrepareOptions {
+        drop_threshold: 0.05,
+        ..PrepareOptions::default()
+    };
+    let m = Material::with_options(&droppy_ir(), options).expect("compiles");
+    assert!(m.prepares_uniform());
+    let mut rng = Rng::new(3);
+    let mut scratch = Scratch::default();
+    let mut reused = Prepared::new();
+    let (mut kept, mut dropped) = (0, 0);
+    for i in 0..200 {
+        let f = Frame::new(rng.sphere(), rng.sphere());
+        // Normal and grazing views in turn.
+        let mu: f32 = if i % 2 == 0 { 0.95 } else { 0.1 };
+        let v = f.z * mu + f.x * (1.0 - mu * mu).sqrt();
+        let p = ShadingPoint::new(f.z, f.x, v);
+        m.prepare_into(&p, &mut scratch, &mut reused);
+        match reused.lobes().len() {
+            3 => kept += 1,
+            2 => dropped += 1,
+            n => panic!("{n} lobes at point {i}"),
+        }
+        let afresh = m.prepare(&p);
+        assert_same(&reused, &afresh, &mut rng, &format!("droppy point {i}"));
+    }
+    assert!(kept > 0 && dropped > 0, "kept {kept}, dropped {dropped}");
+}
+
 /// A material whose parameters come from an input is not uniform: the general path
 /// prepares it, whatever its inputs.
 #[test]

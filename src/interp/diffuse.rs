@@ -289,6 +289,14 @@ impl OrenNayar {
     #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, b: &OrenNayarBound) -> PreparedOrenNayar {
         let mut p = b.template;
+        self.set_view(&mut p, v, b);
+        p
+    }
+
+    /// The view-dependent fields of `p`, a record [`OrenNayar::prepare_bound`] made of
+    /// this lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    pub(super) fn set_view(&self, p: &mut PreparedOrenNayar, v: Vec3, b: &OrenNayarBound) {
         p.v = v;
         match self.variant {
             OrenNayarVariant::Qualitative => {
@@ -303,7 +311,6 @@ impl OrenNayar {
                 }
             }
         }
-        p
     }
 }
 

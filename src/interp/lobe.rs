@@ -511,6 +511,45 @@ impl BoundLobe {
     }
 }
 
+impl BoundLobe {
+    /// [`BoundLobe::prepare_above_into`] into a record that this lobe's
+    /// `prepare_above_into` wrote at an earlier point: the kind, the flip flag and every
+    /// view-independent field are already there, so only the view-dependent ones are
+    /// written (each family's `set_view`, which its `prepare_bound` also ends with). The
+    /// record and the albedo are the same bits.
+    #[inline(always)]
+    pub(super) fn refresh_above_into(&self, v: Vec3, out: &mut PreparedLobe) -> Rgb {
+        debug_assert!(v.z > 0.0 && v.is_finite() && !out.flipped);
+        match (&self.lobe, &self.aux, &mut out.state) {
+            (Lobe::Lambert(_) | Lobe::SubsurfaceProxy(_), _, State::Lambert(p)) => {
+                p.albedo().reflect
+            }
+            (Lobe::OrenNayar(o), Aux::OrenNayar(b), State::OrenNayar(p)) => {
+                o.set_view(p, v, b);
+                p.albedo().reflect
+            }
+            (Lobe::MicrofacetR(m), Aux::Microfacet(b), State::MicrofacetR(p)) => {
+                m.set_view(p, v, b);
+                p.albedo().reflect
+            }
+            (Lobe::Dielectric(d), Aux::Dielectric(b), State::Dielectric(p)) => {
+                d.set_view(p, v, false, b);
+                p.albedo().reflect
+            }
+            (Lobe::Ward(w), Aux::Ward(c), State::Ward(p)) => {
+                w.set_view(p, v, c);
+                p.albedo().reflect
+            }
+            (Lobe::SheenCK(s), Aux::SheenCK(c), State::SheenCK(p)) => {
+                s.set_view(p, v, c);
+                p.albedo().reflect
+            }
+            // Every field of the LTC sheen depends on the view.
+            _ => self.prepare_above_into(v, out),
+        }
+    }
+}
+
 impl PreparedLobe {
     /// The leaf's kind.
     pub fn kind(&self) -> LobeKind {

@@ -604,6 +604,8 @@ impl Material {
     pub fn prepare_general_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let v = p.v.normalize_or(Vec3::Z);
         out.reset(v);
+        // The records are about to hold this algorithm's (possibly flipped) lobes.
+        out.stamp = 0;
         // Step 1: the program, with the point's inputs (fallbacks where missing). A program
         // of constants was run once at compile time.
         let run = self.const_regs.is_none();
@@ -1264,6 +1266,11 @@ pub struct Prepared {
     p_transparency: f32,
     /// Which lobes `eval` runs alone and which in packs.
     plan: packs::EvalPlan,
+    /// The [`uniform::UniformPlan::stamp`] of the material whose fused prepare wrote
+    /// `lobes` last with every leaf surviving (lobe `k` is leaf `k`, none flipped); 0 when
+    /// the records may hold anything else. The next fused prepare of that material then
+    /// writes only the records' view-dependent fields.
+    stamp: u64,
 }
 
 impl Default for Prepared {
@@ -1293,6 +1300,7 @@ impl Prepared {
             transparency: Vec3::ZERO,
             p_transparency: 0.0,
             plan: packs::EvalPlan::empty(),
+            stamp: 0,
         }
     }
 

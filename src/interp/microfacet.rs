@@ -284,22 +284,15 @@ impl MicrofacetR {
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, bound: &MicrofacetBound) -> PreparedMicrofacetR {
-        let albedo_fresnel = &bound.albedo_fresnel;
-        // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
-        let conductor = self.fresnel.is_conductor();
-        let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
-        let f_average = || clamp1(albedo_fresnel.average());
-        let alpha = bound.alpha;
-        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
         let mut p = PreparedMicrofacetR {
             ggx: self.ggx,
             masking: self.masking,
             fresnel: self.fresnel,
             v,
-            lambda_v: t.lambda_v,
-            view: t.view,
-            g1_v: t.g1_v,
-            inv_4mu: 0.25 / safe_mu(v.z),
+            lambda_v: 0.0,
+            view: bound.ggx_view,
+            g1_v: 0.0,
+            inv_4mu: 0.0,
             scale: Vec3::ONE,
             ms: Vec3::ZERO,
             e_row: None,
@@ -307,9 +300,31 @@ impl MicrofacetR {
             delta: bound.delta,
             albedo: Vec3::ZERO,
         };
+        self.set_view(&mut p, v, bound);
+        p
+    }
+
+    /// The view-dependent fields of `p`, a record [`MicrofacetR::prepare_bound`] made of
+    /// this lobe with `bound` (at any view): all that changes from view to view, so a
+    /// record kept from an earlier point is brought to `v` by this alone.
+    #[inline(always)]
+    pub(super) fn set_view(&self, p: &mut PreparedMicrofacetR, v: Vec3, bound: &MicrofacetBound) {
+        let albedo_fresnel = &bound.albedo_fresnel;
+        // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
+        let conductor = self.fresnel.is_conductor();
+        let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
+        let f_average = || clamp1(albedo_fresnel.average());
+        let alpha = bound.alpha;
+        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
+        p.v = v;
+        p.lambda_v = t.lambda_v;
+        p.view.c_z = t.view.c_z;
+        p.view.c_s = t.view.c_s;
+        p.g1_v = t.g1_v;
+        p.inv_4mu = 0.25 / safe_mu(v.z);
         if p.delta {
             p.albedo = self.fresnel.eval(v.z);
-            return p;
+            return;
         }
         let ess = clamp1(match &bound.curves {
             Some(c) => c.albedo(albedo_fresnel, v.z),
@@ -338,7 +353,6 @@ impl MicrofacetR {
                 p.albedo = ess + a_ms;
             }
         }
-        p
     }
 }
 
@@ -616,38 +630,56 @@ impl Dielectric {
         bound: &DielectricBound,
     ) -> PreparedDielectric {
         let c = &bound.consts;
-        let eta = if flipped { 1.0 / c.eta0 } else { c.eta0 };
-        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
-        let refl = self.mode != DielectricMode::T;
-        let trans = self.mode != DielectricMode::R;
-        let alpha = c.alpha;
-        // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
-        let (tint_r, lum_r) = if self.turquin > 0.0 {
-            let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
-            let tint_r = self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha);
-            (tint_r, lum(tint_r).max(0.0))
-        } else {
-            (self.tint_r, c.lum_r)
-        };
         let mut p = PreparedDielectric {
             ggx: self.ggx,
             masking: self.masking,
-            eta,
+            eta: if flipped { 1.0 / c.eta0 } else { c.eta0 },
             v,
-            lambda_v: t.lambda_v,
-            view: t.view,
-            g1_v: t.g1_v,
-            inv_mu: 1.0 / safe_mu(v.z),
-            refl,
-            trans,
-            tint_r,
+            lambda_v: 0.0,
+            view: bound.ggx_view,
+            g1_v: 0.0,
+            inv_mu: 0.0,
+            refl: self.mode != DielectricMode::T,
+            trans: self.mode != DielectricMode::R,
+            tint_r: self.tint_r,
             tint_t: self.tint_t,
-            lum_r,
+            lum_r: c.lum_r,
             lum_t: c.lum_t,
             t_fresnel: self.t_fresnel,
             delta: c.delta,
             albedo: LobeAlbedo::default(),
         };
+        self.set_view(&mut p, v, flipped, bound);
+        p
+    }
+
+    /// The view-dependent fields of `p`, a record [`Dielectric::prepare_bound`] made of
+    /// this lobe with `bound` and `flipped` (at any view): all that changes from view to
+    /// view, so a record kept from an earlier point is brought to `v` by this alone.
+    #[inline(always)]
+    pub(super) fn set_view(
+        &self,
+        p: &mut PreparedDielectric,
+        v: Vec3,
+        flipped: bool,
+        bound: &DielectricBound,
+    ) {
+        let eta = p.eta;
+        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
+        let alpha = bound.consts.alpha;
+        p.v = v;
+        p.lambda_v = t.lambda_v;
+        p.view.c_z = t.view.c_z;
+        p.view.c_s = t.view.c_s;
+        p.g1_v = t.g1_v;
+        p.inv_mu = 1.0 / safe_mu(v.z);
+        // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
+        if self.turquin > 0.0 {
+            let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
+            p.tint_r = self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha);
+            p.lum_r = lum(p.tint_r).max(0.0);
+        }
+        let (refl, trans) = (p.refl, p.trans);
         let [er, et, etn] = if p.delta {
             let f = fresnel::dielectric(v.z, eta);
             let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
@@ -664,13 +696,12 @@ impl Dielectric {
             }
         };
         if refl {
-            p.albedo.reflect = tint_r * er;
+            p.albedo.reflect = p.tint_r * er;
         }
         if trans {
             p.albedo.transmit = self.tint_t * if self.t_fresnel { et } else { etn };
             p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
         }
-        p
     }
 }
 

@@ -117,19 +117,31 @@ impl SheenCK {
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, b: &SheenCKBound) -> PreparedSheenCK {
-        PreparedSheenCK {
+        let mut p = PreparedSheenCK {
             v,
             half_inv_r: b.half_inv_r,
             norm: b.norm,
             masking: self.masking,
             coef: b.coef,
-            lambda_o: match self.masking {
-                SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
-                SheenMasking::MaterialX => 0.0,
-            },
-            inv_4mu: 0.25 / v.z.max(1e-7),
-            albedo: b.curve.at(v.z),
-        }
+            lambda_o: 0.0,
+            inv_4mu: 0.0,
+            albedo: 0.0,
+        };
+        self.set_view(&mut p, v, b);
+        p
+    }
+
+    /// The view-dependent fields of `p`, a record [`SheenCK::prepare_bound`] made of this
+    /// lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    pub(super) fn set_view(&self, p: &mut PreparedSheenCK, v: Vec3, b: &SheenCKBound) {
+        p.v = v;
+        p.lambda_o = match self.masking {
+            SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
+            SheenMasking::MaterialX => 0.0,
+        };
+        p.inv_4mu = 0.25 / v.z.max(1e-7);
+        p.albedo = b.curve.at(v.z);
     }
 
     /// The prepared lobe given its table albedo `e` at `μ_o`.

@@ -162,18 +162,27 @@ impl Ward {
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
     pub fn prepare_bound(&self, v: Vec3, b: &WardBound) -> PreparedWard {
-        let mut core = b.core;
-        if self.variant == WardVariant::Classic {
-            // The only view-dependent part of the core: `1/√μ_o` in the classic norm.
-            core.norm = b.core.norm / v.z.max(1e-7).sqrt();
-        }
-        PreparedWard {
-            core,
+        let mut p = PreparedWard {
+            core: b.core,
             variant: self.variant,
             rho: self.rho,
             v,
-            albedo: self.rho * b.curve.at(v.z),
+            albedo: Vec3::ZERO,
+        };
+        self.set_view(&mut p, v, b);
+        p
+    }
+
+    /// The view-dependent fields of `p`, a record [`Ward::prepare_bound`] made of this
+    /// lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    pub(super) fn set_view(&self, p: &mut PreparedWard, v: Vec3, b: &WardBound) {
+        if self.variant == WardVariant::Classic {
+            // The only view-dependent part of the core: `1/√μ_o` in the classic norm.
+            p.core.norm = b.core.norm / v.z.max(1e-7).sqrt();
         }
+        p.v = v;
+        p.albedo = self.rho * b.curve.at(v.z);
     }
 
     /// The prepared lobe given its table albedo at `μ_o` (ρ = 1).

@@ -22,7 +22,7 @@
 
 use super::{Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
 use crate::interp::frame::Frame;
-use crate::interp::lobe::BoundLobe;
+use crate::interp::lobe::{BoundLobe, PreparedLobe, Sides};
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, Reg, TintMode};
 use glam::Vec3;
@@ -66,6 +66,10 @@ pub(super) struct UniformPlan {
     /// Every leaf's bound constant lobe, in leaf order (side by side, not inside the
     /// larger [`super::LeafInfo`]s).
     leaves: Vec<BoundLobe>,
+    /// Every leaf's record at the view straight up: its view-independent fields are those
+    /// of the record at any view above the surface, so a record is this template with
+    /// the view-dependent fields written over ([`BoundLobe::refresh_above_into`]).
+    templates: Vec<PreparedLobe>,
     thr: Vec<UniformThr>,
 }
 
@@ -138,7 +142,16 @@ impl UniformPlan {
         // Relaxed: the counter only has to hand out distinct values.
         static NEXT_STAMP: AtomicU64 = AtomicU64::new(1);
         let stamp = NEXT_STAMP.fetch_add(1, Ordering::Relaxed);
-        Some(UniformPlan { stamp, leaves, thr })
+        let templates = leaves
+            .iter()
+            .map(|lobe| lobe.prepare(Vec3::Z, Sides::Front))
+            .collect();
+        Some(UniformPlan {
+            stamp,
+            leaves,
+            templates,
+            thr,
+        })
     }
 }
 
@@ -167,11 +180,18 @@ impl Material {
         if !(v_local.z > 0.0 && v_local.is_finite()) {
             return false;
         }
-        // Every leaf's record and albedo (all leaves are constants, so each is bound).
+        // Every leaf's record and albedo (all leaves are constants, so each is bound). Every
+        // family of the plan reflects only (its transmitted parts are 0). Records this
+        // material wrote at the previous point, every leaf in place, already hold their
+        // view-independent fields; others start from the templates.
+        if out.stamp != plan.stamp {
+            for (template, a) in plan.templates.iter().zip(&mut out.lobes) {
+                a.lobe = *template;
+            }
+        }
         let mut albedos = [Vec3::ZERO; MAX_LOBES];
         for ((lobe, a), alb) in plan.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
-            // Every family of the plan reflects only (its transmitted parts are 0).
-            *alb = lobe.prepare_above_into(v_local, &mut a.lobe);
+            *alb = lobe.refresh_above_into(v_local, &mut a.lobe);
         }
         // Step 3: throughputs, bottom-up (step `j` writes slot `j`).
         let mut thr = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
@@ -232,6 +252,12 @@ impl Material {
             count += 1;
         }
         out.count = count;
+        // A dropped lobe moved the records after it down: they are no longer in place.
+        out.stamp = if count == plan.leaves.len() {
+            plan.stamp
+        } else {
+            0
+        };
         // A lobe flips only for a view below its surface (`v_local.z > 0` here).
         out.flipped_any = false;
         // Step 7: selection probabilities.
