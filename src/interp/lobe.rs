@@ -511,41 +511,78 @@ impl BoundLobe {
     }
 }
 
+/// A [`BoundLobe`] as the refresh of a record above the surface reads it: the family's
+/// lobe and bound data in one variant, so one dispatch picks the family's `set_view`
+/// (matching the lobe and its bound data as a pair costs a dispatch each, per leaf and
+/// point).
+#[allow(clippy::large_enum_variant)] // one per leaf of a uniform material, read per point
+#[derive(Debug, Clone, Copy)]
+pub(super) enum RefreshLeaf {
+    /// A Lambert or subsurface proxy: nothing depends on the view.
+    Lambert,
+    OrenNayar(OrenNayar, OrenNayarBound),
+    MicrofacetR(MicrofacetR, MicrofacetBound),
+    Dielectric(Dielectric, DielectricBound),
+    Ward(Ward, WardBound),
+    SheenCK(SheenCK, SheenCKBound),
+    /// Any other lobe, prepared whole.
+    Whole,
+}
+
 impl BoundLobe {
-    /// [`BoundLobe::prepare_above_into`] into a record that this lobe's
-    /// `prepare_above_into` wrote at an earlier point: the kind, the flip flag and every
-    /// view-independent field are already there, so only the view-dependent ones are
-    /// written (each family's `set_view`, which its `prepare_bound` also ends with). The
-    /// record and the albedo are the same bits.
+    /// This lobe as [`RefreshLeaf::refresh_above_into`] reads it.
+    pub(super) fn refresh_leaf(&self) -> RefreshLeaf {
+        match (&self.lobe, &self.aux) {
+            (Lobe::Lambert(_) | Lobe::SubsurfaceProxy(_), _) => RefreshLeaf::Lambert,
+            (Lobe::OrenNayar(o), Aux::OrenNayar(b)) => RefreshLeaf::OrenNayar(*o, *b),
+            (Lobe::MicrofacetR(m), Aux::Microfacet(b)) => RefreshLeaf::MicrofacetR(*m, *b),
+            (Lobe::Dielectric(d), Aux::Dielectric(b)) => RefreshLeaf::Dielectric(*d, *b),
+            (Lobe::Ward(w), Aux::Ward(b)) => RefreshLeaf::Ward(*w, *b),
+            (Lobe::SheenCK(s), Aux::SheenCK(b)) => RefreshLeaf::SheenCK(*s, *b),
+            _ => RefreshLeaf::Whole,
+        }
+    }
+}
+
+impl RefreshLeaf {
+    /// [`BoundLobe::prepare_above_into`] of the lobe `lobe` (of which this is
+    /// [`BoundLobe::refresh_leaf`]) into a record that `lobe.prepare_above_into` wrote at
+    /// an earlier point: the kind, the flip flag and every view-independent field are
+    /// already there, so only the view-dependent ones are written (each family's
+    /// `set_view`, which its `prepare_bound` also ends with). The record and the albedo are
+    /// the same bits. A record of another family is prepared whole.
     #[inline(always)]
-    pub(super) fn refresh_above_into(&self, v: Vec3, out: &mut PreparedLobe) -> Rgb {
+    pub(super) fn refresh_above_into(
+        &self,
+        lobe: &BoundLobe,
+        v: Vec3,
+        out: &mut PreparedLobe,
+    ) -> Rgb {
         debug_assert!(v.z > 0.0 && v.is_finite() && !out.flipped);
-        match (&self.lobe, &self.aux, &mut out.state) {
-            (Lobe::Lambert(_) | Lobe::SubsurfaceProxy(_), _, State::Lambert(p)) => {
-                p.albedo().reflect
-            }
-            (Lobe::OrenNayar(o), Aux::OrenNayar(b), State::OrenNayar(p)) => {
+        match (self, &mut out.state) {
+            (RefreshLeaf::Lambert, State::Lambert(p)) => p.albedo().reflect,
+            (RefreshLeaf::OrenNayar(o, b), State::OrenNayar(p)) => {
                 o.set_view(p, v, b);
                 p.albedo().reflect
             }
-            (Lobe::MicrofacetR(m), Aux::Microfacet(b), State::MicrofacetR(p)) => {
+            (RefreshLeaf::MicrofacetR(m, b), State::MicrofacetR(p)) => {
                 m.set_view(p, v, b);
                 p.albedo().reflect
             }
-            (Lobe::Dielectric(d), Aux::Dielectric(b), State::Dielectric(p)) => {
+            (RefreshLeaf::Dielectric(d, b), State::Dielectric(p)) => {
                 d.set_view(p, v, false, b);
                 p.albedo().reflect
             }
-            (Lobe::Ward(w), Aux::Ward(c), State::Ward(p)) => {
-                w.set_view(p, v, c);
+            (RefreshLeaf::Ward(w, b), State::Ward(p)) => {
+                w.set_view(p, v, b);
                 p.albedo().reflect
             }
-            (Lobe::SheenCK(s), Aux::SheenCK(c), State::SheenCK(p)) => {
-                s.set_view(p, v, c);
+            (RefreshLeaf::SheenCK(s, b), State::SheenCK(p)) => {
+                s.set_view(p, v, b);
                 p.albedo().reflect
             }
             // Every field of the LTC sheen depends on the view.
-            _ => self.prepare_above_into(v, out),
+            _ => lobe.prepare_above_into(v, out),
         }
     }
 }

@@ -22,7 +22,7 @@
 
 use super::{Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
 use crate::interp::frame::Frame;
-use crate::interp::lobe::{BoundLobe, PreparedLobe, Sides};
+use crate::interp::lobe::{BoundLobe, PreparedLobe, RefreshLeaf, Sides};
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, Reg, TintMode};
 use glam::Vec3;
@@ -66,6 +66,8 @@ pub(super) struct UniformPlan {
     /// Every leaf's bound constant lobe, in leaf order (side by side, not inside the
     /// larger [`super::LeafInfo`]s).
     leaves: Vec<BoundLobe>,
+    /// The leaves as their refresh reads them ([`BoundLobe::refresh_leaf`]).
+    refresh: Vec<RefreshLeaf>,
     /// Every leaf's record at the view straight up: its view-independent fields are those
     /// of the record at any view above the surface, so a record is this template with
     /// the view-dependent fields written over ([`BoundLobe::refresh_above_into`]).
@@ -146,9 +148,11 @@ impl UniformPlan {
             .iter()
             .map(|lobe| lobe.prepare(Vec3::Z, Sides::Front))
             .collect();
+        let refresh = leaves.iter().map(BoundLobe::refresh_leaf).collect();
         Some(UniformPlan {
             stamp,
             leaves,
+            refresh,
             templates,
             thr,
         })
@@ -190,8 +194,9 @@ impl Material {
             }
         }
         let mut albedos = [Vec3::ZERO; MAX_LOBES];
-        for ((lobe, a), alb) in plan.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
-            *alb = lobe.refresh_above_into(v_local, &mut a.lobe);
+        let leaves = plan.leaves.iter().zip(&plan.refresh);
+        for (((lobe, leaf), a), alb) in leaves.zip(&mut out.lobes).zip(&mut albedos) {
+            *alb = leaf.refresh_above_into(lobe, v_local, &mut a.lobe);
         }
         // Step 3: throughputs, bottom-up (step `j` writes slot `j`).
         let mut thr = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
