@@ -482,7 +482,7 @@ impl<const W: usize> Kernel<W> {
                 return;
             }
         }
-        self.refresh_lanes(lane, lw);
+        self.refresh_lanes(lane, W, lw);
     }
 
     /// The part of [`Kernel::fill_lanes`] that depends on the view, the weights or the
@@ -492,26 +492,27 @@ impl<const W: usize> Kernel<W> {
     pub(super) fn refresh_lanes<'a>(
         &mut self,
         lane: impl Fn(usize) -> &'a PreparedLobe,
+        lanes: usize,
         lw: &LaneWeights<W>,
     ) {
         match self {
             Kernel::Scalar => {}
             Kernel::Lambert { rho_pi } => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::Lambert(p) = &lane(k).state {
                         rho_pi.set(k, p.rho_pi * lw.w.get(k));
                     }
                 }
             }
             Kernel::OrenNayar(x) => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::OrenNayar(p) = &lane(k).state {
                         x.set_view(k, p, lw.w.get(k));
                     }
                 }
             }
             Kernel::Conductor(x) => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::MicrofacetR(p) = &lane(k).state {
                         x.g.set_view(k, p.v, &p.view);
                         x.pdf_c[k] = p.g1_v * p.inv_4mu * lw.p[k];
@@ -520,7 +521,7 @@ impl<const W: usize> Kernel<W> {
                 }
             }
             Kernel::DielectricR(x) => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::Dielectric(p) = &lane(k).state {
                         x.g.set_view(k, p.v, &p.view);
                         x.set_view(k, p.g1_v, p.inv_mu, p.tint_r, lw.p[k], lw.w.get(k));
@@ -528,7 +529,7 @@ impl<const W: usize> Kernel<W> {
                 }
             }
             Kernel::Ward(x) => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::Ward(p) = &lane(k).state {
                         x.v.set(k, p.v);
                         x.set_view(k, &p.core, p.rho, lw.p[k], lw.w.get(k));
@@ -536,18 +537,43 @@ impl<const W: usize> Kernel<W> {
                 }
             }
             Kernel::SheenCK(x) => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::SheenCK(p) = &lane(k).state {
                         x.v.set(k, p.v);
                     }
                 }
             }
             Kernel::SheenLTC(x) => {
-                for k in 0..W {
+                for k in 0..lanes {
                     if let State::SheenLTC(p) = &lane(k).state {
                         x.set(k, p);
                     }
                 }
+            }
+        }
+    }
+
+    /// Sets the view of lanes `from..W` straight up (`V = +z`, where `Λ(V) = 0`), leaving
+    /// their other terms as they are. For lanes of weight and probability 0 that later
+    /// refreshes skip ([`Kernel::refresh_lanes`] with fewer lanes): each then adds exactly
+    /// zero to every sum, as any finite term times 0 is ±0, and a view straight up keeps
+    /// every term finite for any light above the surface (`H_z ≥ 1`).
+    pub(super) fn park_lanes(&mut self, from: usize) {
+        let up = Vec3::Z;
+        let ggx = |g: &mut GgxX<W>, k: usize| {
+            g.v.set(k, up);
+            g.c_z[k] = 1.0;
+            g.c_s[k] = 1.0;
+        };
+        for k in from..W {
+            match self {
+                // No view, or a view frame with finite terms (the LTC's).
+                Kernel::Scalar | Kernel::Lambert { .. } | Kernel::SheenLTC(_) => {}
+                Kernel::OrenNayar(x) => x.v.set(k, up),
+                Kernel::Conductor(x) => ggx(&mut x.g, k),
+                Kernel::DielectricR(x) => ggx(&mut x.g, k),
+                Kernel::Ward(x) => x.v.set(k, up),
+                Kernel::SheenCK(x) => x.v.set(k, up),
             }
         }
     }

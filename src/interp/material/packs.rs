@@ -279,26 +279,29 @@ impl LobePack {
             }),
             "a pack's lobes share one kernel key"
         );
-        // Unused lanes repeat the last lobe (with weight and probability 0).
+        // Unused lanes take the last lobe's terms (with weight and probability 0) and a
+        // view straight up, which refreshes leave as it is.
         let last = members.len() - 1;
         let lanes: [&PreparedLobe; PACK_LANES] =
             std::array::from_fn(|k| &lobes[members[k.min(last)] as usize].lobe);
         self.kernel.fill_lanes(|k| lanes[k], &self.lw);
+        self.kernel.park_lanes(members.len());
     }
 
     /// [`LobePack::fill`] of the same lobes, unflipped, as the fill before: the lanes'
-    /// signs and frames, and the kernel's view-independent terms, are already right.
+    /// signs and frames, the kernel's view-independent terms and the unused lanes are
+    /// already right, so only the members' view, weight and probability terms are written.
     fn refresh(&mut self, lobes: &[ActiveLobe], members: &[u8]) {
+        let mut lanes: [&PreparedLobe; PACK_LANES] = [&lobes[members[0] as usize].lobe; PACK_LANES];
         for (k, &m) in members.iter().enumerate() {
             let a = &lobes[m as usize];
             debug_assert!(!a.lobe.is_flipped() && self.frame[k] == a.frame);
             self.lw.w.set(k, a.weight);
             self.lw.p[k] = a.prob;
+            lanes[k] = &a.lobe;
         }
-        let last = members.len() - 1;
-        let lanes: [&PreparedLobe; PACK_LANES] =
-            std::array::from_fn(|k| &lobes[members[k.min(last)] as usize].lobe);
-        self.kernel.refresh_lanes(|k| lanes[k], &self.lw);
+        self.kernel
+            .refresh_lanes(|k| lanes[k], members.len(), &self.lw);
     }
 }
 
@@ -321,6 +324,59 @@ mod tests {
         let mut all: Vec<u8> = packs.into_iter().flatten().chain(solo).collect();
         all.sort_unstable();
         assert_eq!(all, (0..keys.len() as u8).collect::<Vec<_>>(), "{keys:?}");
+    }
+
+    /// Two Ward lobes seen at a grazing angle fill one pack; its two unused lanes hold a
+    /// view straight up, weight and probability 0, and the pack's sums equal the lobes'
+    /// own evaluations (the unused lanes add nothing).
+    #[test]
+    fn unused_lanes_look_straight_up_and_add_nothing() {
+        use crate::interp::lobe::{Lobe, Sides};
+        use crate::interp::material::Albedo;
+        use crate::interp::soa::Kernel;
+        use crate::interp::ward::{Ward, WardVariant};
+        crate::interp::tables::init_all();
+        let v = Vec3::new(0.99, 0.0, 0.141).normalize();
+        let lobes = [0.1, 0.3].map(|a| ActiveLobe {
+            lobe: Lobe::Ward(Ward {
+                ax: a,
+                ay: a,
+                rho: Vec3::ONE,
+                variant: WardVariant::Gm,
+            })
+            .prepare(v, Sides::Front),
+            weight: Vec3::new(0.5, 0.4, 0.3),
+            albedo: Albedo::default(),
+            prob: 0.5,
+            frame: 0,
+            leaf: 0,
+        });
+        let mut plan = EvalPlan::empty();
+        plan.build(&lobes);
+        assert_eq!(plan.grouping.pack_count, 1);
+        let pack = &plan.packs[0];
+        let Kernel::Ward(x) = &pack.kernel else {
+            panic!("a Ward pack");
+        };
+        for k in 2..PACK_LANES {
+            assert_eq!(x.v.get(k), Vec3::Z, "lane {k}");
+            assert_eq!((pack.lw.w.get(k), pack.lw.p[k]), (Vec3::ZERO, 0.0));
+        }
+        for l in [Vec3::new(-0.98, 0.0, 0.2).normalize(), Vec3::Z, Vec3::X] {
+            let (f, pdf) = plan.eval_one_frame::<true>(l);
+            let (mut f_alone, mut pdf_alone) = (Vec3::ZERO, 0.0);
+            for a in &lobes {
+                let e = a.lobe.eval(l);
+                f_alone += a.weight * e.f_cos;
+                pdf_alone += a.prob * e.pdf;
+            }
+            assert!(f.is_finite() && pdf.is_finite(), "{l}");
+            assert!(
+                (f - f_alone).abs().max_element() <= 1e-5 * f_alone.max_element(),
+                "{l}"
+            );
+            assert!((pdf - pdf_alone).abs() <= 1e-5 * pdf_alone, "{l}");
+        }
     }
 
     #[test]
