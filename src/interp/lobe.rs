@@ -546,11 +546,12 @@ impl BoundLobe {
 
 impl RefreshLeaf {
     /// [`BoundLobe::prepare_above_into`] of the lobe `lobe` (of which this is
-    /// [`BoundLobe::refresh_leaf`]) into a record that `lobe.prepare_above_into` wrote at
-    /// an earlier point: the kind, the flip flag and every view-independent field are
-    /// already there, so only the view-dependent ones are written (each family's
-    /// `set_view`, which its `prepare_bound` also ends with). The record and the albedo are
-    /// the same bits. A record of another family is prepared whole.
+    /// [`BoundLobe::refresh_leaf`]) into a record of that lobe prepared above the surface
+    /// at some other view (an earlier point's, or the view straight up): the kind, the flip
+    /// flag and every view-independent field are already there, so only the
+    /// view-dependent ones are written (each family's `set_view`, which its
+    /// `prepare_bound` also ends with). The record and the albedo are the same bits. A
+    /// record of another family is prepared whole.
     #[inline(always)]
     pub(super) fn refresh_above_into(
         &self,

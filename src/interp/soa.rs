@@ -488,7 +488,9 @@ impl<const W: usize> Kernel<W> {
     /// The part of [`Kernel::fill_lanes`] that depends on the view, the weights or the
     /// probabilities: all a refill needs when the kernel already holds the same lobes'
     /// view-independent terms (the same leaves of the same material, none flipped, filled
-    /// by `fill_lanes` at an earlier point). A kernel of another family is left as it is.
+    /// by `fill_lanes` at an earlier point). Only lanes `0..lanes` are written: a refresh
+    /// skips the unused lanes that [`Kernel::park_lanes`] set. A lane whose lobe is of
+    /// another family than the kernel is left as it is.
     pub(super) fn refresh_lanes<'a>(
         &mut self,
         lane: impl Fn(usize) -> &'a PreparedLobe,

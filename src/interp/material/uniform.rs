@@ -10,7 +10,9 @@
 //!
 //! 1. the point's frame and V in it (a view at or below the horizon, or not finite, goes to
 //!    the general path: lobes there may be inactive or flipped);
-//! 2. every leaf's record from its bound constant lobe, and its albedo;
+//! 2. every leaf's record from its bound constant lobe, and its albedo: only the record's
+//!    view-dependent fields when the records hold this material's leaves from the previous
+//!    point ([`Prepared`]'s stamp), else the leaf's template first;
 //! 3. the throughput steps with their registers folded to constants ([`UniformThr`]);
 //! 4. the weight plan's scopes and terms, and each target's sum;
 //! 5. and 6. in the same pass over the targets, each leaf's weighted albedo and the drop,
@@ -60,8 +62,9 @@ enum UniformThr {
 #[derive(Debug, Clone)]
 pub(super) struct UniformPlan {
     /// Unique per compiled material (clones share it, with their constants): lets a
-    /// [`Prepared`] tell that its lobe packs hold this material's constants
-    /// ([`super::packs::EvalPlan::build_stamped`]).
+    /// [`Prepared`] tell that its records and lobe packs hold this material's
+    /// view-independent fields (`Prepared::stamp`,
+    /// [`super::packs::EvalPlan::build_stamped`]).
     pub(super) stamp: u64,
     /// Every leaf's bound constant lobe, in leaf order (side by side, not inside the
     /// larger [`super::LeafInfo`]s).
@@ -70,7 +73,7 @@ pub(super) struct UniformPlan {
     refresh: Vec<RefreshLeaf>,
     /// Every leaf's record at the view straight up: its view-independent fields are those
     /// of the record at any view above the surface, so a record is this template with
-    /// the view-dependent fields written over ([`BoundLobe::refresh_above_into`]).
+    /// the view-dependent fields written over ([`RefreshLeaf::refresh_above_into`]).
     templates: Vec<PreparedLobe>,
     thr: Vec<UniformThr>,
 }
