@@ -57,6 +57,13 @@ enum UniformThr {
     Multiply { f: u8, c: Vec3 },
 }
 
+/// A leaf of a [`UniformPlan`]: its bound lobe, and the same as its refresh reads it.
+#[derive(Debug, Clone, Copy)]
+struct UniformLeaf {
+    lobe: BoundLobe,
+    refresh: RefreshLeaf,
+}
+
 /// What [`Material::prepare_uniform_into`] needs beyond the material's weight plan: the
 /// throughput steps with constants folded in.
 #[derive(Debug, Clone)]
@@ -66,11 +73,9 @@ pub(super) struct UniformPlan {
     /// view-independent fields (`Prepared::stamp`,
     /// [`super::packs::EvalPlan::build_stamped`]).
     pub(super) stamp: u64,
-    /// Every leaf's bound constant lobe, in leaf order (side by side, not inside the
-    /// larger [`super::LeafInfo`]s).
-    leaves: Vec<BoundLobe>,
-    /// The leaves as their refresh reads them ([`BoundLobe::refresh_leaf`]).
-    refresh: Vec<RefreshLeaf>,
+    /// Every leaf's bound constant lobe with what its refresh reads, in leaf order (side by
+    /// side, not inside the larger [`super::LeafInfo`]s).
+    leaves: Vec<UniformLeaf>,
     /// Every leaf's record at the view straight up: its view-independent fields are those
     /// of the record at any view above the surface, so a record is this template with
     /// the view-dependent fields written over ([`RefreshLeaf::refresh_above_into`]).
@@ -151,11 +156,16 @@ impl UniformPlan {
             .iter()
             .map(|lobe| lobe.prepare(Vec3::Z, Sides::Front))
             .collect();
-        let refresh = leaves.iter().map(BoundLobe::refresh_leaf).collect();
+        let leaves = leaves
+            .into_iter()
+            .map(|lobe| UniformLeaf {
+                lobe,
+                refresh: lobe.refresh_leaf(),
+            })
+            .collect();
         Some(UniformPlan {
             stamp,
             leaves,
-            refresh,
             templates,
             thr,
         })
@@ -197,9 +207,10 @@ impl Material {
             }
         }
         let mut albedos = [Vec3::ZERO; MAX_LOBES];
-        let leaves = plan.leaves.iter().zip(&plan.refresh);
-        for (((lobe, leaf), a), alb) in leaves.zip(&mut out.lobes).zip(&mut albedos) {
-            *alb = leaf.refresh_above_into(lobe, v_local, &mut a.lobe);
+        for ((leaf, a), alb) in plan.leaves.iter().zip(&mut out.lobes).zip(&mut albedos) {
+            *alb = leaf
+                .refresh
+                .refresh_above_into(&leaf.lobe, v_local, &mut a.lobe);
         }
         // Step 3: throughputs, bottom-up (step `j` writes slot `j`).
         let mut thr = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
