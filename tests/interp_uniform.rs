@@ -168,9 +168,10 @@ fn fused_prepare_overwrites_a_used_record() {
 }
 
 /// Preparing the same material (or a clone) into the same `Prepared` again refreshes its
-/// lobe packs in place, writing only their view, weight and probability terms; that gives
-/// the bits of packs filled afresh. Another material in between, a view from below (the
-/// general path) and dropped lobes each make the next prepare fill the packs whole.
+/// records and lobe packs in place, writing only their view-dependent fields (and the
+/// packs' weight and probability terms); that gives the bits of a fresh prepare. Another
+/// material in between, a view from below (the general path) and dropped lobes each make
+/// the next prepare write them whole.
 #[test]
 fn packs_refreshed_in_place_equal_packs_filled_afresh() {
     tables::init_all();
