@@ -218,19 +218,6 @@ pub struct PreparedLobe {
     pub(super) state: State,
 }
 
-/// Writes family `$variant`'s prepared state `$value` into record `$out`. A record at a
-/// fixed index usually held the same family at the previous prepare: then the new state is
-/// written over the old one field by field, with no temporary (copying a freshly written
-/// temporary stalls store forwarding).
-macro_rules! write_state {
-    ($out:expr, $variant:ident, $value:expr) => {
-        match &mut $out.state {
-            State::$variant(p) => *p = $value,
-            s => *s = State::$variant($value),
-        }
-    };
-}
-
 #[derive(Debug, Clone, Copy)]
 pub(super) enum State {
     Inactive,
@@ -371,9 +358,15 @@ impl Lobe {
             out.state = State::Inactive;
             return;
         }
+        // A record at a fixed index usually held the same family at the previous prepare:
+        // then the new state is written over the old one field by field, with no temporary
+        // (copying a freshly written temporary stalls store forwarding).
         macro_rules! put {
             ($variant:ident, $value:expr) => {
-                write_state!(out, $variant, $value)
+                match &mut out.state {
+                    State::$variant(p) => *p = $value,
+                    s => *s = State::$variant($value),
+                }
             };
         }
         match self {
@@ -471,44 +464,6 @@ impl BoundLobe {
     pub(super) fn prepare_into(&self, v: Vec3, sides: Sides, out: &mut PreparedLobe) {
         self.lobe.prepare_aux_into(v, sides, &self.aux, out)
     }
-
-    /// [`BoundLobe::prepare_into`] for a view above the surface (`v.z > 0` and finite,
-    /// where no lobe flips or goes inactive, whatever the sides), returning the reflected
-    /// part of the lobe's albedo: the per-leaf step of the uniform-material prepare. The
-    /// horizon and flip tests, and the second dispatch of [`PreparedLobe::albedo`], are
-    /// left out; the record and the albedo are the same bits.
-    #[inline(always)]
-    pub(super) fn prepare_above_into(&self, v: Vec3, out: &mut PreparedLobe) -> Rgb {
-        debug_assert!(v.z > 0.0 && v.is_finite());
-        out.kind = self.lobe.kind();
-        out.flipped = false;
-        // The albedo is read from the value before it is stored.
-        macro_rules! put {
-            ($variant:ident, $value:expr) => {{
-                let p = $value;
-                let albedo = p.albedo().reflect;
-                write_state!(out, $variant, p);
-                albedo
-            }};
-        }
-        match (&self.lobe, &self.aux) {
-            (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => put!(Lambert, l.prepare()),
-            (Lobe::OrenNayar(o), Aux::OrenNayar(b)) => put!(OrenNayar, o.prepare_bound(v, b)),
-            (Lobe::MicrofacetR(m), Aux::Microfacet(b)) => {
-                put!(MicrofacetR, m.prepare_bound(v, b))
-            }
-            (Lobe::Dielectric(d), Aux::Dielectric(b)) => {
-                put!(Dielectric, d.prepare_bound(v, false, b))
-            }
-            (Lobe::Ward(w), Aux::Ward(c)) => put!(Ward, w.prepare_bound(v, c)),
-            (Lobe::SheenCK(s), Aux::SheenCK(c)) => put!(SheenCK, s.prepare_bound(v, c)),
-            (Lobe::SheenLTC(s), Aux::SheenLTC(b)) => put!(SheenLTC, s.prepare_bound(v, b)),
-            _ => {
-                self.prepare_into(v, Sides::Front, out);
-                out.albedo().reflect
-            }
-        }
-    }
 }
 
 /// A [`BoundLobe`] as the refresh of a record above the surface reads it: the family's
@@ -525,6 +480,8 @@ pub(super) enum RefreshLeaf {
     Dielectric(Dielectric, DielectricBound),
     Ward(Ward, WardBound),
     SheenCK(SheenCK, SheenCKBound),
+    /// Every field of the LTC sheen depends on the view: its record is written whole.
+    SheenLTC(SheenLTC, SheenLTCBound),
     /// Any other lobe, prepared whole.
     Whole,
 }
@@ -539,18 +496,21 @@ impl BoundLobe {
             (Lobe::Dielectric(d), Aux::Dielectric(b)) => RefreshLeaf::Dielectric(*d, *b),
             (Lobe::Ward(w), Aux::Ward(b)) => RefreshLeaf::Ward(*w, *b),
             (Lobe::SheenCK(s), Aux::SheenCK(b)) => RefreshLeaf::SheenCK(*s, *b),
+            (Lobe::SheenLTC(s), Aux::SheenLTC(b)) => RefreshLeaf::SheenLTC(*s, *b),
             _ => RefreshLeaf::Whole,
         }
     }
 }
 
 impl RefreshLeaf {
-    /// [`BoundLobe::prepare_above_into`] of the lobe `lobe` (of which this is
-    /// [`BoundLobe::refresh_leaf`]) into a record of that lobe prepared above the surface
-    /// at some other view (an earlier point's, or the view straight up): the kind, the flip
-    /// flag and every view-independent field are already there, so only the
-    /// view-dependent ones are written (each family's `set_view`, which its
-    /// `prepare_bound` also ends with). The record and the albedo are the same bits. A
+    /// [`BoundLobe::prepare_into`] of the lobe `lobe` (of which this is
+    /// [`BoundLobe::refresh_leaf`]) for a view `v` above the surface (`v.z > 0` and
+    /// finite, where no lobe flips or goes inactive), returning the reflected part of its
+    /// albedo: the per-leaf step of the uniform-material prepare. `out` must hold a record
+    /// of that lobe prepared above the surface at some other view (an earlier point's, or
+    /// the view straight up): its kind, flip flag and view-independent fields are already
+    /// there, so only the view-dependent ones are written (each family's `set_view`, which
+    /// its `prepare_bound` also ends with). The record and the albedo are the same bits. A
     /// record of another family is prepared whole.
     #[inline(always)]
     pub(super) fn refresh_above_into(
@@ -582,8 +542,14 @@ impl RefreshLeaf {
                 s.set_view(p, v, b);
                 p.albedo().reflect
             }
-            // Every field of the LTC sheen depends on the view.
-            _ => lobe.prepare_above_into(v, out),
+            (RefreshLeaf::SheenLTC(s, b), State::SheenLTC(p)) => {
+                *p = s.prepare_bound(v, b);
+                p.albedo().reflect
+            }
+            _ => {
+                lobe.prepare_into(v, Sides::Front, out);
+                out.albedo().reflect
+            }
         }
     }
 }

@@ -577,7 +577,7 @@ impl Material {
     /// filling the packs costs more than it saves, and for the batched path, which reads
     /// the lobes and never a lane's own `eval`; the results are the same to relative 1e-5.
     ///
-    /// A uniform material ([`Material::prepares_lanes`]) seen from above its surface is
+    /// A uniform material ([`Material::prepares_uniform`]) seen from above its surface is
     /// prepared by a fused form of the steps, over fixed arrays with its constants folded
     /// in; it computes the same bits as [`Material::prepare_general_into`].
     pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
@@ -587,12 +587,10 @@ impl Material {
     /// [`Material::prepare_unpacked_into`], returning the uniform plan's stamp when the
     /// fused form prepared the point.
     fn prepare_steps(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> Option<u64> {
-        if let Some(plan) = &self.uniform {
-            let v = p.v.normalize_or(Vec3::Z);
-            out.reset(v);
-            if self.prepare_uniform_into(plan, p, v, out) {
-                return Some(plan.stamp);
-            }
+        if let Some(plan) = &self.uniform
+            && self.prepare_uniform_into(plan, p, out)
+        {
+            return Some(plan.stamp);
         }
         self.prepare_general_into(p, s, out);
         None

@@ -74,6 +74,15 @@ impl Grouping {
         }
     }
 
+    /// Each pack's member lobe indices, in pack order.
+    fn members(&self) -> impl Iterator<Item = &[u8]> {
+        self.packs
+            .iter()
+            .zip(&self.pack_len)
+            .take(usize::from(self.pack_count))
+            .map(|(members, &n)| &members[..usize::from(n)])
+    }
+
     /// The lobes of each kernel key, in lobe order, fill packs of up to [`PACK_LANES`];
     /// a key's single remaining lobe, and lobes without a key, run alone.
     pub(super) fn of_keys(keys: &[Option<u8>]) -> Grouping {
@@ -165,12 +174,8 @@ impl EvalPlan {
     pub(super) fn build_from(&mut self, grouping: &Grouping, lobes: &[ActiveLobe]) {
         self.stamp = 0;
         self.grouping = *grouping;
-        for (pack, (members, &n)) in self.packs.iter_mut().zip(
-            grouping.packs[..grouping.pack_count as usize]
-                .iter()
-                .zip(&grouping.pack_len),
-        ) {
-            pack.fill(lobes, &members[..n as usize]);
+        for (pack, members) in self.packs.iter_mut().zip(grouping.members()) {
+            pack.fill(lobes, members);
         }
         self.valid = true;
     }
@@ -187,12 +192,8 @@ impl EvalPlan {
             self.stamp = stamp;
             return;
         }
-        for (pack, (members, &n)) in self.packs.iter_mut().zip(
-            grouping.packs[..grouping.pack_count as usize]
-                .iter()
-                .zip(&grouping.pack_len),
-        ) {
-            pack.refresh(lobes, &members[..n as usize]);
+        for (pack, members) in self.packs.iter_mut().zip(grouping.members()) {
+            pack.refresh(lobes, members);
         }
         self.valid = true;
     }
@@ -312,9 +313,7 @@ mod tests {
     /// The packs' members and the lone lobes of `keys`, each list in plan order.
     fn plan(keys: &[Option<u8>]) -> (Vec<Vec<u8>>, Vec<u8>) {
         let g = Grouping::of_keys(keys);
-        let packs = (0..g.pack_count as usize)
-            .map(|p| g.packs[p][..g.pack_len[p] as usize].to_vec())
-            .collect();
+        let packs = g.members().map(<[u8]>::to_vec).collect();
         (packs, g.solo[..g.solo_count as usize].to_vec())
     }
 

@@ -65,7 +65,8 @@ struct UniformLeaf {
 }
 
 /// What [`Material::prepare_uniform_into`] needs beyond the material's weight plan: the
-/// throughput steps with constants folded in.
+/// bound leaves, their records' templates, the throughput steps with constants folded in,
+/// and the material's stamp.
 #[derive(Debug, Clone)]
 pub(super) struct UniformPlan {
     /// Unique per compiled material (clones share it, with their constants): lets a
@@ -80,6 +81,7 @@ pub(super) struct UniformPlan {
     /// of the record at any view above the surface, so a record is this template with
     /// the view-dependent fields written over ([`RefreshLeaf::refresh_above_into`]).
     templates: Vec<PreparedLobe>,
+    /// The throughput steps, bottom-up (step `j` writes slot `j`).
     thr: Vec<UniformThr>,
 }
 
@@ -173,17 +175,18 @@ impl UniformPlan {
 }
 
 impl Material {
-    /// Steps 1–7 of §1.4 for a material with a [`UniformPlan`], into `out` (already reset
-    /// to view `v`). Returns false, having written only `out`'s frame, when the view is at
-    /// or below the horizon of the point's frame or not finite: the general path then
-    /// prepares the point.
+    /// Steps 1–7 of §1.4 for a material with a [`UniformPlan`], into `out`. Returns false,
+    /// having reset `out` and written only its frame, when the view is at or below the
+    /// horizon of the point's frame or not finite: the general path then prepares the
+    /// point.
     pub(super) fn prepare_uniform_into(
         &self,
         plan: &UniformPlan,
         p: &ShadingPoint,
-        v: Vec3,
         out: &mut Prepared,
     ) -> bool {
+        let v = p.v.normalize_or(Vec3::Z);
+        out.reset(v);
         // A plan exists only with a weight plan (`UniformPlan::new`).
         let Some(w_plan) = &self.w_plan else {
             return false;
