@@ -3,7 +3,9 @@
 //!
 //! * `ref10/interp_eval`: `Prepared::eval` per (V, L), V prepared once (4096 L);
 //! * `ref10/native_eval`: the ten leaves called directly (concrete types, no dispatch, fixed
-//!   weights), same L, including the world → local transform;
+//!   weights), same L, including the world → local transform; compiled with AVX2 where the
+//!   interpreter's scalar entry points run their AVX2 versions (`simd::SCALAR_LEVEL`), so
+//!   the limit uses the same instructions as what it limits (from session 16);
 //! * `ref10/interp_eval_paired`: `interp_eval` with a `native_eval` pass run between every
 //!   two timed passes; after the row it prints both evals' mean over the same passes and
 //!   the interpreter's overhead (the figure for the budget: the separate rows run a minute
@@ -47,6 +49,7 @@ use vstructc::interp::microfacet::{
 use vstructc::interp::preview::{PreviewOptions, render_ball};
 use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA, ref10_ir};
 use vstructc::interp::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCKBound, SheenLTCBound};
+use vstructc::interp::simd::{Level, SCALAR_LEVEL, level};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::ward::{PreparedWard, WardBound};
 use vstructc::interp::*;
@@ -212,6 +215,91 @@ impl Native {
     }
 }
 
+/// One hand-written eval pass over `ls`.
+#[inline(always)]
+fn native_eval_pass(p: &Native, ls: &[Vec3]) -> Vec3 {
+    let mut acc = Vec3::ZERO;
+    for l in ls {
+        let (f, pdf) = p.eval(*l);
+        acc += f + Vec3::splat(pdf);
+    }
+    acc
+}
+
+/// One hand-written prepare + eval pass over `pairs`.
+#[inline(always)]
+fn native_prepare_eval_pass(
+    lv: &BoundLeaves,
+    pairs: &[(Frame, Vec3, Vec3)],
+    w: [Vec3; 10],
+    pr: [f32; 10],
+) -> Vec3 {
+    let mut acc = Vec3::ZERO;
+    for (f, v, l) in pairs {
+        let p = Native::prepare(black_box(lv), *f, *v, w, pr);
+        let (f, pdf) = p.eval(*l);
+        acc += f + Vec3::splat(pdf);
+    }
+    acc
+}
+
+/// [`native_eval_pass`] compiled with AVX2, as the interpreter's scalar entry points are.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn native_eval_pass_avx2(p: &Native, ls: &[Vec3]) -> Vec3 {
+    native_eval_pass(p, ls)
+}
+
+/// [`native_prepare_eval_pass`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn native_prepare_eval_pass_avx2(
+    lv: &BoundLeaves,
+    pairs: &[(Frame, Vec3, Vec3)],
+    w: [Vec3; 10],
+    pr: [f32; 10],
+) -> Vec3 {
+    native_prepare_eval_pass(lv, pairs, w, pr)
+}
+
+/// Whether the hand-written passes run their AVX2 versions: exactly when the interpreter's
+/// scalar entry points do (`simd::SCALAR_LEVEL` on a CPU that has it), so that the limit is
+/// compiled for the same instructions as what it limits.
+fn native_at_avx2() -> bool {
+    assert_eq!(
+        SCALAR_LEVEL,
+        Level::Avx2,
+        "the hand-written passes follow the interpreter's scalar level"
+    );
+    cfg!(target_arch = "x86_64") && level() >= Level::Avx2
+}
+
+/// [`native_eval_pass`] at the interpreter's scalar level.
+fn native_eval(p: &Native, ls: &[Vec3], avx2: bool) -> Vec3 {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: `native_at_avx2` found AVX2 and FMA.
+        return unsafe { native_eval_pass_avx2(p, ls) };
+    }
+    native_eval_pass(p, ls)
+}
+
+/// [`native_prepare_eval_pass`] at the interpreter's scalar level.
+fn native_prepare_eval(
+    lv: &BoundLeaves,
+    pairs: &[(Frame, Vec3, Vec3)],
+    w: [Vec3; 10],
+    pr: [f32; 10],
+    avx2: bool,
+) -> Vec3 {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: as in `native_eval`.
+        return unsafe { native_prepare_eval_pass_avx2(lv, pairs, w, pr) };
+    }
+    native_prepare_eval_pass(lv, pairs, w, pr)
+}
+
 /// Random (frame, V, L) triples, V and L on the normal's side.
 fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
     let mut rng = Rng::new(7);
@@ -261,14 +349,8 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
         }
         acc
     };
-    let pass_native = |p: &Native| {
-        let mut acc = Vec3::ZERO;
-        for l in &ls {
-            let (f, pdf) = p.eval(*l);
-            acc += f + Vec3::splat(pdf);
-        }
-        acc
-    };
+    let avx2 = native_at_avx2();
+    let pass_native = |p: &Native| native_eval(p, &ls, avx2);
     g.bench_function("interp_eval", |b| b.iter(|| pass_interp(black_box(&prep))));
     g.bench_function("native_eval", |b| {
         b.iter(|| pass_native(black_box(&native)))
@@ -320,15 +402,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
         })
     });
     g.bench_function("native_prepare_eval", |b| {
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            for (f, v, l) in &pairs {
-                let p = Native::prepare(black_box(&lv), *f, *v, w, pr);
-                let (f, pdf) = p.eval(*l);
-                acc += f + Vec3::splat(pdf);
-            }
-            acc
-        })
+        b.iter(|| native_prepare_eval(&lv, &pairs, w, pr, avx2))
     });
     // Batched: 16 points (the first 16 pairs' frames and views), 256 light sets.
     const W: usize = 16;

@@ -320,7 +320,7 @@ fn eon_rho_ms(rho: Rgb, e_avg: f32) -> Rgb {
 }
 
 impl PreparedOrenNayar {
-    #[inline]
+    #[inline(always)]
     fn e_hat(&self, mu: f32) -> f32 {
         if self.fast {
             eon_e_hat_fast(mu, self.sigma)

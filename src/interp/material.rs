@@ -51,6 +51,7 @@ use super::microfacet::{
     Compensation, Dielectric, DielectricMode as LobeDielectricMode, MicrofacetR,
 };
 use super::sheen::{SheenCK, SheenLTC, SheenMasking as LobeSheenMasking};
+use super::simd::{Level, SCALAR_LEVEL, call_widest, widest_versions};
 use super::ward::{MiaHighlight3, Ward, WardVariant as LobeWardVariant};
 use crate::diag::{Diagnostic, Error};
 use crate::ir::algebra::{AlbedoSource, add_throughput, mix_throughput, mul_throughput};
@@ -549,7 +550,39 @@ impl Material {
 
     /// As [`Material::prepare_with`], overwriting `out` (whatever it held): the cheapest
     /// form when many points are prepared in a row, since a [`Prepared`] is a few KB.
+    ///
+    /// Runs the version compiled for [`SCALAR_LEVEL`] when the CPU has it (see
+    /// [`super::simd`]); every version computes the same bits.
     pub fn prepare_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+        self.prepare_into_at(SCALAR_LEVEL, p, s, out);
+    }
+
+    /// [`Material::prepare_into`] compiled for at most `level` (for tests and benchmarks:
+    /// every level gives the same bits).
+    pub fn prepare_into_at(
+        &self,
+        level: Level,
+        p: &ShadingPoint,
+        s: &mut Scratch,
+        out: &mut Prepared,
+    ) {
+        call_widest!(
+            level,
+            self.prepare_packed_body(p, s, out),
+            prepare_packed_avx512,
+            prepare_packed_avx2
+        )
+    }
+
+    widest_versions!(
+        prepare_packed_body(p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> (),
+        prepare_packed_avx512,
+        prepare_packed_avx2
+    );
+
+    /// [`Material::prepare_into`]'s body: the steps, then `eval`'s lobe packs.
+    #[inline(always)]
+    fn prepare_packed_body(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let fused = self.prepare_steps(p, s, out);
         if !self.options.pack_lobes {
             return;
@@ -581,11 +614,40 @@ impl Material {
     /// prepared by a fused form of the steps, over fixed arrays with its constants folded
     /// in; it computes the same bits as [`Material::prepare_general_into`].
     pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+        self.prepare_unpacked_into_at(SCALAR_LEVEL, p, s, out);
+    }
+
+    /// [`Material::prepare_unpacked_into`] compiled for at most `level` (every level gives
+    /// the same bits).
+    pub fn prepare_unpacked_into_at(
+        &self,
+        level: Level,
+        p: &ShadingPoint,
+        s: &mut Scratch,
+        out: &mut Prepared,
+    ) {
+        call_widest!(
+            level,
+            self.prepare_unpacked_body(p, s, out),
+            prepare_unpacked_avx512,
+            prepare_unpacked_avx2
+        )
+    }
+
+    widest_versions!(
+        prepare_unpacked_body(p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> (),
+        prepare_unpacked_avx512,
+        prepare_unpacked_avx2
+    );
+
+    #[inline(always)]
+    fn prepare_unpacked_body(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         self.prepare_steps(p, s, out);
     }
 
     /// [`Material::prepare_unpacked_into`], returning the uniform plan's stamp when the
     /// fused form prepared the point.
+    #[inline(always)]
     fn prepare_steps(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> Option<u64> {
         if let Some(plan) = &self.uniform
             && self.prepare_uniform_into(plan, p, out)
@@ -1338,6 +1400,7 @@ impl Prepared {
     /// Step 7: `p_k = lum(A_k)/Σ lum(A_j)` (straight transmission takes part with
     /// `lum(τ)`); else proportional to `lum(w_k)`; else absorbing (all 0).
     /// `lums[k]` is `max(lum(A_k), 0)` with transmission in the radiance convention.
+    #[inline(always)]
     fn select(&mut self, lums: &[f32; MAX_LOBES]) {
         let n = self.count;
         let mut a = *lums;
@@ -1394,15 +1457,51 @@ impl Prepared {
 
     /// `Σ_k w_k ⊙ f_k(V, L)·|μ_i|` and the mixture pdf at world direction `l`. Delta lobes
     /// contribute nothing.
+    ///
+    /// Runs the version compiled for [`SCALAR_LEVEL`] when the CPU has it (see
+    /// [`super::simd`]); every version computes the same bits.
     #[inline]
     pub fn eval(&self, l: Vec3) -> Eval {
+        self.eval_at(SCALAR_LEVEL, l)
+    }
+
+    /// [`Prepared::eval`] compiled for at most `level` (every level gives the same bits).
+    #[inline]
+    pub fn eval_at(&self, level: Level, l: Vec3) -> Eval {
+        call_widest!(level, self.eval_body(l), eval_avx512, eval_avx2)
+    }
+
+    widest_versions!(eval_body(l: Vec3) -> Eval, eval_avx512, eval_avx2);
+
+    #[inline(always)]
+    fn eval_body(&self, l: Vec3) -> Eval {
         self.eval_with::<true>(l)
     }
 
     /// [`Prepared::eval`]'s `f_cos` alone, for callers that need no density (the material
-    /// preview): the lobes' pdf arithmetic is left out.
+    /// preview): the lobes' pdf arithmetic is left out. Runs at [`SCALAR_LEVEL`] as `eval`
+    /// does.
     #[inline]
     pub fn eval_f_cos(&self, l: Vec3) -> Rgb {
+        self.eval_f_cos_at(SCALAR_LEVEL, l)
+    }
+
+    /// [`Prepared::eval_f_cos`] compiled for at most `level` (every level gives the same
+    /// bits).
+    #[inline]
+    pub fn eval_f_cos_at(&self, level: Level, l: Vec3) -> Rgb {
+        call_widest!(
+            level,
+            self.f_cos_body(l),
+            eval_f_cos_avx512,
+            eval_f_cos_avx2
+        )
+    }
+
+    widest_versions!(f_cos_body(l: Vec3) -> Rgb, eval_f_cos_avx512, eval_f_cos_avx2);
+
+    #[inline(always)]
+    fn f_cos_body(&self, l: Vec3) -> Rgb {
         self.eval_with::<false>(l).f_cos
     }
 

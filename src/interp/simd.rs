@@ -1,17 +1,21 @@
-//! Runtime choice of the widest vector extension for the batched kernels ([`super::soa`],
-//! [`super::batch`]).
+//! Runtime choice of a vector extension for the batched kernels ([`super::soa`],
+//! [`super::batch`]) and the scalar entry points ([`super::material`]).
 //!
 //! A baseline x86-64 build may only assume SSE2, so the kernels' loops over lanes compile to
 //! 4-wide code. The same source compiled inside a function marked `#[target_feature]` becomes
 //! AVX2 or AVX-512 code. A batched entry point therefore comes in three versions, made by
 //! `widest_versions!`: its body (`#[inline(always)]`, so that it and the kernels it calls
 //! are compiled into each version), an AVX2 wrapper and an AVX-512 wrapper. The entry point
-//! picks one with [`level`], which asks the CPU once (the standard library caches the
-//! answer).
+//! picks one with [`level`], which asks the CPU once.
+//!
+//! The scalar entry points (one point's prepare, one direction's eval) come in the same
+//! three versions and run at [`SCALAR_LEVEL`]: there the gain is the VEX encoding (three
+//! operands, so fewer register copies) and 256-bit block copies, not wider lanes.
 //!
 //! Results do not depend on the version that runs: each does the same IEEE operations per
 //! lane in the same order (Rust never fuses `a * b + c` into one rounding, and lanes do not
-//! interact), so the outputs are bit-identical; `tests/interp_soa.rs` checks this.
+//! interact), so the outputs are bit-identical; `tests/interp_soa.rs` and
+//! `tests/interp_levels.rs` check this.
 //!
 //! Why not only `-C target-cpu=native`: a build for distribution cannot assume AVX-512, and on
 //! Intel server cores LLVM's tuning for `native` prefers 256-bit vectors, while these kernels,
@@ -20,6 +24,7 @@
 
 /// The vector extensions a batched entry point can run with, narrowest first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(u8)]
 pub enum Level {
     /// Whatever the build targets (SSE2 for a baseline x86-64 build).
     Baseline,
@@ -40,9 +45,34 @@ impl Level {
     }
 }
 
-/// The widest [`Level`] this CPU supports.
+/// The level the scalar entry points run at ([`crate::interp::Material::prepare_into`],
+/// [`crate::interp::Prepared::eval`] and their kin) when the CPU has it. AVX2, not AVX-512:
+/// on the development host the AVX2 version ran ref10's prepare + one eval in 370 ns, the
+/// baseline in 405 ns and the AVX-512 version in 461 ns (BENCHMARKS.md, session 16).
+pub const SCALAR_LEVEL: Level = Level::Avx2;
+
+/// The widest [`Level`] this CPU supports, asked once and then read from a static (the
+/// scalar entry points ask at every call).
 #[inline]
 pub fn level() -> Level {
+    use std::sync::atomic::{AtomicU8, Ordering};
+    // 0 until the first call; then the level's index + 1.
+    static LEVEL: AtomicU8 = AtomicU8::new(0);
+    match LEVEL.load(Ordering::Relaxed) {
+        1 => Level::Baseline,
+        2 => Level::Avx2,
+        3 => Level::Avx512,
+        _ => {
+            let found = detect();
+            LEVEL.store(found as u8 + 1, Ordering::Relaxed);
+            found
+        }
+    }
+}
+
+/// [`level`]'s question to the CPU.
+#[cold]
+fn detect() -> Level {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::is_x86_feature_detected as has;

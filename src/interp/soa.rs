@@ -491,6 +491,7 @@ impl<const W: usize> Kernel<W> {
     /// by `fill_lanes` at an earlier point). Only lanes `0..lanes` are written: a refresh
     /// skips the unused lanes that [`Kernel::park_lanes`] set. A lane whose lobe is of
     /// another family than the kernel is left as it is.
+    #[inline(always)]
     pub(super) fn refresh_lanes<'a>(
         &mut self,
         lane: impl Fn(usize) -> &'a PreparedLobe,

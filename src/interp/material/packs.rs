@@ -186,6 +186,7 @@ impl EvalPlan {
     /// the same at every point, so when the packs already hold them (the previous plan was
     /// built here with the same stamp) only the view, weight and probability terms are
     /// written ([`Kernel::refresh_lanes`]); the packs end with the same bits either way.
+    #[inline(always)]
     pub(super) fn build_stamped(&mut self, stamp: u64, grouping: &Grouping, lobes: &[ActiveLobe]) {
         if self.stamp != stamp {
             self.build_from(grouping, lobes);
@@ -292,6 +293,7 @@ impl LobePack {
     /// [`LobePack::fill`] of the same lobes, unflipped, as the fill before: the lanes'
     /// signs and frames, the kernel's view-independent terms and the unused lanes are
     /// already right, so only the members' view, weight and probability terms are written.
+    #[inline(always)]
     fn refresh(&mut self, lobes: &[ActiveLobe], members: &[u8]) {
         let mut lanes: [&PreparedLobe; PACK_LANES] = [&lobes[members[0] as usize].lobe; PACK_LANES];
         for (k, &m) in members.iter().enumerate() {

@@ -179,6 +179,7 @@ impl Material {
     /// having reset `out` and written only its frame, when the view is at or below the
     /// horizon of the point's frame or not finite: the general path then prepares the
     /// point.
+    #[inline(always)]
     pub(super) fn prepare_uniform_into(
         &self,
         plan: &UniformPlan,
