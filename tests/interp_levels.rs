@@ -8,7 +8,7 @@
 #[path = "common/uniform_materials.rs"]
 mod uniform_materials;
 use glam::Vec3;
-use uniform_materials::{assorted_ir, coated_ir, stacked_ir, textured_ir};
+use uniform_materials::{assorted_ir, coated_ir, shared_ir, stacked_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::simd::{Level, level};
 use vstructc::interp::verify::Rng;
@@ -57,6 +57,7 @@ fn every_scalar_version_computes_the_same_bits() {
         assorted_ir(),
         coated_ir(),
         stacked_ir(),
+        shared_ir(),
         textured_ir(),
     ];
     let mut scratch = Scratch::default();

@@ -10,18 +10,20 @@
 #[path = "common/uniform_materials.rs"]
 mod uniform_materials;
 use glam::Vec3;
-use uniform_materials::{assorted_ir, coated_ir, stacked_ir, textured_ir};
+use uniform_materials::{assorted_ir, coated_ir, shared_ir, stacked_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::MaterialIr;
 
-fn cases() -> [(&'static str, MaterialIr); 4] {
+fn cases() -> [(&'static str, MaterialIr); 5] {
     [
         ("ref10", ref10_ir()),
         ("assorted", assorted_ir()),
         ("coated", coated_ir()),
         ("stacked", stacked_ir()),
+        // A leaf reached by two paths: its weight sums two terms.
+        ("shared", shared_ir()),
     ]
 }
 

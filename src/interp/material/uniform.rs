@@ -14,7 +14,8 @@
 //!    view-dependent fields when the records hold this material's leaves from the previous
 //!    point ([`Prepared`]'s stamp), else the leaf's template first;
 //! 3. the throughput steps with their registers folded to constants ([`UniformThr`]);
-//! 4. the weight plan's scopes and terms, and each target's sum;
+//! 4. the weight plan's scopes and terms, and each target's sum (in a tree, where each
+//!    target has one term, the term itself);
 //! 5. and 6. in the same pass over the targets, each leaf's weighted albedo and the drop,
 //!    compacting the records;
 //! 7. the selection probabilities.
@@ -83,6 +84,10 @@ pub(super) struct UniformPlan {
     templates: Vec<PreparedLobe>,
     /// The throughput steps, bottom-up (step `j` writes slot `j`).
     thr: Vec<UniformThr>,
+    /// When no weight target has more than one term (a tree: one path to each node), each
+    /// target's term `(c, scope)`, in target order (`(0, 0)` for a target without one):
+    /// the sum is then the product itself.
+    single_terms: Option<Vec<(Vec3, u32)>>,
 }
 
 impl UniformPlan {
@@ -170,8 +175,28 @@ impl UniformPlan {
             leaves,
             templates,
             thr,
+            single_terms: single_terms(w_plan),
         })
     }
+}
+
+/// [`UniformPlan::single_terms`] of `w_plan`, or `None` when some target has more than one
+/// term.
+fn single_terms(w_plan: &super::WeightPlan) -> Option<Vec<(Vec3, u32)>> {
+    let mut single = vec![None; w_plan.targets.len()];
+    for t in &w_plan.terms {
+        let slot = single.get_mut(t.target as usize)?;
+        if slot.is_some() {
+            return None;
+        }
+        *slot = Some((t.c, t.scope));
+    }
+    Some(
+        single
+            .into_iter()
+            .map(|t| t.unwrap_or((Vec3::ZERO, 0)))
+            .collect(),
+    )
 }
 
 impl Material {
@@ -239,8 +264,19 @@ impl Material {
             scope[i + 1] = scope[parent as usize] * thr[slot as usize];
         }
         let mut acc = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
-        for t in &w_plan.terms {
-            acc[t.target as usize] += t.c * scope[t.scope as usize];
+        match &plan.single_terms {
+            // `0 + c·s` and `c·s` differ only in the sign of a zero, which `clean` below
+            // maps to +0 either way.
+            Some(single) => {
+                for (a, &(c, s)) in acc.iter_mut().zip(single) {
+                    *a = c * scope[s as usize];
+                }
+            }
+            None => {
+                for t in &w_plan.terms {
+                    acc[t.target as usize] += t.c * scope[t.scope as usize];
+                }
+            }
         }
         // Each target's weight, and for a leaf steps 5 and 6 at once: its weighted albedo
         // and the drop, compacting the records in place. Leaf targets come in leaf order
