@@ -8,7 +8,8 @@
 //! `vstructc-lutgen` ([`lutgen`]). [`verify`] holds the statistical harness of the spec's
 //! verification matrix (χ² sampling test, quadrature), [`soa`] the structure-of-arrays
 //! kernels of the batched path (and a standalone batched GGX dielectric lobe), and [`simd`]
-//! the run-time choice of the vector extension they are compiled for.
+//! the run-time choice of the vector extension they, and the scalar prepare and eval, are
+//! compiled for.
 //!
 //! Over whole materials (§1.4–§1.6): [`Material`] compiles a [`crate::ir::MaterialIr`] once;
 //! [`Material::prepare`] runs its program and the closure algebra for one point and view and
