@@ -16,6 +16,9 @@
 //!   pass), their view-independent parts bound once as the interpreter binds its constant
 //!   leaves (before S13 it prepared them unbound, which redid each conductor's F82 fit and
 //!   the table lookups at every point and roughly doubled its time);
+//! * `ref10/interp_prepare_eval_paired`: `interp_prepare_eval` with a `native_prepare_eval`
+//!   pass between every two timed passes, printing both means over the same passes and
+//!   their ratio (from session 16);
 //! * `ref10/batch16_prepare_lanes`: the lane-parallel prepare of 16 points
 //!   (`Material::prepare_batch_eval_into`, what the batched preview runs), ns per point;
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;
@@ -404,6 +407,44 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     g.bench_function("native_prepare_eval", |b| {
         b.iter(|| native_prepare_eval(&lv, &pairs, w, pr, avx2))
     });
+    // The two prepare + eval passes interleaved, as `interp_eval_paired` does for the evals:
+    // the rows above, a minute apart, read up to 1.5× off on this host.
+    let sums = std::cell::Cell::new((0u64, 0u64, 0u64));
+    g.bench_function("interp_prepare_eval_paired", |b| {
+        let mut scratch = Scratch::default();
+        let mut p = Prepared::new();
+        b.iter_custom(|iters| {
+            let (mut ti, mut tn) = (0, 0);
+            for _ in 0..iters {
+                let t0 = cpu_time::thread_cpu_ns();
+                let mut acc = Vec3::ZERO;
+                for (f, v, l) in &pairs {
+                    black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut p);
+                    let e = p.eval(*l);
+                    acc += e.f_cos + Vec3::splat(e.pdf);
+                }
+                black_box(acc);
+                let t1 = cpu_time::thread_cpu_ns();
+                black_box(native_prepare_eval(&lv, &pairs, w, pr, avx2));
+                tn += cpu_time::thread_cpu_ns().saturating_sub(t1);
+                ti += t1.saturating_sub(t0);
+            }
+            let (si, sn, n) = sums.get();
+            sums.set((si + ti, sn + tn, n + iters));
+            ti
+        })
+    });
+    let (si, sn, n) = sums.get();
+    if sn > 0 {
+        let per_point = |t: u64| t as f64 / (n as f64 * PAIRS as f64);
+        println!(
+            "ref10/interp_prepare_eval_paired: interpreter {:.1} ns, hand-written {:.1} ns per \
+             prepare + eval over the same {n} interleaved passes: {:.2}× the hand-written",
+            per_point(si),
+            per_point(sn),
+            si as f64 / sn as f64
+        );
+    }
     // Batched: 16 points (the first 16 pairs' frames and views), 256 light sets.
     const W: usize = 16;
     let batch = ShadingBatch::<W>::new(
