@@ -22,7 +22,8 @@
 //! limited by the divide/square-root unit, run fastest 512 bits wide (BENCHMARKS.md,
 //! session 7).
 
-/// The vector extensions a batched entry point can run with, narrowest first.
+/// The vector extensions an entry point can be run with (batched or scalar), narrowest
+/// first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 #[repr(u8)]
 pub enum Level {
