@@ -40,7 +40,7 @@
 //! RUSTFLAGS="-C target-cpu=native" CARGO_TARGET_DIR=target/native cargo bench --bench interp
 //! ```
 
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use std::hint::black_box;
 use vstructc::interp::diffuse::{
@@ -303,6 +303,38 @@ fn native_prepare_eval(
     native_prepare_eval_pass(lv, pairs, w, pr)
 }
 
+/// Criterion row `name` timing `interp` passes with a `native` pass run between every two,
+/// so that both see the same host phases (on this shared VM two rows measured a minute
+/// apart can read 1.5× off). Criterion times the interpreter's passes; returns the mean ns
+/// per element of both over every pass, warm-up included, and the number of passes.
+fn bench_paired(
+    g: &mut BenchmarkGroup<'_, CpuTime>,
+    name: &str,
+    mut interp: impl FnMut(),
+    mut native: impl FnMut(),
+) -> Option<(f64, f64, u64)> {
+    // (interpreter ns, hand-written ns, passes) over every sample.
+    let mut sums = (0u64, 0u64, 0u64);
+    g.bench_function(name, |b| {
+        b.iter_custom(|iters| {
+            let (mut ti, mut tn) = (0, 0);
+            for _ in 0..iters {
+                let t0 = cpu_time::thread_cpu_ns();
+                interp();
+                let t1 = cpu_time::thread_cpu_ns();
+                native();
+                tn += cpu_time::thread_cpu_ns().saturating_sub(t1);
+                ti += t1.saturating_sub(t0);
+            }
+            sums = (sums.0 + ti, sums.1 + tn, sums.2 + iters);
+            ti
+        })
+    });
+    let (si, sn, n) = sums;
+    let per_element = |t: u64| t as f64 / (n as f64 * PAIRS as f64);
+    (sn > 0).then(|| (per_element(si), per_element(sn), n))
+}
+
 /// Random (frame, V, L) triples, V and L on the normal's side.
 fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
     let mut rng = Rng::new(7);
@@ -358,91 +390,58 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     g.bench_function("native_eval", |b| {
         b.iter(|| pass_native(black_box(&native)))
     });
-    // The two evals interleaved pass by pass, so that both see the same host phases: on this
-    // shared VM the two rows above, measured a minute apart, can read 1.5× off. Criterion
-    // times the interpreter's passes; the hand-written passes run between them, and the
-    // means of both over the same passes are printed after the row. `sums` holds
-    // (interpreter ns, hand-written ns, passes) over every sample, warm-up included.
-    let sums = std::cell::Cell::new((0u64, 0u64, 0u64));
-    g.bench_function("interp_eval_paired", |b| {
-        b.iter_custom(|iters| {
-            let (mut ti, mut tn) = (0, 0);
-            for _ in 0..iters {
-                let t0 = cpu_time::thread_cpu_ns();
-                black_box(pass_interp(black_box(&prep)));
-                let t1 = cpu_time::thread_cpu_ns();
-                black_box(pass_native(black_box(&native)));
-                tn += cpu_time::thread_cpu_ns().saturating_sub(t1);
-                ti += t1.saturating_sub(t0);
-            }
-            let (si, sn, n) = sums.get();
-            sums.set((si + ti, sn + tn, n + iters));
-            ti
-        })
-    });
-    let (si, sn, n) = sums.get();
-    if sn > 0 {
-        let per_eval = |t: u64| t as f64 / (n as f64 * PAIRS as f64);
+    // The two evals interleaved pass by pass (the figure for the budget: the rows above run
+    // a minute apart).
+    let paired = bench_paired(
+        &mut g,
+        "interp_eval_paired",
+        || {
+            black_box(pass_interp(black_box(&prep)));
+        },
+        || {
+            black_box(pass_native(black_box(&native)));
+        },
+    );
+    if let Some((interp, hand, n)) = paired {
         println!(
-            "ref10/interp_eval_paired: interpreter {:.1} ns, hand-written {:.1} ns per eval over \
-             the same {n} interleaved passes: overhead {:+.1} %",
-            per_eval(si),
-            per_eval(sn),
-            (si as f64 / sn as f64 - 1.0) * 100.0
+            "ref10/interp_eval_paired: interpreter {interp:.1} ns, hand-written {hand:.1} ns per \
+             eval over the same {n} interleaved passes: overhead {:+.1} %",
+            (interp / hand - 1.0) * 100.0
         );
     }
-    g.bench_function("interp_prepare_eval", |b| {
-        let mut scratch = Scratch::default();
-        let mut p = Prepared::new();
-        b.iter(|| {
-            let mut acc = Vec3::ZERO;
-            for (f, v, l) in &pairs {
-                black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut p);
-                let e = p.eval(*l);
-                acc += e.f_cos + Vec3::splat(e.pdf);
-            }
-            acc
-        })
-    });
+    // One prepare + eval pass over the 4096 pairs, into one reused `Prepared`.
+    let mut scratch = Scratch::default();
+    let mut prepared = Prepared::new();
+    let mut pass_prepare_eval = || {
+        let mut acc = Vec3::ZERO;
+        for (f, v, l) in &pairs {
+            black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut prepared);
+            let e = prepared.eval(*l);
+            acc += e.f_cos + Vec3::splat(e.pdf);
+        }
+        acc
+    };
+    g.bench_function("interp_prepare_eval", |b| b.iter(&mut pass_prepare_eval));
     g.bench_function("native_prepare_eval", |b| {
         b.iter(|| native_prepare_eval(&lv, &pairs, w, pr, avx2))
     });
-    // The two prepare + eval passes interleaved, as `interp_eval_paired` does for the evals:
-    // the rows above, a minute apart, read up to 1.5× off on this host.
-    let sums = std::cell::Cell::new((0u64, 0u64, 0u64));
-    g.bench_function("interp_prepare_eval_paired", |b| {
-        let mut scratch = Scratch::default();
-        let mut p = Prepared::new();
-        b.iter_custom(|iters| {
-            let (mut ti, mut tn) = (0, 0);
-            for _ in 0..iters {
-                let t0 = cpu_time::thread_cpu_ns();
-                let mut acc = Vec3::ZERO;
-                for (f, v, l) in &pairs {
-                    black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut p);
-                    let e = p.eval(*l);
-                    acc += e.f_cos + Vec3::splat(e.pdf);
-                }
-                black_box(acc);
-                let t1 = cpu_time::thread_cpu_ns();
-                black_box(native_prepare_eval(&lv, &pairs, w, pr, avx2));
-                tn += cpu_time::thread_cpu_ns().saturating_sub(t1);
-                ti += t1.saturating_sub(t0);
-            }
-            let (si, sn, n) = sums.get();
-            sums.set((si + ti, sn + tn, n + iters));
-            ti
-        })
-    });
-    let (si, sn, n) = sums.get();
-    if sn > 0 {
-        let per_point = |t: u64| t as f64 / (n as f64 * PAIRS as f64);
+    // The two prepare + eval passes interleaved, as for the evals.
+    let paired = bench_paired(
+        &mut g,
+        "interp_prepare_eval_paired",
+        || {
+            black_box(pass_prepare_eval());
+        },
+        || {
+            black_box(native_prepare_eval(&lv, &pairs, w, pr, avx2));
+        },
+    );
+    if let Some((interp, hand, n)) = paired {
         println!(
-            "ref10/interp_prepare_eval_paired: interpreter {:.1} ns, hand-written {:.1} ns per \
-             prepare + eval over the same {n} interleaved passes: {:.2}× the hand-written",
-            per_point(si),
-            per_point(sn),
-            si as f64 / sn as f64
+            "ref10/interp_prepare_eval_paired: interpreter {interp:.1} ns, hand-written \
+             {hand:.1} ns per prepare + eval over the same {n} interleaved passes: {:.2}× the \
+             hand-written",
+            interp / hand
         );
     }
     // Batched: 16 points (the first 16 pairs' frames and views), 256 light sets.

@@ -3,12 +3,12 @@
 //! `eval_f_cos` run the AVX2 one where the CPU has it. Every version must compute the same
 //! bits: the same prepared lobes, emission and transparency, and the same `eval`, for
 //! uniform materials (the fused prepare, with and without lobe packs) and for a material
-//! with inputs (the general prepare), from above and below the surface.
+//! with inputs (the general prepare), from above and below the surface and at grazing views.
 
 #[path = "common/uniform_materials.rs"]
 mod uniform_materials;
 use glam::Vec3;
-use uniform_materials::{assorted_ir, coated_ir, shared_ir, stacked_ir, textured_ir};
+use uniform_materials::{assorted_ir, coated_ir, point, shared_ir, stacked_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::simd::{Level, level};
 use vstructc::interp::verify::Rng;
@@ -35,16 +35,6 @@ fn fingerprint(p: &Prepared) -> String {
         bits(p.transparency()),
         p.packed_lobe_count()
     )
-}
-
-/// A random point: a third of the views from below, so the general path runs too.
-fn point(rng: &mut Rng, i: usize) -> ShadingPoint<'static> {
-    let f = Frame::new(rng.sphere(), rng.sphere());
-    let mut v = rng.sphere();
-    if (v.dot(f.z) < 0.0) != (i % 3 == 0) {
-        v = -v;
-    }
-    ShadingPoint::new(f.z, f.x, v)
 }
 
 #[test]

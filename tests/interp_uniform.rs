@@ -10,7 +10,7 @@
 #[path = "common/uniform_materials.rs"]
 mod uniform_materials;
 use glam::Vec3;
-use uniform_materials::{assorted_ir, coated_ir, shared_ir, stacked_ir, textured_ir};
+use uniform_materials::{assorted_ir, coated_ir, point, shared_ir, stacked_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
@@ -50,21 +50,6 @@ fn option_sets() -> [PrepareOptions; 5] {
             ..d
         },
     ]
-}
-
-/// A random point; every third is seen from below, every fifth at a grazing angle.
-fn point(rng: &mut Rng, i: usize) -> ShadingPoint<'static> {
-    let f = Frame::new(rng.sphere(), rng.sphere());
-    let mut v = rng.sphere();
-    if (v.dot(f.z) < 0.0) != (i % 3 == 0) {
-        v = -v;
-    }
-    if i % 5 == 0 {
-        // Nearly in the tangent plane, on the side chosen above.
-        let side = v.dot(f.z).signum();
-        v = (f.x + f.z * (side * 1e-3)).normalize();
-    }
-    ShadingPoint::new(f.z, f.x, v)
 }
 
 /// Asserts two preparations hold the same bits (`{:?}` prints every float exactly, and

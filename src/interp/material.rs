@@ -566,25 +566,39 @@ impl Material {
         s: &mut Scratch,
         out: &mut Prepared,
     ) {
+        self.prepare_at(level, true, p, s, out);
+    }
+
+    /// The steps into `out`, then `eval`'s lobe packs when `packs` (and the options ask
+    /// for them), in the version compiled for at most `level`: the body of
+    /// [`Material::prepare_into_at`] and [`Material::prepare_unpacked_into_at`].
+    fn prepare_at(
+        &self,
+        level: Level,
+        packs: bool,
+        p: &ShadingPoint,
+        s: &mut Scratch,
+        out: &mut Prepared,
+    ) {
         call_widest!(
             level,
-            self.prepare_packed_body(p, s, out),
-            prepare_packed_avx512,
-            prepare_packed_avx2
+            self.prepare_body(packs, p, s, out),
+            prepare_avx512,
+            prepare_avx2
         )
     }
 
     widest_versions!(
-        prepare_packed_body(p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> (),
-        prepare_packed_avx512,
-        prepare_packed_avx2
+        prepare_body(packs: bool, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> (),
+        prepare_avx512,
+        prepare_avx2
     );
 
-    /// [`Material::prepare_into`]'s body: the steps, then `eval`'s lobe packs.
+    /// [`Material::prepare_at`]'s body.
     #[inline(always)]
-    fn prepare_packed_body(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+    fn prepare_body(&self, packs: bool, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         let fused = self.prepare_steps(p, s, out);
-        if !self.options.pack_lobes {
+        if !(packs && self.options.pack_lobes) {
             return;
         }
         let lobes = &out.lobes[..out.count];
@@ -626,23 +640,7 @@ impl Material {
         s: &mut Scratch,
         out: &mut Prepared,
     ) {
-        call_widest!(
-            level,
-            self.prepare_unpacked_body(p, s, out),
-            prepare_unpacked_avx512,
-            prepare_unpacked_avx2
-        )
-    }
-
-    widest_versions!(
-        prepare_unpacked_body(p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) -> (),
-        prepare_unpacked_avx512,
-        prepare_unpacked_avx2
-    );
-
-    #[inline(always)]
-    fn prepare_unpacked_body(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
-        self.prepare_steps(p, s, out);
+        self.prepare_at(level, false, p, s, out);
     }
 
     /// [`Material::prepare_unpacked_into`], returning the uniform plan's stamp when the

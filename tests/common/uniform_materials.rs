@@ -1,10 +1,12 @@
 //! Uniform materials (constant registers, the point's own frame) that together use every
 //! batched kernel family, every tint mode, `mix`, `mul`, emission and transparency, and one
 //! that is not uniform: shared by the tests of the lane-parallel and the fused scalar
-//! prepare.
+//! prepare; and the random shading points those tests prepare.
 
 use glam::Vec3;
 use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA};
+use vstructc::interp::verify::Rng;
+use vstructc::interp::{Frame, ShadingPoint};
 use vstructc::ir::{IrBuilder, LeafKind, MaterialIr, RecipeId, TintMode, WardVariant};
 
 /// Every kernel family and tint mode, `mix` and `mul`, emission and transparency:
@@ -174,4 +176,20 @@ pub fn textured_ir() -> MaterialIr {
     let lam = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
     b.finish("textured", RecipeId::Custom, lam)
         .expect("valid IR")
+}
+
+/// A random point; every third is seen from below, every fifth at a grazing angle.
+#[allow(dead_code)] // not every test that includes this file uses it
+pub fn point(rng: &mut Rng, i: usize) -> ShadingPoint<'static> {
+    let f = Frame::new(rng.sphere(), rng.sphere());
+    let mut v = rng.sphere();
+    if (v.dot(f.z) < 0.0) != (i % 3 == 0) {
+        v = -v;
+    }
+    if i % 5 == 0 {
+        // Nearly in the tangent plane, on the side chosen above.
+        let side = v.dot(f.z).signum();
+        v = (f.x + f.z * (side * 1e-3)).normalize();
+    }
+    ShadingPoint::new(f.z, f.x, v)
 }
