@@ -166,11 +166,53 @@ struct Native {
     p: [f32; 10],
 }
 
+/// ref10's lobe weights (in leaf order) from its layer tops' albedos at the view: the spec's
+/// hand-inlined prepare scales albedos from fits (closures.md §6.2), and this is that
+/// scaling (§2.4's algebra, tints 1, RGB layers) with ref10's constants written in. Each
+/// layer's base takes its top's throughput `sat(1 − c (1 − sat(1 − E)))` (`c`: the top's
+/// `mul`, 1 for the specular layer); the mix gives 0.7 and 0.3.
+#[inline(always)]
+fn ref10_weights(e_fuzz: Vec3, e_coat: Vec3, e_spec: Vec3, e_sheen: Vec3) -> [Vec3; 10] {
+    let sat = |x: Vec3| x.clamp(Vec3::ZERO, Vec3::ONE);
+    let top = |e: Vec3, c: f32| sat(Vec3::ONE - c * (Vec3::ONE - sat(Vec3::ONE - e)));
+    let below_fuzz = top(e_fuzz, 0.5);
+    let below_coat = below_fuzz * top(e_coat, 0.7);
+    let below_spec = below_coat * top(e_spec, 1.0);
+    let below_sheen = below_spec * top(e_sheen, 0.5);
+    let (a, b) = (0.7, 0.3);
+    let ward = (a * 0.05) * below_sheen;
+    let diffuse = (a * 0.4) * below_sheen;
+    [
+        b * below_coat,
+        ward,
+        ward,
+        ward,
+        diffuse,
+        diffuse,
+        (a * 0.5) * below_spec,
+        a * below_coat,
+        0.7 * below_fuzz,
+        Vec3::splat(0.5),
+    ]
+}
+
 impl Native {
+    /// The ten leaves prepared at `v`, their weights scaled from the layer tops' albedos
+    /// ([`ref10_weights`]); the selection probabilities `p` stay fixed.
     #[inline(always)]
-    fn prepare(b: &BoundLeaves, frame: Frame, v: Vec3, w: [Vec3; 10], p: [f32; 10]) -> Native {
+    fn prepare(b: &BoundLeaves, frame: Frame, v: Vec3, p: [f32; 10]) -> Native {
         let v = frame.to_local(v);
         let l = &b.leaves;
+        let sheen = l.sheen.prepare_bound(v, &b.sheen);
+        let spec = l.spec.prepare_bound(v, false, &b.spec);
+        let coat = l.coat.prepare_bound(v, false, &b.coat);
+        let fuzz = l.fuzz.prepare_bound(v, &b.fuzz);
+        let w = ref10_weights(
+            fuzz.albedo().reflect,
+            coat.albedo().reflect,
+            spec.albedo().reflect,
+            sheen.albedo().reflect,
+        );
         Native {
             frame,
             metal: l.metal.prepare_bound(v, &b.metal),
@@ -181,17 +223,17 @@ impl Native {
             ],
             eon: l.eon.prepare_bound(v, &b.eon),
             lambert: l.lambert.prepare(),
-            sheen: l.sheen.prepare_bound(v, &b.sheen),
-            spec: l.spec.prepare_bound(v, false, &b.spec),
-            coat: l.coat.prepare_bound(v, false, &b.coat),
-            fuzz: l.fuzz.prepare_bound(v, &b.fuzz),
+            sheen,
+            spec,
+            coat,
+            fuzz,
             w,
             p,
         }
     }
 
     /// `f_cos` and the mixture pdf (fixed probabilities): the same outputs as
-    /// `Prepared::eval`.
+    /// `Prepared::eval` (the same `f_cos`; the pdf with the probabilities given).
     #[inline(always)]
     fn eval(&self, l: Vec3) -> (Vec3, f32) {
         let l = self.frame.to_local(l);
@@ -234,12 +276,11 @@ fn native_eval_pass(p: &Native, ls: &[Vec3]) -> Vec3 {
 fn native_prepare_eval_pass(
     lv: &BoundLeaves,
     pairs: &[(Frame, Vec3, Vec3)],
-    w: [Vec3; 10],
     pr: [f32; 10],
 ) -> Vec3 {
     let mut acc = Vec3::ZERO;
     for (f, v, l) in pairs {
-        let p = Native::prepare(black_box(lv), *f, *v, w, pr);
+        let p = Native::prepare(black_box(lv), *f, *v, pr);
         let (f, pdf) = p.eval(*l);
         acc += f + Vec3::splat(pdf);
     }
@@ -259,10 +300,9 @@ fn native_eval_pass_avx2(p: &Native, ls: &[Vec3]) -> Vec3 {
 fn native_prepare_eval_pass_avx2(
     lv: &BoundLeaves,
     pairs: &[(Frame, Vec3, Vec3)],
-    w: [Vec3; 10],
     pr: [f32; 10],
 ) -> Vec3 {
-    native_prepare_eval_pass(lv, pairs, w, pr)
+    native_prepare_eval_pass(lv, pairs, pr)
 }
 
 /// Whether the hand-written passes run their AVX2 versions: exactly when the interpreter's
@@ -291,16 +331,15 @@ fn native_eval(p: &Native, ls: &[Vec3], avx2: bool) -> Vec3 {
 fn native_prepare_eval(
     lv: &BoundLeaves,
     pairs: &[(Frame, Vec3, Vec3)],
-    w: [Vec3; 10],
     pr: [f32; 10],
     avx2: bool,
 ) -> Vec3 {
     #[cfg(target_arch = "x86_64")]
     if avx2 {
         // SAFETY: as in `native_eval`.
-        return unsafe { native_prepare_eval_pass_avx2(lv, pairs, w, pr) };
+        return unsafe { native_prepare_eval_pass_avx2(lv, pairs, pr) };
     }
-    native_prepare_eval_pass(lv, pairs, w, pr)
+    native_prepare_eval_pass(lv, pairs, pr)
 }
 
 /// Criterion row `name` timing `interp` passes with a `native` pass run between every two,
@@ -357,10 +396,20 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     let point = |f: &Frame, v: Vec3| ShadingPoint::new(f.z, f.x, v);
     let prep = m.prepare(&point(&f0, v0));
     assert_eq!(prep.lobes().len(), 10, "every ref10 lobe is live");
-    // Fixed weights: the interpreter's at the first view (the values do not affect cost).
-    let w: [Vec3; 10] = std::array::from_fn(|k| prep.lobes()[k].weight);
+    // Fixed probabilities: the interpreter's at the first view (the values do not affect
+    // cost).
     let pr: [f32; 10] = std::array::from_fn(|k| prep.lobes()[k].prob);
-    let native = Native::prepare(&lv, f0, v0, w, pr);
+    let native = Native::prepare(&lv, f0, v0, pr);
+    // Sanity: the hand-written albedo scaling gives the interpreter's weights at every view.
+    for (f, v, _) in pairs.iter().take(256) {
+        let (a, b) = (m.prepare(&point(f, *v)), Native::prepare(&lv, *f, *v, pr));
+        for (lobe, w) in a.lobes().iter().zip(b.w) {
+            assert!(
+                (lobe.weight - w).abs().max_element() <= 1e-5,
+                "{lobe:?} vs {w}"
+            );
+        }
+    }
     // The same L for both, on the first frame's upper side.
     let ls: Vec<Vec3> = pairs
         .iter()
@@ -423,7 +472,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     };
     g.bench_function("interp_prepare_eval", |b| b.iter(&mut pass_prepare_eval));
     g.bench_function("native_prepare_eval", |b| {
-        b.iter(|| native_prepare_eval(&lv, &pairs, w, pr, avx2))
+        b.iter(|| native_prepare_eval(&lv, &pairs, pr, avx2))
     });
     // The two prepare + eval passes interleaved, as for the evals.
     let paired = bench_paired(
@@ -433,7 +482,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
             black_box(pass_prepare_eval());
         },
         || {
-            black_box(native_prepare_eval(&lv, &pairs, w, pr, avx2));
+            black_box(native_prepare_eval(&lv, &pairs, pr, avx2));
         },
     );
     if let Some((interp, hand, n)) = paired {

@@ -521,6 +521,37 @@ fn selection_follows_albedo_luminance() {
 }
 
 #[test]
+fn lobes_that_reflect_nothing_are_selected_by_weight() {
+    // Two black Lamberts kept (no drop): every albedo is 0, so step 7 falls back to
+    // `lum(w_k)`, here the mix's 0.75 and 0.25.
+    let mut b = IrBuilder::new();
+    let col = Type::scalar(BaseType::Color);
+    let rho = b.input_slot("tex.rgb", col, Value::Triple(BaseType::Color, [0.5; 3]));
+    let first = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "first");
+    let second = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "second");
+    let m = b.prog.constf(0.25);
+    let root = b.mix(first, second, m);
+    let opts = PrepareOptions {
+        drop_threshold: 0.0,
+        ..PrepareOptions::default()
+    };
+    let m = Material::with_options(&finish(b, root), opts).unwrap();
+    let p = m.prepare(&point(view(0.5)).with_inputs(&[0.0; 3]));
+    assert_eq!(p.lobes().len(), 2);
+    for a in p.lobes() {
+        // The weight's own share: `lum(w) = w` for a grey weight.
+        assert!(a.weight == Vec3::splat(0.25) || a.weight == Vec3::splat(0.75));
+        assert!((a.prob - a.weight.x).abs() < 1e-6, "{a:?}");
+    }
+    assert!(!p.is_absorbing());
+    // With albedo, the shares follow the weighted albedos (the same here: one ρ for both).
+    let lit = m.prepare(&point(view(0.5)).with_inputs(&[0.5; 3]));
+    for a in lit.lobes() {
+        assert!((a.prob - a.weight.x).abs() < 1e-6, "{a:?}");
+    }
+}
+
+#[test]
 fn an_absorbing_material_samples_nothing() {
     let mut b = IrBuilder::new();
     let col = Type::scalar(BaseType::Color);

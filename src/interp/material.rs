@@ -1401,34 +1401,55 @@ impl Prepared {
     #[inline(always)]
     fn select(&mut self, lums: &[f32; MAX_LOBES]) {
         let n = self.count;
-        let mut a = *lums;
+        // `lums` is read in place, never copied whole: its entries were just stored one by
+        // one, and a wider load of them waits for every store to reach the cache (no store
+        // forwarding).
         let mut sum = 0.0f32;
-        for x in &a[..n] {
+        for x in &lums[..n] {
             sum += *x;
         }
         let tau = lum(self.transparency).max(0.0);
         sum += tau;
-        let by_weight = sum.is_nan() || sum <= 0.0;
-        if by_weight {
-            sum = 0.0;
-            for (x, l) in a.iter_mut().zip(&self.lobes[..n]) {
-                *x = lum(l.weight).max(0.0);
-                sum += *x;
-            }
+        if sum.is_nan() || sum <= 0.0 {
+            self.select_by_weight();
+            return;
         }
-        if !(sum > 0.0 && sum.is_finite()) {
-            // Absorbing: every probability 0 (the records may hold an earlier prepare's).
-            for l in &mut self.lobes[..n] {
-                l.prob = 0.0;
-            }
+        if sum == f32::INFINITY {
+            self.absorb();
             return;
         }
         // One division: the probabilities are the shares times its reciprocal.
         let inv = 1.0 / sum;
-        for (l, x) in self.lobes[..n].iter_mut().zip(a) {
+        for (l, x) in self.lobes[..n].iter_mut().zip(lums) {
             l.prob = x * inv;
         }
-        self.p_transparency = if by_weight { 0.0 } else { tau * inv };
+        self.p_transparency = tau * inv;
+    }
+
+    /// [`Prepared::select`] when no lobe reflects: proportional to `lum(w_k)`, or absorbing.
+    #[cold]
+    fn select_by_weight(&mut self) {
+        let mut sum = 0.0f32;
+        for l in &mut self.lobes[..self.count] {
+            l.prob = lum(l.weight).max(0.0);
+            sum += l.prob;
+        }
+        if !(sum > 0.0 && sum.is_finite()) {
+            self.absorb();
+            return;
+        }
+        let inv = 1.0 / sum;
+        for l in &mut self.lobes[..self.count] {
+            l.prob *= inv;
+        }
+        self.p_transparency = 0.0;
+    }
+
+    /// Absorbing: every probability 0 (the records may hold an earlier prepare's).
+    fn absorb(&mut self) {
+        for l in &mut self.lobes[..self.count] {
+            l.prob = 0.0;
+        }
     }
 
     /// The lobes that survived step 6, with weights, albedos and probabilities.

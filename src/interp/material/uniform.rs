@@ -284,15 +284,17 @@ impl Material {
         let threshold = self.options.drop_threshold;
         let mut lums = [0.0f32; MAX_LOBES];
         let mut count = 0;
+        // Summed in locals: `out`'s fields would be reloaded after every record written.
+        let (mut emission, mut transparency) = (Vec3::ZERO, Vec3::ZERO);
         for (target, &a) in w_plan.targets.iter().zip(&acc) {
             let (k, w) = match *target {
                 Target::Leaf { leaf, tint } => (leaf as usize, clean(tint * a)),
                 Target::Emission(e) => {
-                    out.emission += clean(a * e);
+                    emission += clean(a * e);
                     continue;
                 }
                 Target::Transparent(t) => {
-                    out.transparency += clean(a * t);
+                    transparency += clean(a * t);
                     continue;
                 }
             };
@@ -311,6 +313,8 @@ impl Material {
             count += 1;
         }
         out.count = count;
+        out.emission = emission;
+        out.transparency = transparency;
         // A dropped lobe moved the records after it down: they are no longer in place.
         out.stamp = if count == plan.leaves.len() {
             plan.stamp
