@@ -259,7 +259,10 @@ impl Material {
             };
         }
         // Step 4: the weight plan (scope products, then each target's sum of its terms).
-        let mut scope = [Vec3::ONE; MAX_UNIFORM_SLOTS];
+        // Scope 0 is 1; the others are written before they are read (parents first). Zeros
+        // fill the array in a few wide stores, where ones took one store per channel.
+        let mut scope = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
+        scope[0] = Vec3::ONE;
         for (i, &(parent, slot)) in w_plan.scopes.iter().enumerate() {
             scope[i + 1] = scope[parent as usize] * thr[slot as usize];
         }
