@@ -10,13 +10,15 @@
 #[path = "common/uniform_materials.rs"]
 mod uniform_materials;
 use glam::Vec3;
-use uniform_materials::{assorted_ir, coated_ir, point, shared_ir, stacked_ir, textured_ir};
+use uniform_materials::{
+    assorted_ir, coated_ir, negative_ir, point, shared_ir, stacked_ir, textured_ir,
+};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::MaterialIr;
 
-fn cases() -> [(&'static str, MaterialIr); 5] {
+fn cases() -> [(&'static str, MaterialIr); 6] {
     [
         ("ref10", ref10_ir()),
         ("assorted", assorted_ir()),
@@ -24,6 +26,8 @@ fn cases() -> [(&'static str, MaterialIr); 5] {
         ("stacked", stacked_ir()),
         // A leaf reached by two paths: its weight sums two terms.
         ("shared", shared_ir()),
+        // Weights the fused form must clean (a negative one, a huge one).
+        ("negative", negative_ir()),
     ]
 }
 

@@ -88,6 +88,9 @@ pub(super) struct UniformPlan {
     /// target's term `(c, scope)`, in target order (`(0, 0)` for a target without one):
     /// the sum is then the product itself.
     single_terms: Option<Vec<(Vec3, u32)>>,
+    /// Every leaf weight is finite and non-negative whatever the albedos
+    /// ([`weights_are_clean`]), so [`super::clean`] would return it unchanged and is skipped.
+    weights_clean: bool,
 }
 
 impl UniformPlan {
@@ -176,8 +179,30 @@ impl UniformPlan {
             templates,
             thr,
             single_terms: single_terms(w_plan),
+            weights_clean: weights_are_clean(w_plan),
         })
     }
+}
+
+/// Whether every leaf weight of `w_plan` is finite and non-negative (+0 rather than −0) at
+/// every point, so that [`super::clean`] returns it bit for bit: true when every term's
+/// constant and every leaf target's tint is finite, at most 1e15 and without a sign bit.
+///
+/// A weight is `tint ⊙ Σ c ⊙ scope`, and every scope is a product of throughputs, each of
+/// them `sat` of something, a `max` with 0, a product or a convex sum of such: each in
+/// [0, 1] up to rounding, never NaN (glam's `max(NaN, 0)` is 0), never −0. So each weight
+/// is a sum of products of non-negative finite factors below 1e30.
+fn weights_are_clean(w_plan: &super::WeightPlan) -> bool {
+    let ok = |v: Vec3| {
+        v.to_array()
+            .iter()
+            .all(|x| x.is_finite() && x.is_sign_positive() && *x <= 1e15)
+    };
+    w_plan.terms.iter().all(|t| ok(t.c))
+        && w_plan.targets.iter().all(|t| match *t {
+            Target::Leaf { tint, .. } => ok(tint),
+            _ => true,
+        })
 }
 
 /// [`UniformPlan::single_terms`] of `w_plan`, or `None` when some target has more than one
@@ -291,7 +316,10 @@ impl Material {
         let (mut emission, mut transparency) = (Vec3::ZERO, Vec3::ZERO);
         for (target, &a) in w_plan.targets.iter().zip(&acc) {
             let (k, w) = match *target {
-                Target::Leaf { leaf, tint } => (leaf as usize, clean(tint * a)),
+                Target::Leaf { leaf, tint } => {
+                    let w = tint * a;
+                    (leaf as usize, if plan.weights_clean { w } else { clean(w) })
+                }
                 Target::Emission(e) => {
                     emission += clean(a * e);
                     continue;
