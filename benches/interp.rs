@@ -12,10 +12,12 @@
 //!   apart, and this host's speed changes by about 1.5× between phases);
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
 //!   (V, L) pair (4096 pairs; ref10 is uniform, so `prepare_into` runs its fused form); the
-//!   native prepare prepares the ten leaves with fixed weights (no program, no throughput
-//!   pass), their view-independent parts bound once as the interpreter binds its constant
-//!   leaves (before S13 it prepared them unbound, which redid each conductor's F82 fit and
-//!   the table lookups at every point and roughly doubled its time);
+//!   native prepare prepares the ten leaves, their view-independent parts bound once as the
+//!   interpreter binds its constant leaves (before S13 it prepared them unbound, which
+//!   redid each conductor's F82 fit and the table lookups at every point and roughly
+//!   doubled its time), and scales the weights from the layer tops' albedos, as the spec's
+//!   hand-inlined anchor does (§6.2; before S17 its weights were fixed); its selection
+//!   probabilities stay fixed;
 //! * `ref10/interp_prepare_eval_paired`: `interp_prepare_eval` with a `native_prepare_eval`
 //!   pass between every two timed passes, printing both means over the same passes and
 //!   their ratio (from session 16);
