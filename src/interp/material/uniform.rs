@@ -199,9 +199,11 @@ fn fuse_plain_leaves(mut steps: Vec<UniformThr>) -> Vec<UniformThr> {
         if let UniformThr::Leaf {
             leaf,
             mode: TintMode::Rgb,
-            tint: Vec3::ONE,
-            ttint: Vec3::ONE,
+            tint,
+            ttint,
         } = steps[j]
+            && tint == Vec3::ONE
+            && ttint == Vec3::ONE
         {
             steps[j] = UniformThr::LeafPlain { leaf };
             if let Some(&UniformThr::Multiply { f, c }) = steps.get(j + 1)
