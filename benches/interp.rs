@@ -405,7 +405,8 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     // Sanity: the hand-written albedo scaling gives the interpreter's weights at every view.
     for (f, v, _) in pairs.iter().take(256) {
         let (a, b) = (m.prepare(&point(f, *v)), Native::prepare(&lv, *f, *v, pr));
-        for (lobe, w) in a.lobes().iter().zip(b.w) {
+        for lobe in a.lobes() {
+            let w = b.w[usize::from(lobe.leaf)];
             assert!(
                 (lobe.weight - w).abs().max_element() <= 1e-5,
                 "{lobe:?} vs {w}"
