@@ -58,6 +58,8 @@ use vstructc::interp::simd::{Level, SCALAR_LEVEL, level};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::ward::{PreparedWard, WardBound};
 use vstructc::interp::*;
+use vstructc::ir::TintMode;
+use vstructc::ir::algebra::{leaf_throughput, mul_throughput};
 
 const PAIRS: usize = 4096;
 
@@ -170,13 +172,15 @@ struct Native {
 
 /// ref10's lobe weights (in leaf order) from its layer tops' albedos at the view: the spec's
 /// hand-inlined prepare scales albedos from fits (closures.md §6.2), and this is that
-/// scaling (§2.4's algebra, tints 1, RGB layers) with ref10's constants written in. Each
-/// layer's base takes its top's throughput `sat(1 − c (1 − sat(1 − E)))` (`c`: the top's
+/// scaling (§2.4's algebra, `ir::algebra`'s formulas, tints 1, RGB layers) with ref10's
+/// constants written in. Each layer's base takes its top's throughput (`c`: the top's
 /// `mul`, 1 for the specular layer); the mix gives 0.7 and 0.3.
 #[inline(always)]
 fn ref10_weights(e_fuzz: Vec3, e_coat: Vec3, e_spec: Vec3, e_sheen: Vec3) -> [Vec3; 10] {
-    let sat = |x: Vec3| x.clamp(Vec3::ZERO, Vec3::ONE);
-    let top = |e: Vec3, c: f32| sat(Vec3::ONE - c * (Vec3::ONE - sat(Vec3::ONE - e)));
+    let top = |e: Vec3, c: f32| {
+        let leaf = leaf_throughput(TintMode::Rgb, Vec3::ONE, Vec3::ONE, e);
+        mul_throughput(leaf, Vec3::splat(c))
+    };
     let below_fuzz = top(e_fuzz, 0.5);
     let below_coat = below_fuzz * top(e_coat, 0.7);
     let below_spec = below_coat * top(e_spec, 1.0);

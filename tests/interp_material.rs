@@ -13,7 +13,7 @@ use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, IrBuilder, Leaf, LeafKind, Masking, MaterialIr, Node,
-    NodeId, ProgramBuilder, RecipeId, TintMode,
+    NodeId, ProgramBuilder, RecipeId, Reg, TintMode,
 };
 use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 use vstructc::types::{BaseType, Type, Value};
@@ -520,13 +520,18 @@ fn selection_follows_albedo_luminance() {
     assert!((total - 1.0).abs() < 1e-6);
 }
 
+/// A colour input `tex.rgb` (fallback 0.5 grey), for albedos the tests set per point.
+fn grey_input(b: &mut IrBuilder) -> Reg {
+    let col = Type::scalar(BaseType::Color);
+    b.input_slot("tex.rgb", col, Value::Triple(BaseType::Color, [0.5; 3]))
+}
+
 #[test]
 fn lobes_that_reflect_nothing_are_selected_by_weight() {
     // Two black Lamberts kept (no drop): every albedo is 0, so step 7 falls back to
     // `lum(w_k)`, here the mix's 0.75 and 0.25.
     let mut b = IrBuilder::new();
-    let col = Type::scalar(BaseType::Color);
-    let rho = b.input_slot("tex.rgb", col, Value::Triple(BaseType::Color, [0.5; 3]));
+    let rho = grey_input(&mut b);
     let first = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "first");
     let second = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "second");
     let m = b.prog.constf(0.25);
@@ -554,8 +559,7 @@ fn lobes_that_reflect_nothing_are_selected_by_weight() {
 #[test]
 fn an_absorbing_material_samples_nothing() {
     let mut b = IrBuilder::new();
-    let col = Type::scalar(BaseType::Color);
-    let rho = b.input_slot("tex.rgb", col, Value::Triple(BaseType::Color, [0.5; 3]));
+    let rho = grey_input(&mut b);
     let root = b.simple_leaf(LeafKind::Lambert { albedo: rho }, "diffuse");
     let m = compile(&finish(b, root));
     let p = m.prepare(&point(view(0.5)).with_inputs(&[0.0; 3]));

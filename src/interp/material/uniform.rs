@@ -49,9 +49,6 @@ enum UniformThr {
     /// [`UniformThr::Leaf`] in mode RGB with both tints 1: `sat(1 − E)` (the same bits:
     /// products with 1 are exact).
     LeafPlain { leaf: u8 },
-    /// [`UniformThr::Multiply`] of a [`UniformThr::LeafPlain`] step, in one step (the same
-    /// bits; the leaf's own slot is still written).
-    LeafPlainMul { leaf: u8, c: Vec3 },
     /// A constant: 0 for a leaf that is not layerable, 1 for emission and transparency.
     Const(Vec3),
     /// `T_top · T_base`.
@@ -134,15 +131,18 @@ impl UniformPlan {
             .map(|op| match *op {
                 ThrOp::Leaf { leaf, mode } => {
                     let info = &m.leaves[leaf as usize];
-                    if info.layerable {
+                    let (tint, ttint) = (reg(info.leaf.tint), reg(info.leaf.ttint));
+                    if !info.layerable {
+                        UniformThr::Const(Vec3::ZERO)
+                    } else if mode == TintMode::Rgb && tint == Vec3::ONE && ttint == Vec3::ONE {
+                        UniformThr::LeafPlain { leaf }
+                    } else {
                         UniformThr::Leaf {
                             leaf,
                             mode,
-                            tint: reg(info.leaf.tint),
-                            ttint: reg(info.leaf.ttint),
+                            tint,
+                            ttint,
                         }
-                    } else {
-                        UniformThr::Const(Vec3::ZERO)
                     }
                 }
                 ThrOp::One => UniformThr::Const(Vec3::ONE),
@@ -165,7 +165,6 @@ impl UniformPlan {
                 },
             })
             .collect();
-        let thr = fuse_plain_leaves(thr);
         // Relaxed: the counter only has to hand out distinct values.
         static NEXT_STAMP: AtomicU64 = AtomicU64::new(1);
         let stamp = NEXT_STAMP.fetch_add(1, Ordering::Relaxed);
@@ -189,31 +188,6 @@ impl UniformPlan {
             weights_clean: weights_are_clean(w_plan),
         })
     }
-}
-
-/// `steps` with each RGB-mode leaf step of unit tints made [`UniformThr::LeafPlain`], and
-/// such a step followed at once by a `mul` of it made [`UniformThr::LeafPlainMul`] in the
-/// second step's place (the first still writes its slot: other steps may read it).
-fn fuse_plain_leaves(mut steps: Vec<UniformThr>) -> Vec<UniformThr> {
-    for j in 0..steps.len() {
-        if let UniformThr::Leaf {
-            leaf,
-            mode: TintMode::Rgb,
-            tint,
-            ttint,
-        } = steps[j]
-            && tint == Vec3::ONE
-            && ttint == Vec3::ONE
-        {
-            steps[j] = UniformThr::LeafPlain { leaf };
-            if let Some(&UniformThr::Multiply { f, c }) = steps.get(j + 1)
-                && usize::from(f) == j
-            {
-                steps[j + 1] = UniformThr::LeafPlainMul { leaf, c };
-            }
-        }
-    }
-    steps
 }
 
 /// Whether every leaf weight of `w_plan` is finite and non-negative (+0 rather than −0) at
@@ -309,9 +283,6 @@ impl Material {
                     ttint,
                 } => leaf_throughput(mode, tint, ttint, albedos[leaf as usize]),
                 UniformThr::LeafPlain { leaf } => sat(Vec3::ONE - albedos[leaf as usize]),
-                UniformThr::LeafPlainMul { leaf, c } => {
-                    mul_throughput(sat(Vec3::ONE - albedos[leaf as usize]), c)
-                }
                 UniformThr::Const(c) => c,
                 UniformThr::Layer { top, base } => thr[top as usize] * thr[base as usize],
                 UniformThr::Mix { a, b, m } => mix_throughput(thr[a as usize], thr[b as usize], m),
@@ -330,7 +301,8 @@ impl Material {
         let mut acc = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
         match &plan.single_terms {
             // `0 + c·s` and `c·s` differ only in the sign of a zero, which `clean` below
-            // maps to +0 either way.
+            // maps to +0 either way (and with `weights_clean`, `c` and `s` are unsigned, so
+            // the product is +0 already).
             Some(single) => {
                 for (a, &(c, s)) in acc.iter_mut().zip(single) {
                     *a = c * scope[s as usize];
