@@ -68,6 +68,33 @@ struct UniformLeaf {
     refresh: RefreshLeaf,
 }
 
+/// A target's one term in a tree plan (`c ⊙ scope`; `(0, 0)` for a target without a term
+/// or in a plan that is not a tree, where the sum is accumulated by target index).
+#[derive(Debug, Clone, Copy)]
+struct TreeTerm {
+    c: Vec3,
+    scope: u8,
+}
+
+/// A leaf target of a [`UniformPlan`]: the leaf, its tint, its index among the weight
+/// plan's targets and its term.
+#[derive(Debug, Clone, Copy)]
+struct LeafTarget {
+    tint: Vec3,
+    term: TreeTerm,
+    target: u8,
+    leaf: u8,
+}
+
+/// An emission or transparency target of a [`UniformPlan`] (a [`Target`] that is not a
+/// leaf), with its index among the weight plan's targets and its term.
+#[derive(Debug, Clone, Copy)]
+struct LightTarget {
+    kind: Target,
+    term: TreeTerm,
+    target: u8,
+}
+
 /// What [`Material::prepare_uniform_into`] needs beyond the material's weight plan: the
 /// bound leaves, their records' templates, the throughput steps with constants folded in,
 /// and the material's stamp.
@@ -87,10 +114,13 @@ pub(super) struct UniformPlan {
     templates: Vec<PreparedLobe>,
     /// The throughput steps, bottom-up (step `j` writes slot `j`).
     thr: Vec<UniformThr>,
-    /// When no weight target has more than one term (a tree: one path to each node), each
-    /// target's term `(c, scope)`, in target order (`(0, 0)` for a target without one):
-    /// the sum is then the product itself.
-    single_terms: Option<Vec<(Vec3, u32)>>,
+    /// True when no weight target has more than one term (a tree: one path to each node):
+    /// each target's sum is then its one product, and the targets carry their terms.
+    tree: bool,
+    /// The leaf targets of the weight plan, in leaf order.
+    leaf_targets: Vec<LeafTarget>,
+    /// The emission and transparency targets, in target order.
+    light_targets: Vec<LightTarget>,
     /// Every leaf weight is finite and non-negative whatever the albedos
     /// ([`weights_are_clean`]), so [`super::clean`] would return it unchanged and is skipped.
     weights_clean: bool,
@@ -179,12 +209,35 @@ impl UniformPlan {
                 refresh: lobe.refresh_leaf(),
             })
             .collect();
+        let single = single_terms(w_plan);
+        let term = |t: usize| match &single {
+            Some(terms) => terms[t],
+            None => TreeTerm {
+                c: Vec3::ZERO,
+                scope: 0,
+            },
+        };
+        let (mut leaf_targets, mut light_targets) = (Vec::new(), Vec::new());
+        for (t, &kind) in w_plan.targets.iter().enumerate() {
+            let (term, target) = (term(t), t as u8);
+            match kind {
+                Target::Leaf { leaf, tint } => leaf_targets.push(LeafTarget {
+                    tint,
+                    term,
+                    target,
+                    leaf,
+                }),
+                _ => light_targets.push(LightTarget { kind, term, target }),
+            }
+        }
         Some(UniformPlan {
             stamp,
             leaves,
             templates,
             thr,
-            single_terms: single_terms(w_plan),
+            tree: single.is_some(),
+            leaf_targets,
+            light_targets,
             weights_clean: weights_are_clean(w_plan),
         })
     }
@@ -211,21 +264,30 @@ fn weights_are_clean(w_plan: &super::WeightPlan) -> bool {
         })
 }
 
-/// [`UniformPlan::single_terms`] of `w_plan`, or `None` when some target has more than one
-/// term.
-fn single_terms(w_plan: &super::WeightPlan) -> Option<Vec<(Vec3, u32)>> {
+/// Each target's one term in target order, or `None` when some target has more than one
+/// (the plan is not a tree, [`UniformPlan::tree`]).
+fn single_terms(w_plan: &super::WeightPlan) -> Option<Vec<TreeTerm>> {
     let mut single = vec![None; w_plan.targets.len()];
     for t in &w_plan.terms {
         let slot = single.get_mut(t.target as usize)?;
         if slot.is_some() {
             return None;
         }
-        *slot = Some((t.c, t.scope));
+        // Scopes are fewer than `MAX_UNIFORM_SLOTS` (checked by `UniformPlan::new`).
+        *slot = Some(TreeTerm {
+            c: t.c,
+            scope: t.scope as u8,
+        });
     }
     Some(
         single
             .into_iter()
-            .map(|t| t.unwrap_or((Vec3::ZERO, 0)))
+            .map(|t| {
+                t.unwrap_or(TreeTerm {
+                    c: Vec3::ZERO,
+                    scope: 0,
+                })
+            })
             .collect(),
     )
 }
@@ -261,7 +323,8 @@ impl Material {
         // family of the plan reflects only (its transmitted parts are 0). Records this
         // material wrote at the previous point, every leaf in place, already hold their
         // view-independent fields; others start from the templates.
-        if out.stamp != plan.stamp {
+        let in_place = out.stamp == plan.stamp;
+        if !in_place {
             for (template, a) in plan.templates.iter().zip(&mut out.lobes) {
                 a.lobe = *template;
             }
@@ -298,62 +361,24 @@ impl Material {
         for (i, &(parent, slot)) in w_plan.scopes.iter().enumerate() {
             scope[i + 1] = scope[parent as usize] * thr[slot as usize];
         }
-        let mut acc = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
-        match &plan.single_terms {
-            // `0 + c·s` and `c·s` differ only in the sign of a zero, which `clean` below
-            // maps to +0 either way (and with `weights_clean`, `c` and `s` are unsigned, so
-            // the product is +0 already).
-            Some(single) => {
-                for (a, &(c, s)) in acc.iter_mut().zip(single) {
-                    *a = c * scope[s as usize];
-                }
-            }
-            None => {
-                for t in &w_plan.terms {
-                    acc[t.target as usize] += t.c * scope[t.scope as usize];
-                }
-            }
-        }
-        // Each target's weight, and for a leaf steps 5 and 6 at once: its weighted albedo
-        // and the drop, compacting the records in place. Leaf targets come in leaf order
-        // (both follow the nodes), so a record only ever moves down.
-        let threshold = self.options.drop_threshold;
+        // The targets' sums: in a tree each is its one term, computed where it is read; else
+        // accumulated by target index first.
         let mut lums = [0.0f32; MAX_LOBES];
-        let mut count = 0;
-        // Summed in locals: `out`'s fields would be reloaded after every record written.
-        let (mut emission, mut transparency) = (Vec3::ZERO, Vec3::ZERO);
-        for (target, &a) in w_plan.targets.iter().zip(&acc) {
-            let (k, w) = match *target {
-                Target::Leaf { leaf, tint } => {
-                    let w = tint * a;
-                    (leaf as usize, if plan.weights_clean { w } else { clean(w) })
-                }
-                Target::Emission(e) => {
-                    emission += clean(a * e);
-                    continue;
-                }
-                Target::Transparent(t) => {
-                    transparency += clean(a * t);
-                    continue;
-                }
-            };
-            if w == Vec3::ZERO {
-                continue;
+        let count = if plan.tree {
+            // `0 + c·s` and `c·s` differ only in the sign of a zero, which `clean` maps to +0
+            // either way (and with `weights_clean`, `c` and `s` are unsigned, so the product
+            // is +0 already).
+            let sum = |term: TreeTerm, _| term.c * scope[term.scope as usize];
+            self.weigh_targets(plan, in_place, &albedos, sum, &mut lums, out)
+        } else {
+            let mut acc = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
+            for t in &w_plan.terms {
+                acc[t.target as usize] += t.c * scope[t.scope as usize];
             }
-            let reflect = w * albedos[k];
-            if threshold > 0.0 && reflect.max_element() <= threshold {
-                continue;
-            }
-            let albedo = Albedo {
-                reflect,
-                ..Albedo::default()
-            };
-            lums[count] = out.keep(count, k, w, albedo, 0);
-            count += 1;
-        }
+            let sum = |_, target: u8| acc[target as usize];
+            self.weigh_targets(plan, in_place, &albedos, sum, &mut lums, out)
+        };
         out.count = count;
-        out.emission = emission;
-        out.transparency = transparency;
         // A dropped lobe moved the records after it down: they are no longer in place.
         out.stamp = if count == plan.leaves.len() {
             plan.stamp
@@ -365,5 +390,62 @@ impl Material {
         // Step 7: selection probabilities.
         out.select(&lums);
         true
+    }
+
+    /// Steps 5 and 6 with the end of step 4: each target's weight from its sum (`sum` of its
+    /// term and its index), and for a leaf its weighted albedo and the drop, compacting the
+    /// records in place; emission and transparency go to `out`. Writes each kept lobe's
+    /// share of step 7 into `lums` and returns how many were kept.
+    ///
+    /// Leaf targets come in leaf order (both follow the nodes), so a record only ever moves
+    /// down. With `in_place` (the records hold this material's lobes from a point where
+    /// none was dropped), a lobe kept where it is only needs its weight and albedo.
+    #[inline(always)]
+    fn weigh_targets(
+        &self,
+        plan: &UniformPlan,
+        in_place: bool,
+        albedos: &[Vec3; MAX_LOBES],
+        sum: impl Fn(TreeTerm, u8) -> Vec3,
+        lums: &mut [f32; MAX_LOBES],
+        out: &mut Prepared,
+    ) -> usize {
+        let threshold = self.options.drop_threshold;
+        let mut count = 0;
+        for t in &plan.leaf_targets {
+            let k = t.leaf as usize;
+            let w = t.tint * sum(t.term, t.target);
+            let w = if plan.weights_clean { w } else { clean(w) };
+            if w == Vec3::ZERO {
+                continue;
+            }
+            let reflect = w * albedos[k];
+            if threshold > 0.0 && reflect.max_element() <= threshold {
+                continue;
+            }
+            lums[count] = if in_place && count == k {
+                out.keep_in_place(k, w, reflect)
+            } else {
+                let albedo = Albedo {
+                    reflect,
+                    ..Albedo::default()
+                };
+                out.keep(count, k, w, albedo, 0)
+            };
+            count += 1;
+        }
+        // Summed in locals: `out`'s fields would be reloaded after every store.
+        let (mut emission, mut transparency) = (Vec3::ZERO, Vec3::ZERO);
+        for t in &plan.light_targets {
+            let a = sum(t.term, t.target);
+            match t.kind {
+                Target::Emission(e) => emission += clean(a * e),
+                Target::Transparent(tint) => transparency += clean(a * tint),
+                Target::Leaf { .. } => {}
+            }
+        }
+        out.emission = emission;
+        out.transparency = transparency;
+        count
     }
 }
