@@ -1395,21 +1395,6 @@ impl Prepared {
         lum(albedo.reflect + albedo.transmit_radiance).max(0.0)
     }
 
-    /// [`Prepared::keep`] of leaf `k` as lobe `k` with a reflect-only albedo, for a record
-    /// that [`Prepared::keep`] wrote the same way at the previous point: its frame (0), leaf
-    /// index and zero transmission are already there, so only the weight and the reflected
-    /// albedo are written. Returns the same share.
-    #[inline(always)]
-    fn keep_in_place(&mut self, k: usize, weight: Rgb, reflect: Rgb) -> f32 {
-        let a = &mut self.lobes[k];
-        debug_assert!(a.leaf as usize == k && a.frame == 0);
-        debug_assert!(a.albedo.transmit == Vec3::ZERO && a.albedo.transmit_radiance == Vec3::ZERO);
-        a.weight = weight;
-        a.albedo.reflect = reflect;
-        // `+ 0` as in `keep`: it maps a −0 channel to +0 before the luminance.
-        lum(reflect + Vec3::ZERO).max(0.0)
-    }
-
     /// Step 7: `p_k = lum(A_k)/Σ lum(A_j)` (straight transmission takes part with
     /// `lum(τ)`); else proportional to `lum(w_k)`; else absorbing (all 0).
     /// `lums[k]` is `max(lum(A_k), 0)` with transmission in the radiance convention.

@@ -323,8 +323,7 @@ impl Material {
         // family of the plan reflects only (its transmitted parts are 0). Records this
         // material wrote at the previous point, every leaf in place, already hold their
         // view-independent fields; others start from the templates.
-        let in_place = out.stamp == plan.stamp;
-        if !in_place {
+        if out.stamp != plan.stamp {
             for (template, a) in plan.templates.iter().zip(&mut out.lobes) {
                 a.lobe = *template;
             }
@@ -369,14 +368,14 @@ impl Material {
             // either way (and with `weights_clean`, `c` and `s` are unsigned, so the product
             // is +0 already).
             let sum = |term: TreeTerm, _| term.c * scope[term.scope as usize];
-            self.weigh_targets(plan, in_place, &albedos, sum, &mut lums, out)
+            self.weigh_targets(plan, &albedos, sum, &mut lums, out)
         } else {
             let mut acc = [Vec3::ZERO; MAX_UNIFORM_SLOTS];
             for t in &w_plan.terms {
                 acc[t.target as usize] += t.c * scope[t.scope as usize];
             }
             let sum = |_, target: u8| acc[target as usize];
-            self.weigh_targets(plan, in_place, &albedos, sum, &mut lums, out)
+            self.weigh_targets(plan, &albedos, sum, &mut lums, out)
         };
         out.count = count;
         // A dropped lobe moved the records after it down: they are no longer in place.
@@ -398,13 +397,11 @@ impl Material {
     /// share of step 7 into `lums` and returns how many were kept.
     ///
     /// Leaf targets come in leaf order (both follow the nodes), so a record only ever moves
-    /// down. With `in_place` (the records hold this material's lobes from a point where
-    /// none was dropped), a lobe kept where it is only needs its weight and albedo.
+    /// down.
     #[inline(always)]
     fn weigh_targets(
         &self,
         plan: &UniformPlan,
-        in_place: bool,
         albedos: &[Vec3; MAX_LOBES],
         sum: impl Fn(TreeTerm, u8) -> Vec3,
         lums: &mut [f32; MAX_LOBES],
@@ -423,15 +420,11 @@ impl Material {
             if threshold > 0.0 && reflect.max_element() <= threshold {
                 continue;
             }
-            lums[count] = if in_place && count == k {
-                out.keep_in_place(k, w, reflect)
-            } else {
-                let albedo = Albedo {
-                    reflect,
-                    ..Albedo::default()
-                };
-                out.keep(count, k, w, albedo, 0)
+            let albedo = Albedo {
+                reflect,
+                ..Albedo::default()
             };
+            lums[count] = out.keep(count, k, w, albedo, 0);
             count += 1;
         }
         // Summed in locals: `out`'s fields would be reloaded after every store.
