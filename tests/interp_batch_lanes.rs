@@ -12,7 +12,7 @@ mod lanes;
 mod uniform_materials;
 use glam::Vec3;
 use lanes::assert_lanes_match;
-use uniform_materials::{assorted_ir, coated_ir, textured_ir};
+use uniform_materials::{assorted_ir, coated_ir, negative_ir, shared_ir, textured_ir};
 use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
@@ -89,6 +89,10 @@ fn lane_parallel_prepare_equals_scalar_at<const W: usize>() {
         ("ref10", ref10_ir()),
         ("assorted", assorted_ir()),
         ("coated", coated_ir()),
+        // A leaf reached by two paths: its weight sums two terms.
+        ("shared", shared_ir()),
+        // Weights that need cleaning (a negative one, an overflowing one).
+        ("negative", negative_ir()),
     ];
     for (name, ir) in cases {
         let m = Material::new(&ir).expect("compiles");

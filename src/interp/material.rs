@@ -942,6 +942,10 @@ struct WeightPlan {
     scopes: Vec<(u32, u16)>,
     /// Leaves, emission and transparency nodes, each with its own accumulator.
     targets: Vec<Target>,
+    /// Every leaf weight is finite and non-negative at every point, whatever the albedos
+    /// ([`weights_are_clean`]): [`clean`] of it is the identity, and the fused and
+    /// lane-parallel prepares skip it.
+    weights_clean: bool,
 }
 
 /// One path of a [`WeightPlan`]: `c ⊙ scope` added to a target.
@@ -983,6 +987,7 @@ fn compile_weights(
         terms: Vec::new(),
         scopes: Vec::new(),
         targets: Vec::new(),
+        weights_clean: false,
     };
     if nodes.is_empty() {
         return Some(plan);
@@ -1048,7 +1053,29 @@ fn compile_weights(
             return None;
         }
     }
+    plan.weights_clean = weights_are_clean(&plan);
     Some(plan)
+}
+
+/// Whether every leaf weight of `w_plan` is finite and non-negative (+0 rather than −0) at
+/// every point, so that [`clean`] returns it bit for bit: true when every term's
+/// constant and every leaf target's tint is finite, at most 1e15 and without a sign bit.
+///
+/// A weight is `tint ⊙ Σ c ⊙ scope`, and every scope is a product of throughputs, each of
+/// them `sat` of something, a `max` with 0, a product or a convex sum of such: each in
+/// [0, 1] up to rounding, never NaN (glam's `max(NaN, 0)` is 0), never −0. So each weight
+/// is a sum of products of non-negative finite factors below 1e30.
+fn weights_are_clean(w_plan: &WeightPlan) -> bool {
+    let ok = |v: Vec3| {
+        v.to_array()
+            .iter()
+            .all(|x| x.is_finite() && x.is_sign_positive() && *x <= 1e15)
+    };
+    w_plan.terms.iter().all(|t| ok(t.c))
+        && w_plan.targets.iter().all(|t| match *t {
+            Target::Leaf { tint, .. } => ok(tint),
+            _ => true,
+        })
 }
 
 impl MaterialIr {

@@ -537,6 +537,9 @@ impl Material {
         out.transparency = Vec3x::zero();
         for (target, a) in w_plan.targets.iter().zip(acc.iter()) {
             match *target {
+                Target::Leaf { leaf, tint } if w_plan.weights_clean => {
+                    weights[leaf as usize] = zip(a, a, |a, _| tint * a);
+                }
                 Target::Leaf { leaf, tint } => {
                     weights[leaf as usize] = zip(a, a, |a, _| clean(tint * a));
                 }

@@ -121,8 +121,8 @@ pub(super) struct UniformPlan {
     leaf_targets: Vec<LeafTarget>,
     /// The emission and transparency targets, in target order.
     light_targets: Vec<LightTarget>,
-    /// Every leaf weight is finite and non-negative whatever the albedos
-    /// ([`weights_are_clean`]), so [`super::clean`] would return it unchanged and is skipped.
+    /// [`super::WeightPlan::weights_clean`]: [`super::clean`] would return every leaf
+    /// weight unchanged, so it is skipped.
     weights_clean: bool,
 }
 
@@ -238,30 +238,9 @@ impl UniformPlan {
             tree: single.is_some(),
             leaf_targets,
             light_targets,
-            weights_clean: weights_are_clean(w_plan),
+            weights_clean: w_plan.weights_clean,
         })
     }
-}
-
-/// Whether every leaf weight of `w_plan` is finite and non-negative (+0 rather than −0) at
-/// every point, so that [`super::clean`] returns it bit for bit: true when every term's
-/// constant and every leaf target's tint is finite, at most 1e15 and without a sign bit.
-///
-/// A weight is `tint ⊙ Σ c ⊙ scope`, and every scope is a product of throughputs, each of
-/// them `sat` of something, a `max` with 0, a product or a convex sum of such: each in
-/// [0, 1] up to rounding, never NaN (glam's `max(NaN, 0)` is 0), never −0. So each weight
-/// is a sum of products of non-negative finite factors below 1e30.
-fn weights_are_clean(w_plan: &super::WeightPlan) -> bool {
-    let ok = |v: Vec3| {
-        v.to_array()
-            .iter()
-            .all(|x| x.is_finite() && x.is_sign_positive() && *x <= 1e15)
-    };
-    w_plan.terms.iter().all(|t| ok(t.c))
-        && w_plan.targets.iter().all(|t| match *t {
-            Target::Leaf { tint, .. } => ok(tint),
-            _ => true,
-        })
 }
 
 /// Each target's one term in target order, or `None` when some target has more than one
