@@ -28,7 +28,19 @@
 //!   light, one thread: one pixel at a time (`scalar`: ref10 is uniform, so each pixel is
 //!   prepared by the uniform-material prepare at one lane; `scalar_general`: by the general
 //!   algorithm, `prepare_general_into`, as a material with inputs would be), or 16 at a
-//!   time (`batched`).
+//!   time (`batched`);
+//! * `preview512/{scalar,batched}_paired`: the same two renders, each followed by one pass
+//!   of the hand-written prepare + eval, printing the render time and that limit's ns per
+//!   point over the same passes.
+//!
+//! Reading §6.4 on this machine: its budgets are stated for the spec's reference machine,
+//! where the hand-written limits take the anchors of §6.2 (229 ns per eval, 264 ns per
+//! prepare + eval). Every paired row also prints a `§6.4 …` line: the interpreter's time
+//! here scaled by (anchor / the limit's time in the same passes), against the budget. The
+//! scalar eval is scaled by the eval limit, and the prepare + eval row and both previews by
+//! the prepare + eval limit (the spec's preview estimates are that anchor times the pixel
+//! count, §6.3). The batched rows (`batch16_eval`, and `soa` in `benches/leaves.rs`) are
+//! compared with their budgets as measured.
 //!
 //! Times are the thread's on-CPU time (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`): the
 //! machine is shared. Divide the per-iteration time by 4096 (criterion's "elem"
@@ -55,13 +67,14 @@ use vstructc::interp::preview::{PreviewOptions, render_ball};
 use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA, ref10_ir};
 use vstructc::interp::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCKBound, SheenLTCBound};
 use vstructc::interp::simd::{Level, SCALAR_LEVEL, level};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::ward::{PreparedWard, WardBound};
 use vstructc::interp::*;
 use vstructc::ir::TintMode;
 use vstructc::ir::algebra::{leaf_throughput, mul_throughput};
 
-const PAIRS: usize = 4096;
+#[path = "common/pairs.rs"]
+mod pairs;
+use pairs::PAIRS;
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -351,7 +364,7 @@ fn native_prepare_eval(
 /// Criterion row `name` timing `interp` passes with a `native` pass run between every two,
 /// so that both see the same host phases (on this shared VM two rows measured a minute
 /// apart can read 1.5× off). Criterion times the interpreter's passes; returns the mean ns
-/// per element of both over every pass, warm-up included, and the number of passes.
+/// per pass of both over every pass, warm-up included, and the number of passes.
 fn bench_paired(
     g: &mut BenchmarkGroup<'_, CpuTime>,
     name: &str,
@@ -376,39 +389,122 @@ fn bench_paired(
         })
     });
     let (si, sn, n) = sums;
-    let per_element = |t: u64| t as f64 / (n as f64 * PAIRS as f64);
-    (sn > 0).then(|| (per_element(si), per_element(sn), n))
+    let per_pass = |t: u64| t as f64 / n as f64;
+    (sn > 0).then(|| (per_pass(si), per_pass(sn), n))
 }
 
-/// Random (frame, V, L) triples, V and L on the normal's side.
-fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
-    let mut rng = Rng::new(7);
-    (0..PAIRS)
-        .map(|_| {
-            let n = rng.sphere();
-            let f = Frame::new(n, rng.sphere());
-            let side = |d: Vec3| if d.dot(n) < 0.0 { -d } else { d };
-            (f, side(rng.sphere()), side(rng.sphere()))
-        })
-        .collect()
+/// A §6.4 budget, read on this machine through a hand-written limit measured in the same
+/// passes.
+struct Budget {
+    /// The row of §6.4.
+    row: &'static str,
+    /// The limit's time on the spec's reference machine (its anchor in §6.2), ns.
+    anchor_ns: f64,
+    /// The budget, in `unit`.
+    budget: f64,
+    /// The unit's name and its length in ns.
+    unit: (&'static str, f64),
+}
+
+/// The hand-inlined evaluation of ref10 takes 229 ns on the reference machine.
+const SCALAR_EVAL: Budget = Budget {
+    row: "scalar eval",
+    anchor_ns: 229.0,
+    budget: 300.0,
+    unit: ("ns", 1.0),
+};
+
+/// The hand-inlined prepare (albedo scaling) + evaluation takes 264 ns there.
+const PREPARE_EVAL: Budget = Budget {
+    row: "scalar prepare + one eval",
+    anchor_ns: 264.0,
+    budget: 350.0,
+    unit: ("ns", 1.0),
+};
+
+/// The previews are read through the prepare + eval limit: the spec's own estimates are its
+/// anchor times the pixel count (§6.3).
+const PREVIEW_SCALAR: Budget = Budget {
+    row: "512² preview, scalar",
+    budget: 100.0,
+    unit: ("ms", 1e6),
+    ..PREPARE_EVAL
+};
+
+/// As [`PREVIEW_SCALAR`].
+const PREVIEW_BATCHED: Budget = Budget {
+    row: "512² preview, batched",
+    budget: 15.0,
+    ..PREVIEW_SCALAR
+};
+
+impl Budget {
+    /// Prints the row on the reference machine's scale. `here` is the interpreter's time on
+    /// this machine and `hand` the limit's, both in ns and over the same interleaved passes.
+    /// The limit carries the machine's speed and the ratio to it the interpreter's, so the
+    /// interpreter would take `here · anchor / hand` there.
+    fn print(&self, here: f64, hand: f64) {
+        let (name, ns) = self.unit;
+        let (row, anchor, budget) = (self.row, self.anchor_ns, self.budget);
+        let there = here * anchor / hand / ns;
+        let verdict = if there <= budget { "met" } else { "NOT met" };
+        println!(
+            "§6.4 {row}: {:.1} {name} here; with the hand-written limit's {anchor:.0} ns on \
+             the reference machine: {there:.1} {name} there, budget {budget} {name}: {verdict}",
+            here / ns,
+        );
+    }
+}
+
+/// The hand-written prepare + eval of ref10 over the 4096 pairs: the limit of the prepare +
+/// eval row, and the yardstick that carries the previews' budgets to this machine (the
+/// spec's preview estimates are its prepare + eval anchor times the pixel count, §6.3).
+struct PrepareEvalLimit {
+    leaves: BoundLeaves,
+    pairs: Vec<(Frame, Vec3, Vec3)>,
+    /// Fixed selection probabilities: the interpreter's at the first view (their values do
+    /// not affect the cost).
+    probabilities: [f32; 10],
+    avx2: bool,
+}
+
+impl PrepareEvalLimit {
+    fn new(m: &Material) -> PrepareEvalLimit {
+        let pairs = pairs::pairs(7);
+        let (f, v, _) = pairs[0];
+        let prep = m.prepare(&shading_point(&f, v));
+        assert_eq!(prep.lobes().len(), 10, "every ref10 lobe is live");
+        PrepareEvalLimit {
+            leaves: BoundLeaves::new(leaves()),
+            probabilities: std::array::from_fn(|k| prep.lobes()[k].prob),
+            pairs,
+            avx2: native_at_avx2(),
+        }
+    }
+
+    /// One pass over the pairs.
+    fn pass(&self) -> Vec3 {
+        native_prepare_eval(&self.leaves, &self.pairs, self.probabilities, self.avx2)
+    }
+}
+
+/// The shading point of `frame` seen from `v`.
+fn shading_point(frame: &Frame, v: Vec3) -> ShadingPoint<'static> {
+    ShadingPoint::new(frame.z, frame.x, v)
 }
 
 fn bench_ref10(c: &mut Criterion<CpuTime>) {
     tables::init_all();
     let m = Material::new(&ref10_ir()).expect("ref10 compiles");
-    let lv = BoundLeaves::new(leaves());
-    let pairs = pairs();
+    let limit = PrepareEvalLimit::new(&m);
+    let (lv, pairs, pr) = (&limit.leaves, &limit.pairs, limit.probabilities);
     let (f0, v0, _) = pairs[0];
-    let point = |f: &Frame, v: Vec3| ShadingPoint::new(f.z, f.x, v);
+    let point = shading_point;
     let prep = m.prepare(&point(&f0, v0));
-    assert_eq!(prep.lobes().len(), 10, "every ref10 lobe is live");
-    // Fixed probabilities: the interpreter's at the first view (the values do not affect
-    // cost).
-    let pr: [f32; 10] = std::array::from_fn(|k| prep.lobes()[k].prob);
-    let native = Native::prepare(&lv, f0, v0, pr);
+    let native = Native::prepare(lv, f0, v0, pr);
     // Sanity: the hand-written albedo scaling gives the interpreter's weights at every view.
     for (f, v, _) in pairs.iter().take(256) {
-        let (a, b) = (m.prepare(&point(f, *v)), Native::prepare(&lv, *f, *v, pr));
+        let (a, b) = (m.prepare(&point(f, *v)), Native::prepare(lv, *f, *v, pr));
         for lobe in a.lobes() {
             let w = b.w[usize::from(lobe.leaf)];
             assert!(
@@ -440,7 +536,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
         }
         acc
     };
-    let avx2 = native_at_avx2();
+    let avx2 = limit.avx2;
     let pass_native = |p: &Native| native_eval(p, &ls, avx2);
     g.bench_function("interp_eval", |b| b.iter(|| pass_interp(black_box(&prep))));
     g.bench_function("native_eval", |b| {
@@ -459,18 +555,20 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
         },
     );
     if let Some((interp, hand, n)) = paired {
+        let (interp, hand) = (interp / PAIRS as f64, hand / PAIRS as f64);
         println!(
             "ref10/interp_eval_paired: interpreter {interp:.1} ns, hand-written {hand:.1} ns per \
              eval over the same {n} interleaved passes: overhead {:+.1} %",
             (interp / hand - 1.0) * 100.0
         );
+        SCALAR_EVAL.print(interp, hand);
     }
     // One prepare + eval pass over the 4096 pairs, into one reused `Prepared`.
     let mut scratch = Scratch::default();
     let mut prepared = Prepared::new();
     let mut pass_prepare_eval = || {
         let mut acc = Vec3::ZERO;
-        for (f, v, l) in &pairs {
+        for (f, v, l) in pairs {
             black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut prepared);
             let e = prepared.eval(*l);
             acc += e.f_cos + Vec3::splat(e.pdf);
@@ -478,9 +576,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
         acc
     };
     g.bench_function("interp_prepare_eval", |b| b.iter(&mut pass_prepare_eval));
-    g.bench_function("native_prepare_eval", |b| {
-        b.iter(|| native_prepare_eval(&lv, &pairs, pr, avx2))
-    });
+    g.bench_function("native_prepare_eval", |b| b.iter(|| limit.pass()));
     // The two prepare + eval passes interleaved, as for the evals.
     let paired = bench_paired(
         &mut g,
@@ -489,16 +585,18 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
             black_box(pass_prepare_eval());
         },
         || {
-            black_box(native_prepare_eval(&lv, &pairs, pr, avx2));
+            black_box(limit.pass());
         },
     );
     if let Some((interp, hand, n)) = paired {
+        let (interp, hand) = (interp / PAIRS as f64, hand / PAIRS as f64);
         println!(
             "ref10/interp_prepare_eval_paired: interpreter {interp:.1} ns, hand-written \
              {hand:.1} ns per prepare + eval over the same {n} interleaved passes: {:.2}× the \
              hand-written",
             interp / hand
         );
+        PREPARE_EVAL.print(interp, hand);
     }
     // Batched: 16 points (the first 16 pairs' frames and views), 256 light sets.
     const W: usize = 16;
@@ -560,15 +658,44 @@ fn bench_preview(c: &mut Criterion<CpuTime>) {
         ("scalar_general", false, true),
         ("batched", true, false),
     ];
+    let options = |batched, general_prepare| PreviewOptions {
+        size: 512,
+        batched,
+        general_prepare,
+        parallel: false,
+        ..PreviewOptions::default()
+    };
     for (name, batched, general_prepare) in paths {
-        let opts = PreviewOptions {
-            size: 512,
-            batched,
-            general_prepare,
-            parallel: false,
-            ..PreviewOptions::default()
-        };
+        let opts = options(batched, general_prepare);
         g.bench_function(name, |b| b.iter(|| render_ball(&m, &opts, &|_| {})));
+    }
+    // The two §6.4 rows again, each render followed by a hand-written prepare + eval pass,
+    // which carries their budgets to this machine.
+    let limit = PrepareEvalLimit::new(&m);
+    for (name, batched, budget) in [
+        ("scalar", false, PREVIEW_SCALAR),
+        ("batched", true, PREVIEW_BATCHED),
+    ] {
+        let opts = options(batched, false);
+        let paired = bench_paired(
+            &mut g,
+            &format!("{name}_paired"),
+            || {
+                black_box(render_ball(&m, &opts, &|_| {}));
+            },
+            || {
+                black_box(limit.pass());
+            },
+        );
+        if let Some((render, hand, n)) = paired {
+            let hand = hand / PAIRS as f64;
+            println!(
+                "preview512/{name}_paired: {:.2} ms per render, hand-written prepare + eval \
+                 {hand:.1} ns per point over the same {n} interleaved passes",
+                render / 1e6
+            );
+            budget.print(render, hand);
+        }
     }
     g.finish();
 }

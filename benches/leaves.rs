@@ -13,10 +13,11 @@ use glam::Vec3;
 use std::hint::black_box;
 use vstructc::interp::diffuse::{Lambert, OrenNayar, OrenNayarVariant};
 use vstructc::interp::soa::{DielectricRBatch, DielectricRView, Vec3x};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 
-const PAIRS: usize = 4096;
+#[path = "common/pairs.rs"]
+mod pairs;
+use pairs::PAIRS;
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -79,22 +80,9 @@ fn anchors() -> Vec<(&'static str, Lobe)> {
     ]
 }
 
-/// Random (frame, V, L) triples in world space, V and L on the frame's upper side.
-fn pairs() -> Vec<(Frame, Vec3, Vec3)> {
-    let mut rng = Rng::new(42);
-    (0..PAIRS)
-        .map(|_| {
-            let n = rng.sphere();
-            let f = Frame::new(n, rng.sphere());
-            let side = |d: Vec3| if d.dot(n) < 0.0 { -d } else { d };
-            (f, side(rng.sphere()), side(rng.sphere()))
-        })
-        .collect()
-}
-
 fn bench_leaves(c: &mut Criterion<CpuTime>) {
     tables::init_all();
-    let pairs = pairs();
+    let pairs = pairs::pairs(42);
     let mut g = c.benchmark_group("leaf_prepare_eval");
     g.throughput(Throughput::Elements(PAIRS as u64));
     for (name, lobe) in anchors() {
@@ -130,7 +118,7 @@ fn bench_leaves(c: &mut Criterion<CpuTime>) {
 
 fn bench_soa(c: &mut Criterion<CpuTime>) {
     const W: usize = 16;
-    let pairs = pairs();
+    let pairs = pairs::pairs(42);
     let batches: Vec<(DielectricRView<W>, Vec3x<W>)> = pairs
         .chunks_exact(W)
         .map(|ch| {
