@@ -36,6 +36,31 @@ fn furnace_lambert_is_one() {
     }
 }
 
+/// Translucent sends all of a white ρ through the surface (spec §3.2) and the subsurface
+/// proxy is a white Lambert (§3.16): both integrate to 1, on their own sides, and say so.
+#[test]
+fn furnace_translucent_and_subsurface_proxy_are_one() {
+    let white = Lambert { rho: Vec3::ONE };
+    for mu in MUS {
+        let p = Lobe::Translucent(white).prepare(view(mu), Sides::Front);
+        // The lower hemisphere, by mirroring the cosine grid's directions.
+        let below = |l: Vec3| Vec3::new(l.x, l.y, -l.z);
+        let e = cosine_quadrature(N, |l, pdf| f64::from(p.eval(below(l)).f_cos.x) / pdf);
+        assert!((e - 1.0).abs() < 1e-6, "translucent μ {mu}: {e}");
+        assert_eq!(
+            cosine_albedo(&p),
+            0.0,
+            "translucent reflects nothing, μ {mu}"
+        );
+        assert_eq!(p.albedo().transmit, Vec3::ONE);
+        assert_eq!(p.albedo().reflect, Vec3::ZERO);
+        let p = Lobe::SubsurfaceProxy(white).prepare(view(mu), Sides::Front);
+        let e = cosine_albedo(&p);
+        assert!((e - 1.0).abs() < 1e-6, "subsurface proxy μ {mu}: {e}");
+        assert_eq!(p.albedo().reflect, Vec3::ONE);
+    }
+}
+
 #[test]
 fn furnace_eon_is_one() {
     for sigma in [0.25f32, 0.5, 1.0] {

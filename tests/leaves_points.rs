@@ -534,6 +534,88 @@ fn leaves_match_f64_formulas_at_random_directions() {
     );
 }
 
+/// The leaves and variants the test above leaves out, against their f64 formulas.
+#[test]
+fn more_leaves_match_f64_formulas_at_random_directions() {
+    let hc = Masking::HeightCorrelated;
+    // Translucent: Lambert on the far side (spec §3.2); the subsurface proxy is a Lambert
+    // (§3.16).
+    compare(
+        "translucent",
+        Lobe::Translucent(Lambert { rho: Vec3::ONE }),
+        |_, l| f64::from(l.z).abs() / std::f64::consts::PI,
+        true,
+    );
+    compare(
+        "subsurface proxy",
+        Lobe::SubsurfaceProxy(Lambert { rho: Vec3::ONE }),
+        |_, l| f64::from(l.z) / std::f64::consts::PI,
+        false,
+    );
+    compare(
+        "eon fast",
+        on(0.7, OrenNayarVariant::EnergyFast),
+        |v, l| eon_with(1.0, 0.7, d(v), d(l), eon_e_hat_fast),
+        false,
+    );
+    // Hoffman F82 (§3.7) in the reflection lobe, channel x.
+    let (f0, t) = (0.9f32, 0.7f32);
+    compare(
+        "ggx f82",
+        ggx(
+            0.3,
+            0.3,
+            hc,
+            Fresnel::f82(Vec3::splat(f0), Vec3::ONE, 5.0, Vec3::splat(t)),
+        ),
+        |v, l| {
+            ggx_reflect(0.3f32.into(), 0.3f32.into(), d(v), d(l), true, |m| {
+                f82(f0.into(), 1.0, 5.0, t.into(), m)
+            })
+        },
+        false,
+    );
+    // Turquin (§3.14): `f_ss (1 + k F_avg (1 − E_ss(μ_o))/E_ss(μ_o))`, with `E_ss` the E1
+    // table (tested against quadrature in tests/leaves_furnace.rs) and the generalized
+    // Schlick average `F0 + (F90 − F0)·2/((q + 1)(q + 2))`.
+    let turquin = Lobe::MicrofacetR(MicrofacetR {
+        ggx: Ggx::isotropic(0.3),
+        masking: hc,
+        fresnel: Fresnel::Schlick {
+            f0: Vec3::splat(0.04),
+            f90: Vec3::ONE,
+            q: 5.0,
+        },
+        comp: Compensation::Turquin(0.8),
+    });
+    compare(
+        "ggx turquin",
+        turquin,
+        |v, l| {
+            let f_ss = ggx_reflect(0.3f32.into(), 0.3f32.into(), d(v), d(l), true, |m| {
+                gen_schlick(0.04f32.into(), 1.0, 5.0, m)
+            });
+            let f_avg = f64::from(0.04f32) + (1.0 - f64::from(0.04f32)) / 21.0;
+            let ess = f64::from(microfacet::e1(hc, v.z, 0.3));
+            f_ss * (1.0 + f64::from(0.8f32) * f_avg * (1.0 - ess) / ess)
+        },
+        false,
+    );
+    // MiaHighlight3 anisotropic, in both Ward variants (§3.12).
+    for (variant, classic) in [(WardVariant::Classic, true), (WardVariant::Gm, false)] {
+        compare(
+            &format!("mia highlight aniso {variant:?}"),
+            Lobe::MiaHighlight3(MiaHighlight3 {
+                glossiness: 0.6,
+                anisotropy: 2.0,
+                variant,
+            }),
+            |v, l| mia_highlight_aniso(0.6f32.into(), 2.0, d(v), d(l), classic),
+            false,
+        );
+    }
+}
+
 /// A channel value for the conductor property: 0, a physical range, or a non-finite value.
 fn channel(range: std::ops::Range<f32>, odd: f32) -> impl Strategy<Value = f32> {
     prop_oneof![Just(0.0f32), range, Just(odd)]

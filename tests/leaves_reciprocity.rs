@@ -6,8 +6,10 @@ mod leaves_ref;
 
 use glam::Vec3;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
+use vstructc::interp::reference;
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc::ir::{IrBuilder, RecipeId, TintMode};
 
 fn upper(rng: &mut Rng) -> Vec3 {
     let d = rng.sphere();
@@ -45,6 +47,11 @@ fn reciprocal_lobes() -> Vec<(&'static str, Lobe, bool)> {
         ("lambert", Lobe::Lambert(Lambert { rho: one }), false),
         ("translucent", Lobe::Translucent(Lambert { rho: one }), true),
         (
+            "subsurface proxy",
+            Lobe::SubsurfaceProxy(Lambert { rho: one }),
+            false,
+        ),
+        (
             "burley",
             Lobe::Burley(Burley {
                 rho: one,
@@ -78,6 +85,15 @@ fn reciprocal_lobes() -> Vec<(&'static str, Lobe, bool)> {
                 glossiness: 0.4,
                 anisotropy: 2.0,
                 variant: WardVariant::Classic,
+            }),
+            false,
+        ),
+        (
+            "mia highlight gm",
+            Lobe::MiaHighlight3(MiaHighlight3 {
+                glossiness: 0.4,
+                anisotropy: 2.0,
+                variant: WardVariant::Gm,
             }),
             false,
         ),
@@ -123,11 +139,21 @@ fn reciprocal_lobes() -> Vec<(&'static str, Lobe, bool)> {
                 kappa: Vec3::new(3.424, 2.346, 1.770),
             },
         ),
+        (
+            "f82",
+            Fresnel::f82(
+                Vec3::new(0.9, 0.6, 0.3),
+                one,
+                5.0,
+                Vec3::new(0.7, 0.85, 1.0),
+            ),
+        ),
     ];
     let names = [
         ["ggx exact hc", "ggx exact sep"],
         ["ggx schlick hc", "ggx schlick sep"],
         ["ggx conductor hc", "ggx conductor sep"],
+        ["ggx f82 hc", "ggx f82 sep"],
     ];
     for (k, (_, fresnel)) in fresnels.into_iter().enumerate() {
         for (m, masking) in [Masking::HeightCorrelated, Masking::Separable]
@@ -209,6 +235,18 @@ fn non_reciprocal_leaves_are_asymmetric() {
                 comp: Compensation::Turquin(1.0),
             }),
         ),
+        (
+            "dielectric turquin",
+            Lobe::Dielectric(Dielectric {
+                turquin: 1.0,
+                ..Dielectric::new(
+                    Ggx::isotropic(0.6),
+                    Masking::HeightCorrelated,
+                    1.5,
+                    DielectricMode::R,
+                )
+            }),
+        ),
     ];
     for (name, lobe) in lobes {
         assert_eq!(lobe.reciprocity(), Reciprocity::NonReciprocal, "{name}");
@@ -243,12 +281,44 @@ fn dielectric_transmission_generalized_reciprocity() {
             let scale = a.max(b);
             if scale > 1e-6 {
                 checked += 1;
-                assert!(
-                    (a - b).abs() <= 1e-4 * scale,
-                    "η {eta} V {v} L {l}: {a} vs {b}"
-                );
+                // §5.2's relative 1e-5, with §5.1's absolute 1e-8 below 1e-3: far in the
+                // lobe's tail (f ~ 1e-5) the f32 half vector alone moves f by ~2e-5 of itself.
+                let allowed = if scale < 1e-3 { 1e-8 } else { 1e-5 * scale };
+                assert!((a - b).abs() <= allowed, "η {eta} V {v} L {l}: {a} vs {b}");
             }
         }
         assert!(checked > 100, "too few transmitting pairs ({checked})");
+    }
+}
+
+/// An albedo-scaled layer is not reciprocal (spec §5.2): the base's weight `1 − E_top(μ_o)`
+/// depends on the view alone. Here a coat over a Lambert, and the reference material whose
+/// every leaf but one sits under such a layer.
+#[test]
+fn albedo_scaled_layers_are_asymmetric() {
+    let coated = {
+        let mut b = IrBuilder::new();
+        let coat = reference::dielectric_r(&mut b, 0.3, 0.3, 1.5, "coat");
+        let base = reference::lambert(&mut b, Vec3::ONE, "base");
+        let root = b.layer(coat, base, TintMode::Rgb);
+        b.finish("coated", RecipeId::Custom, root)
+            .expect("valid IR")
+    };
+    for (name, ir) in [("coated lambert", coated), ("ref10", reference::ref10_ir())] {
+        let m = Material::new(&ir).expect("compiles");
+        let f = |v: Vec3, l: Vec3| {
+            m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, v))
+                .eval(l)
+                .f_cos
+                / l.z
+        };
+        let mut rng = Rng::new(17);
+        let mut worst = 0.0f32;
+        for _ in 0..200 {
+            let (v, l) = (upper(&mut rng), upper(&mut rng));
+            let (a, b) = (f(v, l), f(l, v));
+            worst = worst.max((a - b).abs().max_element() / a.max_element().max(b.max_element()));
+        }
+        assert!(worst > 1e-3, "{name}: max asymmetry {worst:e}");
     }
 }

@@ -3,6 +3,10 @@
 //! materials equal the background, the PFM layout, contact sheets, AOVs, determinism, and
 //! the exit statuses of bad invocations.
 
+#[path = "common/pfm.rs"]
+mod pfm;
+
+use pfm::read_pfm;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -43,47 +47,6 @@ fn render_ok(input: &Path, out: &Path, extra: &[&str]) -> Vec<u8> {
         String::from_utf8_lossy(&o.stderr)
     );
     std::fs::read(out).unwrap()
-}
-
-/// A decoded PFM: width, height, pixels top row first.
-struct Pfm {
-    w: usize,
-    h: usize,
-    px: Vec<[f32; 3]>,
-}
-
-fn read_pfm(bytes: &[u8]) -> Pfm {
-    // Header: "PF\n<w> <h>\n<scale>\n", then little-endian f32 RGB rows, bottom row first.
-    let mut lines = 0;
-    let mut end = 0;
-    for (i, b) in bytes.iter().enumerate() {
-        if *b == b'\n' {
-            lines += 1;
-            if lines == 3 {
-                end = i + 1;
-                break;
-            }
-        }
-    }
-    let header = std::str::from_utf8(&bytes[..end]).unwrap();
-    let mut it = header.split_whitespace();
-    assert_eq!(it.next(), Some("PF"));
-    let w: usize = it.next().unwrap().parse().unwrap();
-    let h: usize = it.next().unwrap().parse().unwrap();
-    let scale: f32 = it.next().unwrap().parse().unwrap();
-    assert!(scale < 0.0, "little-endian PFM has a negative scale");
-    let body = &bytes[end..];
-    assert_eq!(body.len(), w * h * 12, "PFM body size");
-    let f = |k: usize| f32::from_le_bytes(body[4 * k..4 * k + 4].try_into().unwrap());
-    let mut px = vec![[0.0; 3]; w * h];
-    for row in 0..h {
-        // File row `row` is image row h − 1 − row.
-        for x in 0..w {
-            let k = (row * w + x) * 3;
-            px[(h - 1 - row) * w + x] = [f(k), f(k + 1), f(k + 2)];
-        }
-    }
-    Pfm { w, h, px }
 }
 
 /// Is pixel (x, y) of a `size` image on the sphere (§1.6 pixel centres)?

@@ -150,9 +150,22 @@ pub fn fon(rho: f64, sigma: f64, v: DVec3, l: DVec3) -> f64 {
 }
 
 pub fn eon(rho: f64, sigma: f64, v: DVec3, l: DVec3) -> f64 {
+    eon_with(rho, sigma, v, l, eon_e_hat)
+}
+
+/// EON's fast `Ê` (spec §3.3): `(1 + σ Gπ(1 − μ)) / (1 + c1 σ)` with the quartic `Gπ`.
+pub fn eon_e_hat_fast(sigma: f64, mu: f64) -> f64 {
+    let m = 1.0 - mu;
+    let g = [0.0571085289, 0.491881867, -0.332181442, 0.0714429953];
+    let g_pi = m * (g[0] + m * (g[1] + m * (g[2] + m * g[3])));
+    (1.0 + sigma * g_pi) / (1.0 + eon_c1() * sigma)
+}
+
+/// EON with the directional albedo `e_hat(σ, μ)` given (exact or fast).
+pub fn eon_with(rho: f64, sigma: f64, v: DVec3, l: DVec3, e_hat: fn(f64, f64) -> f64) -> f64 {
     let ea = eon_e_avg(sigma);
     let rms = rho * rho * ea / (1.0 - rho * (1.0 - ea));
-    let fms = rms / PI * (1.0 - eon_e_hat(sigma, v.z)) * (1.0 - eon_e_hat(sigma, l.z)) / (1.0 - ea);
+    let fms = rms / PI * (1.0 - e_hat(sigma, v.z)) * (1.0 - e_hat(sigma, l.z)) / (1.0 - ea);
     fon(rho, sigma, v, l) + fms * l.z
 }
 
@@ -189,12 +202,17 @@ pub fn ward(ax: f64, ay: f64, v: DVec3, l: DVec3, classic: bool) -> f64 {
 }
 
 pub fn mia_highlight(gloss: f64, v: DVec3, l: DVec3, classic: bool) -> f64 {
+    mia_highlight_aniso(gloss, 1.0, v, l, classic)
+}
+
+/// MiaHighlight3 with anisotropy `a`: `α_x = α_j/√a`, `α_y = α_j √a` (spec §3.12).
+pub fn mia_highlight_aniso(gloss: f64, aniso: f64, v: DVec3, l: DVec3, classic: bool) -> f64 {
     let n = 2f64.powf(8.0 * gloss);
     [(n, 1.0 / 6.0), (n / 2.0, 1.0 / 3.0), (n / 4.0, 0.5)]
         .iter()
         .map(|&(nj, w)| {
             let a = (2.0 / (nj + 2.0)).sqrt();
-            w * ward(a, a, v, l, classic)
+            w * ward(a / aniso.sqrt(), a * aniso.sqrt(), v, l, classic)
         })
         .sum()
 }
