@@ -2,10 +2,9 @@
 //! checks: the pdf returned by `sample` equals `pdf(L)`, `weight = f_cos/pdf`, and the mean
 //! sample weight equals the tabulated or closed-form albedo.
 //!
-//! Cost control for CI: 2 views per configuration (the spec's 5 runs use more) and
-//! `SAMPLES` samples per run instead of 10⁶; the pooled-cell rule and the Šidák correction
-//! are the spec's. `harness_rejects_wrong_pdfs` shows that this sample size still detects a
-//! 10 % error in a GGX width and a wrong hemisphere density.
+//! The spec's sizes: 5 views (runs) per configuration, 10⁶ samples each, the pooled-cell rule
+//! and the Šidák correction over every run of the suite. `harness_rejects_wrong_pdfs` shows
+//! that the harness detects a 10 % error in a GGX width and a wrong hemisphere density.
 
 mod leaves_ref;
 
@@ -15,8 +14,8 @@ use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA};
 use vstructc::interp::verify::{Chi2Config, Rng, chi2_test, sidak};
 use vstructc::interp::*;
 
-const SAMPLES: usize = 500_000;
-const VIEWS: usize = 2;
+const SAMPLES: usize = 1_000_000;
+const VIEWS: usize = 5;
 
 fn cfg() -> Chi2Config {
     Chi2Config {
@@ -358,6 +357,28 @@ fn views(case: &Case, seed: u64) -> Vec<Vec3> {
         .collect()
 }
 
+/// The albedo tolerance of `case` seen from `v`. A dielectric seen from its denser side
+/// within one table node (1/31 in μ) of the critical angle keeps 5e-2: its transmitted albedo
+/// steps there from 0 (total internal reflection) to its full value over a μ range of order
+/// α, which the 32 linear μ nodes of §3.17's tables cannot follow at low roughness (α = 0.05,
+/// μ_o = 0.760 against μ_c = 0.745: the table reads 3.8 % low).
+fn albedo_tolerance(case: &Case, v: Vec3) -> f32 {
+    let Lobe::Dielectric(d) = case.lobe else {
+        return case.albedo_tol;
+    };
+    // The relative index of the side L refracts into, over V's side.
+    let eta = if v.z >= 0.0 { d.eta } else { 1.0 / d.eta };
+    if d.mode == DielectricMode::R || eta >= 1.0 {
+        return case.albedo_tol;
+    }
+    let critical = (1.0 - eta * eta).sqrt();
+    if (v.z.abs() - critical).abs() < 1.0 / 31.0 {
+        case.albedo_tol.max(5e-2)
+    } else {
+        case.albedo_tol
+    }
+}
+
 /// Consistency of `sample` with `eval`/`pdf`, and the mean weight against the albedo.
 fn consistency(name: &str, p: &PreparedLobe, tol: f32, seed: u64) -> Vec<String> {
     let mut errs = Vec::new();
@@ -418,7 +439,8 @@ fn chi2_every_sampled_leaf() {
         for (vi, v) in views(c, 1000 + ci as u64).into_iter().enumerate() {
             let p = c.lobe.prepare(v, Sides::Front);
             let label = format!("{} (view {vi}: {v})", c.name);
-            failures.extend(consistency(&label, &p, c.albedo_tol, 77 + ci as u64));
+            let tol = albedo_tolerance(c, v);
+            failures.extend(consistency(&label, &p, tol, 77 + ci as u64));
             let out = chi2_test(
                 |u| p.sample(u).map(|s| s.l),
                 |l| f64::from(p.pdf(l)),

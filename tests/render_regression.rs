@@ -23,7 +23,6 @@ use vstructc::interp::Material;
 use vstructc::interp::preview::{Image, PreviewOptions, render_ball};
 use vstructc::ir::MaterialIr;
 use vstructc::lower::network::{lower_terminal, terminals};
-use vstructc::network::Network;
 use vstructc::registry::{Registry, RegistryOptions};
 use vstructc::resolve::{ResolveOptions, resolve};
 use vstructc::{Diagnostics, Severity};
@@ -32,15 +31,6 @@ use vstructc::{Diagnostics, Severity};
 const SIZE: usize = 64;
 /// §5.9's bound on the RMS difference, relative to the reference's mean.
 const RMS_BOUND: f64 = 1e-4;
-
-/// Every terminal type with a lowering recipe (closures.md §4.1–§4.5).
-const RECIPES: [&str; 5] = [
-    "PxrSurface",
-    "PxrLayerSurface",
-    "VRayMtl",
-    "PhysicalMaterial",
-    "mia_material",
-];
 
 fn reference_path(name: &str) -> PathBuf {
     common::repo_dir()
@@ -55,21 +45,6 @@ fn render(ir: &MaterialIr) -> Image {
         ..PreviewOptions::default()
     };
     render_ball(&m, &opts, &|_| {})
-}
-
-/// The recipe of `shader` with every parameter at its definition's default.
-fn recipe_at_defaults(shader: &str) -> MaterialIr {
-    let registry = Registry::embedded();
-    let mut net = Network::new();
-    let node = net.add_node("m", shader);
-    let mut diags = Diagnostics::new();
-    let ir = lower_terminal(&net, &registry, node, shader, &mut diags).expect("lowers");
-    assert_eq!(
-        diags.count("LW003"),
-        0,
-        "{shader} has an embedded definition"
-    );
-    ir
 }
 
 /// The golden network, resolved and lowered as in tests/lower_network.rs (its one external
@@ -175,9 +150,9 @@ fn check(name: &str, image: &Image) -> Option<String> {
 
 #[test]
 fn recipes_at_defaults_match_their_references() {
-    let failures: Vec<String> = RECIPES
+    let failures: Vec<String> = common::RECIPES
         .iter()
-        .filter_map(|shader| check(shader, &render(&recipe_at_defaults(shader))))
+        .filter_map(|shader| check(shader, &render(&common::recipe_at_defaults(shader))))
         .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
@@ -195,7 +170,7 @@ fn golden_network_matches_its_reference() {
 /// image's mean over a 64² preview is an RMS of about 5e-4 of the mean.
 #[test]
 fn the_comparison_sees_a_small_change() {
-    let image = render(&recipe_at_defaults("PxrSurface"));
+    let image = render(&common::recipe_at_defaults("PxrSurface"));
     let as_pfm = |img: &Image| read_pfm(&encode_pfm(img));
     let reference = as_pfm(&image);
     assert_eq!(relative_rms(&image, &reference), 0.0);

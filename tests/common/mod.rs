@@ -66,3 +66,28 @@ pub fn dump_network(net: &vstructc::network::Network) -> String {
     }
     out
 }
+
+/// Every terminal type with a lowering recipe (closures.md §4.1–§4.5).
+pub const RECIPES: [&str; 5] = [
+    "PxrSurface",
+    "PxrLayerSurface",
+    "VRayMtl",
+    "PhysicalMaterial",
+    "mia_material",
+];
+
+/// The recipe of `shader` lowered with every parameter at its embedded definition's default.
+pub fn recipe_at_defaults(shader: &str) -> vstructc::ir::MaterialIr {
+    let registry = vstructc::registry::Registry::embedded();
+    let mut net = vstructc::network::Network::new();
+    let node = net.add_node("m", shader);
+    let mut diags = vstructc::Diagnostics::new();
+    let ir = vstructc::lower::network::lower_terminal(&net, &registry, node, shader, &mut diags)
+        .expect("lowers");
+    assert_eq!(
+        diags.count("LW003"),
+        0,
+        "{shader} has an embedded definition"
+    );
+    ir
+}
