@@ -260,6 +260,45 @@ fn dielectric_transmission_points_and_generalized_reciprocity() {
     assert!(near(a, 11.4713) && (a - b).abs() < 1e-5 * a, "{a} vs {b}");
 }
 
+/// OpenPBR's F82-tint metal (spec §3.7): the F82 formula with `F90 = 1`, `q = 5` and the
+/// specular colour as tint; at μ̄ = 1/7 it is the tint times Schlick, it reduces to Schlick
+/// for a white specular colour, and `Fresnel::openpbr_metal` evaluates the same curve.
+#[test]
+fn openpbr_f82_tint_metal() {
+    let f0 = Vec3::new(0.9, 0.6, 0.3);
+    let tint = Vec3::new(0.8, 0.5, 1.0);
+    let bar = 1.0f32 / 7.0;
+    let at_bar = fresnel::openpbr_f82_tint(f0, tint, bar);
+    let schlick_bar = fresnel::schlick(f0, bar);
+    assert!(
+        (at_bar - tint * schlick_bar).abs().max_element() < 1e-6,
+        "{at_bar}"
+    );
+    let metal = Fresnel::openpbr_metal(f0, tint);
+    for mu in [0.0f32, 0.05, 0.3, bar, 0.6, 1.0] {
+        let white = fresnel::openpbr_f82_tint(f0, Vec3::ONE, mu);
+        let schlick = fresnel::schlick(f0, mu);
+        assert!(
+            (white - schlick).abs().max_element() < 1e-6,
+            "μ {mu}: {white} vs {schlick}"
+        );
+        let tinted = fresnel::openpbr_f82_tint(f0, tint, mu);
+        assert!(
+            (metal.eval(mu) - tinted.max(Vec3::ZERO))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        for c in 0..3 {
+            let want = leaves_ref::f82(f0[c].into(), 1.0, 5.0, tint[c].into(), mu.into());
+            assert!(
+                (f64::from(tinted[c]) - want).abs() < 1e-6,
+                "μ {mu} channel {c}"
+            );
+        }
+    }
+}
+
 #[test]
 fn fresnel_and_curve_points() {
     for (mu, want) in [(1.0, 0.04), (0.5, 0.0891867), (0.1, 0.571593)] {
