@@ -92,3 +92,47 @@ fn eval_usage_errors() {
     // Lambert config A of closures.md §5.1: f·μ_i = 0.225079.
     assert!(out.contains("0.225079"), "{out}");
 }
+
+/// `--uv` reaches the pattern program and `--input` the external slots: in
+/// tests/data/render/textured.rib a vsChecker over uv (frequency 2) gives the specular a
+/// black or a white F0, and the diffuse colour is an external slot (fallback 0.18).
+#[test]
+fn uv_and_external_inputs_reach_the_program() {
+    let input = repo().join("tests/data/render/textured.rib");
+    let i = input.to_str().unwrap();
+    let material = |extra: &[&str]| {
+        let mut args = vec![i, "--wo", "0,0,1", "--wi", "0,0.6,0.8", "--json"];
+        args.extend_from_slice(extra);
+        let (code, out, err) = eval(&args);
+        assert_eq!(code, Some(0), "{err}");
+        let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+        doc["materials"][0].clone()
+    };
+    let reflect = |m: &serde_json::Value| m["albedo"]["reflect"][0].as_f64().unwrap();
+    // Checker cell (0, 0): colorA, so only the diffuse fallback reflects.
+    let black = material(&["--uv", "0.25,0.25"]);
+    assert!((reflect(&black) - 0.18).abs() < 1e-3, "{black}");
+    // Cell (1, 0): colorB, a white F0 over the diffuse.
+    let white = material(&["--uv", "0.75,0.25"]);
+    assert!(reflect(&white) > 0.9, "{white}");
+    // A red diffuse from the slot: the Lambert's f·cosθ is (cosθ/π, 0, 0).
+    let red = material(&["--uv", "0.25,0.25", "--input", "tex.resultRGB=1,0,0"]);
+    let lambert = red["lobes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|l| l["kind"] == "lambert")
+        .expect("a Lambert lobe")
+        .clone();
+    let f: Vec<f64> = lambert["f_cos"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect();
+    let want = 0.8 / std::f64::consts::PI;
+    assert!(
+        (f[0] - want).abs() < 1e-6 && f[1] == 0.0 && f[2] == 0.0,
+        "{f:?}"
+    );
+}

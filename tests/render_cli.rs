@@ -254,6 +254,23 @@ fn lobe_aovs_sum_to_the_full_render() {
     }
 }
 
+/// `--input NAME=VALUE` sets an external slot: tests/data/render/textured.rib's diffuse
+/// colour comes from a texture vstructc does not interpret (fallback grey); set to red, the
+/// sphere turns red where the default render is grey, and the background stays.
+#[test]
+fn external_inputs_change_the_render() {
+    let dir = tmp("inputs");
+    let input = data("textured.rib");
+    let grey = read_pfm(&render_ok(&input, &dir.join("grey.pfm"), &["--size", "24"]));
+    let args = ["--size", "24", "--input", "tex.resultRGB=1,0,0"];
+    let red = read_pfm(&render_ok(&input, &dir.join("red.pfm"), &args));
+    let centre = 12 * 24 + 12;
+    let (g, r) = (grey.px[centre], red.px[centre]);
+    assert!((g[0] - g[1]).abs() < 1e-6, "the fallback is grey: {g:?}");
+    assert!(r[0] > g[0] && r[1] < g[1], "red {r:?} vs grey {g:?}");
+    assert_eq!(grey.px[0], red.px[0], "background");
+}
+
 #[test]
 fn bad_invocations_exit_with_the_documented_status() {
     let dir = tmp("errors");
