@@ -142,8 +142,10 @@ fn furnace_dielectric_rt_energy() {
                     (energy - table).abs() < tol,
                     "η {eta} α {alpha} μ {mu}: {energy} vs table {table}"
                 );
-                // Near-smooth interfaces keep their energy, except at grazing views.
-                if alpha == 0.05 && eta > 1.0 && mu >= 0.5 {
+                // Near-smooth interfaces keep their energy from either side, except at
+                // grazing views, where masking alone loses more than §5.3's 1e-2 (η 1.5,
+                // μ_o 0.2: 0.981; μ_o 0.05: 0.912).
+                if alpha == 0.05 && mu >= 0.5 {
                     assert!((energy - 1.0).abs() < 1e-2, "α 0.05 μ {mu}: {energy}");
                 }
             }
