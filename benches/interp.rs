@@ -499,12 +499,14 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     let limit = PrepareEvalLimit::new(&m);
     let (lv, pairs, pr) = (&limit.leaves, &limit.pairs, limit.probabilities);
     let (f0, v0, _) = pairs[0];
-    let point = shading_point;
-    let prep = m.prepare(&point(&f0, v0));
+    let prep = m.prepare(&shading_point(&f0, v0));
     let native = Native::prepare(lv, f0, v0, pr);
     // Sanity: the hand-written albedo scaling gives the interpreter's weights at every view.
     for (f, v, _) in pairs.iter().take(256) {
-        let (a, b) = (m.prepare(&point(f, *v)), Native::prepare(lv, *f, *v, pr));
+        let (a, b) = (
+            m.prepare(&shading_point(f, *v)),
+            Native::prepare(lv, *f, *v, pr),
+        );
         for lobe in a.lobes() {
             let w = b.w[usize::from(lobe.leaf)];
             assert!(
@@ -569,7 +571,7 @@ fn bench_ref10(c: &mut Criterion<CpuTime>) {
     let mut pass_prepare_eval = || {
         let mut acc = Vec3::ZERO;
         for (f, v, l) in pairs {
-            black_box(&m).prepare_into(&point(f, *v), &mut scratch, &mut prepared);
+            black_box(&m).prepare_into(&shading_point(f, *v), &mut scratch, &mut prepared);
             let e = prepared.eval(*l);
             acc += e.f_cos + Vec3::splat(e.pdf);
         }
