@@ -191,9 +191,9 @@ fn cases() -> Vec<Case> {
             tol,
         ));
         // The conductor's albedo is the F82 fit of its complex Fresnel through the
-        // generalized-Schlick tables (spec §3.9), within 2.5e-2 of its quadrature
-        // (tests/leaves_furnace.rs).
-        let conductor_tol = if ax != ay { 0.25 } else { 2.5e-2 };
+        // generalized-Schlick tables (spec §3.9): gold's blue channel (F0 0.37) reads up to
+        // 7e-3 off its sampled mean.
+        let conductor_tol = if ax != ay { 0.25 } else { 1e-2 };
         out.push(case(
             &format!("ggx conductor gold {ax}/{ay}"),
             Lobe::MicrofacetR(MicrofacetR {
