@@ -97,3 +97,26 @@ fn info_shows_pages_heads_and_normalised_types() {
     assert!(s.contains("input   in   3 members"), "{s}");
     assert!(s.contains("output  out  2 members, 0 conditional"), "{s}");
 }
+
+/// A reader that stops early (`vstructc info PxrLayerMixer | head -1`) ends the program as it
+/// ends `cat`, by SIGPIPE, never with a panic (exit 101 and "failed printing to stdout").
+#[cfg(unix)]
+#[test]
+fn a_closed_output_pipe_ends_the_program_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    let child = Command::new(env!("CARGO_BIN_EXE_vstructc"))
+        .args(["info", "PxrLayerMixer"])
+        .env_remove("VSTRUCTC_ARGS_PATH")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the read end before the program writes: its first write meets a closed pipe.
+    let mut child = child;
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "{:?}", out.status);
+}

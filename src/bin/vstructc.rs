@@ -7,5 +7,18 @@
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> std::process::ExitCode {
+    restore_default_sigpipe();
     vstructc::cli::main()
+}
+
+/// Lets a closed output pipe end the program quietly, as it ends `cat` or `grep`
+/// (`vstructc info PxrLayer | head`). Rust ignores SIGPIPE, so a write to a closed pipe
+/// fails instead, and `println!` turns that failure into a panic.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any other thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }
