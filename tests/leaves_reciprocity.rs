@@ -282,7 +282,7 @@ fn dielectric_transmission_generalized_reciprocity() {
             if scale > 1e-6 {
                 checked += 1;
                 // §5.2's relative 1e-5, with §5.1's absolute 1e-8 below 1e-3: far in the
-                // lobe's tail (f ~ 1e-5) the f32 half vector alone moves f by ~2e-5 of itself.
+                // lobe's tail (f ~ 1e-5) f32 rounding moves f by up to ~2e-5 of itself.
                 let allowed = if scale < 1e-3 { 1e-8 } else { 1e-5 * scale };
                 assert!((a - b).abs() <= allowed, "η {eta} V {v} L {l}: {a} vs {b}");
             }
