@@ -41,10 +41,10 @@ fn furnace_lambert_is_one() {
 #[test]
 fn furnace_translucent_and_subsurface_proxy_are_one() {
     let white = Lambert { rho: Vec3::ONE };
+    // The lower hemisphere, by mirroring the cosine grid's directions.
+    let below = |l: Vec3| Vec3::new(l.x, l.y, -l.z);
     for mu in MUS {
         let p = Lobe::Translucent(white).prepare(view(mu), Sides::Front);
-        // The lower hemisphere, by mirroring the cosine grid's directions.
-        let below = |l: Vec3| Vec3::new(l.x, l.y, -l.z);
         let e = cosine_quadrature(N, |l, pdf| f64::from(p.eval(below(l)).f_cos.x) / pdf);
         assert!((e - 1.0).abs() < 1e-6, "translucent μ {mu}: {e}");
         assert_eq!(

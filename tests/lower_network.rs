@@ -13,7 +13,7 @@ use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::ir::{Fresnel, LeafKind, SimpleAlbedo, print};
 use vstructc::lower::network::{lower_terminal, terminals};
 use vstructc::network::Network;
-use vstructc::registry::{Registry, RegistryOptions};
+use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
 use vstructc::{Diagnostics, Severity};
 
@@ -73,16 +73,9 @@ fn example_chain() {
 #[test]
 fn golden_fixture_lowers_to_two_lobes_and_one_slot() {
     let dir = fixtures_or_skip!();
-    let mut reg = Registry::new(RegistryOptions {
-        paths: vec![dir.join("args/pixar")],
-        use_env: false,
-        use_embedded: false,
-        ..RegistryOptions::default()
-    });
-    let text =
-        std::fs::read_to_string(common::repo_dir().join("args/PxrLayerSurface.args")).unwrap();
-    reg.add_args_text("PxrLayerSurface", &text).unwrap();
-    let bytes = std::fs::read(dir.join("rib/ldd/pxrLayerSurface.0001.rib")).unwrap();
+    let surface = common::repo_dir().join("args/PxrLayerSurface.args");
+    let reg = common::golden_registry(&dir, &surface);
+    let bytes = std::fs::read(dir.join(common::GOLDEN_RIB)).unwrap();
     let net = load(&bytes, "pxrLayerSurface.0001.rib", &reg);
     let list = terminals(&net, None).unwrap();
     assert!(!list.is_empty());

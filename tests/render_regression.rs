@@ -23,7 +23,6 @@ use vstructc::interp::Material;
 use vstructc::interp::preview::{Image, PreviewOptions, render_ball};
 use vstructc::ir::MaterialIr;
 use vstructc::lower::network::{lower_terminal, terminals};
-use vstructc::registry::{Registry, RegistryOptions};
 use vstructc::resolve::{ResolveOptions, resolve};
 use vstructc::{Diagnostics, Severity};
 
@@ -50,19 +49,10 @@ fn render(ir: &MaterialIr) -> Image {
 /// The golden network, resolved and lowered as in tests/lower_network.rs (its one external
 /// input at its fallback).
 fn golden_network(fixtures: &std::path::Path) -> MaterialIr {
-    let mut registry = Registry::new(RegistryOptions {
-        paths: vec![fixtures.join("args/pixar")],
-        use_env: false,
-        use_embedded: false,
-        ..RegistryOptions::default()
-    });
-    let ours = common::repo_dir().join("args/PxrLayerSurface.args");
-    let text = std::fs::read_to_string(ours).expect("our PxrLayerSurface.args");
-    registry
-        .add_args_text("PxrLayerSurface", &text)
-        .expect("parses");
+    let surface = common::repo_dir().join("args/PxrLayerSurface.args");
+    let registry = common::golden_registry(fixtures, &surface);
     let name = "pxrLayerSurface.0001.rib";
-    let bytes = std::fs::read(fixtures.join("rib/ldd").join(name)).expect("fixture RIB");
+    let bytes = std::fs::read(fixtures.join(common::GOLDEN_RIB)).expect("fixture RIB");
     let mut diags = Diagnostics::new();
     let mut net =
         parse_rib(&bytes, name, &registry, &RibOptions::default(), &mut diags).expect("parses");

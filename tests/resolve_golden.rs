@@ -8,25 +8,11 @@ use std::path::{Path, PathBuf};
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::network::{Link, Network, NodeId};
-use vstructc::registry::{Registry, RegistryOptions};
+use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
 use vstructc::{Diagnostics, Value};
 
-const GOLDEN: &str = "rib/ldd/pxrLayerSurface.0001.rib";
-
-/// Registry with Pixar's PxrLayer/PxrLayerMixer and a PxrLayerSurface definition.
-fn registry(fixtures: &Path, surface_args: &Path) -> Registry {
-    let mut reg = Registry::new(RegistryOptions {
-        paths: vec![fixtures.join("args/pixar")],
-        use_env: false,
-        use_embedded: false,
-        ..RegistryOptions::default()
-    });
-    let text = std::fs::read_to_string(surface_args).expect("surface definition");
-    reg.add_args_text("PxrLayerSurface", &text)
-        .expect("surface definition parses");
-    reg
-}
+use common::{GOLDEN_RIB, golden_registry};
 
 fn full_surface() -> PathBuf {
     common::repo_dir().join("args/PxrLayerSurface.args")
@@ -66,9 +52,9 @@ fn enable_values(net: &Network, node: NodeId) -> BTreeSet<(String, i32)> {
 
 /// §12.1: parse the export and turn it back into the unresolved network an artist wires.
 fn unresolved(reg: &Registry, fixtures: &Path) -> (Network, Network) {
-    let bytes = std::fs::read(fixtures.join(GOLDEN)).expect("read golden RIB");
+    let bytes = std::fs::read(fixtures.join(GOLDEN_RIB)).expect("read golden RIB");
     let mut diags = Diagnostics::new();
-    let original = parse_rib(&bytes, GOLDEN, reg, &RibOptions::default(), &mut diags)
+    let original = parse_rib(&bytes, GOLDEN_RIB, reg, &RibOptions::default(), &mut diags)
         .expect("golden RIB parses");
     let mut net = original.clone();
     let mixer = net.find("PxrLayerMixer1").expect("mixer");
@@ -101,7 +87,7 @@ fn no_errors_of_concern(diags: &Diagnostics) {
 fn golden_network_resolves_like_the_exporter() {
     let fixtures = fixtures_or_skip!();
     for surface_args in [full_surface(), twelve_member_surface()] {
-        let reg = registry(&fixtures, &surface_args);
+        let reg = golden_registry(&fixtures, &surface_args);
         let (original, mut net) = unresolved(&reg, &fixtures);
         let res = resolve(&mut net, &reg, &ResolveOptions::default());
         no_errors_of_concern(&res.diagnostics);
@@ -167,7 +153,7 @@ fn golden_network_resolves_like_the_exporter() {
 fn golden_network_without_conditions() {
     let fixtures = fixtures_or_skip!();
     for (surface_args, surface_count) in [(full_surface(), 69), (twelve_member_surface(), 12)] {
-        let reg = registry(&fixtures, &surface_args);
+        let reg = golden_registry(&fixtures, &surface_args);
         let (_, mut net) = unresolved(&reg, &fixtures);
         let options = ResolveOptions {
             conditions: false,
@@ -190,7 +176,7 @@ fn golden_network_expanded_without_upstream_first_gets_only_diffuse_color() {
     // R9-neg: if the surface were expanded before the mixer, the mixer's enable members would
     // still hold their defaults (0). Simulate that by not wiring the mixer's layers at all.
     let fixtures = fixtures_or_skip!();
-    let reg = registry(&fixtures, &full_surface());
+    let reg = golden_registry(&fixtures, &full_surface());
     let (_, mut net) = unresolved(&reg, &fixtures);
     let mixer = net.find("PxrLayerMixer1").unwrap();
     net.clear_connections(mixer, "baselayer");
@@ -207,9 +193,9 @@ fn golden_network_expanded_without_upstream_first_gets_only_diffuse_color() {
 #[test]
 fn golden_network_round_trips_through_the_writer() {
     let fixtures = fixtures_or_skip!();
-    let reg = registry(&fixtures, &full_surface());
+    let reg = golden_registry(&fixtures, &full_surface());
     let (_, mut unresolved_net) = unresolved(&reg, &fixtures);
-    let source = std::fs::read(fixtures.join(GOLDEN)).unwrap();
+    let source = std::fs::read(fixtures.join(GOLDEN_RIB)).unwrap();
 
     // The unresolved network written as RIB reads back with its placeholders.
     let unresolved_rib = write_rib_to_vec(&source, &unresolved_net, &reg).unwrap();

@@ -91,3 +91,26 @@ pub fn recipe_at_defaults(shader: &str) -> vstructc::ir::MaterialIr {
     );
     ir
 }
+
+/// The golden network of vstruct.md §12: the RenderMan for Maya export, relative to the
+/// fixtures folder.
+pub const GOLDEN_RIB: &str = "rib/ldd/pxrLayerSurface.0001.rib";
+
+/// The golden network's registry: Pixar's PxrLayer and PxrLayerMixer from the fixtures, and
+/// the PxrLayerSurface definition in `surface_args`.
+pub fn golden_registry(
+    fixtures: &std::path::Path,
+    surface_args: &std::path::Path,
+) -> vstructc::registry::Registry {
+    use vstructc::registry::{Registry, RegistryOptions};
+    let mut reg = Registry::new(RegistryOptions {
+        paths: vec![fixtures.join("args/pixar")],
+        use_env: false,
+        use_embedded: false,
+        ..RegistryOptions::default()
+    });
+    let text = std::fs::read_to_string(surface_args).expect("surface definition");
+    reg.add_args_text("PxrLayerSurface", &text)
+        .expect("surface definition parses");
+    reg
+}
