@@ -1,6 +1,9 @@
-//! Hostile input (issue 7): every file in `tests/hostile/` and every generated monster input
+//! Hostile input: every file in `tests/hostile/corpus/` and every generated monster input
 //! goes through the real CLI and must end with exit status 0 or 1 (never 101 = panic, never
 //! a signal), a positioned error or a documented warning on stderr, in at most 2 s.
+//!
+//! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
+//! `run_file`) live here and are visible to every module.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -21,7 +24,7 @@ const fn e(file: &'static str, status: i32, code: &'static str) -> Expect {
     Expect { file, status, code }
 }
 
-/// One entry per file in `tests/hostile/`; the codes are the spec's (formats.md, vstruct.md).
+/// One entry per file in `tests/hostile/corpus/`; the codes are the spec's (formats.md, vstruct.md).
 const CORPUS: &[Expect] = &[
     e("bad_conditional.args", 0, "warning[VS001]"),
     e("huge_array_size.args", 0, "warning[AR013]"),
@@ -53,7 +56,7 @@ const CORPUS: &[Expect] = &[
 ];
 
 fn corpus_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/hostile")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/hostile/corpus")
 }
 
 /// The CLI arguments that read `path`: definitions through `info`, networks through `resolve`.
@@ -115,7 +118,7 @@ fn check(name: &str, o: &Outcome, status: i32, code: &str) {
 #[test]
 fn every_corpus_file_has_an_expectation() {
     let mut names: Vec<String> = std::fs::read_dir(corpus_dir())
-        .expect("tests/hostile exists")
+        .expect("tests/hostile/corpus exists")
         .map(|e| {
             e.expect("dir entry")
                 .file_name()
