@@ -327,6 +327,9 @@ pub enum Error {
     /// Wrong use of an API or command (bad option value, unknown shader name, ...).
     #[error("{0}")]
     Usage(String),
+    /// A bound of [`crate::limits::Limits`] was exceeded.
+    #[error("{0}")]
+    Limit(Box<crate::limits::LimitExceeded>),
 }
 
 impl Error {
@@ -337,9 +340,30 @@ impl Error {
             _ => None,
         }
     }
-    /// The stable code of an input error.
+    /// The stable code of an input error (`LM001` for an exceeded limit).
     pub fn code(&self) -> Option<&'static str> {
-        self.diagnostic().map(|d| d.code)
+        match self {
+            Error::Limit(_) => Some("LM001"),
+            _ => self.diagnostic().map(|d| d.code),
+        }
+    }
+
+    /// The error as one diagnostic, as the command line prints it (`IO001` for I/O,
+    /// `USAGE` for usage errors).
+    pub fn to_diagnostic(&self) -> Diagnostic {
+        match self {
+            Error::Input(d) => (**d).clone(),
+            Error::Io { path, source } => Diagnostic::error("IO001", format!("{source}"))
+                .at(Location::file(path.display().to_string())),
+            Error::Usage(msg) => Diagnostic::error("USAGE", msg.clone()),
+            Error::Limit(e) => e.to_diagnostic(),
+        }
+    }
+}
+
+impl From<crate::limits::LimitExceeded> for Error {
+    fn from(e: crate::limits::LimitExceeded) -> Self {
+        Error::Limit(Box::new(e))
     }
 }
 

@@ -23,6 +23,7 @@
 #![warn(missing_docs)]
 
 pub mod diag;
+pub mod limits;
 pub mod types;
 
 pub mod front;

@@ -2,7 +2,7 @@
 //! output file atomically. Shared by `resolve`, `explain` and the later stages.
 
 use super::CommonOptions;
-use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::diag::{Diagnostics, Error};
 use crate::front::json::parse_json;
 use crate::front::rib::{RibOptions, parse_rib};
 use crate::network::Network;
@@ -142,14 +142,8 @@ pub fn stream_output(
 /// Print an error (I/O or input) as a diagnostic according to the common options; returns
 /// exit status 1.
 pub fn report_error(err: &Error, common: &CommonOptions) -> std::process::ExitCode {
-    let d = match err {
-        Error::Input(d) => (**d).clone(),
-        Error::Io { path, source } => Diagnostic::error("IO001", format!("{source}"))
-            .at(Location::file(path.display().to_string())),
-        Error::Usage(msg) => Diagnostic::error("USAGE", msg.clone()),
-    };
     let mut diags = Diagnostics::new();
-    diags.push(d);
+    diags.push(err.to_diagnostic());
     super::report(&diags, common)
 }
 

@@ -1,0 +1,231 @@
+//! Resource limits a bridge can set: one [`Limits`] value accepted by the readers, the
+//! registry, resolution and the preview renderer.
+//!
+//! Every bound that protects vstructc from hostile or broken input lives here with a
+//! documented default. Exceeding one stops the affected input with a typed
+//! [`LimitExceeded`] (wrapped in [`crate::Error::Limit`]) that names the limit, the value
+//! found and the maximum, and carries a positioned diagnostic with code `LM001`.
+//!
+//! The defaults are far above anything a production scene needs (a 10,000-material scene has
+//! 40,000 nodes; the largest shipped definition has a few hundred parameters) and far below
+//! what would exhaust a workstation, so a bridge rarely needs to change them; one that reads
+//! untrusted input may lower them.
+//!
+//! ```
+//! use vstructc::limits::{Limit, Limits};
+//! let strict = Limits { nodes: 1_000, ..Limits::default() };
+//! assert!(strict.check(Limit::Nodes, 1_000).is_ok());
+//! let err = strict.check(Limit::Nodes, 1_001).unwrap_err();
+//! assert_eq!(err.limit, Limit::Nodes);
+//! assert_eq!((err.value, err.max), (1_001, 1_000));
+//! ```
+
+use crate::diag::{Diagnostic, Location};
+use std::fmt;
+
+/// The bounds applied to one run. `Default` gives the documented defaults.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Limits {
+    /// Bytes of one definition file (`.args`, `.oso`). Default 64 MiB.
+    pub definition_file_bytes: u64,
+    /// Bytes of one network input (RIB, JSON), including one read from standard input or a
+    /// pipe. Default 4 GiB.
+    pub network_file_bytes: u64,
+    /// Shader nodes in one network. Default 16,777,216 (2^24).
+    pub nodes: u64,
+    /// Connections on one input of one node (fan-in). Default 1,048,576 (2^20).
+    pub connections_per_input: u64,
+    /// Parameters (authored values and connected inputs) of one node, and parameters
+    /// declared by one definition. Default 1,048,576 (2^20).
+    pub params_per_node: u64,
+    /// Comparison and `is` terms in one conditional expression. Default 4,194,304 (2^22).
+    pub expr_terms: u64,
+    /// Parenthesis nesting in one conditional expression. Default 64.
+    pub expr_depth: u64,
+    /// Pixels of one preview image (one ball, `size × size`). Default 67,108,864
+    /// (8192 × 8192).
+    pub preview_pixels: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            definition_file_bytes: 64 << 20,
+            network_file_bytes: 4 << 30,
+            nodes: 1 << 24,
+            connections_per_input: 1 << 20,
+            params_per_node: 1 << 20,
+            expr_terms: 1 << 22,
+            expr_depth: 64,
+            preview_pixels: 8192 * 8192,
+        }
+    }
+}
+
+/// One of the bounds of [`Limits`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Limit {
+    /// [`Limits::definition_file_bytes`].
+    DefinitionFileBytes,
+    /// [`Limits::network_file_bytes`].
+    NetworkFileBytes,
+    /// [`Limits::nodes`].
+    Nodes,
+    /// [`Limits::connections_per_input`].
+    ConnectionsPerInput,
+    /// [`Limits::params_per_node`].
+    ParamsPerNode,
+    /// [`Limits::expr_terms`].
+    ExprTerms,
+    /// [`Limits::expr_depth`].
+    ExprDepth,
+    /// [`Limits::preview_pixels`].
+    PreviewPixels,
+}
+
+impl Limit {
+    /// The field name in [`Limits`], as messages print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Limit::DefinitionFileBytes => "definition_file_bytes",
+            Limit::NetworkFileBytes => "network_file_bytes",
+            Limit::Nodes => "nodes",
+            Limit::ConnectionsPerInput => "connections_per_input",
+            Limit::ParamsPerNode => "params_per_node",
+            Limit::ExprTerms => "expr_terms",
+            Limit::ExprDepth => "expr_depth",
+            Limit::PreviewPixels => "preview_pixels",
+        }
+    }
+
+    /// What the limit counts, for messages ("bytes", "nodes", ...).
+    pub fn unit(self) -> &'static str {
+        match self {
+            Limit::DefinitionFileBytes | Limit::NetworkFileBytes => "bytes",
+            Limit::Nodes => "nodes",
+            Limit::ConnectionsPerInput => "connections on one input",
+            Limit::ParamsPerNode => "parameters",
+            Limit::ExprTerms => "terms",
+            Limit::ExprDepth => "levels of parentheses",
+            Limit::PreviewPixels => "pixels",
+        }
+    }
+}
+
+impl fmt::Display for Limit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Limits {
+    /// The maximum for `limit`.
+    pub fn max(&self, limit: Limit) -> u64 {
+        match limit {
+            Limit::DefinitionFileBytes => self.definition_file_bytes,
+            Limit::NetworkFileBytes => self.network_file_bytes,
+            Limit::Nodes => self.nodes,
+            Limit::ConnectionsPerInput => self.connections_per_input,
+            Limit::ParamsPerNode => self.params_per_node,
+            Limit::ExprTerms => self.expr_terms,
+            Limit::ExprDepth => self.expr_depth,
+            Limit::PreviewPixels => self.preview_pixels,
+        }
+    }
+
+    /// `Ok` when `value` is within `limit`, else the typed error (with no location; add one
+    /// with [`LimitExceeded::at`]).
+    pub fn check(&self, limit: Limit, value: u64) -> Result<(), LimitExceeded> {
+        let max = self.max(limit);
+        if value <= max {
+            Ok(())
+        } else {
+            Err(LimitExceeded {
+                limit,
+                value,
+                max,
+                location: None,
+            })
+        }
+    }
+}
+
+/// A [`Limits`] bound was exceeded: which one, the value found and the maximum.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{value} {unit} exceed the limit {name} = {max}", unit = limit.unit(), name = limit.name())]
+pub struct LimitExceeded {
+    /// The bound.
+    pub limit: Limit,
+    /// The value found (for streamed input, the count when reading stopped).
+    pub value: u64,
+    /// The bound's maximum.
+    pub max: u64,
+    /// Where the input exceeded it, when known.
+    pub location: Option<Location>,
+}
+
+impl LimitExceeded {
+    /// The same error at `location`.
+    pub fn at(mut self, location: Location) -> Self {
+        self.location = Some(location);
+        self
+    }
+
+    /// The error as a positioned diagnostic (code `LM001`, severity error).
+    pub fn to_diagnostic(&self) -> Diagnostic {
+        let d = Diagnostic::error("LM001", self.to_string());
+        match &self.location {
+            Some(loc) => d.at(loc.clone()),
+            None => d,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_limit_reads_its_own_field() {
+        let limits = Limits {
+            definition_file_bytes: 1,
+            network_file_bytes: 2,
+            nodes: 3,
+            connections_per_input: 4,
+            params_per_node: 5,
+            expr_terms: 6,
+            expr_depth: 7,
+            preview_pixels: 8,
+        };
+        let all = [
+            Limit::DefinitionFileBytes,
+            Limit::NetworkFileBytes,
+            Limit::Nodes,
+            Limit::ConnectionsPerInput,
+            Limit::ParamsPerNode,
+            Limit::ExprTerms,
+            Limit::ExprDepth,
+            Limit::PreviewPixels,
+        ];
+        for (k, limit) in all.into_iter().enumerate() {
+            assert_eq!(limits.max(limit), k as u64 + 1, "{limit}");
+            assert!(limits.check(limit, k as u64 + 1).is_ok());
+            assert!(limits.check(limit, k as u64 + 2).is_err());
+        }
+    }
+
+    #[test]
+    fn the_message_names_the_limit_value_and_maximum() {
+        let e = Limits::default()
+            .check(Limit::ExprTerms, 5_000_000)
+            .unwrap_err()
+            .at(Location::new("big.args", 3, 7));
+        assert_eq!(
+            e.to_string(),
+            "5000000 terms exceed the limit expr_terms = 4194304"
+        );
+        let d = e.to_diagnostic();
+        assert_eq!(d.code, "LM001");
+        assert_eq!(d.render_human().lines().nth(1), Some("  --> big.args:3:7"));
+    }
+}
