@@ -6,6 +6,7 @@
 //! when the expression parses, 1 on a syntax error, 2 on a usage error (unknown `--ext`).
 
 use super::CommonOptions;
+use super::input::print_stdout;
 use crate::cond::{self, Extensions};
 use crate::diag::{Diagnostics, Location, Severity};
 use std::process::ExitCode;
@@ -31,23 +32,21 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
         }
     };
     let text = args.text.as_str();
+    let print = |out: String| print_stdout(&out, common);
     match cond::parse_with(text, &ext) {
-        Ok(stmt) => {
-            if args.json {
-                let doc = serde_json::json!({
-                    "input": text,
-                    "extensions": ext.names(),
-                    "desugared": stmt.to_string(),
-                    "statement": stmt,
-                });
-                println!("{}", pretty(&doc));
-            } else {
-                println!("{stmt}");
-                println!();
-                print!("{}", cond::dump(&stmt));
-            }
-            ExitCode::SUCCESS
+        Ok(stmt) => if args.json {
+            let doc = serde_json::json!({
+                "input": text,
+                "extensions": ext.names(),
+                "desugared": stmt.to_string(),
+                "statement": stmt,
+            });
+            print(pretty(&doc) + "\n")
+        } else {
+            print(format!("{stmt}\n\n{}", cond::dump(&stmt)))
         }
+        .err()
+        .unwrap_or(ExitCode::SUCCESS),
         Err(err) => {
             let (line, column) = err.line_column(text);
             if args.json {
@@ -65,7 +64,9 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
                         "notes": err.notes,
                     },
                 });
-                println!("{}", pretty(&doc));
+                if let Err(failed) = print(pretty(&doc) + "\n") {
+                    return failed;
+                }
             }
             let d = err
                 .to_diagnostic_with(text, Severity::Error)
