@@ -46,12 +46,12 @@ pub enum ReadError {
 }
 
 fn too_large_message(size: u64, limit: u64, at_least: bool) -> String {
-    let more = if at_least { "more than " } else { "" };
-    format!(
-        "{more}{size} bytes ({}), larger than the limit of {limit} bytes ({})",
-        human_size(size),
-        human_size(limit)
-    )
+    let limit = format!("the limit of {} ({limit} bytes)", human_size(limit));
+    if at_least {
+        format!("more than {limit}")
+    } else {
+        format!("{size} bytes, more than {limit}")
+    }
 }
 
 /// `bytes` in the largest binary unit that keeps it at least 1 (`64 MiB`, `1.5 GiB`).
@@ -184,7 +184,11 @@ mod tests {
                 at_least: true
             }
         ));
-        assert!(err.to_string().starts_with("more than 1000 bytes"), "{err}");
+        assert_eq!(
+            err.to_string(),
+            "more than the limit of 1000 B (1000 bytes)",
+            "{err}"
+        );
         assert_eq!(read_stream(&[7u8; 1000][..], 1000).unwrap().len(), 1000);
     }
 

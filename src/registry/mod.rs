@@ -597,7 +597,7 @@ fn not_regular(severity: Severity, kind: &str) -> Diagnostic {
     Diagnostic::new(
         severity,
         "RG004",
-        format!("not a regular file but {kind}: skipped, only regular files are read"),
+        format!("not a regular file but {kind}; only regular files are read as definitions"),
     )
 }
 
@@ -653,15 +653,29 @@ impl FolderWalk {
                     continue;
                 }
             };
+            let mut paths = Vec::new();
             for entry in entries {
                 match entry {
-                    Ok(entry) => self.visit(entry.path(), &mut todo),
+                    Ok(entry) => paths.push(entry.path()),
                     Err(e) => {
                         self.cannot_read(&dir, &e);
                         break;
                     }
                 }
             }
+            // Sorted, so that which of two ways into one folder is listed (and which one
+            // a diagnostic names) does not depend on the order the system returns entries.
+            paths.sort_by(|a, b| {
+                a.as_os_str()
+                    .as_encoded_bytes()
+                    .cmp(b.as_os_str().as_encoded_bytes())
+            });
+            let first_subfolder = todo.len();
+            for path in paths {
+                self.visit(path, &mut todo);
+            }
+            // Depth first in sorted order: the stack pops the first subfolder first.
+            todo[first_subfolder..].reverse();
         }
     }
 
