@@ -187,7 +187,7 @@ fn folder_of(real: &Path) -> &Path {
         .unwrap_or(Path::new("."))
 }
 
-/// The temporary file's name pattern for a target named `file_name`: `.NAME.` + `random`
+/// The temporary file's name pattern: `prefix` (`.NAME.`, see [`temp_prefix`]) + `random`
 /// random letters + `.tmp`.
 fn temp_builder(prefix: &OsString, random: usize) -> tempfile::Builder<'_, 'static> {
     let mut b = tempfile::Builder::new();
@@ -195,6 +195,7 @@ fn temp_builder(prefix: &OsString, random: usize) -> tempfile::Builder<'_, 'stat
     b
 }
 
+/// `.NAME.` for a target named `NAME`: hidden, and recognisably the target's.
 fn temp_prefix(real: &Path) -> OsString {
     let mut prefix = OsString::from(".");
     prefix.push(real.file_name().unwrap_or("output".as_ref()));
@@ -202,7 +203,9 @@ fn temp_prefix(real: &Path) -> OsString {
     prefix
 }
 
-/// Create the temporary file for `real` in `folder` (exclusively; see the module docs).
+/// Create the temporary file in `folder` (exclusively; see the module docs). A `new_file`
+/// gets the mode a new file would get; a replacement starts private (0600) and gets the old
+/// file's mode once written.
 fn create_temp(
     folder: &Path,
     prefix: &OsString,

@@ -34,19 +34,23 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
     let text = args.text.as_str();
     let print = |out: String| print_stdout(&out, common);
     match cond::parse_with(text, &ext) {
-        Ok(stmt) => if args.json {
-            let doc = serde_json::json!({
-                "input": text,
-                "extensions": ext.names(),
-                "desugared": stmt.to_string(),
-                "statement": stmt,
-            });
-            print(pretty(&doc) + "\n")
-        } else {
-            print(format!("{stmt}\n\n{}", cond::dump(&stmt)))
+        Ok(stmt) => {
+            let out = if args.json {
+                let doc = serde_json::json!({
+                    "input": text,
+                    "extensions": ext.names(),
+                    "desugared": stmt.to_string(),
+                    "statement": stmt,
+                });
+                pretty(&doc) + "\n"
+            } else {
+                format!("{stmt}\n\n{}", cond::dump(&stmt))
+            };
+            match print(out) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(failed) => failed,
+            }
         }
-        .err()
-        .unwrap_or(ExitCode::SUCCESS),
         Err(err) => {
             let (line, column) = err.line_column(text);
             if args.json {
