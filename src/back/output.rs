@@ -14,7 +14,9 @@
 //! * **A symlink** is written through: the link chain is followed to its end and the file at
 //!   the end is replaced atomically in its own folder; the links stay links. A dangling link
 //!   creates the file it points to, as a shell redirection (`>`) does; a chain longer than 40
-//!   links is an error.
+//!   links is an error. As Linux's `protected_symlinks` does for `>`, a link in a sticky
+//!   world-writable folder (`/tmp`) owned by neither the user nor the folder's owner is not
+//!   followed: the write is refused.
 //! * **A character or block device, a FIFO or a socket** (`/dev/null`, `/dev/stdout`,
 //!   `-o >(gzip)`, which is `/dev/fd/N`) is opened for writing without truncation and written
 //!   in place: no temporary file, the node itself is never replaced. Output already written
@@ -148,6 +150,7 @@ fn follow_links(path: &Path) -> io::Result<PathBuf> {
     for _ in 0..=MAX_SYMLINK_CHAIN {
         match std::fs::symlink_metadata(&p) {
             Ok(m) if m.file_type().is_symlink() => {
+                refuse_foreign_link_in_shared_folder(&p, &m)?;
                 let to = std::fs::read_link(&p)?;
                 p = match p.parent() {
                     Some(dir) => dir.join(to),
@@ -162,6 +165,36 @@ fn follow_links(path: &Path) -> io::Result<PathBuf> {
     Err(io::Error::other(format!(
         "more than {MAX_SYMLINK_CHAIN} symbolic links to follow"
     )))
+}
+
+/// Linux's `protected_symlinks` rule, which following links by hand would bypass: in a
+/// sticky world-writable folder (`/tmp`), a symlink is followed only when it belongs to the
+/// process's user or to the folder's owner. Otherwise anyone could plant `/tmp/out.rib`
+/// pointing at a file of the user running vstructc, and `-o /tmp/out.rib` would replace it.
+#[cfg(unix)]
+fn refuse_foreign_link_in_shared_folder(link: &Path, meta: &Metadata) -> io::Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(folder) = std::fs::metadata(folder_of(link)) else {
+        return Ok(());
+    };
+    let shared = folder.mode() & 0o1002 == 0o1002;
+    // SAFETY: geteuid has no preconditions.
+    let me = unsafe { libc::geteuid() };
+    if shared && meta.uid() != me && meta.uid() != folder.uid() {
+        return Err(io::Error::new(
+            io::ErrorKind::PermissionDenied,
+            format!(
+                "{} is a symlink of another user in a shared folder: not followed",
+                link.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn refuse_foreign_link_in_shared_folder(_: &Path, _: &Metadata) -> io::Result<()> {
+    Ok(())
 }
 
 #[cfg(unix)]

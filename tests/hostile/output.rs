@@ -184,6 +184,48 @@ fn a_symlink_target_stays_a_link_and_its_file_is_replaced() {
     assert!(temporaries(&real).is_empty());
 }
 
+/// As root: in a sticky world-writable folder (like `/tmp`), a symlink owned by another
+/// user is not followed, as Linux's `protected_symlinks` keeps `>` from following it: the
+/// write is refused and the file it points to is untouched. The user's own link there is
+/// followed.
+#[test]
+fn a_foreign_symlink_in_a_shared_folder_is_not_followed() {
+    if !is_root() {
+        eprintln!("NOT RUN: a_foreign_symlink_in_a_shared_folder_is_not_followed needs root");
+        return;
+    }
+    let dir = folder("sticky");
+    let victim = dir.path().join("victim");
+    std::fs::write(&victim, "precious").unwrap();
+    let shared = dir.path().join("shared");
+    std::fs::create_dir(&shared).unwrap();
+    std::fs::set_permissions(&shared, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let link = shared.join("out.rib");
+    symlink(&victim, &link).unwrap();
+    std::os::unix::fs::lchown(&link, Some(NOBODY), Some(NOBODY)).unwrap();
+    let ran = resolve_to(&link);
+    check(
+        "-o foreign link in /tmp-like folder",
+        &ran.out,
+        1,
+        "error[IO001]",
+    );
+    assert!(
+        ran.out.stderr.contains("another user"),
+        "{}",
+        ran.out.stderr
+    );
+    assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+    assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+    assert!(temporaries(&shared).is_empty() && temporaries(dir.path()).is_empty());
+
+    std::fs::remove_file(&link).unwrap();
+    symlink(&victim, &link).unwrap();
+    let ran = resolve_to(&link);
+    check("-o own link in /tmp-like folder", &ran.out, 0, "");
+    assert_eq!(std::fs::read(&victim).unwrap(), resolved_chain());
+}
+
 /// A 0600 file stays 0600 (before, it became 0644) and keeps its owner: as root the
 /// replacement is given back to the file's owner.
 #[test]
