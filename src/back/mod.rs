@@ -1,6 +1,9 @@
-//! Back ends: writers for RIB ([`rib`]), JSON ([`json`]), Graphviz dot ([`dot`]) and images ([`png`]: PNG and PFM).
+//! Back ends: writers for RIB ([`rib`]), JSON ([`json`]), Graphviz dot ([`dot`]) and images
+//! ([`png`]: PNG and PFM), and [`output`]: how any of them reaches a file or standard output
+//! safely.
 
 pub mod dot;
 pub mod json;
+pub mod output;
 pub mod png;
 pub mod rib;

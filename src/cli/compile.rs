@@ -94,6 +94,9 @@ pub fn run(args: &CompileArgs, common: &CommonOptions) -> ExitCode {
         }
     }
     diags.sort();
-    print!("{out}");
+    if let Err(failed) = super::input::print_stdout(&out, common) {
+        super::report(&diags, common);
+        return failed;
+    }
     super::report(&diags, common)
 }

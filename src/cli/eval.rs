@@ -273,14 +273,15 @@ pub fn run(args: &EvalArgs, common: &CommonOptions) -> ExitCode {
     if args.json {
         let doc = json!({ "materials": list });
         match serde_json::to_string_pretty(&doc) {
-            Ok(s) => println!("{s}"),
+            Ok(s) => text = s + "\n",
             Err(e) => {
                 eprintln!("error: {e}");
                 return ExitCode::from(1);
             }
         }
-    } else {
-        print!("{text}");
     }
-    ExitCode::SUCCESS
+    match super::input::print_stdout(&text, common) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failed) => failed,
+    }
 }

@@ -1,7 +1,7 @@
 //! `vstructc explain HANDLE.INPUT INPUT`: the story of one member input's value.
 
 use super::CommonOptions;
-use super::input::{Prepared, prepare};
+use super::input::{Prepared, prepare, print_stdout};
 use crate::network::Network;
 use crate::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 use std::fmt::Write as _;
@@ -47,18 +47,22 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         .iter()
         .filter(|e| e.node == node && e.member == input)
         .collect();
-    if events.is_empty() {
-        println!(
+    let text = if events.is_empty() {
+        format!(
             "{handle}.{input} was not expanded from any vstruct connection: it is not a member \
-             of a connected input head of `{}`.",
+             of a connected input head of `{}`.\n",
             loaded.network[node].shader()
-        );
-        return ExitCode::SUCCESS;
+        )
+    } else {
+        events
+            .iter()
+            .map(|e| render_event(&loaded.network, e))
+            .collect()
+    };
+    match print_stdout(&text, common) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failed) => failed,
     }
-    for e in events {
-        print!("{}", render_event(&loaded.network, e));
-    }
-    ExitCode::SUCCESS
 }
 
 /// The story of one member decision, as readable text.

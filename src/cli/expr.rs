@@ -6,6 +6,7 @@
 //! when the expression parses, 1 on a syntax error, 2 on a usage error (unknown `--ext`).
 
 use super::CommonOptions;
+use super::input::print_stdout;
 use crate::cond::{self, Extensions};
 use crate::diag::{Diagnostics, Location, Severity};
 use std::process::ExitCode;
@@ -31,22 +32,24 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
         }
     };
     let text = args.text.as_str();
+    let print = |out: String| print_stdout(&out, common);
     match cond::parse_with(text, &ext) {
         Ok(stmt) => {
-            if args.json {
+            let out = if args.json {
                 let doc = serde_json::json!({
                     "input": text,
                     "extensions": ext.names(),
                     "desugared": stmt.to_string(),
                     "statement": stmt,
                 });
-                println!("{}", pretty(&doc));
+                pretty(&doc) + "\n"
             } else {
-                println!("{stmt}");
-                println!();
-                print!("{}", cond::dump(&stmt));
+                format!("{stmt}\n\n{}", cond::dump(&stmt))
+            };
+            match print(out) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(failed) => failed,
             }
-            ExitCode::SUCCESS
         }
         Err(err) => {
             let (line, column) = err.line_column(text);
@@ -65,7 +68,9 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
                         "notes": err.notes,
                     },
                 });
-                println!("{}", pretty(&doc));
+                if let Err(failed) = print(pretty(&doc) + "\n") {
+                    return failed;
+                }
             }
             let d = err
                 .to_diagnostic_with(text, Severity::Error)

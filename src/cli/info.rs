@@ -65,8 +65,10 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
     } else {
         render_human(&def, &tables, &registry, common.verbose)
     };
-    print!("{text}");
-    status
+    match super::input::print_stdout(&text, common) {
+        Ok(()) => status,
+        Err(failed) => failed,
+    }
 }
 
 /// The human summary of `def`; `verbose` also lists the other files that define the id.

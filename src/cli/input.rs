@@ -1,10 +1,12 @@
-//! Reading a network input (RIB or JSON, a file or `-` for standard input) and writing an
-//! output file atomically. Shared by `resolve`, `explain` and the later stages.
+//! Reading a network input (RIB or JSON, a file or `-` for standard input) and writing output
+//! (files by [`crate::back::output`]'s rules, or standard output). Shared by every command.
 
 use super::CommonOptions;
-use crate::diag::{Diagnostics, Error};
+use crate::back::output;
+use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::front::json::parse_json;
 use crate::front::rib::{RibOptions, parse_rib};
+use crate::front::source::{MAX_STREAM_INPUT, ReadError, read_stream};
 use crate::network::Network;
 use crate::registry::Registry;
 use std::io::{Read, Write};
@@ -60,22 +62,45 @@ pub fn load_network(
     })
 }
 
+/// The input's bytes. Standard input, a FIFO or a device is read up to
+/// [`MAX_STREAM_INPUT`] (IO002 beyond); a regular file is read whole.
 fn read_bytes(path: &Path) -> Result<(String, Vec<u8>), Error> {
     if path.as_os_str() == "-" {
-        let mut bytes = Vec::new();
-        std::io::stdin()
-            .read_to_end(&mut bytes)
-            .map_err(|source| Error::Io {
-                path: PathBuf::from("<stdin>"),
-                source,
-            })?;
-        return Ok(("<stdin>".to_string(), bytes));
+        let name = "<stdin>".to_string();
+        let bytes = stream_bytes(std::io::stdin().lock(), &name)?;
+        return Ok((name, bytes));
     }
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let name = path.display().to_string();
+    let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    Ok((path.display().to_string(), bytes))
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.is_dir() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "is a folder, not a network file",
+        )));
+    }
+    let bytes = if meta.is_file() {
+        std::fs::read(path).map_err(io)?
+    } else {
+        stream_bytes(std::fs::File::open(path).map_err(io)?, &name)?
+    };
+    Ok((name, bytes))
+}
+
+/// A stream input, capped at [`MAX_STREAM_INPUT`].
+fn stream_bytes(reader: impl Read, name: &str) -> Result<Vec<u8>, Error> {
+    read_stream(reader, MAX_STREAM_INPUT).map_err(|e| match e {
+        ReadError::Io(source) => Error::Io {
+            path: PathBuf::from(name),
+            source,
+        },
+        e => Diagnostic::error("IO002", format!("input too large: {e}"))
+            .at(Location::file(name))
+            .into(),
+    })
 }
 
 fn detect_format(path: &Path, bytes: &[u8]) -> NetFormat {
@@ -89,54 +114,30 @@ fn detect_format(path: &Path, bytes: &[u8]) -> NetFormat {
     }
 }
 
-/// Write `data` to `path` atomically: into a temporary file beside it, then rename, so that a
-/// failure never leaves a partial file (and reading and writing the same path is safe, since
-/// the input was read completely before). `-` writes to standard output.
+/// Write `data` to `path` (`None` or `-`: standard output) by the rules of
+/// [`crate::back::output`]: a regular file is replaced atomically (a failure never leaves a
+/// partial file, and reading and writing the same path is safe since the input was read
+/// completely before), a device or FIFO is written in place, a symlink is written through.
 pub fn write_output(path: Option<&Path>, data: &[u8]) -> Result<(), Error> {
     stream_output(path, |out| out.write_all(data))
 }
 
 /// [`write_output`] for output produced piece by piece: `produce` writes into the destination
-/// (a buffered temporary file renamed into place only when everything succeeded, or stdout),
-/// so a large scene is never held in memory a second time.
+/// (buffered), so a large scene is never held in memory a second time.
 pub fn stream_output(
     path: Option<&Path>,
     produce: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), Error> {
-    let Some(path) = path.filter(|p| p.as_os_str() != "-") else {
-        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-        return produce(&mut out)
-            .and_then(|_| out.flush())
-            .map_err(|source| Error::Io {
-                path: PathBuf::from("<stdout>"),
-                source,
-            });
-    };
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let file_name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "output".to_string());
-    let tmp = dir.join(format!(".{file_name}.vstructc-{}.tmp", std::process::id()));
-    let result = std::fs::File::create(&tmp)
-        .and_then(|f| {
-            let mut out = std::io::BufWriter::with_capacity(1 << 16, f);
-            produce(&mut out)?;
-            out.into_inner().map_err(|e| e.into_error())?.sync_all()
-        })
-        .and_then(|_| std::fs::rename(&tmp, path));
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io(e));
+    match path.filter(|p| p.as_os_str() != "-") {
+        Some(path) => output::write_file(path, produce),
+        None => output::write_stdout(produce),
     }
-    Ok(())
+}
+
+/// Print `text` on standard output; a write error (a full disk) is reported as IO001 and
+/// gives exit status 1.
+pub fn print_stdout(text: &str, common: &CommonOptions) -> Result<(), std::process::ExitCode> {
+    output::write_stdout(|out| out.write_all(text.as_bytes())).map_err(|e| report_error(&e, common))
 }
 
 /// Print an error (I/O or input) as a diagnostic according to the common options; returns

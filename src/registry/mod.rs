@@ -22,6 +22,19 @@
 //!   candidate is not used in its place.
 //! * A missing or unreadable explicit path is AR005 (error); a missing `VSTRUCTC_ARGS_PATH`
 //!   entry is AR005 as a warning.
+//!
+//! Folder walks and definition files are bounded, since a definitions folder may be shared
+//! or hostile:
+//!
+//! * The walk follows symlinked folders but keeps the set of folders visited (device and
+//!   inode): a symlink that leads back to a folder above it is RG003 (warning, naming the link
+//!   and the folder), not followed, and the walk goes on; a folder reached a second time by
+//!   another way is skipped (RG003 note), so its files are not listed twice.
+//! * Only regular files are read: an entry named `*.args` or `*.oso` that is a FIFO, a device
+//!   or a socket is RG004 (warning) and skipped; an explicit path or `VSTRUCTC_ARGS_PATH`
+//!   entry that is one is RG004 as an error, respectively a warning.
+//! * One definition file holds at most [`MAX_DEFINITION_BYTES`]; a larger one is RG005 (error
+//!   naming its size) when its id is loaded, and the id has no definition.
 
 pub mod model;
 mod param_types;
@@ -36,9 +49,10 @@ pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, Vs
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
 use crate::front::args::{ArgsOptions, parse_args_with};
 use crate::front::oso::parse_oso;
+use crate::front::source::{ReadError, kind_name, open_regular, read_regular_file};
 use rustc_hash::FxHashMap as HashMap;
 use std::collections::BTreeMap;
-use std::io::BufRead;
+use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -47,6 +61,14 @@ pub const ARGS_PATH_ENV: &str = "VSTRUCTC_ARGS_PATH";
 
 /// Pseudo-directory naming embedded definitions in paths and diagnostics.
 pub const EMBEDDED_PREFIX: &str = "<embedded>";
+
+/// The largest definition file read: 64 MiB, far above any real definition (RenderMan's
+/// largest `.args` files are under 1 MiB) and small enough that a hostile one cannot exhaust
+/// memory. A larger file is RG005.
+pub const MAX_DEFINITION_BYTES: u64 = 64 << 20;
+
+/// How much of an `.oso` file is read to find its shader name while listing.
+const OSO_PEEK_BYTES: u64 = 64 << 10;
 
 /// The crate's own `args/` files compiled into the binary: `(path relative to args/, bytes)`,
 /// in byte-wise sorted path order.
@@ -231,31 +253,35 @@ impl Registry {
         self.index.entry(id).or_default().push(c);
     }
 
-    /// Adds a file or (recursively) a folder to the end of the search path.
+    /// Adds a file or (recursively) a folder to the end of the search path. `missing` is the
+    /// severity of a path that cannot be used (error for explicit paths, warning for
+    /// environment entries).
     fn index_path(&mut self, path: &Path, missing: Severity) {
-        if path.is_dir() {
-            let mut files = Vec::new();
-            if let Err(e) = scan_dir(path, &mut files) {
-                self.index_diags.push(
-                    Diagnostic::new(missing, "AR005", format!("cannot read folder: {e}"))
-                        .at(Location::file(path.to_string_lossy().as_ref())),
-                );
+        let at = || Location::file(path.to_string_lossy().as_ref());
+        match std::fs::metadata(path) {
+            Ok(m) if m.is_dir() => {
+                let mut walk = FolderWalk::new(missing);
+                walk.run(path);
+                self.index_diags.append(&mut walk.diags);
+                walk.files.sort_by(|a, b| {
+                    a.as_os_str()
+                        .as_encoded_bytes()
+                        .cmp(b.as_os_str().as_encoded_bytes())
+                });
+                for f in walk.files {
+                    self.index_file(&f, missing);
+                }
             }
-            files.sort_by(|a, b| {
-                a.as_os_str()
-                    .as_encoded_bytes()
-                    .cmp(b.as_os_str().as_encoded_bytes())
-            });
-            for f in files {
-                self.index_file(&f, missing);
-            }
-        } else if path.is_file() {
-            self.index_file(path, missing);
-        } else {
-            self.index_diags.push(
-                Diagnostic::new(missing, "AR005", "no such definition file or folder")
-                    .at(Location::file(path.to_string_lossy().as_ref())),
-            );
+            Ok(m) if m.is_file() => self.index_file(path, missing),
+            Ok(m) => self
+                .index_diags
+                .push(not_regular(missing, kind_name(m.file_type())).at(at())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => self.index_diags.push(
+                Diagnostic::new(missing, "AR005", "no such definition file or folder").at(at()),
+            ),
+            Err(e) => self
+                .index_diags
+                .push(Diagnostic::new(missing, "AR005", format!("cannot read: {e}")).at(at())),
         }
     }
 
@@ -490,13 +516,10 @@ impl Registry {
                 return Some((**def).clone());
             }
             Origin::Embedded(b) => std::borrow::Cow::Borrowed(*b),
-            Origin::File(p) => match std::fs::read(p) {
+            Origin::File(p) => match read_regular_file(p, MAX_DEFINITION_BYTES) {
                 Ok(b) => std::borrow::Cow::Owned(b),
                 Err(e) => {
-                    diags.push(
-                        Diagnostic::error("AR005", format!("cannot read file: {e}"))
-                            .at(Location::file(c.name.clone())),
-                    );
+                    diags.push(read_error(&e).at(Location::file(c.name.clone())));
                     return None;
                 }
             },
@@ -557,17 +580,168 @@ fn first_of_kind<'c>(
     Some(first)
 }
 
-/// Recursively collects `*.args` and `*.oso` files under `dir`.
-fn scan_dir(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
-    for entry in std::fs::read_dir(dir)? {
-        let path = entry?.path();
-        if path.is_dir() {
-            scan_dir(&path, out)?;
-        } else if path.extension().is_some_and(|e| e == "args" || e == "oso") {
-            out.push(path);
+/// The diagnostic of a definition file that could not be read: RG004 (not a regular file),
+/// RG005 (too large) or AR005 (the operating system refused).
+fn read_error(e: &ReadError) -> Diagnostic {
+    match e {
+        ReadError::NotRegular { kind } => not_regular(Severity::Error, kind),
+        ReadError::TooLarge { .. } => {
+            Diagnostic::error("RG005", format!("definition file too large: {e}"))
+        }
+        ReadError::Io(io) => Diagnostic::error("AR005", format!("cannot read file: {io}")),
+    }
+}
+
+/// RG004: a definition path that names a FIFO, a device or a socket.
+fn not_regular(severity: Severity, kind: &str) -> Diagnostic {
+    Diagnostic::new(
+        severity,
+        "RG004",
+        format!("not a regular file but {kind}; only regular files are read as definitions"),
+    )
+}
+
+/// Identity of a folder, to recognise it when a symlink leads to it again.
+#[cfg(unix)]
+type FolderKey = (u64, u64);
+#[cfg(not(unix))]
+type FolderKey = PathBuf;
+
+#[cfg(unix)]
+fn folder_key(_: &Path, m: &std::fs::Metadata) -> FolderKey {
+    use std::os::unix::fs::MetadataExt;
+    (m.dev(), m.ino())
+}
+
+#[cfg(not(unix))]
+fn folder_key(path: &Path, _: &std::fs::Metadata) -> FolderKey {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+/// The recursive listing of a definitions folder: `*.args` and `*.oso` regular files (and
+/// entries that cannot be examined, reported when loaded), with the walk's diagnostics.
+struct FolderWalk {
+    files: Vec<PathBuf>,
+    diags: Vec<Diagnostic>,
+    /// Every folder listed so far, with the path it was first reached by.
+    seen: HashMap<FolderKey, PathBuf>,
+    /// Severity of a folder that cannot be read.
+    unreadable: Severity,
+}
+
+impl FolderWalk {
+    fn new(unreadable: Severity) -> Self {
+        FolderWalk {
+            files: Vec::new(),
+            diags: Vec::new(),
+            seen: HashMap::default(),
+            unreadable,
         }
     }
-    Ok(())
+
+    /// Walks `root` and everything below it (an explicit stack: no recursion).
+    fn run(&mut self, root: &Path) {
+        if let Ok(m) = std::fs::metadata(root) {
+            self.seen.insert(folder_key(root, &m), root.to_path_buf());
+        }
+        let mut todo = vec![root.to_path_buf()];
+        while let Some(dir) = todo.pop() {
+            let entries = match std::fs::read_dir(&dir) {
+                Ok(entries) => entries,
+                Err(e) => {
+                    self.cannot_read(&dir, &e);
+                    continue;
+                }
+            };
+            let mut paths = Vec::new();
+            for entry in entries {
+                match entry {
+                    Ok(entry) => paths.push(entry.path()),
+                    Err(e) => {
+                        self.cannot_read(&dir, &e);
+                        break;
+                    }
+                }
+            }
+            // Sorted, so that which of two ways into one folder is listed (and which one
+            // a diagnostic names) does not depend on the order the system returns entries.
+            paths.sort_by(|a, b| {
+                a.as_os_str()
+                    .as_encoded_bytes()
+                    .cmp(b.as_os_str().as_encoded_bytes())
+            });
+            let first_subfolder = todo.len();
+            for path in paths {
+                self.visit(path, &mut todo);
+            }
+            // Depth first in sorted order: the stack pops the first subfolder first.
+            todo[first_subfolder..].reverse();
+        }
+    }
+
+    fn cannot_read(&mut self, dir: &Path, e: &std::io::Error) {
+        self.diags.push(
+            Diagnostic::new(self.unreadable, "AR005", format!("cannot read folder: {e}"))
+                .at(Location::file(dir.to_string_lossy().as_ref())),
+        );
+    }
+
+    /// One folder entry: a folder to list (once), a definition file to keep, or a
+    /// definition name on something that is not a regular file.
+    fn visit(&mut self, path: PathBuf, todo: &mut Vec<PathBuf>) {
+        let is_definition = path.extension().is_some_and(|e| e == "args" || e == "oso");
+        let at = || Location::file(path.to_string_lossy().as_ref());
+        match std::fs::metadata(&path) {
+            Ok(m) if m.is_dir() => match self.seen.get(&folder_key(&path, &m)) {
+                Some(first) if path.starts_with(first) => {
+                    let d = Diagnostic::warning(
+                        "RG003",
+                        format!(
+                            "symlink loop: `{}` leads back to `{}`; not followed",
+                            path.display(),
+                            first.display()
+                        ),
+                    )
+                    .at(at());
+                    self.diags.push(d);
+                }
+                Some(first) => {
+                    let d = Diagnostic::note(
+                        "RG003",
+                        format!(
+                            "`{}` is the folder `{}`, already listed; not listed again",
+                            path.display(),
+                            first.display()
+                        ),
+                    )
+                    .at(at());
+                    self.diags.push(d);
+                }
+                None => {
+                    self.seen.insert(folder_key(&path, &m), path.clone());
+                    todo.push(path);
+                }
+            },
+            Ok(m) if m.is_file() => {
+                if is_definition {
+                    self.files.push(path);
+                }
+            }
+            Ok(m) => {
+                if is_definition {
+                    let d = not_regular(Severity::Warning, kind_name(m.file_type())).at(at());
+                    self.diags.push(d);
+                }
+            }
+            // A dangling link or an entry that cannot be examined: kept, so that loading its
+            // id reports why it cannot be read (AR005).
+            Err(_) => {
+                if is_definition {
+                    self.files.push(path);
+                }
+            }
+        }
+    }
 }
 
 /// The file stem of a `/`-separated or OS path.
@@ -580,8 +754,9 @@ fn file_stem(path: &str) -> String {
 
 /// The shader name on the shader line of an `.oso` file, read without parsing the rest.
 fn peek_oso_name(path: &Path) -> Option<String> {
-    let file = std::fs::File::open(path).ok()?;
-    let reader = std::io::BufReader::new(file);
+    // Bounded: a file without line breaks must not be read whole just to list it.
+    let (file, _) = open_regular(path).ok()?;
+    let reader = std::io::BufReader::new(file.take(OSO_PEEK_BYTES));
     let mut header_seen = false;
     for line in reader.split(b'\n').take(256) {
         let line = line.ok()?;

@@ -5,6 +5,12 @@
 //! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
 //! `run_file`) live here and are visible to every module.
 
+// FIFOs, device nodes, symlinks and file modes: Unix only.
+#[cfg(unix)]
+mod definitions;
+#[cfg(unix)]
+mod output;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
