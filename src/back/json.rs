@@ -19,10 +19,12 @@
 //! * Two materials with the same name: the later ones get `#1`, `#2`, … suffixes.
 //! * A parameter with both a value and connections is written in both `parameters` and
 //!   `inputConnections` (formats.md §5.3).
-//! * Non-finite floats (only possible in networks built in code) are written as `null`.
+//! * Non-finite floats (only possible in networks built in code) are written saturated to the
+//!   largest finite `f32` of their sign, NaN as 0 ([`crate::types::saturate_f32`]): the reader
+//!   takes finite numbers only, and what this writer writes must read back.
 
 use crate::network::{Link, Network, NodeId, Upstream};
-use crate::types::{Value, format_f32};
+use crate::types::{Value, format_f32, saturate_f32};
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// An output tree: objects are sorted maps, numbers are pre-formatted text.
@@ -231,9 +233,7 @@ fn canonical(v: &Value) -> Out {
 /// The shortest JSON text that reads back to `x`: the shorter of the plain decimal
 /// (`0.0000001`) and the exponent form (`1e-7`), plain on ties; `-0.0` keeps its sign.
 fn num(x: f32) -> Out {
-    if !x.is_finite() {
-        return Out::Raw("null".into());
-    }
+    let x = saturate_f32(x);
     if x == 0.0 && x.is_sign_negative() {
         return Out::Raw("-0.0".into());
     }
@@ -279,7 +279,11 @@ mod tests {
             ))),
             "[\n  [1, 0, 0.5]\n]"
         );
-        assert_eq!(text(json_value(&Value::Float(f32::NAN))), "null");
+        assert_eq!(text(json_value(&Value::Float(f32::NAN))), "0");
+        assert_eq!(
+            text(json_value(&Value::Float(f32::NEG_INFINITY))),
+            "-3.4028235e38"
+        );
         assert_eq!(text(json_value(&Value::Str("a\"b".into()))), "\"a\\\"b\"");
         let t = text(canonical(&Value::Array(BaseType::Int, vec![Value::Int(0)])));
         assert!(t.contains("\"int[1]\""));
