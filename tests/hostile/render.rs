@@ -26,7 +26,10 @@ fn materials(n: usize) -> String {
     rib
 }
 
-/// Exit status and peak resident set size (KiB) of `vstructc args`, from `wait4`.
+/// Exit status and peak resident set size (KiB) of `vstructc args`, from `wait4` (not
+/// `getrusage(RUSAGE_CHILDREN)`: other tests' children run at the same time).
+// The child is reaped by `wait4`, which `Child::wait` cannot replace (it gives no rusage).
+#[allow(clippy::zombie_processes)]
 fn run_measured(name: &str, args: &[&str]) -> (Option<i32>, u64, String) {
     let err = scratch(&format!("{name}.stderr"), "");
     let child = Command::new(env!("CARGO_BIN_EXE_vstructc"))
