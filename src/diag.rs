@@ -501,6 +501,41 @@ mod tests {
     }
 
     #[test]
+    fn volume_limit_counts_distinct_diagnostics_per_code() {
+        let mut d = Diagnostics::new();
+        for line in [1, 1, 2, 3, 3, 4] {
+            d.push(Diagnostic::warning("RB018", "r").at(Location::new("f", line, 1)));
+        }
+        d.push(Diagnostic::warning("RB018", "other").at(Location::new("f", 1, 1)));
+        d.push(Diagnostic::info("VS018", "v"));
+        d.push(Diagnostic::note("VS021", "n"));
+        let shown = d.volume_limited(2, |d| d.severity != Severity::Note);
+        let lines: Vec<(&str, u32)> = shown
+            .items
+            .iter()
+            .map(|d| (d.code, d.location.as_ref().map_or(0, |l| l.line)))
+            .collect();
+        assert_eq!(lines, [("RB018", 1), ("RB018", 2), ("VS018", 0)]);
+        // Lines 3 and 4, and the other message on line 1: three distinct ones left out.
+        assert_eq!(shown.suppressed, [("RB018", 3)]);
+        let all = d.volume_limited(0, |_| true);
+        assert_eq!(all.items.len(), 7);
+        assert!(all.suppressed.is_empty());
+    }
+
+    #[test]
+    fn bound_line_keeps_both_ends_of_multibyte_text() {
+        let line = format!("{}{}", "é".repeat(3000), "←end");
+        let short = bound_line(&line, 100);
+        assert!(
+            short.starts_with("éé") && short.ends_with("←end"),
+            "{short}"
+        );
+        assert!(short.contains("[2904 characters left out]"), "{short}");
+        assert_eq!(bound_line("short", 100), "short");
+    }
+
+    #[test]
     fn human_rendering_has_code_and_location() {
         let d =
             Diagnostic::error("AR004", "duplicate parameter `x`").at(Location::new("a.args", 3, 5));

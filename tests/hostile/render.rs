@@ -121,10 +121,12 @@ fn large_balls_render_in_bounded_memory() {
 
 /// The streamed sheet is the balls rendered one by one, in row-major order, with empty
 /// cells in the background colour (5 balls: 3 columns, 2 rows, one empty cell), in PFM,
-/// whose rows are written bottom first.
+/// whose rows are written bottom first. At 600 pixels a ball row (1800 × 600) is more than
+/// one band of `BAND_PIXELS`, so bands are split inside a ball row too.
 #[test]
 fn the_streamed_sheet_is_the_balls_side_by_side() {
-    let size = 20;
+    let size = 600;
+    assert!(3 * size * size > vstructc::interp::preview::BAND_PIXELS);
     let input = scratch("sheet5.rib", materials(5));
     let sheet_path = input.with_extension("pfm");
     let o = crate::run(&[
