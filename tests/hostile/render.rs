@@ -120,58 +120,84 @@ fn large_balls_render_in_bounded_memory() {
 }
 
 /// The streamed sheet is the balls rendered one by one, in row-major order, with empty
-/// cells in the background colour (5 balls: 3 columns, 2 rows, one empty cell), in PFM,
-/// whose rows are written bottom first. At 600 pixels a ball row (1800 × 600) is more than
-/// one band of `BAND_PIXELS`, so bands are split inside a ball row too.
-#[test]
-fn the_streamed_sheet_is_the_balls_side_by_side() {
-    let size = 600;
-    assert!(3 * size * size > vstructc::interp::preview::BAND_PIXELS);
-    let input = scratch("sheet5.rib", materials(5));
+/// cells in the background colour, in PFM, whose rows are written bottom first.
+fn sheet_is_balls_side_by_side(input: &Path, names: &[&str], size: usize) {
     let sheet_path = input.with_extension("pfm");
-    let o = crate::run(&[
-        "render".into(),
-        input.display().to_string(),
-        "--size".into(),
-        size.to_string(),
-        "-o".into(),
-        sheet_path.display().to_string(),
-    ]);
-    crate::check("sheet5", &o, 0, "");
-    let (w, h, sheet) = read_pfm(&sheet_path);
-    assert_eq!((w, h), (3 * size, 2 * size));
-    for k in 0..5 {
-        let one = input.with_extension(format!("m{k}.pfm"));
-        let o = crate::run(&[
-            "render".into(),
+    let render = |extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "render".to_string(),
             input.display().to_string(),
             "--size".into(),
             size.to_string(),
-            "--material".into(),
-            format!("m{k}"),
             "-o".into(),
-            one.display().to_string(),
-        ]);
-        crate::check("one ball", &o, 0, "");
+            out.display().to_string(),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let o = crate::run(&args);
+        assert_eq!(o.status, Some(0), "{}", o.stderr);
+    };
+    render(&[], &sheet_path);
+    let (w, h, sheet) = read_pfm(&sheet_path);
+    let columns = (names.len() as f64).sqrt().ceil() as usize;
+    let rows = names.len().div_ceil(columns);
+    assert_eq!((w, h), (columns * size, rows * size));
+    for (k, name) in names.iter().enumerate() {
+        let one = input.with_extension(format!("{name}.pfm"));
+        render(&["--material", name], &one);
         let (bw, bh, ball) = read_pfm(&one);
         assert_eq!((bw, bh), (size, size));
-        let (cx, cy) = ((k % 3) * size, (k / 3) * size);
+        let (cx, cy) = ((k % columns) * size, (k / columns) * size);
         for y in 0..size {
             for x in 0..size {
                 assert_eq!(
                     sheet[(cy + y) * w + cx + x],
                     ball[y * size + x],
-                    "ball {k} at {x},{y}"
+                    "ball {name} at {x},{y}"
                 );
             }
         }
     }
     let background = [0.05f32; 3];
-    for y in size..2 * size {
-        for x in 2 * size..3 * size {
-            assert_eq!(sheet[y * w + x], background);
+    for k in names.len()..columns * rows {
+        let (cx, cy) = ((k % columns) * size, (k / columns) * size);
+        for y in cy..cy + size {
+            assert!(
+                sheet[y * w + cx..y * w + cx + size]
+                    .iter()
+                    .all(|p| *p == background)
+            );
         }
     }
+}
+
+/// Five balls (3 columns, 2 rows, one empty cell) of 600 pixels: a ball row (1800 × 600)
+/// is more than one band of `BAND_PIXELS`, so bands split a ball row too.
+#[test]
+fn the_streamed_sheet_is_the_balls_side_by_side() {
+    let size = 600;
+    assert!(3 * size * size > vstructc::interp::preview::BAND_PIXELS);
+    let input = scratch("sheet5.rib", materials(5));
+    sheet_is_balls_side_by_side(&input, &["m0", "m1", "m2", "m3", "m4"], size);
+}
+
+/// Materials of different structures side by side (plain, coated, textured, layered,
+/// chained): a worker's working memory serves balls of different materials.
+#[test]
+fn a_sheet_of_different_materials_is_the_balls_side_by_side() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut rib = Vec::new();
+    for file in [
+        "tests/data/render/coated.rib",
+        "tests/data/render/textured.rib",
+        "examples/layered.rib",
+        "examples/chain.rib",
+        "tests/data/render/two.rib",
+    ] {
+        rib.extend(std::fs::read(root.join(file)).expect("a repository file"));
+    }
+    let input = scratch("mixed_sheet.rib", rib);
+    let names = ["coated", "textured", "surface", "car", "white", "red"];
+    sheet_is_balls_side_by_side(&input, &names, 40);
 }
 
 /// The library refuses a size beyond its limit with an error naming the limit and the

@@ -308,6 +308,15 @@ fn round_trips(rib: &str, extensions: Extensions) -> Result<(), TestCaseError> {
         ..ResolveOptions::default()
     };
     resolve(&mut net, &reg, &options);
+    // Nothing non-finite reaches the writers (they would saturate it, but the source is
+    // meant to be closed).
+    for id in net.node_ids() {
+        for p in net[id].params() {
+            if let Some(v) = p.value() {
+                prop_assert!(v.is_finite(), "{} = {v} in\n{rib}", p.name());
+            }
+        }
+    }
     let written = write_rib_to_vec(rib.as_bytes(), &net, &reg).expect("the RIB writer writes");
     let text = String::from_utf8_lossy(&written).into_owned();
     if let Err(e) = parse_rib(&written, "w.rib", &reg, &RibOptions::default(), &mut d) {
@@ -329,4 +338,36 @@ proptest! {
         let ext = if all { Extensions::all() } else { Extensions::none() };
         round_trips(&rib, ext)?;
     }
+}
+
+/// Float defaults beyond the f32 range where definitions are read: `.args` saturates them
+/// (AR012), `.oso` drops them (OS010), so no `copy` can take an infinity from a default.
+#[test]
+fn huge_float_defaults_are_closed_at_the_reader() {
+    let args = crate::run_file(
+        "HugeDefault.args",
+        "<args format=\"1.0\"><shaderType><tag value=\"pattern\"/></shaderType>\
+         <param name=\"g\" type=\"float\" default=\"-1e39\"/>\
+         <output name=\"out\" type=\"float\"/></args>\n",
+    );
+    crate::check("HugeDefault.args", &args, 0, "warning[AR012]");
+    assert!(
+        args.stderr
+            .contains("`-1e39` is outside the f32 range; -3.4028235e38 is used"),
+        "{}",
+        args.stderr
+    );
+    let oso = crate::run_file(
+        "HugeDefault.oso",
+        "OpenShadingLanguage 1.00\nshader HugeDefault\n\
+         param\tfloat\tg\t1e39\t\t%read{2147483647,-1} %write{2147483647,-1}\n\
+         oparam\tfloat\tout\t0\t\t%read{2147483647,-1} %write{2147483647,-1}\n\
+         code ___main___\n\tend\n",
+    );
+    crate::check("HugeDefault.oso", &oso, 0, "warning[OS010]");
+    assert!(
+        oso.stderr.contains("`1e39` is not a finite float"),
+        "{}",
+        oso.stderr
+    );
 }
