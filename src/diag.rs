@@ -305,10 +305,11 @@ pub struct Shown<'a> {
 }
 
 impl Diagnostics {
-    /// The diagnostics a report prints: those `keep` accepts, identical ones (same severity,
-    /// code, location and message) once, and at most `max_per_code` of each code (0: no
-    /// limit). The rest of each code is counted in [`Shown::suppressed`]. Linear in the
-    /// number of diagnostics.
+    /// The diagnostics a report prints: those `keep` accepts, with `dedup` identical ones
+    /// (same severity, code, location and message; notes and related locations are not
+    /// compared) once, and at most `max_per_code` distinct ones of each code (0: no limit).
+    /// The rest of each code is counted in [`Shown::suppressed`]. Linear in the number of
+    /// diagnostics.
     ///
     /// ```
     /// use vstructc::{Diagnostic, Diagnostics};
@@ -317,13 +318,15 @@ impl Diagnostics {
     ///     d.push(Diagnostic::warning("RB018", format!("reference {i}")));
     ///     d.push(Diagnostic::warning("RB018", format!("reference {i}")));
     /// }
-    /// let shown = d.volume_limited(3, |_| true);
+    /// let shown = d.volume_limited(3, true, |_| true);
     /// assert_eq!(shown.items.len(), 3);
     /// assert_eq!(shown.suppressed, [("RB018", 2)]);
+    /// assert_eq!(d.volume_limited(0, false, |_| true).items.len(), 10);
     /// ```
     pub fn volume_limited(
         &self,
         max_per_code: usize,
+        dedup: bool,
         keep: impl Fn(&Diagnostic) -> bool,
     ) -> Shown<'_> {
         type Key<'k> = (Severity, &'static str, Option<&'k Location>, &'k str);
@@ -335,7 +338,8 @@ impl Diagnostics {
             suppressed: Vec::new(),
         };
         for d in self.items.iter().filter(|d| keep(d)) {
-            if !seen.insert((d.severity, d.code, d.location.as_ref(), d.message.as_str())) {
+            if dedup && !seen.insert((d.severity, d.code, d.location.as_ref(), d.message.as_str()))
+            {
                 continue;
             }
             let count = per_code.entry(d.code).or_insert(0);
@@ -509,7 +513,7 @@ mod tests {
         d.push(Diagnostic::warning("RB018", "other").at(Location::new("f", 1, 1)));
         d.push(Diagnostic::info("VS018", "v"));
         d.push(Diagnostic::note("VS021", "n"));
-        let shown = d.volume_limited(2, |d| d.severity != Severity::Note);
+        let shown = d.volume_limited(2, true, |d| d.severity != Severity::Note);
         let lines: Vec<(&str, u32)> = shown
             .items
             .iter()
@@ -518,9 +522,11 @@ mod tests {
         assert_eq!(lines, [("RB018", 1), ("RB018", 2), ("VS018", 0)]);
         // Lines 3 and 4, and the other message on line 1: three distinct ones left out.
         assert_eq!(shown.suppressed, [("RB018", 3)]);
-        let all = d.volume_limited(0, |_| true);
+        let all = d.volume_limited(0, true, |_| true);
         assert_eq!(all.items.len(), 7);
         assert!(all.suppressed.is_empty());
+        let every = d.volume_limited(0, false, |_| true);
+        assert_eq!(every.items.len(), 9);
     }
 
     #[test]

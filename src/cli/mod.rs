@@ -58,8 +58,8 @@ pub struct CommonOptions {
     #[arg(long, short, global = true)]
     pub verbose: bool,
     /// Show at most N diagnostics of each code, then one line counting the rest; 0 shows
-    /// all. Default: 20 in human output, no limit in JSON output. Identical diagnostics
-    /// (same code, place and message) are shown once either way.
+    /// all. Default: 20 in human output, no limit in JSON output. Human output shows
+    /// identical diagnostics (same code, place and message) once.
     #[arg(long, value_name = "N", global = true)]
     pub max_diagnostics: Option<usize>,
 }
@@ -136,19 +136,23 @@ pub fn run(cli: Cli) -> ExitCode {
 /// Print diagnostics to stderr according to the common options and return the exit status
 /// they imply: 1 if any error (or any warning under `--deny-warnings`), else 0.
 ///
-/// Volume control ([`Diagnostics::volume_limited`]): identical diagnostics are printed once;
-/// past `--max-diagnostics` of one code (default [`DEFAULT_MAX_PER_CODE`] in human output, no
-/// limit in JSON output) one line per code counts the rest. Human lines are bounded
-/// ([`MAX_HUMAN_LINE`]). In JSON output that line is an object
-/// `{"code": CODE, "suppressed": N}`. The exit status counts every diagnostic, shown or not.
+/// Volume control ([`Diagnostics::volume_limited`]): in human output identical diagnostics
+/// are printed once, at most `--max-diagnostics` of one code (default
+/// [`DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
+/// bounded ([`MAX_HUMAN_LINE`]). JSON output keeps every diagnostic, whole, unless
+/// `--max-diagnostics` is given; its count line is an object `{"code": CODE, "suppressed": N}`.
+/// The exit status counts every diagnostic, shown or not.
 /// Failures to write to stderr are ignored (there is nowhere left to report them).
 pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
-    let limit = match (common.max_diagnostics, common.diag_format) {
-        (Some(n), _) => n,
-        (None, DiagFormat::Human) => DEFAULT_MAX_PER_CODE,
-        (None, DiagFormat::Json) => 0,
+    let human = common.diag_format == DiagFormat::Human;
+    let limit = match common.max_diagnostics {
+        Some(n) => n,
+        None if human => DEFAULT_MAX_PER_CODE,
+        None => 0,
     };
-    let shown = diags.volume_limited(limit, |d| d.severity != Severity::Note || common.verbose);
+    let shown = diags.volume_limited(limit, human, |d| {
+        d.severity != Severity::Note || common.verbose
+    });
     let mut err = std::io::BufWriter::new(std::io::stderr().lock());
     let _ = print_shown(&mut err, &shown, common.diag_format).and_then(|_| err.flush());
     if diags.has_errors() || (common.deny_warnings && diags.has_warnings()) {

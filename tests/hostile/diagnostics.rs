@@ -197,3 +197,56 @@ fn a_huge_handle_in_a_message_is_cut() {
     let json = run(&resolve_args(&path, &["--diag-format", "json"]));
     assert!(json.stderr.contains(&big));
 }
+
+/// Two members whose conditionals compare a string with a number: two VS015 warnings with
+/// the same code, place (the downstream node) and message. Human output prints it once; JSON
+/// output keeps both (their notes name different members).
+#[test]
+fn identical_diagnostics_print_once_in_human_output() {
+    let dir = scratch(
+        "dup_network.rib",
+        "Pattern \"Up\" \"u\"\n\
+        Bxdf \"Down\" \"d\" \"reference struct inputMaterial\" [\"u:out\"]\n",
+    );
+    let defs = dir.with_file_name("dup_defs");
+    std::fs::create_dir_all(&defs).expect("definitions folder");
+    std::fs::write(
+        defs.join("Up.args"),
+        r#"<args format="1.0"><shaderType><tag value="pattern"/></shaderType>
+  <param name="s" type="string" default="abc"/>
+  <output name="out"><tags><tag value="vstruct"/></tags></output>
+  <output name="out_a" vstructmember="out.a" vstructConditionalExpr="connect if s == 1"><tags><tag value="float"/></tags></output>
+  <output name="out_b" vstructmember="out.b" vstructConditionalExpr="connect if s == 1"><tags><tag value="float"/></tags></output>
+</args>"#,
+    )
+    .expect("Up.args");
+    std::fs::write(
+        defs.join("Down.args"),
+        r#"<args format="1.0"><shaderType><tag value="bxdf"/></shaderType>
+  <param name="inputMaterial" type="float" readOnly="true"><tags><tag value="vstruct"/></tags></param>
+  <param name="p_a" type="float" vstructmember="inputMaterial.a"/>
+  <param name="p_b" type="float" vstructmember="inputMaterial.b"/>
+</args>"#,
+    )
+    .expect("Down.args");
+    let defs = defs.display().to_string();
+    let human = run(&resolve_args(&dir, &["--args", &defs]));
+    check("dup human", &human, 0, "warning[VS015]");
+    assert_eq!(
+        count(&human.stderr, "warning[VS015]"),
+        1,
+        "{}",
+        human.stderr
+    );
+    let json = run(&resolve_args(
+        &dir,
+        &["--args", &defs, "--diag-format", "json"],
+    ));
+    assert_eq!(json.status, Some(0), "{}", json.stderr);
+    assert_eq!(
+        count(&json.stderr, "\"code\":\"VS015\""),
+        2,
+        "{}",
+        json.stderr
+    );
+}
