@@ -2,9 +2,9 @@
 //! [0, 1]) and linear PFM (`PF`, little-endian f32, rows bottom to top as the format
 //! requires).
 //!
-//! [`RowEncoder`] writes an image row by row as it is rendered, so a contact sheet of any
+//! [`write_rows`] writes an image row by row as it is rendered, so a contact sheet of any
 //! size is never held whole ([`crate::interp::preview::ContactSheet::render_rows`] hands
-//! out the rows in the encoder's [`RowEncoder::order`]). [`encode_png`] and [`encode_pfm`]
+//! out the rows in the format's [`ImageFormat::order`]). [`encode_png`] and [`encode_pfm`]
 //! encode an image held in memory the same way.
 
 use crate::diag::{Diagnostic, Error};

@@ -26,7 +26,7 @@
 //! Memory is bounded whatever the number of materials: [`ContactSheet`] renders a grid of
 //! balls a band of pixel rows at a time (at most [`BAND_PIXELS`] pixels, never a whole ball
 //! or sheet) and hands each finished row to the caller, who streams it to a file
-//! ([`crate::back::png::RowEncoder`]). Sizes are checked here, not only by the command line:
+//! ([`crate::back::png::write_rows`]). Sizes are checked here, not only by the command line:
 //! a ball's side is at most [`MAX_PREVIEW_SIZE`] and a sheet's sides at most
 //! [`MAX_SHEET_SIDE`] ([`PreviewError`] names the limit and the value).
 
@@ -595,20 +595,6 @@ impl<'m> ContactSheet<'m> {
             }
         }
         Ok(())
-    }
-
-    /// The whole sheet as one image (small sheets and tests; [`Self::render_rows`] streams).
-    pub fn render(&self) -> Image {
-        let mut pixels = Vec::with_capacity(self.width() * self.height());
-        let _ = self.render_rows(RowOrder::TopDown, &|_| {}, |row| {
-            pixels.extend_from_slice(row);
-            Ok::<(), std::convert::Infallible>(())
-        });
-        Image {
-            width: self.width(),
-            height: self.height(),
-            pixels,
-        }
     }
 
     /// Shade rows `j0..` of ball row `r` into `band` (whole sheet rows, filled with the
