@@ -669,7 +669,9 @@ fn bench_preview(c: &mut Criterion<CpuTime>) {
     };
     for (name, batched, general_prepare) in paths {
         let opts = options(batched, general_prepare);
-        g.bench_function(name, |b| b.iter(|| render_ball(&m, &opts, &|_| {})));
+        g.bench_function(name, |b| {
+            b.iter(|| render_ball(&m, &opts, &|_| {}).expect("valid preview options"))
+        });
     }
     // The two §6.4 rows again, each render followed by a hand-written prepare + eval pass,
     // which carries their budgets to this machine.
@@ -683,7 +685,7 @@ fn bench_preview(c: &mut Criterion<CpuTime>) {
             &mut g,
             &format!("{name}_paired"),
             || {
-                black_box(render_ball(&m, &opts, &|_| {}));
+                black_box(render_ball(&m, &opts, &|_| {}).expect("valid preview options"));
             },
             || {
                 black_box(limit.pass());

@@ -289,6 +289,132 @@ impl Diagnostics {
     }
 }
 
+/// How many diagnostics of one code a human report shows before it summarises the rest
+/// (`--max-diagnostics`, whose 0 means no limit).
+pub const DEFAULT_MAX_PER_CODE: usize = 20;
+
+/// The longest line, in characters, of a diagnostic in a human report; a longer line keeps
+/// its beginning and end and says how many characters were left out.
+pub const MAX_HUMAN_LINE: usize = 2000;
+
+/// What a report prints out of a [`Diagnostics`] list: see [`Diagnostics::volume_limited`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shown<'a> {
+    /// The diagnostics to print, in list order.
+    pub items: Vec<&'a Diagnostic>,
+    /// Per code (in the order the first one was left out): how many distinct diagnostics of
+    /// that code were left out by the per-code limit.
+    pub suppressed: Vec<(&'static str, usize)>,
+}
+
+impl Diagnostics {
+    /// The diagnostics a report prints: those `keep` accepts, with `dedup` identical ones
+    /// (same severity, code, location and message; notes and related locations are not
+    /// compared) once, and at most `max_per_code` distinct ones of each code (0: no limit).
+    /// The rest of each code is counted in [`Shown::suppressed`]. Linear in the number of
+    /// diagnostics.
+    ///
+    /// ```
+    /// use vstructc::{Diagnostic, Diagnostics};
+    /// let mut d = Diagnostics::new();
+    /// for i in 0..5 {
+    ///     d.push(Diagnostic::warning("RB018", format!("reference {i}")));
+    ///     d.push(Diagnostic::warning("RB018", format!("reference {i}")));
+    /// }
+    /// let shown = d.volume_limited(3, true, |_| true);
+    /// assert_eq!(shown.items.len(), 3);
+    /// assert_eq!(shown.suppressed, [("RB018", 2)]);
+    /// assert_eq!(d.volume_limited(0, false, |_| true).items.len(), 10);
+    /// ```
+    pub fn volume_limited(
+        &self,
+        max_per_code: usize,
+        dedup: bool,
+        keep: impl Fn(&Diagnostic) -> bool,
+    ) -> Shown<'_> {
+        type Key<'k> = (Severity, &'static str, Option<&'k Location>, &'k str);
+        let mut seen: std::collections::HashSet<Key<'_>> = std::collections::HashSet::new();
+        let mut per_code: std::collections::HashMap<&'static str, usize> =
+            std::collections::HashMap::new();
+        let mut shown = Shown {
+            items: Vec::new(),
+            suppressed: Vec::new(),
+        };
+        for d in self.items.iter().filter(|d| keep(d)) {
+            if dedup && !seen.insert((d.severity, d.code, d.location.as_ref(), d.message.as_str()))
+            {
+                continue;
+            }
+            let count = per_code.entry(d.code).or_insert(0);
+            *count += 1;
+            if max_per_code == 0 || *count <= max_per_code {
+                shown.items.push(d);
+            } else if let Some(s) = shown.suppressed.iter_mut().find(|(c, _)| *c == d.code) {
+                s.1 += 1;
+            } else {
+                shown.suppressed.push((d.code, 1));
+            }
+        }
+        shown
+    }
+}
+
+/// How many items [`join_bounded`] names at each end of a long list.
+pub const LIST_ENDS: usize = 3;
+
+/// The items of a list of `len` joined with `, `, naming at most [`LIST_ENDS`] at each end
+/// of a longer list and the number left out between them; `item(i)` is called only for the
+/// items named, so a message about a list of 100,000 nodes costs what one about 6 does.
+///
+/// ```
+/// use vstructc::diag::join_bounded;
+/// assert_eq!(join_bounded(3, |i| i.to_string()), "0, 1, 2");
+/// assert_eq!(join_bounded(10, |i| i.to_string()), "0, 1, 2, … 4 more …, 7, 8, 9");
+/// ```
+pub fn join_bounded(len: usize, mut item: impl FnMut(usize) -> String) -> String {
+    if len <= 2 * LIST_ENDS + 1 {
+        return (0..len).map(item).collect::<Vec<_>>().join(", ");
+    }
+    let head: Vec<String> = (0..LIST_ENDS).map(&mut item).collect();
+    let tail: Vec<String> = (len - LIST_ENDS..len).map(&mut item).collect();
+    format!(
+        "{}, … {} more …, {}",
+        head.join(", "),
+        len - 2 * LIST_ENDS,
+        tail.join(", ")
+    )
+}
+
+/// `line` shortened to at most about `max` characters: its beginning and end, and between
+/// them how many characters were left out. Shorter lines are returned unchanged.
+///
+/// ```
+/// use vstructc::diag::bound_line;
+/// let long = "x".repeat(10_000);
+/// let short = bound_line(&long, 100);
+/// assert!(short.chars().count() < 160);
+/// assert!(short.contains("9900 characters left out"));
+/// ```
+pub fn bound_line(line: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    let count = line.chars().count();
+    if count <= max {
+        return std::borrow::Cow::Borrowed(line);
+    }
+    let head = max / 2;
+    let tail = max - head;
+    let start_tail = line
+        .char_indices()
+        .nth(count - tail)
+        .map_or(line.len(), |(i, _)| i);
+    let end_head = line.char_indices().nth(head).map_or(0, |(i, _)| i);
+    std::borrow::Cow::Owned(format!(
+        "{} … [{} characters left out] … {}",
+        &line[..end_head],
+        count - max,
+        &line[start_tail..]
+    ))
+}
+
 impl IntoIterator for Diagnostics {
     type Item = Diagnostic;
     type IntoIter = std::vec::IntoIter<Diagnostic>;
@@ -403,6 +529,43 @@ mod tests {
         d.sort();
         let codes: Vec<_> = d.iter().map(|x| x.code).collect();
         assert_eq!(codes, ["VS003", "VS001", "VS002", "VS009"]);
+    }
+
+    #[test]
+    fn volume_limit_counts_distinct_diagnostics_per_code() {
+        let mut d = Diagnostics::new();
+        for line in [1, 1, 2, 3, 3, 4] {
+            d.push(Diagnostic::warning("RB018", "r").at(Location::new("f", line, 1)));
+        }
+        d.push(Diagnostic::warning("RB018", "other").at(Location::new("f", 1, 1)));
+        d.push(Diagnostic::info("VS018", "v"));
+        d.push(Diagnostic::note("VS021", "n"));
+        let shown = d.volume_limited(2, true, |d| d.severity != Severity::Note);
+        let lines: Vec<(&str, u32)> = shown
+            .items
+            .iter()
+            .map(|d| (d.code, d.location.as_ref().map_or(0, |l| l.line)))
+            .collect();
+        assert_eq!(lines, [("RB018", 1), ("RB018", 2), ("VS018", 0)]);
+        // Lines 3 and 4, and the other message on line 1: three distinct ones left out.
+        assert_eq!(shown.suppressed, [("RB018", 3)]);
+        let all = d.volume_limited(0, true, |_| true);
+        assert_eq!(all.items.len(), 7);
+        assert!(all.suppressed.is_empty());
+        let every = d.volume_limited(0, false, |_| true);
+        assert_eq!(every.items.len(), 9);
+    }
+
+    #[test]
+    fn bound_line_keeps_both_ends_of_multibyte_text() {
+        let line = format!("{}{}", "é".repeat(3000), "←end");
+        let short = bound_line(&line, 100);
+        assert!(
+            short.starts_with("éé") && short.ends_with("←end"),
+            "{short}"
+        );
+        assert!(short.contains("[2904 characters left out]"), "{short}");
+        assert_eq!(bound_line("short", 100), "short");
     }
 
     #[test]

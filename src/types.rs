@@ -280,6 +280,62 @@ impl Value {
     }
 }
 
+/// `x` if it is finite; otherwise the largest finite `f32` of its sign (`f32::MAX` for +∞,
+/// `f32::MIN` for −∞) and 0 for NaN, which has no sign to keep. What the writers can emit
+/// and the readers accept is finite floats only; this is how a value that is not gets there.
+pub fn saturate_f32(x: f32) -> f32 {
+    if x.is_finite() {
+        x
+    } else if x.is_nan() {
+        0.0
+    } else if x > 0.0 {
+        f32::MAX
+    } else {
+        f32::MIN
+    }
+}
+
+impl Value {
+    /// Replace every non-finite float in the value (components and array elements included)
+    /// by [`saturate_f32`]; true if any was replaced.
+    pub fn saturate_floats(&mut self) -> bool {
+        fn fix(xs: &mut [f32]) -> bool {
+            let mut changed = false;
+            for x in xs.iter_mut().filter(|x| !x.is_finite()) {
+                *x = saturate_f32(*x);
+                changed = true;
+            }
+            changed
+        }
+        match self {
+            Value::Float(x) => fix(std::slice::from_mut(x)),
+            Value::Triple(_, xs) => fix(xs),
+            Value::HPoint(xs) => fix(xs),
+            Value::Matrix(xs) => fix(xs),
+            Value::Array(_, items) => items
+                .iter_mut()
+                .fold(false, |changed, v| v.saturate_floats() | changed),
+            Value::Int(_) | Value::Bool(_) | Value::Str(_) | Value::Token(_) | Value::Asset(_) => {
+                false
+            }
+        }
+    }
+
+    /// True if every float in the value is finite.
+    pub fn is_finite(&self) -> bool {
+        match self {
+            Value::Float(x) => x.is_finite(),
+            Value::Triple(_, xs) => xs.iter().all(|x| x.is_finite()),
+            Value::HPoint(xs) => xs.iter().all(|x| x.is_finite()),
+            Value::Matrix(xs) => xs.iter().all(|x| x.is_finite()),
+            Value::Array(_, items) => items.iter().all(Value::is_finite),
+            Value::Int(_) | Value::Bool(_) | Value::Str(_) | Value::Token(_) | Value::Asset(_) => {
+                true
+            }
+        }
+    }
+}
+
 /// Formats a float with the shortest decimal text that reads back to the same `f32`.
 pub fn format_f32(x: f32) -> String {
     format!("{x}")

@@ -200,8 +200,9 @@ fn preview_paths_agree() {
                 ..base.clone()
             },
             &|_| {},
-        );
-        let scalar = render_ball(&m, &base, &|_| {});
+        )
+        .expect("valid preview options");
+        let scalar = render_ball(&m, &base, &|_| {}).expect("valid preview options");
         let batched = render_ball(
             &m,
             &PreviewOptions {
@@ -209,7 +210,8 @@ fn preview_paths_agree() {
                 ..base.clone()
             },
             &|_| {},
-        );
+        )
+        .expect("valid preview options");
         let lit = general
             .pixels
             .iter()

@@ -65,7 +65,7 @@ fn batched_preview_equals_scalar_preview() {
         parallel: false,
         ..PreviewOptions::default()
     };
-    let scalar = render_ball(&m, &opts, &|_| {});
+    let scalar = render_ball(&m, &opts, &|_| {}).expect("valid preview options");
     let batched = render_ball(
         &m,
         &PreviewOptions {
@@ -73,7 +73,8 @@ fn batched_preview_equals_scalar_preview() {
             ..opts.clone()
         },
         &|_| {},
-    );
+    )
+    .expect("valid preview options");
     for (k, (a, b)) in scalar.pixels.iter().zip(&batched.pixels).enumerate() {
         let tol = 1e-5 * a.max_element().max(1e-3);
         assert!(

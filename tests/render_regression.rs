@@ -43,7 +43,7 @@ fn render(ir: &MaterialIr) -> Image {
         size: SIZE,
         ..PreviewOptions::default()
     };
-    render_ball(&m, &opts, &|_| {})
+    render_ball(&m, &opts, &|_| {}).expect("valid preview options")
 }
 
 /// The golden network, resolved and lowered as in tests/lower_network.rs (its one external

@@ -19,10 +19,15 @@
 //! * Two materials with the same name: the later ones get `#1`, `#2`, … suffixes.
 //! * A parameter with both a value and connections is written in both `parameters` and
 //!   `inputConnections` (formats.md §5.3).
-//! * Non-finite floats (only possible in networks built in code) are written as `null`.
+//! * An array whose elements are not of its declared type (a RIB value kept as written after
+//!   RB014, such as `"color c" [0]`) is written with its elements' type (`float[1]`): the
+//!   reader would reject `color[1]` holding a number.
+//! * Non-finite floats (only possible in networks built in code) are written saturated to the
+//!   largest finite `f32` of their sign, NaN as 0 ([`crate::types::saturate_f32`]): the reader
+//!   takes finite numbers only, and what this writer writes must read back.
 
 use crate::network::{Link, Network, NodeId, Upstream};
-use crate::types::{Value, format_f32};
+use crate::types::{BaseType, Value, format_f32, saturate_f32};
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// An output tree: objects are sorted maps, numbers are pre-formatted text.
@@ -219,7 +224,7 @@ fn connection(net: &Network, link: &Link, names: &HashMap<NodeId, String>) -> Ou
 /// `{ "type": T, "value": V }`.
 fn canonical(v: &Value) -> Out {
     let ty = match v {
-        Value::Array(b, items) => format!("{}[{}]", b.word(), items.len()),
+        Value::Array(b, items) => format!("{}[{}]", element_type(b, items).word(), items.len()),
         other => other.base_type().word().to_string(),
     };
     let mut o = Out::obj();
@@ -228,12 +233,32 @@ fn canonical(v: &Value) -> Out {
     Out::Obj(o)
 }
 
+/// The element type an array is written with: its declared base type when every element is
+/// of it; otherwise (a RIB value kept as written after RB014, e.g. one number for a `color`)
+/// the type of its elements, numbers as `float` (or `int` when all are), so that the reader
+/// takes what is written.
+fn element_type(declared: &BaseType, items: &[Value]) -> BaseType {
+    if items.iter().all(|v| v.base_type() == *declared) {
+        return declared.clone();
+    }
+    if items.iter().all(|v| matches!(v, Value::Int(_))) {
+        BaseType::Int
+    } else if items
+        .iter()
+        .all(|v| matches!(v, Value::Int(_) | Value::Float(_)))
+    {
+        BaseType::Float
+    } else if items.iter().all(|v| matches!(v, Value::Str(_))) {
+        BaseType::String
+    } else {
+        declared.clone()
+    }
+}
+
 /// The shortest JSON text that reads back to `x`: the shorter of the plain decimal
 /// (`0.0000001`) and the exponent form (`1e-7`), plain on ties; `-0.0` keeps its sign.
 fn num(x: f32) -> Out {
-    if !x.is_finite() {
-        return Out::Raw("null".into());
-    }
+    let x = saturate_f32(x);
     if x == 0.0 && x.is_sign_negative() {
         return Out::Raw("-0.0".into());
     }
@@ -258,7 +283,6 @@ fn json_value(v: &Value) -> Out {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::types::BaseType;
 
     fn text(o: Out) -> String {
         let mut s = String::new();
@@ -279,7 +303,11 @@ mod tests {
             ))),
             "[\n  [1, 0, 0.5]\n]"
         );
-        assert_eq!(text(json_value(&Value::Float(f32::NAN))), "null");
+        assert_eq!(text(json_value(&Value::Float(f32::NAN))), "0");
+        assert_eq!(
+            text(json_value(&Value::Float(f32::NEG_INFINITY))),
+            "-3.4028235e38"
+        );
         assert_eq!(text(json_value(&Value::Str("a\"b".into()))), "\"a\\\"b\"");
         let t = text(canonical(&Value::Array(BaseType::Int, vec![Value::Int(0)])));
         assert!(t.contains("\"int[1]\""));

@@ -39,7 +39,7 @@
 
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
 use crate::network::{Param, RequestKind, SourceParam};
-use crate::types::{ArraySpec, BaseType, Type, Value, format_f32};
+use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
 use std::collections::HashMap;
 use std::io::{self, Write};
 use std::ops::Range;
@@ -521,14 +521,20 @@ pub fn format_value(v: &Value) -> String {
     format!("[{}]", parts.join(" "))
 }
 
+/// One float as RIB text. The reader takes finite numbers only, so a non-finite float (only
+/// possible in a network built in code) is written saturated ([`saturate_f32`]).
+fn rib_f32(x: f32) -> String {
+    format_f32(saturate_f32(x))
+}
+
 fn push_elements(v: &Value, parts: &mut Vec<String>) {
     match v {
         Value::Int(i) => parts.push(i.to_string()),
-        Value::Float(x) => parts.push(format_f32(*x)),
+        Value::Float(x) => parts.push(rib_f32(*x)),
         Value::Str(s) | Value::Token(s) | Value::Asset(s) => parts.push(quote(s)),
-        Value::Triple(_, xs) => parts.extend(xs.iter().map(|x| format_f32(*x))),
-        Value::HPoint(xs) => parts.extend(xs.iter().map(|x| format_f32(*x))),
-        Value::Matrix(xs) => parts.extend(xs.iter().map(|x| format_f32(*x))),
+        Value::Triple(_, xs) => parts.extend(xs.iter().map(|x| rib_f32(*x))),
+        Value::HPoint(xs) => parts.extend(xs.iter().map(|x| rib_f32(*x))),
+        Value::Matrix(xs) => parts.extend(xs.iter().map(|x| rib_f32(*x))),
         Value::Bool(b) => parts.push(if *b { "1".into() } else { "0".into() }),
         Value::Array(_, items) => {
             for i in items {

@@ -4,8 +4,9 @@
 //! Exit status: 0 success (warnings on stderr), 1 input errors (or warnings under
 //! `--deny-warnings`), 2 usage errors.
 
-use crate::diag::{Diagnostics, Severity};
+use crate::diag::{DEFAULT_MAX_PER_CODE, Diagnostics, MAX_HUMAN_LINE, Severity, Shown, bound_line};
 use clap::{Parser, Subcommand, ValueEnum};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -56,6 +57,11 @@ pub struct CommonOptions {
     /// Also show `note` diagnostics.
     #[arg(long, short, global = true)]
     pub verbose: bool,
+    /// Show at most N diagnostics of each code, then one line counting the rest; 0 shows
+    /// all. Default: 20 in human output, no limit in JSON output. Human output shows
+    /// identical diagnostics (same code, place and message) once.
+    #[arg(long, value_name = "N", global = true)]
+    pub max_diagnostics: Option<usize>,
 }
 
 /// Definition priority when a shader id has both an `.oso` and an `.args` definition.
@@ -129,19 +135,53 @@ pub fn run(cli: Cli) -> ExitCode {
 
 /// Print diagnostics to stderr according to the common options and return the exit status
 /// they imply: 1 if any error (or any warning under `--deny-warnings`), else 0.
+///
+/// Volume control ([`Diagnostics::volume_limited`]): in human output identical diagnostics
+/// are printed once, at most `--max-diagnostics` of one code (default
+/// [`DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
+/// bounded ([`MAX_HUMAN_LINE`]). JSON output keeps every diagnostic, whole, unless
+/// `--max-diagnostics` is given; its count line is an object `{"code": CODE, "suppressed": N}`.
+/// The exit status counts every diagnostic, shown or not.
+/// Failures to write to stderr are ignored (there is nowhere left to report them).
 pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
-    for d in diags {
-        if d.severity == Severity::Note && !common.verbose {
-            continue;
-        }
-        match common.diag_format {
-            DiagFormat::Human => eprintln!("{}", d.render_human()),
-            DiagFormat::Json => eprintln!("{}", d.render_json()),
-        }
-    }
+    let human = common.diag_format == DiagFormat::Human;
+    let limit = match common.max_diagnostics {
+        Some(n) => n,
+        None if human => DEFAULT_MAX_PER_CODE,
+        None => 0,
+    };
+    let shown = diags.volume_limited(limit, human, |d| {
+        d.severity != Severity::Note || common.verbose
+    });
+    let mut err = std::io::BufWriter::new(std::io::stderr().lock());
+    let _ = print_shown(&mut err, &shown, common.diag_format).and_then(|_| err.flush());
     if diags.has_errors() || (common.deny_warnings && diags.has_warnings()) {
         ExitCode::from(1)
     } else {
         ExitCode::SUCCESS
     }
+}
+
+fn print_shown(out: &mut dyn Write, shown: &Shown<'_>, format: DiagFormat) -> std::io::Result<()> {
+    for d in &shown.items {
+        match format {
+            DiagFormat::Human => {
+                for line in d.render_human().lines() {
+                    writeln!(out, "{}", bound_line(line, MAX_HUMAN_LINE))?;
+                }
+            }
+            DiagFormat::Json => writeln!(out, "{}", d.render_json())?,
+        }
+    }
+    for (code, n) in &shown.suppressed {
+        match format {
+            DiagFormat::Human => writeln!(
+                out,
+                "note: {n} more {code} diagnostic{} not shown (--max-diagnostics 0 shows all)",
+                if *n == 1 { "" } else { "s" }
+            )?,
+            DiagFormat::Json => writeln!(out, "{{\"code\":\"{code}\",\"suppressed\":{n}}}")?,
+        }
+    }
+    Ok(())
 }

@@ -10,6 +10,12 @@
 //! with `--pfm`) in the current directory, `preview.png` for standard input. A path ending
 //! in `.pfm` selects PFM. The file is written atomically (temporary file, then rename).
 //!
+//! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
+//! rows at a time and each row is encoded into the output as it is finished
+//! ([`crate::interp::preview::ContactSheet`]). `--size` is checked by the library
+//! ([`PreviewOptions::validate`], at most [`crate::interp::preview::MAX_PREVIEW_SIZE`]); a
+//! size outside it is a usage error.
+//!
 //! `--input NAME=VALUE` sets an external input slot (its name as `compile --emit ir` lists
 //! it, `node.output`); VALUE is one number or three separated by commas or spaces.
 //! `--aov lobe:NAME` renders one lobe's contribution; NAME is the lobe's label (`diffuse`,
@@ -18,10 +24,11 @@
 //! Exit status: 0, 1 on input errors (positioned diagnostics), 2 on usage errors.
 
 use super::CommonOptions;
-use super::input::{Prepared as Loaded, prepare, report_error, write_output};
+use super::input::{Prepared as Loaded, prepare, report_error, stream_output};
+use crate::back::png::{ImageFormat, write_rows};
 use crate::diag::{Diagnostics, Error};
 use crate::interp::Material;
-use crate::interp::preview::{self, Image, PreviewOptions};
+use crate::interp::preview::{Ball, ContactSheet, PreviewOptions};
 use crate::ir::MaterialIr;
 use crate::lower::network::{lower_terminal, report_placeholders, terminals};
 use crate::resolve::resolve;
@@ -59,9 +66,9 @@ pub struct RenderArgs {
     /// Output file (`-`: standard output). Default: `<input stem>.png` (or `.pfm`).
     #[arg(short, long, value_name = "PATH")]
     pub output: Option<PathBuf>,
-    /// Image side in pixels.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=8192))]
-    pub size: u32,
+    /// Side of one ball in pixels (1 to 8192).
+    #[arg(long, default_value_t = 256)]
+    pub size: usize,
     /// White furnace: no light, environment 1.
     #[arg(long)]
     pub furnace: bool,
@@ -222,10 +229,16 @@ fn default_output(input: &Path, pfm: bool) -> PathBuf {
     }
 }
 
-/// Render with a progress bar on a terminal once the render has taken more than a moment.
-fn render_with_progress(m: &Material, opts: &PreviewOptions, show: bool) -> Image {
+/// Render `sheet` into `out` row by row in `format`, with a progress bar on a terminal once
+/// the render has taken more than a moment.
+fn write_sheet(
+    sheet: &ContactSheet<'_>,
+    format: ImageFormat,
+    out: &mut dyn std::io::Write,
+    show: bool,
+) -> std::io::Result<()> {
     let bar = indicatif::ProgressBar::hidden();
-    bar.set_length(opts.size as u64);
+    bar.set_length(sheet.height() as u64);
     let start = Instant::now();
     let shown = AtomicBool::new(false);
     let progress = |rows: usize| {
@@ -239,9 +252,11 @@ fn render_with_progress(m: &Material, opts: &PreviewOptions, show: bool) -> Imag
             bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
         }
     };
-    let img = preview::render_ball(m, opts, &progress);
+    let result = write_rows(format, out, sheet.width(), sheet.height(), |sink| {
+        sheet.render_rows(format.order(), &progress, |row| sink.write_row(row))
+    });
     bar.finish_and_clear();
-    img
+    result
 }
 
 /// Run `vstructc render`.
@@ -286,13 +301,12 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         }
     }
     let base = PreviewOptions {
-        size: args.size as usize,
+        size: args.size,
         batched: args.batched,
         ..PreviewOptions::default()
     };
     let base = if args.furnace { base.furnace() } else { base };
-    let show = std::io::stderr().is_terminal();
-    let mut images = Vec::with_capacity(materials.len());
+    let mut balls = Vec::with_capacity(materials.len());
     for c in &materials {
         let inputs = match packed_inputs(&c.material, &args.source.inputs) {
             Ok(i) => i,
@@ -300,17 +314,19 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         };
         // A material without the AOV's lobe renders its sphere black (usize::MAX matches
         // no leaf).
-        let opts = PreviewOptions {
+        let options = PreviewOptions {
             inputs,
             aov_leaf: aov.map(|n| find_leaf(&c.material, n).unwrap_or(usize::MAX)),
             ..base.clone()
         };
-        images.push(render_with_progress(&c.material, &opts, show));
+        balls.push(Ball {
+            material: &c.material,
+            options,
+        });
     }
-    let img = if images.len() == 1 {
-        images.swap_remove(0)
-    } else {
-        preview::contact_sheet(&images, base.env)
+    let sheet = match ContactSheet::new(balls, base.env) {
+        Ok(s) => s,
+        Err(e) => return usage(e.to_string()),
     };
     let out = args
         .output
@@ -320,15 +336,13 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         || out
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("pfm"));
-    let bytes = if pfm {
-        crate::back::png::encode_pfm(&img)
+    let format = if pfm {
+        ImageFormat::Pfm
     } else {
-        match crate::back::png::encode_png(&img) {
-            Ok(b) => b,
-            Err(e) => return report_error(&e, common),
-        }
+        ImageFormat::Png
     };
-    if let Err(e) = write_output(Some(&out), &bytes) {
+    let show = std::io::stderr().is_terminal();
+    if let Err(e) = stream_output(Some(&out), |w| write_sheet(&sheet, format, w, show)) {
         return report_error(&e, common);
     }
     ExitCode::SUCCESS

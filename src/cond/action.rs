@@ -4,7 +4,7 @@
 
 use super::ast::{Literal, LiteralKind};
 use super::ext::{Extension, Extensions};
-use crate::types::{ArraySpec, BaseType, Type, Value};
+use crate::types::{ArraySpec, BaseType, Type, Value, saturate_f32};
 use std::fmt;
 
 /// A value `set` writes, with the VS023 flag.
@@ -12,7 +12,8 @@ use std::fmt;
 pub struct SetValue {
     /// The value to author on D.M.
     pub value: Value,
-    /// True if the number was outside the `i32` range and was saturated (VS023).
+    /// True if the number was outside the range of the destination type (`i32`, or the
+    /// finite `f32` range) and was saturated (VS023).
     pub saturated: bool,
 }
 
@@ -77,11 +78,14 @@ pub fn truncate_to_i32(x: f64) -> (i32, bool) {
 /// | literal | destination | written |
 /// |---|---|---|
 /// | NUMBER | `int` | truncation toward zero; saturated outside `i32` (flag for VS023) |
-/// | NUMBER | `float` | the f64 rounded to the nearest f32 (beyond the f32 range: ±infinity) |
-/// | NUMBER | `color`/`point`/`vector`/`normal` with `set-tuples` | the f32 in all three components |
+/// | NUMBER | `float` | the f64 rounded to the nearest f32; beyond the finite f32 range: the largest finite f32 of its sign (flag for VS023) |
+/// | NUMBER | `color`/`point`/`vector`/`normal` with `set-tuples` | that f32 in all three components |
 /// | NUMBER | anything else (arrays, string, matrix, …) | rejected (VS013) |
 /// | STRING | `string` | the verbatim content |
 /// | STRING | anything else | rejected (VS013) |
+///
+/// A float is never written as an infinity: the RIB and JSON readers reject non-finite
+/// numbers, so a resolved network that held one could not be read back.
 pub fn set_value(
     literal: &Literal,
     dest: Option<&Type>,
@@ -103,9 +107,11 @@ pub fn set_value(
                     saturated,
                 })
             }
-            (BaseType::Float, ArraySpec::None) => plain(Value::Float(*value as f32)),
+            (BaseType::Float, ArraySpec::None) => Ok(saturated_float(*value, Value::Float)),
             (b, ArraySpec::None) if b.is_triple() && ext.contains(Extension::SetTuples) => {
-                plain(Value::Triple(b.clone(), [*value as f32; 3]))
+                Ok(saturated_float(*value, |x| {
+                    Value::Triple(b.clone(), [x; 3])
+                }))
             }
             _ => Err(SetRejection::Number(ty.clone())),
         },
@@ -113,6 +119,16 @@ pub fn set_value(
             (BaseType::String, ArraySpec::None) => plain(Value::Str(value.clone())),
             _ => Err(SetRejection::String(ty.clone())),
         },
+    }
+}
+
+/// The f64 `x` rounded to f32 and saturated to the finite range ([`saturate_f32`]), as the
+/// value `make` builds from it.
+fn saturated_float(x: f64, make: impl FnOnce(f32) -> Value) -> SetValue {
+    let rounded = x as f32;
+    SetValue {
+        value: make(saturate_f32(rounded)),
+        saturated: !rounded.is_finite(),
     }
 }
 
@@ -218,6 +234,10 @@ pub enum CopyOutcome {
         shape_mismatch: bool,
         /// `copy-convert` converted the value.
         converted: bool,
+        /// The source held a non-finite float (an infinity or NaN, possible only in a
+        /// definition default or a network built in code): it was replaced by
+        /// [`saturate_f32`] (VS023).
+        saturated: bool,
     },
     /// U.p is unauthored and has no default: nothing is written (no diagnostic).
     NoValue,
@@ -229,7 +249,10 @@ pub enum CopyOutcome {
 ///
 /// vstructc reports the shape warning whenever the declared array shapes differ (the
 /// specification names the scalar/array case; two arrays of different fixed sizes, or fixed
-/// vs dynamic, are treated alike).
+/// vs dynamic, are treated alike). A non-finite float in the value (an infinity or NaN, which
+/// the readers never produce but a definition default or a network built in code can hold) is
+/// written saturated ([`saturate_f32`]) and flagged for VS023, so that every written value
+/// reads back.
 pub fn copy_value(
     value: Option<&Value>,
     source: Option<&Type>,
@@ -243,7 +266,7 @@ pub fn copy_value(
         return Ok(CopyOutcome::NoValue);
     };
     let shape_mismatch = source.array != dest.array;
-    let (value, converted) = match plan {
+    let (mut value, converted) = match plan {
         CopyPlan::Same => (value.clone(), false),
         CopyPlan::IntToFloat | CopyPlan::FloatToInt => (convert(value, &dest.base), true),
         CopyPlan::Broadcast => match value.as_f64() {
@@ -251,10 +274,12 @@ pub fn copy_value(
             None => (value.clone(), false),
         },
     };
+    let saturated = value.saturate_floats();
     Ok(CopyOutcome::Write {
         value,
         shape_mismatch,
         converted,
+        saturated,
     })
 }
 
@@ -285,6 +310,67 @@ mod tests {
         assert_eq!(truncate_to_i32(-2147483648.5), (i32::MIN, false));
         assert_eq!(truncate_to_i32(-2147483649.0), (i32::MIN, true));
         assert_eq!(truncate_to_i32(f64::INFINITY), (i32::MAX, true));
+    }
+
+    fn number(text: &str) -> Literal {
+        Literal::number(text, 0..text.len()).expect("a number")
+    }
+
+    #[test]
+    fn set_saturates_floats_beyond_the_f32_range() {
+        let float = Type::scalar(BaseType::Float);
+        let none = Extensions::none();
+        let big = set_value(&number("1e39"), Some(&float), &none).unwrap();
+        assert_eq!(big.value, Value::Float(f32::MAX));
+        assert!(big.saturated);
+        let small = set_value(&number("-1e39"), Some(&float), &none).unwrap();
+        assert_eq!(small.value, Value::Float(f32::MIN));
+        assert!(small.saturated);
+        let inf = set_value(&number("1e400"), Some(&float), &none).unwrap();
+        assert_eq!(inf.value, Value::Float(f32::MAX));
+        let max = set_value(&number("3.4028235e38"), Some(&float), &none).unwrap();
+        assert_eq!((max.value, max.saturated), (Value::Float(f32::MAX), false));
+        let tiny = set_value(&number("1e-60"), Some(&float), &none).unwrap();
+        assert_eq!((tiny.value, tiny.saturated), (Value::Float(0.0), false));
+        let color = Type::scalar(BaseType::Color);
+        let tuples = Extensions::none().with(Extension::SetTuples);
+        let c = set_value(&number("-1e39"), Some(&color), &tuples).unwrap();
+        assert_eq!(c.value, Value::Triple(BaseType::Color, [f32::MIN; 3]));
+        assert!(c.saturated);
+    }
+
+    #[test]
+    fn copy_saturates_non_finite_sources() {
+        let color = Type::scalar(BaseType::Color);
+        let v = Value::Triple(BaseType::Color, [f32::INFINITY, f32::NAN, 0.5]);
+        let Ok(CopyOutcome::Write {
+            value, saturated, ..
+        }) = copy_value(Some(&v), Some(&color), Some(&color), &Extensions::none())
+        else {
+            panic!("copy refused")
+        };
+        assert_eq!(value, Value::Triple(BaseType::Color, [f32::MAX, 0.0, 0.5]));
+        assert!(saturated);
+        let float = Type::scalar(BaseType::Float);
+        let arr = Value::Array(BaseType::Float, vec![Value::Float(f32::NEG_INFINITY)]);
+        let Ok(CopyOutcome::Write {
+            value, saturated, ..
+        }) = copy_value(Some(&arr), Some(&float), Some(&float), &Extensions::none())
+        else {
+            panic!("copy refused")
+        };
+        assert_eq!(
+            value,
+            Value::Array(BaseType::Float, vec![Value::Float(f32::MIN)])
+        );
+        assert!(saturated);
+        let fine = Value::Float(1.0);
+        let Ok(CopyOutcome::Write { saturated, .. }) =
+            copy_value(Some(&fine), Some(&float), Some(&float), &Extensions::none())
+        else {
+            panic!("copy refused")
+        };
+        assert!(!saturated);
     }
 
     #[test]

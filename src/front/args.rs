@@ -21,6 +21,9 @@
 //!   property's metadata under `hintdict:NAME` / `hintlist:NAME`, after the attributes.
 //! * Warnings gathered before a file is rejected are dropped: only the rejecting error is
 //!   returned.
+//! * A float default beyond the finite `f32` range (`1e39`, which `atof` makes infinite) is
+//!   saturated to the largest finite `f32` of its sign with AR012 (warning): no writer could
+//!   write an infinity back where a `copy` puts it.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
 use crate::registry::{
@@ -1452,6 +1455,21 @@ fn float_prefix_len(s: &str) -> usize {
 
 /// One float token like C `atof` with the reporting rules of §2.5 step 3.
 fn parse_float_token(tok: &str, issues: &mut Issues) -> f32 {
+    let x = parse_float_prefix(tok, issues);
+    if !x.is_finite() {
+        // `atof` gives ±HUGE_VAL; no writer could write that value back, so it saturates.
+        let used = crate::types::saturate_f32(x);
+        issues.add(
+            Severity::Warning,
+            format!("`{tok}` is outside the f32 range; {used:e} is used"),
+        );
+        return used;
+    }
+    x
+}
+
+/// One float token like C `atof`, before the range check of [`parse_float_token`].
+fn parse_float_prefix(tok: &str, issues: &mut Issues) -> f32 {
     let n = float_prefix_len(tok);
     let value = || tok[..n].parse::<f32>().unwrap_or(0.0);
     if n == tok.len() {

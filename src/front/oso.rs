@@ -20,7 +20,8 @@
 //!   scalar TYPE has several values is reported like an unknown TYPE (OS011) and ignored. The
 //!   number of values of an array TYPE is not checked against its length.
 //! * A default whose literals have the wrong kind (a string for a `float`, a float for an
-//!   `int`) or do not fit an `i32` is reported like a count mismatch (OS010): no default.
+//!   `int`) or do not fit an `i32` or a finite `f32` (`1e39`: no writer could write an infinity
+//!   back) is reported like a count mismatch (OS010): no default.
 //! * Array lengths must be positive; `T[]` and `T[-1]` are dynamic; `T[0]` is malformed (OS002).
 //! * The shader type must be one of `shader surface displacement volume light` (OS001 if not).
 //! * A repeated `%meta` key keeps every entry in the metadata; the typed fields and the vstruct
@@ -1057,8 +1058,10 @@ fn scalar_literal(base: &BaseType, tok: &TokenKind) -> Result<Value, String> {
         (BaseType::String, TokenKind::Str(s)) => Ok(Value::Str(s.clone())),
         (b, TokenKind::Number(text, _)) if b.is_numeric() && *b != BaseType::Int => text
             .parse::<f32>()
+            .ok()
+            .filter(|x| x.is_finite())
             .map(Value::Float)
-            .map_err(|_| format!("`{text}` is not a float")),
+            .ok_or_else(|| format!("`{text}` is not a finite float")),
         (_, TokenKind::Number(text, _)) => Err(format!("value `{text}` has the wrong kind")),
         (_, TokenKind::Str(s)) => Err(format!("value {s:?} has the wrong kind")),
         _ => Err(String::from("unexpected default token")),

@@ -22,6 +22,13 @@
 //! needed here); other materials, and AOVs, take the prepare that builds lobe records
 //! ([`Material::prepare_unpacked_into`]; [`PreviewOptions::general_prepare`] forces its
 //! general form).
+//!
+//! Memory is bounded whatever the number of materials: [`ContactSheet`] renders a grid of
+//! balls a band of pixel rows at a time (at most [`BAND_PIXELS`] pixels, never a whole ball
+//! or sheet) and hands each finished row to the caller, who streams it to a file
+//! ([`crate::back::png::write_rows`]). Sizes are checked here, not only by the command line:
+//! a ball's side is at most [`MAX_PREVIEW_SIZE`] and a sheet's sides at most
+//! [`MAX_SHEET_SIDE`] ([`PreviewError`] names the limit and the value).
 
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
@@ -32,6 +39,51 @@ use std::f32::consts::{PI, TAU};
 
 /// Lanes of the batched preview path.
 pub const PREVIEW_LANES: usize = 16;
+
+/// The largest side, in pixels, of one ball ([`PreviewOptions::size`]).
+pub const MAX_PREVIEW_SIZE: usize = 8192;
+
+/// The largest side, in pixels, of a contact sheet: the PNG format's limit (2³¹ − 1).
+pub const MAX_SHEET_SIDE: usize = (1 << 31) - 1;
+
+/// The most pixels a [`ContactSheet`] holds at once (one band of rows, 12 MB of RGB).
+pub const BAND_PIXELS: usize = 1 << 20;
+
+/// Preview settings outside what can be rendered.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PreviewError {
+    /// [`PreviewOptions::size`] is 0 or above [`MAX_PREVIEW_SIZE`].
+    #[error("preview size {size} is outside the limit 1..={max} pixels")]
+    Size {
+        /// The size asked for.
+        size: usize,
+        /// [`MAX_PREVIEW_SIZE`].
+        max: usize,
+    },
+    /// A contact sheet would be wider or taller than [`MAX_SHEET_SIDE`].
+    #[error(
+        "a contact sheet of {count} balls of {size} pixels would be {width}×{height} pixels; \
+         a side is limited to {max}"
+    )]
+    SheetSide {
+        /// Number of balls.
+        count: usize,
+        /// Side of one ball.
+        size: usize,
+        /// Sheet width.
+        width: usize,
+        /// Sheet height.
+        height: usize,
+        /// [`MAX_SHEET_SIDE`].
+        max: usize,
+    },
+    /// A contact sheet needs at least one ball, all of one size.
+    #[error("a contact sheet needs at least one ball, all of one size (sizes: {sizes:?})")]
+    SheetBalls {
+        /// The distinct sizes of the balls given (empty: no ball).
+        sizes: Vec<usize>,
+    },
+}
 
 /// A linear RGB image, rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,6 +156,26 @@ impl Default for PreviewOptions {
 }
 
 impl PreviewOptions {
+    /// Check what a render needs of these options: a side of 1 to [`MAX_PREVIEW_SIZE`]
+    /// pixels.
+    ///
+    /// ```
+    /// use vstructc::interp::preview::{PreviewError, PreviewOptions};
+    /// let big = PreviewOptions { size: 100_000, ..PreviewOptions::default() };
+    /// assert_eq!(big.validate(), Err(PreviewError::Size { size: 100_000, max: 8192 }));
+    /// assert!(PreviewOptions::default().validate().is_ok());
+    /// ```
+    pub fn validate(&self) -> Result<(), PreviewError> {
+        if (1..=MAX_PREVIEW_SIZE).contains(&self.size) {
+            Ok(())
+        } else {
+            Err(PreviewError::Size {
+                size: self.size,
+                max: MAX_PREVIEW_SIZE,
+            })
+        }
+    }
+
     /// White-furnace settings: no light, `env = 1`.
     pub fn furnace(mut self) -> Self {
         self.light = Vec3::ZERO;
@@ -195,58 +267,72 @@ fn pixel_xy(i: usize, j: usize, size: usize) -> (f32, f32) {
 }
 
 /// Render the material ball. `progress` is called with the number of rows finished so far
-/// (from worker threads, in any order).
+/// (from worker threads, in any order). Fails if the options do not pass
+/// [`PreviewOptions::validate`]. The whole image is in memory: for many balls or large sizes
+/// use [`ContactSheet`], which streams rows.
 pub fn render_ball(
     material: &Material,
     opts: &PreviewOptions,
     progress: &(dyn Fn(usize) + Sync),
-) -> Image {
-    let size = opts.size.max(1);
+) -> Result<Image, PreviewError> {
+    opts.validate()?;
+    let size = opts.size;
     let mut img = Image::filled(size, size, opts.env);
     let done = std::sync::atomic::AtomicUsize::new(0);
-    // Working memory per worker, not per row: a 16-lane batch is ~120 KB, and building one
-    // per row cost a quarter of a batched preview.
-    let one_lane = !opts.batched
-        && !opts.general_prepare
-        && opts.aov_leaf.is_none()
-        && material.prepares_lanes();
-    let init = || RowState {
-        scratch: Scratch::default(),
-        prep: Prepared::new(),
-        batch: opts.batched.then(PreparedBatch::<PREVIEW_LANES>::new_boxed),
-        lane: one_lane.then(PreparedBatch::<1>::new_boxed),
-    };
     let row = |st: &mut RowState, (j, out): (usize, &mut [Rgb])| {
-        match (&mut st.batch, &mut st.lane) {
-            (Some(batch), _) => shade_row_lanes(material, opts, j, out, &mut st.scratch, batch),
-            (None, Some(lane)) => shade_row_lanes(material, opts, j, out, &mut st.scratch, lane),
-            (None, None) => shade_row_with(material, opts, j, out, &mut st.scratch, &mut st.prep),
-        }
+        st.shade(material, opts, j, out);
         progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
     };
     if opts.parallel {
         img.pixels
             .par_chunks_mut(size)
             .enumerate()
-            .for_each_init(init, row);
+            .for_each_init(RowState::default, row);
     } else {
-        let mut st = init();
+        let mut st = RowState::default();
         img.pixels
             .chunks_mut(size)
             .enumerate()
             .for_each(|r| row(&mut st, r));
     }
-    img
+    Ok(img)
 }
 
-/// Per-worker working memory of [`render_ball`].
+/// Per-worker working memory of the row shaders: working memory per worker, not per row (a
+/// 16-lane batch is ~120 KB, and building one per row cost a quarter of a batched preview).
+/// The batches are made on first use, so one state serves balls of different materials.
+#[derive(Default)]
 struct RowState {
     scratch: Scratch,
-    prep: Prepared,
+    prep: Option<Prepared>,
     /// The batched path's lanes.
     batch: Option<Box<PreparedBatch<PREVIEW_LANES>>>,
     /// The scalar path's one lane, for a material the uniform-material prepare covers.
     lane: Option<Box<PreparedBatch<1>>>,
+}
+
+impl RowState {
+    /// Shade row `j` of the ball of `material` into `out` (pixels off the sphere are left
+    /// as they are), with the path the options and the material call for.
+    fn shade(&mut self, material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+        let one_lane = !opts.batched
+            && !opts.general_prepare
+            && opts.aov_leaf.is_none()
+            && material.prepares_lanes();
+        let scratch = &mut self.scratch;
+        if opts.batched {
+            let batch = self
+                .batch
+                .get_or_insert_with(PreparedBatch::<PREVIEW_LANES>::new_boxed);
+            shade_row_lanes(material, opts, j, out, scratch, batch);
+        } else if one_lane {
+            let lane = self.lane.get_or_insert_with(PreparedBatch::<1>::new_boxed);
+            shade_row_lanes(material, opts, j, out, scratch, lane);
+        } else {
+            let prep = self.prep.get_or_insert_with(Prepared::new);
+            shade_row_with(material, opts, j, out, scratch, prep);
+        }
+    }
 }
 
 /// A sphere pixel's radiance (§1.6): the light through `direct` (`eval(L_light).f_cos`), the
@@ -379,25 +465,159 @@ fn shade_row_lanes<const W: usize>(
     }
 }
 
-/// Arrange images of equal size in a grid (`⌈√n⌉` columns), filling empty cells with
-/// `background`.
-pub fn contact_sheet(images: &[Image], background: Rgb) -> Image {
-    let Some(first) = images.first() else {
-        return Image::filled(1, 1, background);
-    };
-    let (w, h) = (first.width, first.height);
-    let cols = (images.len() as f64).sqrt().ceil().max(1.0) as usize;
-    let rows = images.len().div_ceil(cols);
-    let mut sheet = Image::filled(cols * w, rows * h, background);
-    for (k, img) in images.iter().enumerate() {
-        let (cx, cy) = ((k % cols) * w, (k / cols) * h);
-        for y in 0..img.height.min(h) {
-            for x in 0..img.width.min(w) {
-                sheet.pixels[(cy + y) * sheet.width + cx + x] = img.at(x, y);
+/// One ball of a [`ContactSheet`]: a material and how to show it.
+#[derive(Debug, Clone)]
+pub struct Ball<'m> {
+    /// The material.
+    pub material: &'m Material,
+    /// Its preview options (every ball of a sheet has the same [`PreviewOptions::size`]).
+    pub options: PreviewOptions,
+}
+
+/// The order in which [`ContactSheet::render_rows`] hands out pixel rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RowOrder {
+    /// Top row first (PNG).
+    TopDown,
+    /// Bottom row first (PFM).
+    BottomUp,
+}
+
+/// Balls of equal size in a grid of `⌈√n⌉` columns, row-major in the given order, empty
+/// cells in a background colour; rendered a band of pixel rows at a time, so its memory is
+/// at most [`BAND_PIXELS`] pixels (and at least one pixel row) whatever the number of balls.
+///
+/// ```
+/// use vstructc::interp::preview::{ContactSheet, MAX_SHEET_SIDE, PreviewError};
+/// use glam::Vec3;
+/// // Sides are checked before anything is rendered.
+/// let none = ContactSheet::new(Vec::new(), Vec3::ZERO);
+/// assert!(matches!(none, Err(PreviewError::SheetBalls { .. })));
+/// # let _ = MAX_SHEET_SIDE;
+/// ```
+#[derive(Debug, Clone)]
+pub struct ContactSheet<'m> {
+    balls: Vec<Ball<'m>>,
+    background: Rgb,
+    size: usize,
+    columns: usize,
+    rows: usize,
+}
+
+impl<'m> ContactSheet<'m> {
+    /// A sheet of `balls`, empty cells filled with `background`. Fails if there is no ball,
+    /// if the balls' sizes differ or fail [`PreviewOptions::validate`], or if a side of the
+    /// sheet would exceed [`MAX_SHEET_SIDE`].
+    pub fn new(balls: Vec<Ball<'m>>, background: Rgb) -> Result<Self, PreviewError> {
+        let mut sizes: Vec<usize> = balls.iter().map(|b| b.options.size).collect();
+        sizes.sort_unstable();
+        sizes.dedup();
+        let [size] = sizes[..] else {
+            return Err(PreviewError::SheetBalls { sizes });
+        };
+        for b in &balls {
+            b.options.validate()?;
+        }
+        let count = balls.len();
+        let columns = (count as f64).sqrt().ceil().max(1.0) as usize;
+        let rows = count.div_ceil(columns);
+        let (width, height) = (columns.saturating_mul(size), rows.saturating_mul(size));
+        if width > MAX_SHEET_SIDE || height > MAX_SHEET_SIDE {
+            return Err(PreviewError::SheetSide {
+                count,
+                size,
+                width,
+                height,
+                max: MAX_SHEET_SIDE,
+            });
+        }
+        Ok(ContactSheet {
+            balls,
+            background,
+            size,
+            columns,
+            rows,
+        })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.columns * self.size
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.rows * self.size
+    }
+
+    /// Number of columns of balls.
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// Render the sheet and hand each pixel row (`width()` pixels) to `emit`, in `order`.
+    /// `progress` is called with the number of rows handed out so far. Stops at `emit`'s
+    /// first error. Bands of rows are shaded in parallel when the first ball's options ask
+    /// for it ([`PreviewOptions::parallel`]).
+    pub fn render_rows<E>(
+        &self,
+        order: RowOrder,
+        progress: &dyn Fn(usize),
+        mut emit: impl FnMut(&[Rgb]) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let width = self.width();
+        let band_rows = (BAND_PIXELS / width).clamp(1, self.size);
+        let mut band = Vec::with_capacity(band_rows * width);
+        let mut done = 0;
+        let mut ball_rows: Vec<usize> = (0..self.rows).collect();
+        if order == RowOrder::BottomUp {
+            ball_rows.reverse();
+        }
+        for r in ball_rows {
+            let mut starts: Vec<usize> = (0..self.size).step_by(band_rows).collect();
+            if order == RowOrder::BottomUp {
+                starts.reverse();
+            }
+            for j0 in starts {
+                let j1 = (j0 + band_rows).min(self.size);
+                band.clear();
+                band.resize((j1 - j0) * width, self.background);
+                self.shade_band(r, j0, &mut band);
+                let mut rows: Vec<&[Rgb]> = band.chunks(width).collect();
+                if order == RowOrder::BottomUp {
+                    rows.reverse();
+                }
+                for row in rows {
+                    emit(row)?;
+                    done += 1;
+                    progress(done);
+                }
             }
         }
+        Ok(())
     }
-    sheet
+
+    /// Shade rows `j0..` of ball row `r` into `band` (whole sheet rows, filled with the
+    /// background): one task per ball and pixel row.
+    fn shade_band(&self, r: usize, j0: usize, band: &mut [Rgb]) {
+        let cell = |st: &mut RowState, (idx, out): (usize, &mut [Rgb])| {
+            let (j, c) = (j0 + idx / self.columns, idx % self.columns);
+            if let Some(ball) = self.balls.get(r * self.columns + c) {
+                out.fill(ball.options.env);
+                st.shade(ball.material, &ball.options, j, out);
+            }
+        };
+        if self.balls[0].options.parallel {
+            band.par_chunks_mut(self.size)
+                .enumerate()
+                .for_each_init(RowState::default, cell);
+        } else {
+            let mut st = RowState::default();
+            band.chunks_mut(self.size)
+                .enumerate()
+                .for_each(|x| cell(&mut st, x));
+        }
+    }
 }
 
 #[cfg(test)]

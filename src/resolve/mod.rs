@@ -11,7 +11,7 @@ use crate::cond::{
     self, Action, ActionKind, Choice, ComparisonReport, CopyOutcome, Extension, Extensions,
     Statement,
 };
-use crate::diag::{Diagnostic, Diagnostics, Location};
+use crate::diag::{Diagnostic, Diagnostics, LIST_ENDS, Location, join_bounded};
 use crate::network::{Link, Network, NodeId, Slot};
 use crate::registry::tables::{CondEntry, InputMember, OutputMember, VstructTables};
 use crate::registry::{IndexedDefinition, Registry};
@@ -698,7 +698,7 @@ impl Resolver<'_> {
                 match cond::set_value(literal, dest, &self.options.extensions) {
                     Ok(set) => {
                         if set.saturated {
-                            self.saturated_warning(ctx, action);
+                            self.saturated_warning(ctx, action, &set.value);
                         }
                         self.write(ctx, set.value.clone(), action);
                         Outcome::Written(set.value)
@@ -735,8 +735,12 @@ impl Resolver<'_> {
             Ok(CopyOutcome::Write {
                 value,
                 shape_mismatch,
+                saturated,
                 ..
             }) => {
+                if saturated {
+                    self.saturated_warning(ctx, action, &value);
+                }
                 if shape_mismatch {
                     let msg = format!(
                         "`copy {param}` copies between an array and a non-array (or arrays of \
@@ -819,11 +823,7 @@ impl Resolver<'_> {
 
     fn direct_connection_wins(&mut self, ctx: &MemberCtx<'_>) {
         let links = self.net.connections(ctx.node, ctx.member).to_vec();
-        let from = links
-            .iter()
-            .map(|l| self.link_text(l))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let from = join_bounded(links.len(), |i| self.link_text(&links[i]));
         let d = Diagnostic::info(
             "VS019",
             format!(
@@ -908,14 +908,20 @@ impl Resolver<'_> {
         self.push(d, ctx.node, Some(ctx.member));
     }
 
-    fn saturated_warning(&mut self, ctx: &MemberCtx<'_>, action: &Action) {
-        let d = Diagnostic::warning(
-            "VS023",
-            format!(
-                "`{action}` is outside the int range; {} is saturated",
-                self.plug(ctx.node, ctx.member)
+    /// VS023: `value` was written saturated, an int to the `i32` range, a float (or float
+    /// components) to the finite `f32` range, which is all the writers and readers carry.
+    fn saturated_warning(&mut self, ctx: &MemberCtx<'_>, action: &Action, value: &Value) {
+        // The value is named by its rule, not written out: f32::MAX prints with 39 digits.
+        let plug = self.plug(ctx.node, ctx.member);
+        let message = match value {
+            Value::Int(_) => format!("`{action}` is outside the int range; {plug} is saturated"),
+            _ => format!(
+                "`{action}` gives a float outside the finite f32 range (an infinity or NaN); \
+                 {plug} is saturated to the largest finite float of its sign (±3.4028235e38), \
+                 NaN to 0"
             ),
-        );
+        };
+        let d = Diagnostic::warning("VS023", message);
         self.push(d, ctx.node, Some(ctx.member));
     }
 
@@ -928,11 +934,7 @@ impl Resolver<'_> {
     }
 
     fn report_extra_connections(&mut self, node: NodeId, head: &str, links: &[Link]) {
-        let dropped = links[1..]
-            .iter()
-            .map(|l| self.link_text(l))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let dropped = join_bounded(links.len() - 1, |i| self.link_text(&links[i + 1]));
         let d = Diagnostic::warning(
             "VS011",
             format!(
@@ -946,28 +948,32 @@ impl Resolver<'_> {
         self.push(d, node, Some(head));
     }
 
+    /// VS012. A long cycle is named by its first and last hops and their count
+    /// ([`join_bounded`]), so the message stays short whatever the cycle's length.
     fn report_cycle(&mut self, cycle: &[Frame], head: &str, source: &HeadSource) {
         // One hop per frame on the cycle: `node.head ← upstream.output`.
-        let hops: Vec<String> = cycle
-            .iter()
-            .map(|f| {
-                let input = f.heads.get(f.next).map(String::as_str).unwrap_or(head);
-                let from = self
-                    .net
-                    .connections(f.node, input)
-                    .first()
-                    .map(|l| self.link_text(l))
-                    .unwrap_or_default();
-                format!("{} ← {from}", self.plug(f.node, input))
-            })
-            .collect();
+        let hop = |f: &Frame| {
+            let input = f.heads.get(f.next).map(String::as_str).unwrap_or(head);
+            let from = self
+                .net
+                .connections(f.node, input)
+                .first()
+                .map(|l| self.link_text(l))
+                .unwrap_or_default();
+            format!("{} ← {from}", self.plug(f.node, input))
+        };
+        let hops = join_bounded(cycle.len(), |i| hop(&cycle[i]));
         let Some(last) = cycle.last() else { return };
         let d = Diagnostic::warning(
             "VS012",
             format!(
-                "cycle: {} is still being resolved and is used as it is now: {}",
+                "{}: {} is still being resolved and is used as it is now: {hops}",
+                if cycle.len() > 2 * LIST_ENDS + 1 {
+                    format!("cycle of {} nodes", cycle.len())
+                } else {
+                    "cycle".to_string()
+                },
                 self.name(source.upstream),
-                hops.join(", ")
             ),
         );
         self.push(d, last.node, Some(head));

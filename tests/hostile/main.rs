@@ -5,6 +5,9 @@
 //! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
 //! `run_file`) live here and are visible to every module.
 
+mod diagnostics;
+mod render;
+mod values;
 // FIFOs, device nodes, symlinks and file modes: Unix only.
 #[cfg(unix)]
 mod definitions;
