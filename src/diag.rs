@@ -4,9 +4,10 @@
 //! [`Diagnostics`] list that is returned to the caller (never only printed). Codes are the
 //! stable identifiers of the specification (`AR…` args, `OS…` oso, `RG…` registry, `RB…` RIB,
 //! `JS…` JSON, `VS…` vstruct, `LW…` lowering), plus `IO…` for files and streams (IO001: the
-//! system refused a read or write; IO002: a stream input above its cap) and the registry's
-//! own RG003 (symlink loop in a definitions folder), RG004 (not a regular file) and RG005
-//! (definition file too large). Conditions that stop processing are returned as
+//! system refused a read or write; IO002: the PNG encoder failed), `LM001` for a bound of
+//! [`crate::limits::Limits`] exceeded (file sizes, nodes, fan-in, parameters, expression
+//! terms and depth, preview pixels), and the registry's own RG003 (symlink loop in a
+//! definitions folder) and RG004 (not a regular file). Conditions that stop processing are returned as
 //! [`Error`], which wraps the same positioned [`Diagnostic`].
 
 use std::fmt;

@@ -3,10 +3,11 @@
 
 use super::CommonOptions;
 use crate::back::output;
-use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::diag::{Diagnostics, Error, Location};
 use crate::front::json::parse_json;
 use crate::front::rib::{RibOptions, parse_rib};
-use crate::front::source::{MAX_STREAM_INPUT, ReadError, read_stream};
+use crate::front::source::{ReadError, read_stream};
+use crate::limits::{Limit, LimitExceeded, Limits};
 use crate::network::Network;
 use crate::registry::Registry;
 use std::io::{Read, Write};
@@ -62,12 +63,14 @@ pub fn load_network(
     })
 }
 
-/// The input's bytes. Standard input, a FIFO or a device is read up to
-/// [`MAX_STREAM_INPUT`] (IO002 beyond); a regular file is read whole.
+/// The input's bytes, at most [`Limits::network_file_bytes`] of them (LM001 beyond): a
+/// regular file is refused by its size before it is read; standard input, a FIFO or a device
+/// is read until the limit is passed.
 fn read_bytes(path: &Path) -> Result<(String, Vec<u8>), Error> {
+    let max = Limits::default().network_file_bytes;
     if path.as_os_str() == "-" {
         let name = "<stdin>".to_string();
-        let bytes = stream_bytes(std::io::stdin().lock(), &name)?;
+        let bytes = stream_bytes(std::io::stdin().lock(), &name, max)?;
         return Ok((name, bytes));
     }
     let name = path.display().to_string();
@@ -83,24 +86,37 @@ fn read_bytes(path: &Path) -> Result<(String, Vec<u8>), Error> {
         )));
     }
     let bytes = if meta.is_file() {
+        if meta.len() > max {
+            return Err(too_large(meta.len(), max, &name));
+        }
         std::fs::read(path).map_err(io)?
     } else {
-        stream_bytes(std::fs::File::open(path).map_err(io)?, &name)?
+        stream_bytes(std::fs::File::open(path).map_err(io)?, &name, max)?
     };
     Ok((name, bytes))
 }
 
-/// A stream input, capped at [`MAX_STREAM_INPUT`].
-fn stream_bytes(reader: impl Read, name: &str) -> Result<Vec<u8>, Error> {
-    read_stream(reader, MAX_STREAM_INPUT).map_err(|e| match e {
+/// A stream input, read until more than `max` bytes arrive.
+fn stream_bytes(reader: impl Read, name: &str, max: u64) -> Result<Vec<u8>, Error> {
+    read_stream(reader, max).map_err(|e| match e {
         ReadError::Io(source) => Error::Io {
             path: PathBuf::from(name),
             source,
         },
-        e => Diagnostic::error("IO002", format!("input too large: {e}"))
-            .at(Location::file(name))
-            .into(),
+        // A stream's size is unknown: it had at least one byte more than the limit.
+        _ => too_large(max.saturating_add(1), max, name),
     })
+}
+
+/// LM001: a network input of `size` bytes is above `max`.
+fn too_large(size: u64, max: u64, name: &str) -> Error {
+    LimitExceeded {
+        limit: Limit::NetworkFileBytes,
+        value: size,
+        max,
+        location: Some(Location::file(name)),
+    }
+    .into()
 }
 
 fn detect_format(path: &Path, bytes: &[u8]) -> NetFormat {

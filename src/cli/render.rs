@@ -13,7 +13,7 @@
 //! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
 //! rows at a time and each row is encoded into the output as it is finished
 //! ([`crate::interp::preview::ContactSheet`]). `--size` is checked by the library
-//! ([`PreviewOptions::validate`], at most [`crate::interp::preview::MAX_PREVIEW_SIZE`]); a
+//! ([`PreviewOptions::validate`], at most [`crate::limits::Limits::preview_pixels`] pixels); a
 //! size outside it is a usage error.
 //!
 //! `--input NAME=VALUE` sets an external input slot (its name as `compile --emit ir` lists

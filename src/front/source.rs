@@ -5,20 +5,16 @@
 //!   given size. It opens without blocking, so a FIFO with that name is refused instead of
 //!   waiting forever for a writer, and it checks the opened file, not the name, so a file
 //!   swapped after a folder walk is judged as what is actually read. Definitions are read
-//!   this way ([`crate::registry::MAX_DEFINITION_BYTES`]).
+//!   this way (at most [`crate::limits::Limits::definition_file_bytes`]).
 //! * [`read_stream`] reads a stream (standard input, a FIFO, a device) up to a cap: such an
 //!   input is legitimate for a network (`gen | vstructc resolve -`), but `/dev/zero` must not
-//!   fill the memory. Networks from non-regular inputs are capped at [`MAX_STREAM_INPUT`];
-//!   a network in a regular file is read whole (its size is known and was chosen).
+//!   fill the memory. The command line caps every network input at
+//!   [`crate::limits::Limits::network_file_bytes`]: a regular file by its size before it is
+//!   read, a stream when the limit is passed.
 
 use std::fs::{File, FileType};
 use std::io::{self, Read};
 use std::path::Path;
-
-/// The most bytes read from a stream input (standard input, a FIFO, a character device):
-/// 1 GiB, which holds the largest scenes measured (BENCHMARKS.md) while `/dev/zero` or an
-/// endless pipe stops with an error instead of exhausting memory.
-pub const MAX_STREAM_INPUT: u64 = 1 << 30;
 
 /// Why bytes could not be read.
 #[derive(Debug, thiserror::Error)]

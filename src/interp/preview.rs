@@ -27,21 +27,20 @@
 //! balls a band of pixel rows at a time (at most [`BAND_PIXELS`] pixels, never a whole ball
 //! or sheet) and hands each finished row to the caller, who streams it to a file
 //! ([`crate::back::png::write_rows`]). Sizes are checked here, not only by the command line:
-//! a ball's side is at most [`MAX_PREVIEW_SIZE`] and a sheet's sides at most
-//! [`MAX_SHEET_SIDE`] ([`PreviewError`] names the limit and the value).
+//! a ball has at most [`Limits::preview_pixels`] pixels ([`PreviewOptions::limits`]) and a
+//! sheet's sides are at most [`MAX_SHEET_SIDE`] ([`PreviewError`] names the limit and the
+//! value).
 
 use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
+use crate::limits::{Limit, LimitExceeded, Limits};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::{PI, TAU};
 
 /// Lanes of the batched preview path.
 pub const PREVIEW_LANES: usize = 16;
-
-/// The largest side, in pixels, of one ball ([`PreviewOptions::size`]).
-pub const MAX_PREVIEW_SIZE: usize = 8192;
 
 /// The largest side, in pixels, of a contact sheet: the PNG format's limit (2³¹ − 1).
 pub const MAX_SHEET_SIDE: usize = (1 << 31) - 1;
@@ -52,13 +51,16 @@ pub const BAND_PIXELS: usize = 1 << 20;
 /// Preview settings outside what can be rendered.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum PreviewError {
-    /// [`PreviewOptions::size`] is 0 or above [`MAX_PREVIEW_SIZE`].
-    #[error("preview size {size} is outside the limit 1..={max} pixels")]
-    Size {
+    /// [`PreviewOptions::size`] is 0.
+    #[error("preview size 0: a ball needs at least one pixel")]
+    ZeroSize,
+    /// A ball of `size × size` pixels is above [`Limits::preview_pixels`].
+    #[error("preview size {size}: {exceeded}")]
+    TooLarge {
         /// The size asked for.
         size: usize,
-        /// [`MAX_PREVIEW_SIZE`].
-        max: usize,
+        /// The limit, the ball's pixel count and the maximum.
+        exceeded: LimitExceeded,
     },
     /// A contact sheet would be wider or taller than [`MAX_SHEET_SIDE`].
     #[error(
@@ -137,6 +139,8 @@ pub struct PreviewOptions {
     pub general_prepare: bool,
     /// Shade rows in parallel (rayon's global pool).
     pub parallel: bool,
+    /// Bounds; a ball has at most [`Limits::preview_pixels`] pixels.
+    pub limits: Limits,
 }
 
 impl Default for PreviewOptions {
@@ -151,29 +155,34 @@ impl Default for PreviewOptions {
             batched: false,
             general_prepare: false,
             parallel: true,
+            limits: Limits::default(),
         }
     }
 }
 
 impl PreviewOptions {
-    /// Check what a render needs of these options: a side of 1 to [`MAX_PREVIEW_SIZE`]
-    /// pixels.
+    /// Check what a render needs of these options: a side of at least one pixel, and a ball
+    /// of at most [`Limits::preview_pixels`] pixels (8192 × 8192 by default).
     ///
     /// ```
     /// use vstructc::interp::preview::{PreviewError, PreviewOptions};
+    /// use vstructc::limits::Limit;
     /// let big = PreviewOptions { size: 100_000, ..PreviewOptions::default() };
-    /// assert_eq!(big.validate(), Err(PreviewError::Size { size: 100_000, max: 8192 }));
+    /// let Err(PreviewError::TooLarge { size, exceeded }) = big.validate() else { panic!() };
+    /// assert_eq!((size, exceeded.limit, exceeded.value), (100_000, Limit::PreviewPixels, 10_000_000_000));
     /// assert!(PreviewOptions::default().validate().is_ok());
     /// ```
     pub fn validate(&self) -> Result<(), PreviewError> {
-        if (1..=MAX_PREVIEW_SIZE).contains(&self.size) {
-            Ok(())
-        } else {
-            Err(PreviewError::Size {
-                size: self.size,
-                max: MAX_PREVIEW_SIZE,
-            })
+        if self.size == 0 {
+            return Err(PreviewError::ZeroSize);
         }
+        let pixels = (self.size as u64).saturating_mul(self.size as u64);
+        self.limits
+            .check(Limit::PreviewPixels, pixels)
+            .map_err(|exceeded| PreviewError::TooLarge {
+                size: self.size,
+                exceeded,
+            })
     }
 
     /// White-furnace settings: no light, `env = 1`.

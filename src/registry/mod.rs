@@ -33,8 +33,9 @@
 //! * Only regular files are read: an entry named `*.args` or `*.oso` that is a FIFO, a device
 //!   or a socket is RG004 (warning) and skipped; an explicit path or `VSTRUCTC_ARGS_PATH`
 //!   entry that is one is RG004 as an error, respectively a warning.
-//! * One definition file holds at most [`MAX_DEFINITION_BYTES`]; a larger one is RG005 (error
-//!   naming its size) when its id is loaded, and the id has no definition.
+//! * One definition file holds at most [`Limits::definition_file_bytes`] (64 MiB by default,
+//!   [`RegistryOptions::limits`]); a larger one is LM001 (error naming the limit and the
+//!   file's size) when its id is loaded, and the id has no definition.
 
 pub mod model;
 mod param_types;
@@ -50,6 +51,7 @@ use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
 use crate::front::args::{ArgsOptions, parse_args_with};
 use crate::front::oso::parse_oso;
 use crate::front::source::{ReadError, kind_name, open_regular, read_regular_file};
+use crate::limits::{Limit, LimitExceeded, Limits};
 use rustc_hash::FxHashMap as HashMap;
 use std::collections::BTreeMap;
 use std::io::{BufRead, Read};
@@ -61,11 +63,6 @@ pub const ARGS_PATH_ENV: &str = "VSTRUCTC_ARGS_PATH";
 
 /// Pseudo-directory naming embedded definitions in paths and diagnostics.
 pub const EMBEDDED_PREFIX: &str = "<embedded>";
-
-/// The largest definition file read: 64 MiB, far above any real definition (RenderMan's
-/// largest `.args` files are under 1 MiB) and small enough that a hostile one cannot exhaust
-/// memory. A larger file is RG005.
-pub const MAX_DEFINITION_BYTES: u64 = 64 << 20;
 
 /// How much of an `.oso` file is read to find its shader name while listing.
 const OSO_PEEK_BYTES: u64 = 64 << 10;
@@ -108,6 +105,8 @@ pub struct RegistryOptions {
     pub prefer: Prefer,
     /// Options of the `.args` reader (extensions).
     pub args: ArgsOptions,
+    /// Bounds; a definition file holds at most [`Limits::definition_file_bytes`].
+    pub limits: Limits,
 }
 
 impl Default for RegistryOptions {
@@ -119,6 +118,7 @@ impl Default for RegistryOptions {
             use_embedded: true,
             prefer: Prefer::Oso,
             args: ArgsOptions::default(),
+            limits: Limits::default(),
         }
     }
 }
@@ -516,13 +516,15 @@ impl Registry {
                 return Some((**def).clone());
             }
             Origin::Embedded(b) => std::borrow::Cow::Borrowed(*b),
-            Origin::File(p) => match read_regular_file(p, MAX_DEFINITION_BYTES) {
-                Ok(b) => std::borrow::Cow::Owned(b),
-                Err(e) => {
-                    diags.push(read_error(&e).at(Location::file(c.name.clone())));
-                    return None;
+            Origin::File(p) => {
+                match read_regular_file(p, self.options.limits.definition_file_bytes) {
+                    Ok(b) => std::borrow::Cow::Owned(b),
+                    Err(e) => {
+                        diags.push(read_error(&e).at(Location::file(c.name.clone())));
+                        return None;
+                    }
                 }
-            },
+            }
         };
         let mut d = Diagnostics::new();
         let result = match c.kind {
@@ -581,13 +583,17 @@ fn first_of_kind<'c>(
 }
 
 /// The diagnostic of a definition file that could not be read: RG004 (not a regular file),
-/// RG005 (too large) or AR005 (the operating system refused).
+/// LM001 (above [`Limits::definition_file_bytes`]) or AR005 (the operating system refused).
 fn read_error(e: &ReadError) -> Diagnostic {
     match e {
         ReadError::NotRegular { kind } => not_regular(Severity::Error, kind),
-        ReadError::TooLarge { .. } => {
-            Diagnostic::error("RG005", format!("definition file too large: {e}"))
+        &ReadError::TooLarge { size, limit, .. } => LimitExceeded {
+            limit: Limit::DefinitionFileBytes,
+            value: size,
+            max: limit,
+            location: None,
         }
+        .to_diagnostic(),
         ReadError::Io(io) => Diagnostic::error("AR005", format!("cannot read file: {io}")),
     }
 }

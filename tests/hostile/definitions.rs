@@ -10,7 +10,8 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::Instant;
 use vstructc::diag::Severity;
-use vstructc::registry::{MAX_DEFINITION_BYTES, Registry, RegistryOptions};
+use vstructc::limits::Limits;
+use vstructc::registry::{Registry, RegistryOptions};
 
 const GOOD_ARGS: &str = "<args format=\"1.0\"><shaderType><tag value=\"pattern\"/></shaderType>\
     <param name=\"x\" type=\"float\" default=\"1\"/><output name=\"out\" type=\"float\"/></args>\n";
@@ -117,31 +118,37 @@ fn a_definition_linked_to_dev_zero_is_not_read() {
     assert_eq!(ran.out.stderr.matches("warning[RG004]").count(), 2);
 }
 
-/// A definition file above [`MAX_DEFINITION_BYTES`] is an error (RG005) naming the file and
-/// its size, and is not read; one of exactly the limit is read (and rejected for what it
+/// A definition file above [`Limits::definition_file_bytes`] is an error (LM001) naming the
+/// file, the limit and its size, and is not read; one of exactly the limit is read (and rejected for what it
 /// holds, here zeros, not for its size). The files are sparse: no disk is used.
 #[test]
 fn an_oversized_definition_is_an_error_with_its_size() {
+    let max = Limits::default().definition_file_bytes;
     let dir = folder("big");
     let big = dir.path().join("Big.args");
     let file = std::fs::File::create(&big).unwrap();
-    file.set_len(MAX_DEFINITION_BYTES + 1).unwrap();
+    file.set_len(max + 1).unwrap();
     let ran = run_cmd(&mut vstructc(&["info", "Big", "--args", s(dir.path())]));
-    check("oversized .args", &ran.out, 1, "error[RG005]");
-    let size = (MAX_DEFINITION_BYTES + 1).to_string();
+    check("oversized .args", &ran.out, 1, "error[LM001]");
+    assert!(
+        ran.out.stderr.contains("definition_file_bytes"),
+        "{}",
+        ran.out.stderr
+    );
+    let size = (max + 1).to_string();
     assert!(
         ran.out.stderr.contains(s(&big)) && ran.out.stderr.contains(&size),
         "{}",
         ran.out.stderr
     );
-    file.set_len(MAX_DEFINITION_BYTES).unwrap();
+    file.set_len(max).unwrap();
     let ran = run_cmd(&mut vstructc(&["info", "Big", "--args", s(dir.path())]));
     assert_eq!(ran.out.status, Some(1), "{}", ran.out.stderr);
-    assert!(!ran.out.stderr.contains("RG005"), "{}", ran.out.stderr);
+    assert!(!ran.out.stderr.contains("LM001"), "{}", ran.out.stderr);
 }
 
 /// A network from a FIFO is legitimate and read to its end (streams are capped at
-/// `front::source::MAX_STREAM_INPUT`, tested in the library: 1 GiB is too much for a test).
+/// `Limits::network_file_bytes`, tested in the library: 4 GiB is too much for a test).
 #[test]
 fn a_network_from_a_fifo_is_read() {
     let dir = folder("netfifo");
@@ -167,4 +174,25 @@ fn a_network_from_a_fifo_is_read() {
     let ran = wait(child, Instant::now());
     check("resolve FIFO", &ran.out, 0, "");
     assert_eq!(ran.stdout, expected);
+}
+
+/// A network file above `Limits::network_file_bytes` is refused by its size before a byte is
+/// read (LM001 naming the limit and the size); the file is sparse, so no disk is used.
+#[test]
+fn an_oversized_network_file_is_refused_unread() {
+    let max = Limits::default().network_file_bytes;
+    let dir = folder("bignet");
+    let big = dir.path().join("scene.rib");
+    std::fs::File::create(&big)
+        .unwrap()
+        .set_len(max + 1)
+        .unwrap();
+    let ran = run_cmd(&mut vstructc(&["resolve", s(&big)]));
+    check("oversized network", &ran.out, 1, "error[LM001]");
+    let size = (max + 1).to_string();
+    assert!(
+        ran.out.stderr.contains("network_file_bytes") && ran.out.stderr.contains(&size),
+        "{}",
+        ran.out.stderr
+    );
 }

@@ -6,9 +6,7 @@ use crate::scratch;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
-use vstructc::interp::preview::{
-    ContactSheet, MAX_PREVIEW_SIZE, PreviewError, PreviewOptions, render_ball,
-};
+use vstructc::interp::preview::{ContactSheet, PreviewError, PreviewOptions, render_ball};
 
 /// `n` PxrSurface materials (handles `m0`…), each a little different.
 fn materials(n: usize) -> String {
@@ -209,25 +207,33 @@ fn preview_size_is_validated_by_the_library() {
         ..PreviewOptions::default()
     };
     let err = big.validate().expect_err("too large");
-    assert_eq!(
-        err,
-        PreviewError::Size {
-            size: 100_000,
-            max: MAX_PREVIEW_SIZE
-        }
-    );
+    let PreviewError::TooLarge { size, exceeded } = &err else {
+        panic!("{err:?}")
+    };
+    assert_eq!(*size, 100_000);
+    assert_eq!(exceeded.limit, vstructc::limits::Limit::PreviewPixels);
     assert_eq!(
         err.to_string(),
-        "preview size 100000 is outside the limit 1..=8192 pixels"
+        "preview size 100000: 10000000000 pixels exceed the limit preview_pixels = 67108864"
     );
+    // The bound is the caller's: a smaller one refuses a size the default allows.
+    let strict = PreviewOptions {
+        size: 64,
+        limits: vstructc::limits::Limits {
+            preview_pixels: 63 * 63,
+            ..Default::default()
+        },
+        ..PreviewOptions::default()
+    };
+    assert!(matches!(
+        strict.validate(),
+        Err(PreviewError::TooLarge { size: 64, .. })
+    ));
     let zero = PreviewOptions {
         size: 0,
         ..PreviewOptions::default()
     };
-    assert!(matches!(
-        zero.validate(),
-        Err(PreviewError::Size { size: 0, .. })
-    ));
+    assert!(matches!(zero.validate(), Err(PreviewError::ZeroSize)));
     assert!(matches!(
         ContactSheet::new(Vec::new(), glam::Vec3::ZERO),
         Err(PreviewError::SheetBalls { .. })
@@ -235,7 +241,16 @@ fn preview_size_is_validated_by_the_library() {
     let _ = render_ball; // `render_ball` validates too (tests/render_regression.rs renders).
 
     let input = scratch("size_limit.rib", materials(2));
-    for size in ["100000", "0"] {
+    for (size, message) in [
+        (
+            "100000",
+            "error: preview size 100000: 10000000000 pixels exceed the limit preview_pixels",
+        ),
+        (
+            "0",
+            "error: preview size 0: a ball needs at least one pixel",
+        ),
+    ] {
         let o = crate::run(&[
             "render".into(),
             input.display().to_string(),
@@ -245,12 +260,6 @@ fn preview_size_is_validated_by_the_library() {
             input.with_extension("png").display().to_string(),
         ]);
         assert_eq!(o.status, Some(2), "{}", o.stderr);
-        assert!(
-            o.stderr.contains(&format!(
-                "error: preview size {size} is outside the limit 1..=8192 pixels"
-            )),
-            "{}",
-            o.stderr
-        );
+        assert!(o.stderr.contains(message), "{}", o.stderr);
     }
 }
