@@ -5,6 +5,8 @@
 //! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
 //! `run_file`) live here and are visible to every module.
 
+mod cond;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
