@@ -2,7 +2,8 @@
 //! the Laika OSL through `cpp`, scanned at start-up).
 //!
 //! Run: `cargo bench --bench cond_parse -- --quick`. The reported time is for one pass over
-//! all distinct expressions; divide by the printed count for ns per expression.
+//! all distinct expressions; divide by the printed count for ns per expression. The
+//! `cond_chain` group parses and evaluates one 100,000-term `and` chain.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -58,5 +59,34 @@ fn bench(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench);
+/// A 100,000-term `and` chain (about 1.1 MB of text): parse, and evaluate to the end. Both
+/// are linear in the terms (n-ary chain nodes, no token list).
+fn long_chain(c: &mut Criterion) {
+    let terms = 100_000;
+    let preds = ["a == 1", "b == 2", "c >= 3"];
+    let text = format!(
+        "connect if {}",
+        (0..terms)
+            .map(|i| preds[i % 3])
+            .collect::<Vec<_>>()
+            .join(" and ")
+    );
+    let up = cond::MapUpstream::new()
+        .input("a", Some(vstructc::Value::Int(1)))
+        .input("b", Some(vstructc::Value::Int(2)))
+        .input("c", Some(vstructc::Value::Int(3)));
+    let stmt = cond::parse(&text).expect("the chain parses");
+    let mut group = c.benchmark_group("cond_chain");
+    group.throughput(Throughput::Elements(terms as u64));
+    group.sample_size(20);
+    group.bench_function("parse_100k_terms", |b| {
+        b.iter(|| black_box(cond::parse(black_box(&text)).ok()))
+    });
+    group.bench_function("evaluate_100k_terms", |b| {
+        b.iter(|| black_box(cond::evaluate(&stmt, &up, &cond::Extensions::none()).choice))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench, long_chain);
 criterion_main!(benches);

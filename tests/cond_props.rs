@@ -2,8 +2,8 @@
 
 use proptest::prelude::*;
 use vstructc::cond::{
-    self, Action, ActionKind, CmpOp, ElseIf, Expr, Extension, Extensions, IsTest, Literal,
-    MapUpstream, Param, Statement, ast::quote_for,
+    self, Action, ActionKind, CmpOp, ComparisonReport, ElseIf, Expr, Extension, Extensions, IsTest,
+    Literal, MapUpstream, Param, Statement, ast::quote_for,
 };
 use vstructc::types::Value;
 
@@ -219,4 +219,179 @@ fn check_any_input(text: &str) -> Result<(), TestCaseError> {
         }
     }
     Ok(())
+}
+
+/// The binary tree of the grammar (`expr 'AND' expr`, left-associative), which is how the
+/// parser stored chains before they became n-ary nodes: the reference that the n-ary form
+/// must agree with, in evaluation (value, short-circuit and reports) and in printing.
+#[derive(Debug, Clone)]
+enum Tree {
+    Pred(Expr),
+    And(Box<Tree>, Box<Tree>),
+    Or(Box<Tree>, Box<Tree>),
+}
+
+impl Tree {
+    /// The n-ary expression, built with the public constructors.
+    fn to_expr(&self) -> Expr {
+        match self {
+            Tree::Pred(e) => e.clone(),
+            Tree::And(l, r) => Expr::and(l.to_expr(), r.to_expr()),
+            Tree::Or(l, r) => Expr::or(l.to_expr(), r.to_expr()),
+        }
+    }
+
+    /// Straightforward recursive evaluation; predicates go through the library one at a time.
+    fn eval(
+        &self,
+        up: &MapUpstream,
+        ext: &Extensions,
+        reports: &mut Vec<ComparisonReport>,
+    ) -> bool {
+        match self {
+            Tree::Pred(e) => cond::eval::evaluate_expr(e, up, ext, reports),
+            Tree::And(l, r) => l.eval(up, ext, reports) && r.eval(up, ext, reports),
+            Tree::Or(l, r) => l.eval(up, ext, reports) || r.eval(up, ext, reports),
+        }
+    }
+
+    fn precedence(&self) -> u8 {
+        match self {
+            Tree::Or(..) => 1,
+            Tree::And(..) => 2,
+            Tree::Pred(_) => 3,
+        }
+    }
+
+    /// The printing rule of spec §3.2 for a binary tree: a left operand may be the same
+    /// operator unparenthesised, a right operand must bind strictly tighter.
+    fn print(&self) -> String {
+        let operand = |t: &Tree, min: u8| {
+            if t.precedence() < min {
+                format!("({})", t.print())
+            } else {
+                t.print()
+            }
+        };
+        match self {
+            Tree::Pred(e) => e.to_string(),
+            Tree::And(l, r) => format!("{} and {}", operand(l, 2), operand(r, 3)),
+            Tree::Or(l, r) => format!("{} or {}", operand(l, 1), operand(r, 2)),
+        }
+    }
+}
+
+/// Predicates over a small pool of names whose upstream states cover true, false and every
+/// kind of VS015 report.
+fn pooled_predicate() -> impl Strategy<Value = Expr> {
+    let name = proptest::sample::select(vec!["p", "q", "r", "s", "missing"]);
+    let lit = prop_oneof![
+        Just(Literal::number("0", 0..0).unwrap()),
+        Just(Literal::number("1", 0..0).unwrap()),
+        Just(Literal::string("a", 0..0)),
+    ];
+    prop_oneof![
+        (
+            name.clone(),
+            proptest::sample::select(CmpOp::ALL.to_vec()),
+            lit
+        )
+            .prop_map(|(n, op, l)| Expr::cmp(Param::new(n, 0..0), op, l, 0..0)),
+        (
+            name,
+            prop_oneof![Just(IsTest::Connected), Just(IsTest::Set)],
+            any::<bool>()
+        )
+            .prop_map(|(n, t, neg)| Expr::is(Param::new(n, 0..0), t, neg, 0..0)),
+    ]
+}
+
+fn tree() -> impl Strategy<Value = Tree> {
+    let leaf = pooled_predicate().prop_map(Tree::Pred);
+    let nested = leaf.prop_recursive(6, 64, 2, |inner| {
+        prop_oneof![
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| Tree::And(Box::new(a), Box::new(b))),
+            (inner.clone(), inner).prop_map(|(a, b)| Tree::Or(Box::new(a), Box::new(b))),
+        ]
+    });
+    // Long left-associative chains of random subtrees and operators, as real text makes.
+    let chains =
+        proptest::collection::vec((any::<bool>(), nested.clone()), 1..40).prop_map(|items| {
+            let mut it = items.into_iter();
+            let (_, first) = it.next().expect("at least one item");
+            it.fold(first, |acc, (is_and, t)| {
+                if is_and {
+                    Tree::And(Box::new(acc), Box::new(t))
+                } else {
+                    Tree::Or(Box::new(acc), Box::new(t))
+                }
+            })
+        });
+    prop_oneof![nested, chains]
+}
+
+fn pool_upstream() -> MapUpstream {
+    MapUpstream::new()
+        .input("p", Some(Value::Int(1)))
+        .set("q", Value::Str("a".into()))
+        .input("r", None)
+        .input("s", Some(Value::Float(0.0)))
+        .connect("s")
+}
+
+/// No `and` node starts with an `and` node (nor `or` with `or`), and every node has at
+/// least two terms: a chain is one node.
+fn chains_are_flat(e: &Expr) -> bool {
+    use cond::ExprKind;
+    let terms = e.terms();
+    let first_same = matches!(
+        (&e.kind, terms.first().map(|t| &t.kind)),
+        (ExprKind::And { .. }, Some(ExprKind::And { .. }))
+            | (ExprKind::Or { .. }, Some(ExprKind::Or { .. }))
+    );
+    let is_chain = matches!(e.kind, ExprKind::And { .. } | ExprKind::Or { .. });
+    !first_same && (!is_chain || terms.len() >= 2) && terms.iter().all(chains_are_flat)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn n_ary_chains_agree_with_the_binary_reference(t in tree(), strict_ne in any::<bool>()) {
+        let ext = if strict_ne {
+            Extensions::none().with(Extension::StrictNe)
+        } else {
+            Extensions::none()
+        };
+        let up = pool_upstream();
+        let mut want_reports = Vec::new();
+        let want = t.eval(&up, &ext, &mut want_reports);
+        let text = t.print();
+
+        let built = t.to_expr();
+        prop_assert!(chains_are_flat(&built));
+        prop_assert_eq!(built.to_string(), text.clone());
+        let mut got_reports = Vec::new();
+        prop_assert_eq!(cond::eval::evaluate_expr(&built, &up, &ext, &mut got_reports), want);
+        prop_assert_eq!(&got_reports, &want_reports);
+
+        // The parsed text: the same tree (modulo spans), the same decision and reports
+        // (report spans now point into the text, so compare the rest).
+        let stmt = cond::parse(&format!("connect if {text}"))
+            .map_err(|e| TestCaseError::fail(format!("{text:?}: {e}")))?;
+        let parsed = stmt.condition.clone().expect("a condition");
+        prop_assert!(chains_are_flat(&parsed));
+        let rebuilt = Statement { condition: Some(built), ..stmt.clone() };
+        prop_assert!(stmt.same_as(&rebuilt), "{:?}", text);
+        let ev = cond::evaluate(&stmt, &up, &ext);
+        prop_assert_eq!(ev.choice == cond::Choice::Condition, want);
+        let strip = |r: &[ComparisonReport]| -> Vec<(String, CmpOp, String, bool)> {
+            r.iter().map(|r| (r.param.clone(), r.op, r.literal.clone(), r.result)).collect()
+        };
+        prop_assert_eq!(strip(&ev.reports), strip(&want_reports));
+        for r in &ev.reports {
+            prop_assert_eq!(&text[r.span.start - "connect if ".len()..r.span.end - "connect if ".len()],
+                format!("{} {} {}", r.param, r.op, r.literal));
+        }
+    }
 }

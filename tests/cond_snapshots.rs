@@ -75,6 +75,16 @@ const ASTS: &[(&str, &str, &[Extension])] = &[
         "s == \"two\nlines\" or t < -1e-3",
         &[],
     ),
+    (
+        "ast_36_chain_is_one_node",
+        "a == 1 and b == 2 and c == 3 and d == 4",
+        &[],
+    ),
+    (
+        "ast_37_grouped_chains",
+        "(a == 1 and b == 2) and c == 3 or d == 4 or (e == 5 or f == 6) or g == 7 and (h == 8 and i == 9)",
+        &[],
+    ),
 ];
 
 /// (snapshot name, malformed expression)
@@ -165,4 +175,13 @@ fn diagnostic_rendering_of_a_definition_error() {
         .to_diagnostic(text)
         .at(cond::location_in(&start, text, err.span.start));
     insta::assert_snapshot!("diag_vs001_in_definition", d.render_human());
+}
+
+#[test]
+fn json_shape_of_chains() {
+    // The `statement` member of `vstructc expr --json`: an `and`/`or` chain is one node with
+    // its `terms` in order; a parenthesised chain on the right is a nested node.
+    let stmt = cond::parse("connect if a == 1 and b is set and (c < 2 or d != 'x')").unwrap();
+    let json = serde_json::to_string_pretty(&stmt).unwrap();
+    insta::assert_snapshot!("json_chain_shape", json);
 }

@@ -59,9 +59,17 @@ fn sx_expr(e: &Expr) -> String {
             };
             format!("(is-{not}{what} {})", param.name)
         }
-        ExprKind::And { left, right } => format!("(and {} {})", sx_expr(left), sx_expr(right)),
-        ExprKind::Or { left, right } => format!("(or {} {})", sx_expr(left), sx_expr(right)),
+        ExprKind::And { terms } => sx_chain("and", terms),
+        ExprKind::Or { terms } => sx_chain("or", terms),
     }
+}
+
+/// The vectors write `and`/`or` as the binary, left-associative nodes of the grammar: an
+/// n-ary chain `a and b and c` is `(and (and a b) c)`.
+fn sx_chain(op: &str, terms: &[Expr]) -> String {
+    let mut it = terms.iter().map(sx_expr);
+    let first = it.next().unwrap_or_default();
+    it.fold(first, |acc, t| format!("({op} {acc} {t})"))
 }
 
 fn opt_str(v: &Json) -> Option<String> {
@@ -127,9 +135,8 @@ fn string_literals(stmt: &Statement) -> Vec<String> {
         match &e.kind {
             ExprKind::Cmp { value, .. } => out.extend(value.as_str().map(str::to_string)),
             ExprKind::Is { .. } => {}
-            ExprKind::And { left, right } | ExprKind::Or { left, right } => {
-                from_expr(left, out);
-                from_expr(right, out);
+            ExprKind::And { terms } | ExprKind::Or { terms } => {
+                terms.iter().for_each(|t| from_expr(t, out));
             }
         }
     }

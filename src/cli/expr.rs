@@ -18,6 +18,20 @@ pub struct ExprArgs {
     #[arg(value_name = "TEXT", allow_hyphen_values = true)]
     pub text: String,
     /// Print a JSON document on stdout instead of the readable form.
+    ///
+    /// On success: {"input", "extensions", "desugared", "statement"}. The statement is
+    /// {"action", "condition", "else_ifs", "fallback", "span"} (condition and fallback are
+    /// null for a bare action; else_ifs, links {"action", "condition"}, appears with
+    /// `--ext else-if` only). An action is {"action": "connect" | "ignore" | "set" | "copy",
+    /// "literal" (set) or "param" (copy), "span"}. An expression node is one of
+    /// {"expr": "cmp", "param", "op", "value", "span"},
+    /// {"expr": "is", "param", "test": "connected" | "set", "negated", "span"},
+    /// {"expr": "and" | "or", "terms": [nodes], "span"}: a chain `a and b and c` is one node
+    /// with its terms in order; only a chain parenthesised as a later term is a nested node.
+    /// A param is {"name", "span"}, a literal {"type": "number", "value", "text", "span"} or
+    /// {"type": "string", "value", "span"}; spans are byte offsets {"start", "end"}.
+    /// On a syntax error: {"input", "extensions", "error": {"code", "message", "span",
+    /// "line", "column", "expected", "found", "notes"}}.
     #[arg(long)]
     pub json: bool,
 }

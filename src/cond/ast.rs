@@ -11,6 +11,12 @@
 //! expressions with the fewest parentheses that keep the tree (`and` binds tighter than `or`;
 //! both are left-associative, so a right operand of the same operator is parenthesised),
 //! numbers as originally written, strings between `"` unless their verbatim content needs `'`.
+//!
+//! `and`/`or` nodes are n-ary ([`ExprKind::And`]): a chain of a million terms is one node, so
+//! the depth of a parsed expression grows only with its parentheses, which the parser bounds
+//! ([`super::parser::MAX_PAREN_DEPTH`]); every walk over the tree (evaluation, printing,
+//! `dump`, serialisation, dropping) therefore recurses at most about twice that deep,
+//! whatever the length of the text.
 
 use super::lexer::CmpOp;
 use std::fmt;
@@ -260,19 +266,21 @@ pub enum ExprKind {
         /// True for `is not`.
         negated: bool,
     },
-    /// `left and right`
+    /// `t1 and t2 and … tn`: true when every term is, evaluated left to right.
+    ///
+    /// A left-associative chain is one node: `a and b and c` (and `(a and b) and c`, which
+    /// means the same) has three terms. A term is an `and` node only when it was
+    /// parenthesised on the right (`a and (b and c)`), never the first term. The parser
+    /// always produces at least two terms; see [`Expr::and`].
     And {
-        /// Left operand (evaluated first).
-        left: Box<Expr>,
-        /// Right operand.
-        right: Box<Expr>,
+        /// The operands, in evaluation order.
+        terms: Vec<Expr>,
     },
-    /// `left or right`
+    /// `t1 or t2 or … tn`: true when some term is, evaluated left to right (same shape
+    /// rules as [`ExprKind::And`]).
     Or {
-        /// Left operand (evaluated first).
-        left: Box<Expr>,
-        /// Right operand.
-        right: Box<Expr>,
+        /// The operands, in evaluation order.
+        terms: Vec<Expr>,
     },
 }
 
@@ -308,27 +316,54 @@ impl Expr {
         }
     }
 
-    /// `left and right`, spanning both.
+    /// `left and right`, spanning both. A `left` that is itself an `and` node is extended
+    /// (left associativity: `(a and b) and c` is the chain `a and b and c`), so a chain of n
+    /// terms built from the left is one node with n terms, not a tree n levels deep.
     pub fn and(left: Expr, right: Expr) -> Self {
-        let span = left.span.start..right.span.end;
-        Expr {
-            kind: ExprKind::And {
-                left: Box::new(left),
-                right: Box::new(right),
-            },
-            span,
-        }
+        Self::chain(left, right, true)
     }
 
-    /// `left or right`, spanning both.
+    /// `left or right`, spanning both; extends a `left` that is an `or` node (see
+    /// [`Expr::and`]).
     pub fn or(left: Expr, right: Expr) -> Self {
+        Self::chain(left, right, false)
+    }
+
+    fn chain(left: Expr, right: Expr, is_and: bool) -> Self {
         let span = left.span.start..right.span.end;
-        Expr {
-            kind: ExprKind::Or {
-                left: Box::new(left),
-                right: Box::new(right),
-            },
-            span,
+        let kind = match (left.kind, is_and) {
+            (ExprKind::And { mut terms }, true) => {
+                terms.push(right);
+                ExprKind::And { terms }
+            }
+            (ExprKind::Or { mut terms }, false) => {
+                terms.push(right);
+                ExprKind::Or { terms }
+            }
+            (kind, _) => {
+                let left = Expr {
+                    kind,
+                    span: left.span,
+                };
+                if is_and {
+                    ExprKind::And {
+                        terms: vec![left, right],
+                    }
+                } else {
+                    ExprKind::Or {
+                        terms: vec![left, right],
+                    }
+                }
+            }
+        };
+        Expr { kind, span }
+    }
+
+    /// The operands of an `and`/`or` node (empty for a predicate).
+    pub fn terms(&self) -> &[Expr] {
+        match &self.kind {
+            ExprKind::And { terms } | ExprKind::Or { terms } => terms,
+            ExprKind::Cmp { .. } | ExprKind::Is { .. } => &[],
         }
     }
 
@@ -350,9 +385,10 @@ impl Expr {
     fn collect_params<'a>(&'a self, out: &mut Vec<&'a Param>) {
         match &self.kind {
             ExprKind::Cmp { param, .. } | ExprKind::Is { param, .. } => out.push(param),
-            ExprKind::And { left, right } | ExprKind::Or { left, right } => {
-                left.collect_params(out);
-                right.collect_params(out);
+            ExprKind::And { terms } | ExprKind::Or { terms } => {
+                for t in terms {
+                    t.collect_params(out);
+                }
             }
         }
     }
@@ -391,20 +427,25 @@ impl fmt::Display for Expr {
                 };
                 write!(f, "{} is{not} {what}", param.name)
             }
-            // Left-associative: the left operand may be the same operator unparenthesised,
-            // the right operand must bind strictly tighter.
-            ExprKind::And { left, right } => {
-                left.fmt_operand(f, 2)?;
-                f.write_str(" and ")?;
-                right.fmt_operand(f, 3)
-            }
-            ExprKind::Or { left, right } => {
-                left.fmt_operand(f, 1)?;
-                f.write_str(" or ")?;
-                right.fmt_operand(f, 2)
-            }
+            ExprKind::And { terms } => fmt_chain(f, terms, " and ", 2),
+            ExprKind::Or { terms } => fmt_chain(f, terms, " or ", 1),
         }
     }
+}
+
+/// The terms of a chain of binding strength `prec`, joined by `sep`. Left-associative: the
+/// first term may be the same operator unparenthesised (it never is in a parsed tree), later
+/// terms must bind strictly tighter.
+fn fmt_chain(f: &mut fmt::Formatter<'_>, terms: &[Expr], sep: &str, prec: u8) -> fmt::Result {
+    for (i, t) in terms.iter().enumerate() {
+        if i == 0 {
+            t.fmt_operand(f, prec)?;
+        } else {
+            f.write_str(sep)?;
+            t.fmt_operand(f, prec + 1)?;
+        }
+    }
+    Ok(())
 }
 
 /// One `else B if C` link of an `else-if` chain (extension `else-if`).
@@ -441,13 +482,13 @@ impl Statement {
     /// Every parameter name the statement reads, distinct, in source order (predicates and
     /// `copy`, including `else-if` links and the fallback).
     pub fn param_names(&self) -> Vec<&str> {
-        let mut names: Vec<&str> = Vec::new();
-        for p in self.params() {
-            if !names.contains(&p.name.as_str()) {
-                names.push(&p.name);
-            }
-        }
-        names
+        // A set, not a scan of `names`: a chain may name a million distinct parameters.
+        let mut seen = std::collections::HashSet::new();
+        self.params()
+            .into_iter()
+            .map(|p| p.name.as_str())
+            .filter(|name| seen.insert(*name))
+            .collect()
     }
 
     /// Every parameter occurrence (predicates and `copy`), in source order.
@@ -531,10 +572,7 @@ fn clear_expr(e: &mut Expr) {
             value.span = 0..0;
         }
         ExprKind::Is { param, .. } => param.span = 0..0,
-        ExprKind::And { left, right } | ExprKind::Or { left, right } => {
-            clear_expr(left);
-            clear_expr(right);
-        }
+        ExprKind::And { terms } | ExprKind::Or { terms } => terms.iter_mut().for_each(clear_expr),
     }
 }
 
@@ -642,15 +680,16 @@ fn dump_expr(out: &mut String, depth: usize, e: &Expr) {
             };
             line(out, depth, &format!("{name} {at}: {:?}", param.name));
         }
-        ExprKind::And { left, right } => {
-            line(out, depth, &format!("And {at}"));
-            dump_expr(out, depth + 1, left);
-            dump_expr(out, depth + 1, right);
-        }
-        ExprKind::Or { left, right } => {
-            line(out, depth, &format!("Or {at}"));
-            dump_expr(out, depth + 1, left);
-            dump_expr(out, depth + 1, right);
+        ExprKind::And { terms } | ExprKind::Or { terms } => {
+            let name = if matches!(e.kind, ExprKind::And { .. }) {
+                "And"
+            } else {
+                "Or"
+            };
+            line(out, depth, &format!("{name} {at}"));
+            for t in terms {
+                dump_expr(out, depth + 1, t);
+            }
         }
     }
 }

@@ -24,13 +24,12 @@ pub fn check_params(
     member: &str,
     ext: &Extensions,
 ) -> Vec<Diagnostic> {
-    let mut seen: Vec<&str> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     let mut out = Vec::new();
     for p in stmt.params() {
-        if seen.contains(&p.name.as_str()) {
+        if !seen.insert(p.name.as_str()) {
             continue;
         }
-        seen.push(&p.name);
         if let Some(d) = check_one(p, text, def, member, ext) {
             out.push(d);
         }

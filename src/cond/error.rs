@@ -127,10 +127,20 @@ fn pad_for(c: char) -> String {
     }
 }
 
+/// Characters of a long line shown before a marked span, and after it.
+const CARET_CONTEXT: usize = 200;
+
+/// Characters of a long span marked under it.
+const CARET_SPAN: usize = 200;
+
 /// The line of `text` that contains byte `span.start`, and under it a caret line marking the
 /// span (`^` under its first character, `~` under the rest of it on that line; a single `^`
 /// just past the end for an empty span). Control characters such as `\r` are shown escaped
 /// and the caret line accounts for their width.
+///
+/// A line longer than the window (200 characters before the span, 200 of the span, 200
+/// after it) is cut to that window, with `…` where it was cut: the rendering costs the same
+/// for a one-line expression of 10 MB, which may report a diagnostic per predicate.
 ///
 /// ```
 /// let r = vstructc::cond::render_caret("connect if x = 1", 13..14);
@@ -141,13 +151,21 @@ pub fn render_caret(text: &str, span: Range<usize>) -> String {
     while !text.is_char_boundary(start) {
         start -= 1;
     }
-    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
-    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
-    let end = span.end.clamp(start, line_end);
+    // Only the window is scanned, never the whole line.
+    let from = walk_back(text, start, CARET_CONTEXT);
+    let span_end = walk_forward(text, start, CARET_SPAN);
+    let end = span.end.clamp(start, span_end);
+    let to = walk_forward(text, end, CARET_CONTEXT);
+    let cut_before = from > 0 && text.as_bytes()[from - 1] != b'\n';
+    let cut_after = to < text.len() && text.as_bytes()[to] != b'\n';
     let mut shown_line = String::new();
     let mut carets = String::new();
-    for (i, c) in text[line_start..line_end].char_indices() {
-        let at = line_start + i;
+    if cut_before {
+        shown_line.push('…');
+        carets.push(' ');
+    }
+    for (i, c) in text[from..to].char_indices() {
+        let at = from + i;
         shown_line.push_str(&shown(c));
         if at < start {
             carets.push_str(&pad_for(c));
@@ -158,10 +176,37 @@ pub fn render_caret(text: &str, span: Range<usize>) -> String {
             carets.push_str(&"~".repeat(width - 1));
         }
     }
+    if cut_after {
+        shown_line.push('…');
+    }
     if end == start {
         carets.push('^');
     }
     format!("{}\n{}", shown_line.trim_end_matches(' '), carets)
+}
+
+/// The byte offset up to `max` characters before `at`, stopping after a newline.
+fn walk_back(text: &str, at: usize, max: usize) -> usize {
+    let mut from = at;
+    for (i, c) in text[..at].char_indices().rev().take(max) {
+        if c == '\n' {
+            break;
+        }
+        from = i;
+    }
+    from
+}
+
+/// The byte offset up to `max` characters after `at`, stopping before a newline.
+fn walk_forward(text: &str, at: usize, max: usize) -> usize {
+    let mut to = at;
+    for (i, c) in text[at..].char_indices().take(max) {
+        if c == '\n' {
+            return at + i;
+        }
+        to = at + i + c.len_utf8();
+    }
+    to
 }
 
 /// The source location of byte `offset` of an expression whose first character is at
@@ -211,6 +256,29 @@ mod tests {
     #[test]
     fn caret_counts_characters_not_bytes() {
         assert_eq!(render_caret("é = 1", 3..4), "é = 1\n  ^");
+    }
+
+    #[test]
+    fn long_lines_are_cut_to_a_window_around_the_span() {
+        let text = format!("{}x == 1{}", "a".repeat(10_000), "b".repeat(10_000));
+        let r = render_caret(&text, 10_000..10_006);
+        let (line, carets) = r.split_once('\n').unwrap();
+        assert_eq!(
+            line,
+            format!("…{}x == 1{}…", "a".repeat(200), "b".repeat(200))
+        );
+        assert_eq!(carets, format!("{}^~~~~~", " ".repeat(201)));
+        // A span longer than the window is marked up to the window's end.
+        let r = render_caret(&text, 0..20_006);
+        let (line, carets) = r.split_once('\n').unwrap();
+        assert_eq!(line, format!("{}…", "a".repeat(400)));
+        assert_eq!(carets, format!("^{}", "~".repeat(199)));
+        // Within the window nothing changes, and a newline ends the line as before.
+        let text = format!("{}\n{} y", "c".repeat(150), "d".repeat(150));
+        assert_eq!(
+            render_caret(&text, 302..303),
+            format!("{} y\n{}^", "d".repeat(150), " ".repeat(151))
+        );
     }
 
     #[test]

@@ -278,8 +278,9 @@ impl<U: Upstream + ?Sized> Evaluator<'_, U> {
         match &e.kind {
             // Short-circuit left to right: the right operand is not evaluated (and reports
             // nothing) when the left decides.
-            ExprKind::And { left, right } => self.expr(left) && self.expr(right),
-            ExprKind::Or { left, right } => self.expr(left) || self.expr(right),
+            // A chain is a loop, not a recursion: nesting is bounded by parentheses.
+            ExprKind::And { terms } => terms.iter().all(|t| self.expr(t)),
+            ExprKind::Or { terms } => terms.iter().any(|t| self.expr(t)),
             ExprKind::Is {
                 param,
                 test,

@@ -1,4 +1,4 @@
-//! Recursive-descent parser over the token list (spec vstruct.md §3.2, §3.4, §3.5, §9).
+//! Recursive-descent parser over tokens lexed on demand (spec vstruct.md §3.2, §3.4, §3.5, §9).
 //!
 //! The grammar is LR; this parser decides every choice with at most two tokens of
 //! look-ahead using the deterministic rule of §3.2:
@@ -14,7 +14,7 @@
 use super::ast::{Action, ActionKind, ElseIf, Expr, IsTest, Literal, Param, Span, Statement};
 use super::error::ParseError;
 use super::ext::{Extension, Extensions};
-use super::lexer::{CmpOp, Keyword, Token, TokenKind, tokenize};
+use super::lexer::{CmpOp, Keyword, Token, TokenKind, next_token};
 
 /// What may follow at an error position; rendered into the message and the expected list.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,54 +74,76 @@ fn join_or(items: &[String]) -> String {
 
 /// Parse `text` with the given extensions.
 pub fn parse_statement(text: &str, ext: &Extensions) -> Result<Statement, ParseError> {
-    let tokens = tokenize(text);
+    let first = next_token(text, 0);
     let mut p = Parser {
-        tokens,
-        pos: 0,
+        text,
+        window: [first; LOOKAHEAD],
+        previous: None,
         ext: *ext,
         depth: 0,
     };
+    for k in 1..LOOKAHEAD {
+        p.window[k] = p.following(p.window[k - 1]);
+    }
     p.statement()
 }
 
+/// Tokens of look-ahead the parser keeps (the current one and two more, §3.2).
+const LOOKAHEAD: usize = 3;
+
+/// Tokens are lexed on demand into a window of [`LOOKAHEAD`] tokens rather than into a list
+/// of the whole text, so a long expression costs no memory beyond its tree.
 struct Parser<'a> {
-    tokens: Vec<Token<'a>>,
-    pos: usize,
+    text: &'a str,
+    /// The current token and the next ones; past the end, `Eof` repeats.
+    window: [Token<'a>; LOOKAHEAD],
+    /// The last consumed token.
+    previous: Option<Token<'a>>,
     ext: Extensions,
     /// Open parentheses around the current position (bounded by [`MAX_PAREN_DEPTH`]).
     depth: usize,
 }
 
 /// Deepest parenthesis nesting accepted in a conditional (robustness limit: the parser and
-/// every pass over the tree recurse once per level; real expressions use 1–3 levels). Deeper
-/// nesting is a syntax error (VS001) at the parenthesis that exceeds it.
+/// every pass over the tree recurse once per level, while `and`/`or` chains of any length are
+/// loops over n-ary nodes; real expressions use 1–3 levels). Deeper nesting is a syntax error
+/// (VS001) at the parenthesis that exceeds it.
 pub const MAX_PAREN_DEPTH: usize = 64;
 
 impl<'a> Parser<'a> {
-    /// The token `k` positions ahead (the final `Eof` repeats).
+    /// The token `k` positions ahead, `k < LOOKAHEAD` (the final `Eof` repeats).
     fn peek_at(&self, k: usize) -> Token<'a> {
-        let last = self.tokens.len() - 1;
-        self.tokens[(self.pos + k).min(last)]
+        self.window[k]
     }
 
     fn peek(&self) -> Token<'a> {
         self.peek_at(0)
     }
 
+    /// The token after `t` (`Eof` after `Eof`).
+    fn following(&self, t: Token<'a>) -> Token<'a> {
+        if t.kind == TokenKind::Eof {
+            t
+        } else {
+            next_token(self.text, t.end)
+        }
+    }
+
     fn bump(&mut self) -> Token<'a> {
         let t = self.peek();
-        if self.pos < self.tokens.len() - 1 {
-            self.pos += 1;
+        if t.kind != TokenKind::Eof {
+            self.previous = Some(t);
+            self.window.rotate_left(1);
+            self.window[LOOKAHEAD - 1] = self.following(self.window[LOOKAHEAD - 2]);
         }
         t
     }
 
     /// End offset of the last consumed token.
     fn last_end(&self) -> usize {
-        if self.pos == 0 {
-            self.peek().start
-        } else {
-            self.tokens[self.pos - 1].end
+        match self.previous {
+            Some(t) => t.end,
+            None => self.peek().start,
         }
     }
 
@@ -164,7 +186,7 @@ impl<'a> Parser<'a> {
     }
 
     fn previous(&self) -> Option<Token<'a>> {
-        self.pos.checked_sub(1).map(|i| self.tokens[i])
+        self.previous
     }
 
     fn expect_end(&self, also: &[Want]) -> Result<(), ParseError> {

@@ -5,6 +5,7 @@
 //! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
 //! `run_file`) live here and are visible to every module.
 
+mod cond;
 mod diagnostics;
 mod render;
 mod values;
