@@ -8,7 +8,7 @@ use super::fresnel::{self, Fresnel};
 use super::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
-use super::tables::{self, MuCurve, Row, TableId};
+use super::tables::{self, AnisoCurves, MuCurve, Row, TableId};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -34,6 +34,73 @@ fn e1_table(masking: Masking) -> TableId {
     match masking {
         Masking::HeightCorrelated => TableId::E1Hc,
         Masking::Separable => TableId::E1Sep,
+    }
+}
+
+fn aniso_table(masking: Masking) -> TableId {
+    match masking {
+        Masking::HeightCorrelated => TableId::E1HcAniso,
+        Masking::Separable => TableId::E1SepAniso,
+    }
+}
+
+/// The albedo correction of an anisotropic GGX lobe (spec §3.17):
+/// `E_aniso(V) / E1(μ_o, √(α_x α_y))`, with `E_aniso` from the azimuth-0 anisotropic table
+/// blended over the view's azimuth ([`tables::aniso_lookup`]). It multiplies the isotropic
+/// albedo forms (Fresnel moments, dielectric tables), which are looked up at `√(α_x α_y)`.
+pub fn ggx_aniso_factor(ggx: &Ggx, masking: Masking, v: Vec3) -> f32 {
+    let (yx, yy) = (tables::ggx_axis(ggx.ax), tables::ggx_axis(ggx.ay));
+    let e = tables::aniso_lookup(aniso_table(masking), v, yx, yy);
+    e / e1(masking, v.z, ggx.lookup_alpha()).max(1e-6)
+}
+
+/// How a GGX lobe's prepare applies [`ggx_aniso_factor`].
+#[derive(Debug, Clone, Copy)]
+pub(super) enum GgxAniso {
+    /// Isotropic or delta: no correction (the isotropic tables are exact).
+    Off,
+    /// Direct table lookups (a one-off prepare).
+    Direct,
+    /// The tables baked along μ at the lobe's widths (a bound lobe).
+    Bound {
+        /// The anisotropic table's azimuth-0 and azimuth-90° curves.
+        curves: AnisoCurves,
+        /// `E1` at `√(α_x α_y)`.
+        iso: MuCurve,
+    },
+}
+
+impl GgxAniso {
+    fn direct(ggx: &Ggx) -> GgxAniso {
+        if ggx.ax == ggx.ay || ggx.is_delta() {
+            GgxAniso::Off
+        } else {
+            GgxAniso::Direct
+        }
+    }
+
+    fn bind(ggx: &Ggx, masking: Masking) -> GgxAniso {
+        match GgxAniso::direct(ggx) {
+            GgxAniso::Off => GgxAniso::Off,
+            _ => GgxAniso::Bound {
+                curves: AnisoCurves::new(
+                    aniso_table(masking),
+                    tables::ggx_axis(ggx.ax),
+                    tables::ggx_axis(ggx.ay),
+                ),
+                iso: MuCurve::new2(e1_table(masking), tables::ggx_axis(ggx.lookup_alpha())),
+            },
+        }
+    }
+
+    /// The correction at local view `v`, `None` for an isotropic lobe.
+    #[inline(always)]
+    fn factor(&self, ggx: &Ggx, masking: Masking, v: Vec3) -> Option<f32> {
+        match self {
+            GgxAniso::Off => None,
+            GgxAniso::Direct => Some(ggx_aniso_factor(ggx, masking, v)),
+            GgxAniso::Bound { curves, iso } => Some(curves.at(v) / iso.at(v.z).max(1e-6)),
+        }
     }
 }
 
@@ -174,6 +241,8 @@ pub struct MicrofacetBound {
     pub(super) alpha: f32,
     /// The distribution is a delta ([`Ggx::is_delta`]).
     pub(super) delta: bool,
+    /// The anisotropic albedo correction.
+    pub(super) aniso: GgxAniso,
 }
 
 /// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
@@ -242,6 +311,7 @@ impl MicrofacetR {
             curves: None,
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
+            aniso: GgxAniso::direct(&self.ggx),
         };
         self.prepare_bound(v, &bound)
     }
@@ -276,6 +346,7 @@ impl MicrofacetR {
             }),
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
+            aniso: GgxAniso::bind(&self.ggx, self.masking),
         }
     }
 
@@ -330,6 +401,10 @@ impl MicrofacetR {
             Some(c) => c.albedo(albedo_fresnel, v.z),
             None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
         });
+        let ess = match bound.aniso.factor(&self.ggx, self.masking, v) {
+            Some(c) => clamp1(ess * c),
+            None => ess,
+        };
         match self.comp {
             Compensation::None => p.albedo = ess,
             Compensation::Turquin(k) => {
@@ -465,6 +540,10 @@ pub enum DielectricMode {
 ///   and the χ² test fails. Sample weights then average to the radiance-convention `E_T`.
 /// * With `t_fresnel = false` the reflection probability uses the transmission factor 1
 ///   instead of `1 − F`: `P_R = F lum(T_r) / (F lum(T_r) + lum(T_t))`.
+/// * Seen from below, a mode `T` lobe with `t_fresnel = false` is the whole interface: it
+///   evaluates as `RT` with `t_fresnel` on (the reflection layer the recipe puts above it is
+///   one-sided; spec §4.5), so glass seen from inside reflects with the inverted index and
+///   conserves energy.
 /// * Delta refraction (α below the cut-off) has weight `T_t (1 − F)/η'²` (radiance
 ///   convention, consistent with `E_T`), not `1 − F`.
 /// * `eval`'s Fresnel factor for a refraction pair is computed from the optically denser
@@ -542,6 +621,8 @@ pub struct DielectricBound {
     pub(super) ggx_view: GgxView,
     /// The lobe's view-independent scalars.
     pub(super) consts: DielectricConsts,
+    /// The anisotropic albedo correction.
+    pub(super) aniso: GgxAniso,
 }
 
 /// The scalars of a dielectric's `prepare` that do not depend on the view, computed once
@@ -569,6 +650,16 @@ impl Dielectric {
         }
     }
 
+    /// True when this lobe, seen from below (`flipped`), stands for the whole interface: a
+    /// transmission lobe without its `(1 − F)` factor leaves the reflection to a separate
+    /// layer above it, and that layer is one-sided, so from inside the lobe reflects (Fresnel
+    /// with the inverted index, total internal reflection beyond the critical angle) and
+    /// keeps `(1 − F)` on its transmission, as an `RT` lobe does (spec §4.5).
+    #[inline(always)]
+    fn whole_interface(&self, flipped: bool) -> bool {
+        flipped && self.mode == DielectricMode::T && !self.t_fresnel
+    }
+
     /// The view-independent scalars of [`Dielectric::prepare`].
     fn consts(&self) -> DielectricConsts {
         DielectricConsts {
@@ -584,11 +675,13 @@ impl Dielectric {
     pub fn bind(&self) -> DielectricBound {
         let ggx_view = GgxView::constants(&self.ggx);
         let consts = self.consts();
+        let aniso = GgxAniso::bind(&self.ggx, self.masking);
         if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
             return DielectricBound {
                 curves: None,
                 ggx_view,
                 consts,
+                aniso,
             };
         }
         let y = tables::ggx_axis(self.ggx.lookup_alpha());
@@ -606,6 +699,7 @@ impl Dielectric {
             curves: Some([at(eta0), at(1.0 / eta0)]),
             ggx_view,
             consts,
+            aniso,
         }
     }
 
@@ -616,6 +710,7 @@ impl Dielectric {
             curves: None,
             ggx_view: GgxView::constants(&self.ggx),
             consts: self.consts(),
+            aniso: GgxAniso::direct(&self.ggx),
         };
         self.prepare_bound(v, flipped, &bound)
     }
@@ -630,6 +725,7 @@ impl Dielectric {
         bound: &DielectricBound,
     ) -> PreparedDielectric {
         let c = &bound.consts;
+        let whole = self.whole_interface(flipped);
         let mut p = PreparedDielectric {
             ggx: self.ggx,
             masking: self.masking,
@@ -639,13 +735,13 @@ impl Dielectric {
             view: bound.ggx_view,
             g1_v: 0.0,
             inv_mu: 0.0,
-            refl: self.mode != DielectricMode::T,
+            refl: self.mode != DielectricMode::T || whole,
             trans: self.mode != DielectricMode::R,
             tint_r: self.tint_r,
             tint_t: self.tint_t,
             lum_r: c.lum_r,
             lum_t: c.lum_t,
-            t_fresnel: self.t_fresnel,
+            t_fresnel: self.t_fresnel || whole,
             delta: c.delta,
             albedo: LobeAlbedo::default(),
         };
@@ -685,21 +781,25 @@ impl Dielectric {
             let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
             [f, (1.0 - f) * t, t]
         } else {
-            let want = [refl, trans && self.t_fresnel, trans && !self.t_fresnel];
-            match &bound.curves {
+            let want = [refl, trans && p.t_fresnel, trans && !p.t_fresnel];
+            let [er, et, etn] = match &bound.curves {
                 Some(c) => {
                     let c = &c[usize::from(flipped)];
                     let at = |i: usize| if want[i] { c[i].at(v.z) } else { 0.0 };
                     [at(0), at(1), at(2)]
                 }
                 None => dielectric_albedos_masked(self.masking, v.z, alpha, eta, want),
+            };
+            match bound.aniso.factor(&self.ggx, self.masking, v) {
+                Some(c) => [er * c, et * c, etn * c],
+                None => [er, et, etn],
             }
         };
         if refl {
             p.albedo.reflect = p.tint_r * er;
         }
         if trans {
-            p.albedo.transmit = self.tint_t * if self.t_fresnel { et } else { etn };
+            p.albedo.transmit = self.tint_t * if p.t_fresnel { et } else { etn };
             p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
         }
     }

@@ -108,7 +108,8 @@ impl LanePlan {
 
 impl LeafLanes {
     /// The leaf's data when its family and configuration have a kernel (the same cases as
-    /// `Kernel::rebuild`, for views above the horizon).
+    /// `Kernel::rebuild`, for views above the horizon). Anisotropic lobes take the general
+    /// path: their albedo depends on the view's azimuth, which the lanes' μ curves do not see.
     fn new(b: &crate::interp::lobe::BoundLobe) -> Option<LeafLanes> {
         Some(match (&b.lobe, &b.aux) {
             (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => LeafLanes::Lambert {
@@ -122,6 +123,7 @@ impl LeafLanes {
             (Lobe::MicrofacetR(m), Aux::Microfacet(bound))
                 if m.fresnel.is_conductor()
                     && !m.ggx.is_delta()
+                    && m.ggx.ax == m.ggx.ay
                     && m.comp == Compensation::None =>
             {
                 let Fresnel::F82 { f0, f90, a, .. } = bound.albedo_fresnel else {
@@ -139,6 +141,7 @@ impl LeafLanes {
             (Lobe::Dielectric(d), Aux::Dielectric(bound))
                 if d.mode == DielectricMode::R
                     && !d.ggx.is_delta()
+                    && d.ggx.ax == d.ggx.ay
                     && (d.turquin <= 0.0 || d.turquin.is_nan()) =>
             {
                 LeafLanes::DielectricR {
@@ -148,7 +151,7 @@ impl LeafLanes {
                     e_r: bound.curves?[0][0],
                 }
             }
-            (Lobe::Ward(w), Aux::Ward(bound)) => LeafLanes::Ward {
+            (Lobe::Ward(w), Aux::Ward(bound)) if bound.aniso.is_none() => LeafLanes::Ward {
                 lobe: *w,
                 bound: *bound,
             },
