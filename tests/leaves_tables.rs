@@ -1,5 +1,5 @@
 //! Albedo tables (spec closures.md §3.17): every blob decodes, its header records the
-//! generator version and 512² samples; a seeded random sample of 64 entries regenerated with
+//! generator version and its sample count (512², 128² for the anisotropic tables); a seeded random sample of 64 entries regenerated with
 //! the generator's f64 quadrature matches to 1e-6; each `Eavg` table is the average of its
 //! parent; lookups interpolate linearly.
 

@@ -8,7 +8,7 @@ use super::fresnel::{self, Fresnel};
 use super::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
-use super::tables::{self, AnisoCurves, MuCurve, Row, TableId};
+use super::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -44,64 +44,30 @@ fn aniso_table(masking: Masking) -> TableId {
     }
 }
 
-/// The albedo correction of an anisotropic GGX lobe (spec §3.17):
-/// `E_aniso(V) / E1(μ_o, √(α_x α_y))`, with `E_aniso` from the azimuth-0 anisotropic table
-/// blended over the view's azimuth ([`tables::aniso_lookup`]). It multiplies the isotropic
-/// albedo forms (Fresnel moments, dielectric tables), which are looked up at `√(α_x α_y)`.
-pub fn ggx_aniso_factor(ggx: &Ggx, masking: Masking, v: Vec3) -> f32 {
-    let (yx, yy) = (tables::ggx_axis(ggx.ax), tables::ggx_axis(ggx.ay));
-    let e = tables::aniso_lookup(aniso_table(masking), v, yx, yy);
-    e / e1(masking, v.z, ggx.lookup_alpha()).max(1e-6)
+/// The albedo of an anisotropic GGX lobe (spec §3.17; [`tables::aniso_albedo`]): `iso(α)`,
+/// the lobe's isotropic albedo form (Fresnel moments or dielectric tables) at width α, taken
+/// at the view's projected width and corrected by the anisotropic `E1` table.
+#[inline]
+pub fn ggx_aniso_albedo<R: std::ops::Mul<f32, Output = R>>(
+    ggx: &Ggx,
+    masking: Masking,
+    v: Vec3,
+    iso: impl FnOnce(f32) -> R,
+) -> R {
+    tables::aniso_albedo(
+        aniso_table(masking),
+        v,
+        (ggx.ax, ggx.ay),
+        tables::ggx_axis,
+        |a| e1(masking, v.z, a),
+        iso,
+    )
 }
 
-/// How a GGX lobe's prepare applies [`ggx_aniso_factor`].
-#[derive(Debug, Clone, Copy)]
-pub(super) enum GgxAniso {
-    /// Isotropic or delta: no correction (the isotropic tables are exact).
-    Off,
-    /// Direct table lookups (a one-off prepare).
-    Direct,
-    /// The tables baked along μ at the lobe's widths (a bound lobe).
-    Bound {
-        /// The anisotropic table's azimuth-0 and azimuth-90° curves.
-        curves: AnisoCurves,
-        /// `E1` at `√(α_x α_y)`.
-        iso: MuCurve,
-    },
-}
-
-impl GgxAniso {
-    fn direct(ggx: &Ggx) -> GgxAniso {
-        if ggx.ax == ggx.ay || ggx.is_delta() {
-            GgxAniso::Off
-        } else {
-            GgxAniso::Direct
-        }
-    }
-
-    fn bind(ggx: &Ggx, masking: Masking) -> GgxAniso {
-        match GgxAniso::direct(ggx) {
-            GgxAniso::Off => GgxAniso::Off,
-            _ => GgxAniso::Bound {
-                curves: AnisoCurves::new(
-                    aniso_table(masking),
-                    tables::ggx_axis(ggx.ax),
-                    tables::ggx_axis(ggx.ay),
-                ),
-                iso: MuCurve::new2(e1_table(masking), tables::ggx_axis(ggx.lookup_alpha())),
-            },
-        }
-    }
-
-    /// The correction at local view `v`, `None` for an isotropic lobe.
-    #[inline(always)]
-    fn factor(&self, ggx: &Ggx, masking: Masking, v: Vec3) -> Option<f32> {
-        match self {
-            GgxAniso::Off => None,
-            GgxAniso::Direct => Some(ggx_aniso_factor(ggx, masking, v)),
-            GgxAniso::Bound { curves, iso } => Some(curves.at(v) / iso.at(v.z).max(1e-6)),
-        }
-    }
+/// True when a GGX lobe needs the anisotropic albedo ([`ggx_aniso_albedo`]).
+#[inline(always)]
+fn is_aniso(ggx: &Ggx) -> bool {
+    ggx.ax != ggx.ay && !ggx.is_delta()
 }
 
 /// `E_avg = 2∫E1 μ dμ` for a masking variant.
@@ -140,6 +106,16 @@ pub fn reflection_albedo(f: &Fresnel, masking: Masking, mu: f32, alpha: f32) -> 
             (schlick(f0, Vec3::ONE, 5.0) - a * tables::lookup2(h82, mu, y))
                 .clamp(Vec3::ZERO, Vec3::ONE)
         }
+    }
+}
+
+/// Three albedos scaled together (for [`ggx_aniso_albedo`]).
+struct AlbedoTriple([f32; 3]);
+
+impl std::ops::Mul<f32> for AlbedoTriple {
+    type Output = AlbedoTriple;
+    fn mul(self, c: f32) -> AlbedoTriple {
+        AlbedoTriple(self.0.map(|x| x * c))
     }
 }
 
@@ -241,8 +217,6 @@ pub struct MicrofacetBound {
     pub(super) alpha: f32,
     /// The distribution is a delta ([`Ggx::is_delta`]).
     pub(super) delta: bool,
-    /// The anisotropic albedo correction.
-    pub(super) aniso: GgxAniso,
 }
 
 /// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
@@ -283,6 +257,15 @@ pub(super) fn f82_albedo(f0: Rgb, f90: Rgb, a: Rgb, e1: f32, sq: f32, h82: f32) 
 }
 
 impl MicrofacetR {
+    /// The albedo of an anisotropic lobe at local view `v` ([`ggx_aniso_albedo`]) for
+    /// [`MicrofacetR::albedo_fresnel`] `f`, before any clamp or compensation (shared by the
+    /// scalar and the lane-parallel prepares, so they agree bit for bit).
+    pub(in crate::interp) fn aniso_albedo(&self, f: &Fresnel, v: Vec3) -> Rgb {
+        ggx_aniso_albedo(&self.ggx, self.masking, v, |a| {
+            reflection_albedo(f, self.masking, v.z, a)
+        })
+    }
+
     /// The Fresnel form the albedo tables read: a conductor through its F82 fit (§3.9),
     /// any other form as it is. The fit costs two complex Fresnel evaluations, so a compiled
     /// material computes it once per constant leaf ([`MicrofacetR::prepare_bound`]).
@@ -311,7 +294,6 @@ impl MicrofacetR {
             curves: None,
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
-            aniso: GgxAniso::direct(&self.ggx),
         };
         self.prepare_bound(v, &bound)
     }
@@ -346,7 +328,6 @@ impl MicrofacetR {
             }),
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
-            aniso: GgxAniso::bind(&self.ggx, self.masking),
         }
     }
 
@@ -397,14 +378,13 @@ impl MicrofacetR {
             p.albedo = self.fresnel.eval(v.z);
             return;
         }
+        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
+        // μ do not see: it is looked up directly.
         let ess = clamp1(match &bound.curves {
+            _ if is_aniso(&self.ggx) => self.aniso_albedo(albedo_fresnel, v),
             Some(c) => c.albedo(albedo_fresnel, v.z),
             None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
         });
-        let ess = match bound.aniso.factor(&self.ggx, self.masking, v) {
-            Some(c) => clamp1(ess * c),
-            None => ess,
-        };
         match self.comp {
             Compensation::None => p.albedo = ess,
             Compensation::Turquin(k) => {
@@ -621,8 +601,6 @@ pub struct DielectricBound {
     pub(super) ggx_view: GgxView,
     /// The lobe's view-independent scalars.
     pub(super) consts: DielectricConsts,
-    /// The anisotropic albedo correction.
-    pub(super) aniso: GgxAniso,
 }
 
 /// The scalars of a dielectric's `prepare` that do not depend on the view, computed once
@@ -641,6 +619,16 @@ pub(super) struct DielectricConsts {
 }
 
 impl Dielectric {
+    /// `[E_R, E_T, E_T without (1 − F)]` of an anisotropic lobe at local view `v` and relative
+    /// index `eta` ([`ggx_aniso_albedo`]; entries not in `want` are 0), shared by the scalar
+    /// and the lane-parallel prepares.
+    pub(in crate::interp) fn aniso_albedos(&self, v: Vec3, eta: f32, want: [bool; 3]) -> [f32; 3] {
+        ggx_aniso_albedo(&self.ggx, self.masking, v, |a| {
+            AlbedoTriple(dielectric_albedos_masked(self.masking, v.z, a, eta, want))
+        })
+        .0
+    }
+
     /// η, with invalid values replaced by 1.
     pub(super) fn eta0(&self) -> f32 {
         if self.eta.is_finite() && self.eta > 0.0 {
@@ -675,13 +663,11 @@ impl Dielectric {
     pub fn bind(&self) -> DielectricBound {
         let ggx_view = GgxView::constants(&self.ggx);
         let consts = self.consts();
-        let aniso = GgxAniso::bind(&self.ggx, self.masking);
         if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
             return DielectricBound {
                 curves: None,
                 ggx_view,
                 consts,
-                aniso,
             };
         }
         let y = tables::ggx_axis(self.ggx.lookup_alpha());
@@ -699,7 +685,6 @@ impl Dielectric {
             curves: Some([at(eta0), at(1.0 / eta0)]),
             ggx_view,
             consts,
-            aniso,
         }
     }
 
@@ -710,7 +695,6 @@ impl Dielectric {
             curves: None,
             ggx_view: GgxView::constants(&self.ggx),
             consts: self.consts(),
-            aniso: GgxAniso::direct(&self.ggx),
         };
         self.prepare_bound(v, flipped, &bound)
     }
@@ -782,17 +766,14 @@ impl Dielectric {
             [f, (1.0 - f) * t, t]
         } else {
             let want = [refl, trans && p.t_fresnel, trans && !p.t_fresnel];
-            let [er, et, etn] = match &bound.curves {
+            match &bound.curves {
+                _ if is_aniso(&self.ggx) => self.aniso_albedos(v, eta, want),
                 Some(c) => {
                     let c = &c[usize::from(flipped)];
                     let at = |i: usize| if want[i] { c[i].at(v.z) } else { 0.0 };
                     [at(0), at(1), at(2)]
                 }
                 None => dielectric_albedos_masked(self.masking, v.z, alpha, eta, want),
-            };
-            match bound.aniso.factor(&self.ggx, self.masking, v) {
-                Some(c) => [er * c, et * c, etn * c],
-                None => [er, et, etn],
             }
         };
         if refl {

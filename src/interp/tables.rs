@@ -20,6 +20,10 @@
 //! Axis 0 is always `μ_o` (index `μ·31`; the node at `μ = 0` is computed at `μ = 1e-4`, which
 //! is the grazing limit to table accuracy). Lookups are (tri)linear and clamp every coordinate
 //! to its axis range. Blobs are decoded once, on first use, into a `Vec<f32>`.
+//!
+//! The isotropic tables are looked up at `α = √(α_x α_y)`. Anisotropic lobes (GGX, Ward,
+//! mia's highlight) use the 3-D azimuth-0 tables over `(μ_o, α_x, α_y)` through
+//! [`aniso_albedo`], because their albedo depends on both widths and on the view's azimuth.
 
 use std::sync::OnceLock;
 
@@ -604,43 +608,33 @@ pub fn aniso_weight(v: glam::Vec3) -> f32 {
     if r2 > 1e-12 { v.x * v.x / r2 } else { 0.5 }
 }
 
-/// Albedo of an anisotropic lobe from its azimuth-0 table `id` (axes μ_o, `y(α_x)`,
-/// `y(α_y)`, normalised coordinates `yx`, `yy`) at local view `v`, with
-/// `c2` = [`aniso_weight`]`(v)`: `c2·T(μ, yx, yy) + (1 − c2)·T(μ, yy, yx)`. Turning the view by 90° swaps the roles of
-/// the two widths, so the two lookups are the albedo at azimuths 0 and 90°, and the blend is
-/// the azimuth's lowest harmonic (`E(φ) = E₀ + E₂ cos 2φ`); the measured error of the blend
-/// is in docs/albedo-tables.md.
+/// Albedo of an anisotropic lobe (spec §3.17) from its azimuth-0 anisotropic table `id`
+/// (axes μ_o, `y(α_x)`, `y(α_y)`; `axis` maps a width to its coordinate), at local view `v`.
+///
+/// Turning the view by 90° swaps the roles of the widths, so the table gives the albedo at
+/// azimuths 0 and 90° exactly: `A = T(μ_o, α_x, α_y)`, `B = T(μ_o, α_y, α_x)`; in between it
+/// is blended by the azimuth's lowest harmonic, `E_T = B + (A − B) cos²φ_o` ([`aniso_weight`];
+/// at normal incidence `A = B`). A lobe whose albedo carries a Fresnel weighting the table
+/// does not (`iso(α)`, the lobe's isotropic albedo form, and `e_iso(α)` the isotropic
+/// albedo of the tabulated quantity) takes `iso(α_o) · E_T / e_iso(α_o)` at the view's
+/// projected width `α_o = √(cos²φ_o α_x² + sin²φ_o α_y²)` (exact for Λ(V)); for the
+/// tabulated quantity itself the result is `E_T`. Measured accuracy: docs/albedo-tables.md.
 #[inline]
-pub fn aniso_lookup(id: TableId, v: glam::Vec3, yx: f32, yy: f32) -> f32 {
+pub fn aniso_albedo<R: std::ops::Mul<f32, Output = R>>(
+    id: TableId,
+    v: glam::Vec3,
+    (ax, ay): (f32, f32),
+    axis: impl Fn(f32) -> f32,
+    e_iso: impl Fn(f32) -> f32,
+    iso: impl FnOnce(f32) -> R,
+) -> R {
+    let c2 = aniso_weight(v);
+    let (yx, yy) = (axis(ax), axis(ay));
     let a = lookup3(id, v.z, yx, yy);
     let b = lookup3(id, v.z, yy, yx);
-    b + (a - b) * aniso_weight(v)
-}
-
-/// An anisotropic table ([`aniso_lookup`]) at fixed widths: its azimuth-0 and azimuth-90°
-/// curves in μ, baked once per constant lobe.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AnisoCurves {
-    x: MuCurve,
-    y: MuCurve,
-}
-
-impl AnisoCurves {
-    /// The curves of table `id` at normalised width coordinates `yx` (along the tangent)
-    /// and `yy`.
-    pub fn new(id: TableId, yx: f32, yy: f32) -> AnisoCurves {
-        AnisoCurves {
-            x: MuCurve::new3(id, yx, yy),
-            y: MuCurve::new3(id, yy, yx),
-        }
-    }
-
-    /// [`aniso_lookup`] at local view `v`.
-    #[inline]
-    pub fn at(&self, v: glam::Vec3) -> f32 {
-        let b = self.y.at(v.z);
-        b + (self.x.at(v.z) - b) * aniso_weight(v)
-    }
+    let e_t = b + (a - b) * c2;
+    let alpha_o = (c2 * ax * ax + (1.0 - c2) * ay * ay).sqrt();
+    iso(alpha_o) * (e_t / e_iso(alpha_o).max(1e-6))
 }
 
 /// A 2-D table with its second coordinate fixed: a cheap 1-D lookup in μ (used in `eval` for

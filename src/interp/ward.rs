@@ -7,7 +7,7 @@
 
 use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
 use super::math::{Rgb, reflect};
-use super::tables::{self, AnisoCurves, MuCurve, TableId};
+use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -49,14 +49,20 @@ fn aniso_table(variant: WardVariant) -> TableId {
 }
 
 /// Albedo (ρ = 1) of a Ward lobe with (clamped) widths `ax`, `ay` at local view `v`: the
-/// isotropic table when `α_x = α_y`, else the anisotropic one blended over the view's
-/// azimuth ([`tables::aniso_lookup`], spec §3.17).
+/// isotropic table when `α_x = α_y`, else [`tables::aniso_albedo`] (spec §3.17).
 pub fn ward_albedo_at(variant: WardVariant, v: Vec3, ax: f32, ay: f32) -> f32 {
     if ax == ay {
         ward_albedo(variant, v.z, ax, ay)
     } else {
-        let (yx, yy) = (tables::ward_axis(ax), tables::ward_axis(ay));
-        tables::aniso_lookup(aniso_table(variant), v, yx, yy)
+        let iso = |a: f32| ward_albedo(variant, v.z, a, a);
+        tables::aniso_albedo(
+            aniso_table(variant),
+            v,
+            (ax, ay),
+            tables::ward_axis,
+            iso,
+            iso,
+        )
     }
 }
 
@@ -138,10 +144,18 @@ pub struct Ward {
 /// curve and its widths and normalisation (the classic norm at `μ_o = 1`).
 #[derive(Debug, Clone, Copy)]
 pub struct WardBound {
+    /// The albedo along μ (unused for an anisotropic lobe, whose albedo depends on the
+    /// view's azimuth: see [`WardBound::is_aniso`]).
     pub(super) curve: MuCurve,
-    /// The anisotropic table's curves when `α_x ≠ α_y` (then `curve` is unused).
-    pub(super) aniso: Option<AnisoCurves>,
     pub(super) core: WardCore,
+}
+
+impl WardBound {
+    /// True for an anisotropic lobe (clamped widths differ).
+    #[inline(always)]
+    pub(in crate::interp) fn is_aniso(&self) -> bool {
+        self.core.ax != self.core.ay
+    }
 }
 
 /// Prepared [`Ward`].
@@ -174,17 +188,8 @@ impl Ward {
 
     /// The view-independent part of [`Ward::prepare`] ([`WardBound`]).
     pub fn bind(&self) -> WardBound {
-        let (ax, ay) = (clamp_alpha(self.ax), clamp_alpha(self.ay));
-        let aniso = (ax != ay).then(|| {
-            AnisoCurves::new(
-                aniso_table(self.variant),
-                tables::ward_axis(ax),
-                tables::ward_axis(ay),
-            )
-        });
         WardBound {
             curve: self.albedo_curve(),
-            aniso,
             core: WardCore::new(self.ax, self.ay, self.variant, 1.0),
         }
     }
@@ -213,11 +218,19 @@ impl Ward {
             p.core.norm = b.core.norm / v.z.max(1e-7).sqrt();
         }
         p.v = v;
-        let e = match &b.aniso {
-            Some(a) => a.at(v),
-            None => b.curve.at(v.z),
+        let e = if b.is_aniso() {
+            self.aniso_albedo(b, v)
+        } else {
+            b.curve.at(v.z)
         };
         p.albedo = self.rho * e;
+    }
+
+    /// The albedo (ρ = 1) of an anisotropic bound lobe at local view `v` (shared by the
+    /// scalar and the lane-parallel prepares).
+    #[inline]
+    pub(in crate::interp) fn aniso_albedo(&self, b: &WardBound, v: Vec3) -> f32 {
+        ward_albedo_at(self.variant, v, b.core.ax, b.core.ay)
     }
 
     /// The prepared lobe given its table albedo at `μ_o` (ρ = 1).
@@ -293,6 +306,18 @@ pub struct MiaHighlight3 {
 }
 
 impl MiaHighlight3 {
+    /// The directional albedo at local view `v` of the unnormalised three-Ward mixture (the
+    /// divisor of §3.12's normalisation): `Σ_j w_j E_ward(μ_o; α_jx, α_jy)` from the Ward
+    /// tables at the clamped widths, anisotropic ones at the view's azimuth.
+    pub fn mixture_albedo(&self, v: Vec3) -> f32 {
+        let widths = self
+            .alphas()
+            .map(|(ax, ay)| (clamp_alpha(ax), clamp_alpha(ay)));
+        (0..3)
+            .map(|j| MIA_WEIGHTS[j] * ward_albedo_at(self.variant, v, widths[j].0, widths[j].1))
+            .sum()
+    }
+
     /// The three `(α_x, α_y)` pairs: `α_j = √(2/(n_j + 2))`, `n_j = n, n/2, n/4`.
     pub fn alphas(&self) -> [(f32, f32); 3] {
         let n = (8.0 * self.glossiness.clamp(0.0, 1.0)).exp2();
@@ -328,9 +353,7 @@ impl MiaHighlight3 {
         let cores = self
             .alphas()
             .map(|(ax, ay)| WardCore::new(ax, ay, self.variant, v.z));
-        let albedo: f32 = (0..3)
-            .map(|j| MIA_WEIGHTS[j] * ward_albedo_at(self.variant, v, cores[j].ax, cores[j].ay))
-            .sum();
+        let albedo = self.mixture_albedo(v);
         let norm = if albedo > 0.0 && albedo.is_finite() {
             1.0 / albedo
         } else {

@@ -1,13 +1,14 @@
 //! The albedo-table generator behind `vstructc-lutgen` (spec closures.md §3.17).
 //!
-//! Every entry is a deterministic f64 quadrature over a 512 × 512 grid of cell midpoints in
-//! the unit square: VNDF-stratified for GGX lobes (the estimator averages `f μ_i / pdf`, i.e.
+//! Every entry is a deterministic f64 quadrature over a 512 × 512 grid (128 × 128 for the
+//! 3-D anisotropic tables, [`grid`]) of cell midpoints in the unit square: VNDF-stratified for GGX lobes (the estimator averages `f μ_i / pdf`, i.e.
 //! `G2/G1(V)` times the Fresnel-like factor), Walter-stratified half vectors for Ward,
 //! cosine-stratified for diffuse and sheen lobes. Sums run sequentially in a fixed order, so
 //! an entry computed alone ([`compute_entry`]) is bit-identical to the same entry computed in
 //! a batch ([`generate`]); the batch is parallel over entries with rayon.
 //!
-//! Conventions: `V = (√(1 − μ²), 0, μ)` with `μ = max(j/31, 1e-4)`; isotropic widths;
+//! Conventions: `V = (√(1 − μ²), 0, μ)` with `μ = max(j/31, 1e-4)`; isotropic widths
+//! (anisotropic tables: widths `α_x` along the view's azimuth, `α_y` across it);
 //! dielectric transmission in the radiance convention (what sampling weights average to); the
 //! `Eavg` tables integrate the piecewise-linear interpolant of their parent table exactly
 //! (`2∫E μ dμ`), so that Kulla–Conty compensation built on table lookups is energy-exact with

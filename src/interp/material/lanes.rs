@@ -108,8 +108,7 @@ impl LanePlan {
 
 impl LeafLanes {
     /// The leaf's data when its family and configuration have a kernel (the same cases as
-    /// `Kernel::rebuild`, for views above the horizon). Anisotropic lobes take the general
-    /// path: their albedo depends on the view's azimuth, which the lanes' μ curves do not see.
+    /// `Kernel::rebuild`, for views above the horizon).
     fn new(b: &crate::interp::lobe::BoundLobe) -> Option<LeafLanes> {
         Some(match (&b.lobe, &b.aux) {
             (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => LeafLanes::Lambert {
@@ -123,7 +122,6 @@ impl LeafLanes {
             (Lobe::MicrofacetR(m), Aux::Microfacet(bound))
                 if m.fresnel.is_conductor()
                     && !m.ggx.is_delta()
-                    && m.ggx.ax == m.ggx.ay
                     && m.comp == Compensation::None =>
             {
                 let Fresnel::F82 { f0, f90, a, .. } = bound.albedo_fresnel else {
@@ -141,7 +139,6 @@ impl LeafLanes {
             (Lobe::Dielectric(d), Aux::Dielectric(bound))
                 if d.mode == DielectricMode::R
                     && !d.ggx.is_delta()
-                    && d.ggx.ax == d.ggx.ay
                     && (d.turquin <= 0.0 || d.turquin.is_nan()) =>
             {
                 LeafLanes::DielectricR {
@@ -151,7 +148,7 @@ impl LeafLanes {
                     e_r: bound.curves?[0][0],
                 }
             }
-            (Lobe::Ward(w), Aux::Ward(bound)) if bound.aniso.is_none() => LeafLanes::Ward {
+            (Lobe::Ward(w), Aux::Ward(bound)) => LeafLanes::Ward {
                 lobe: *w,
                 bound: *bound,
             },
@@ -171,11 +168,15 @@ impl LeafLanes {
     #[inline(always)]
     fn albedo<const W: usize>(
         &self,
-        mu: &[f32; W],
+        v: &Vec3x<W>,
         at: &LaneCoords<W>,
         out: &mut Vec3x<W>,
         e_hat: &mut [f32; W],
     ) {
+        let mu = &v.z;
+        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
+        // μ do not see: it is computed per lane, by the scalar prepare's own function.
+        let view = |k: usize| Vec3::new(v.x[k], v.y[k], v.z[k]);
         match self {
             LeafLanes::Lambert { rho, .. } => {
                 for k in 0..W {
@@ -224,6 +225,22 @@ impl LeafLanes {
                 }
             }
             LeafLanes::Conductor {
+                lobe,
+                f82: [f0, f90, a],
+                ..
+            } if lobe.ggx.ax != lobe.ggx.ay => {
+                // The bound F82 fit (`MicrofacetR::albedo_fresnel`, q = 5).
+                let f = Fresnel::F82 {
+                    f0: *f0,
+                    f90: *f90,
+                    q: 5.0,
+                    a: *a,
+                };
+                for k in 0..W {
+                    out.set(k, lobe.aniso_albedo(&f, view(k)).min(Vec3::ONE));
+                }
+            }
+            LeafLanes::Conductor {
                 f82: [f0, f90, a],
                 curves: [e1, sq, h82],
                 ..
@@ -236,10 +253,21 @@ impl LeafLanes {
                     );
                 }
             }
+            LeafLanes::DielectricR { lobe, eta, .. } if lobe.ggx.ax != lobe.ggx.ay => {
+                for k in 0..W {
+                    let [er, ..] = lobe.aniso_albedos(view(k), *eta, [true, false, false]);
+                    out.set(k, lobe.tint_r * er);
+                }
+            }
             LeafLanes::DielectricR { lobe, e_r, .. } => {
                 let e_r = e_r.at_lanes(at);
                 for k in 0..W {
                     out.set(k, lobe.tint_r * e_r[k]);
+                }
+            }
+            LeafLanes::Ward { lobe, bound } if bound.is_aniso() => {
+                for k in 0..W {
+                    out.set(k, lobe.rho * lobe.aniso_albedo(bound, view(k)));
                 }
             }
             LeafLanes::Ward { lobe, bound } => {
@@ -480,7 +508,7 @@ impl Material {
         // and the selection).
         let at = LaneCoords::new(&v.z);
         for ((leaf, a), e) in plan.leaves.iter().zip(alb.iter_mut()).zip(e_hat.iter_mut()) {
-            leaf.albedo(&v.z, &at, a, &mut e.x);
+            leaf.albedo(&v, &at, a, &mut e.x);
         }
         // Step 3: throughputs, bottom-up (op `j` writes slot `j`).
         for j in 0..n_thr {
