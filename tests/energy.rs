@@ -770,6 +770,10 @@ fn leaves() -> Vec<(String, Lobe)> {
         let rho = if d { Vec3::splat(0.8) } else { rgb(r) };
         let sigma = if d { 0.5 } else { r.f32() };
         out.push((format!("lambert {k}"), Lobe::Lambert(Lambert { rho })));
+        out.push((
+            format!("translucent {k}"),
+            Lobe::Translucent(Lambert { rho }),
+        ));
         for (name, variant) in [
             ("qon", OrenNayarVariant::Qualitative),
             ("fon", OrenNayarVariant::Fujii),
@@ -828,6 +832,20 @@ fn leaves() -> Vec<(String, Lobe)> {
                     masking,
                     fresnel,
                     comp: Compensation::None,
+                }),
+            ));
+        }
+        for (cname, comp) in [
+            ("turquin", Compensation::Turquin(1.0)),
+            ("kulla-conty", Compensation::KullaConty),
+        ] {
+            out.push((
+                format!("microfacet schlick {cname} {k} ({}, {})", g.ax, g.ay),
+                Lobe::MicrofacetR(MicrofacetR {
+                    ggx: g,
+                    masking,
+                    fresnel: schlick,
+                    comp,
                 }),
             ));
         }
