@@ -194,8 +194,14 @@ fn golden_point_values() {
     let mut failures = Vec::new();
     for (name, lobe, a, b) in golden_gray() {
         let p = prep(lobe, v);
+        // §3.12: the highlight is divided by its mixture's table albedo; the point values are
+        // those of the mixture itself.
+        let scale = match lobe {
+            Lobe::MiaHighlight3(m) => f64::from(m.mixture_albedo(v)),
+            _ => 1.0,
+        };
         for (cfg, l, want) in [("A", config_a(), a), ("B", config_b(), b)] {
-            let got = f64::from(p.eval(l).f_cos.x);
+            let got = f64::from(p.eval(l).f_cos.x) * scale;
             if !close_golden(got, want) {
                 failures.push(format!("{name} config {cfg}: got {got:.8}, want {want}"));
             }
@@ -537,14 +543,17 @@ fn leaves_match_f64_formulas_at_random_directions() {
         |v, l| leaves_ref::ward(0.15f32.into(), 0.3f32.into(), d(v), d(l), false),
         false,
     );
+    // The highlight is divided by its mixture's table albedo (§3.12; the albedo itself is
+    // checked against quadrature in tests/energy.rs).
+    let mia = MiaHighlight3 {
+        glossiness: 0.6,
+        anisotropy: 1.0,
+        variant: WardVariant::Classic,
+    };
     compare(
         "mia highlight",
-        Lobe::MiaHighlight3(MiaHighlight3 {
-            glossiness: 0.6,
-            anisotropy: 1.0,
-            variant: WardVariant::Classic,
-        }),
-        |v, l| mia_highlight(0.6f32.into(), d(v), d(l), true),
+        Lobe::MiaHighlight3(mia),
+        |v, l| mia_highlight(0.6f32.into(), d(v), d(l), true) / f64::from(mia.mixture_albedo(v)),
         false,
     );
     compare(
@@ -642,14 +651,18 @@ fn more_leaves_match_f64_formulas_at_random_directions() {
     );
     // MiaHighlight3 anisotropic, in both Ward variants (§3.12).
     for (variant, classic) in [(WardVariant::Classic, true), (WardVariant::Gm, false)] {
+        let mia = MiaHighlight3 {
+            glossiness: 0.6,
+            anisotropy: 2.0,
+            variant,
+        };
         compare(
             &format!("mia highlight aniso {variant:?}"),
-            Lobe::MiaHighlight3(MiaHighlight3 {
-                glossiness: 0.6,
-                anisotropy: 2.0,
-                variant,
-            }),
-            |v, l| mia_highlight_aniso(0.6f32.into(), 2.0, d(v), d(l), classic),
+            Lobe::MiaHighlight3(mia),
+            |v, l| {
+                mia_highlight_aniso(0.6f32.into(), 2.0, d(v), d(l), classic)
+                    / f64::from(mia.mixture_albedo(v))
+            },
             false,
         );
     }

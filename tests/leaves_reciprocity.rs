@@ -80,24 +80,6 @@ fn reciprocal_lobes() -> Vec<(&'static str, Lobe, bool)> {
             false,
         ),
         (
-            "mia highlight",
-            Lobe::MiaHighlight3(MiaHighlight3 {
-                glossiness: 0.4,
-                anisotropy: 2.0,
-                variant: WardVariant::Classic,
-            }),
-            false,
-        ),
-        (
-            "mia highlight gm",
-            Lobe::MiaHighlight3(MiaHighlight3 {
-                glossiness: 0.4,
-                anisotropy: 2.0,
-                variant: WardVariant::Gm,
-            }),
-            false,
-        ),
-        (
             "sheen mx",
             Lobe::SheenCK(SheenCK {
                 r: 0.4,
@@ -219,6 +201,23 @@ fn non_reciprocal_leaves_are_asymmetric() {
             }),
         ),
         ("sheen ltc", Lobe::SheenLTC(SheenLTC { r: 0.5 })),
+        // Divided by its directional albedo at μ_o (§3.12), in both Ward variants.
+        (
+            "mia highlight",
+            Lobe::MiaHighlight3(MiaHighlight3 {
+                glossiness: 0.4,
+                anisotropy: 2.0,
+                variant: WardVariant::Classic,
+            }),
+        ),
+        (
+            "mia highlight gm",
+            Lobe::MiaHighlight3(MiaHighlight3 {
+                glossiness: 0.4,
+                anisotropy: 2.0,
+                variant: WardVariant::Gm,
+            }),
+        ),
         (
             "sheen original",
             Lobe::SheenCK(SheenCK {

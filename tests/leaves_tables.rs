@@ -1,9 +1,9 @@
 //! Albedo tables (spec closures.md §3.17): every blob decodes, its header records the
-//! generator version and 512² samples; a seeded random sample of 64 entries regenerated with
+//! generator version and its sample count (512², 128² for the anisotropic tables); a seeded random sample of 64 entries regenerated with
 //! the generator's f64 quadrature matches to 1e-6; each `Eavg` table is the average of its
 //! parent; lookups interpolate linearly.
 
-use vstructc::interp::lutgen::{self, GENERATOR_VERSION, GRID};
+use vstructc::interp::lutgen::{self, GENERATOR_VERSION};
 use vstructc::interp::tables::{self, N, TableId};
 use vstructc::interp::verify::Rng;
 
@@ -13,7 +13,8 @@ fn blobs_decode_with_expected_headers() {
         let lut = tables::lut(id);
         assert_eq!(lut.data.len(), id.len(), "{}", id.name());
         assert_eq!(lut.generator_version, GENERATOR_VERSION, "{}", id.name());
-        assert_eq!(lut.samples_per_entry as usize, GRID * GRID, "{}", id.name());
+        let g = lutgen::grid(id);
+        assert_eq!(lut.samples_per_entry as usize, g * g, "{}", id.name());
         assert!(
             lut.data.iter().all(|v| v.is_finite() && *v >= 0.0),
             "{}",

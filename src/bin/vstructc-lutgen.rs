@@ -1,13 +1,13 @@
 //! `vstructc-lutgen`: generates the interpreter's albedo tables (spec closures.md §3.17).
 //!
-//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|all]` (default: all groups, into
+//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|all]` (default: all groups, into
 //! `src/interp/tables/` of this crate). Run it in release mode; the 3-D dielectric tables
 //! take several CPU-minutes. Each group's tables (and the `Eavg` tables derived from them)
 //! are written as soon as the group is done. `--entry NAME I J K` prints one entry.
 
 use std::path::PathBuf;
 use std::time::Instant;
-use vstructc::interp::lutgen::{self, GENERATOR_VERSION, GRID, Group};
+use vstructc::interp::lutgen::{self, GENERATOR_VERSION, Group};
 use vstructc::interp::tables::{self, TableId};
 
 fn main() {
@@ -25,7 +25,7 @@ fn main() {
             ("--only", Some(v)) => only = v,
             _ => {
                 eprintln!(
-                    "usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|all]"
+                    "usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|all]"
                 );
                 std::process::exit(2);
             }
@@ -43,6 +43,7 @@ fn main() {
             "diel" => matches!(group, Group::Dielectric(_)),
             "diel-fwd" => group == Group::Dielectric(false),
             "diel-inv" => group == Group::Dielectric(true),
+            "aniso" => matches!(group, Group::Aniso(_)),
             _ => false,
         };
         if !selected {
@@ -75,7 +76,8 @@ fn print_entry(args: &[String]) {
 }
 
 fn write(dir: &std::path::Path, id: TableId, data: &[f32]) {
-    let bytes = tables::encode(id, GENERATOR_VERSION, (GRID * GRID) as u32, data);
+    let g = lutgen::grid(id);
+    let bytes = tables::encode(id, GENERATOR_VERSION, (g * g) as u32, data);
     let path = dir.join(format!("{}.lut", id.name()));
     if let Err(e) = std::fs::write(&path, bytes) {
         eprintln!("error: cannot write {}: {e}", path.display());

@@ -281,7 +281,10 @@ impl Lobe {
     pub fn reciprocity(&self) -> Reciprocity {
         let turquin = |k: f32| k > 0.0;
         match self {
-            Lobe::MiaDiffuse(_) | Lobe::SheenLTC(_) => Reciprocity::NonReciprocal,
+            // mia's highlight is divided by its directional albedo at μ_o (§3.12).
+            Lobe::MiaDiffuse(_) | Lobe::SheenLTC(_) | Lobe::MiaHighlight3(_) => {
+                Reciprocity::NonReciprocal
+            }
             Lobe::SheenCK(s) if s.masking == SheenMasking::Original => Reciprocity::NonReciprocal,
             Lobe::MicrofacetR(MicrofacetR {
                 comp: Compensation::Turquin(k),

@@ -37,6 +37,39 @@ fn e1_table(masking: Masking) -> TableId {
     }
 }
 
+fn aniso_table(masking: Masking) -> TableId {
+    match masking {
+        Masking::HeightCorrelated => TableId::E1HcAniso,
+        Masking::Separable => TableId::E1SepAniso,
+    }
+}
+
+/// The albedo of an anisotropic GGX lobe (spec §3.17; [`tables::aniso_albedo`]): `iso(α)`,
+/// the lobe's isotropic albedo form (Fresnel moments or dielectric tables) at width α, taken
+/// at the view's projected width and corrected by the anisotropic `E1` table.
+#[inline]
+pub fn ggx_aniso_albedo<R: std::ops::Mul<f32, Output = R>>(
+    ggx: &Ggx,
+    masking: Masking,
+    v: Vec3,
+    iso: impl FnOnce(f32) -> R,
+) -> R {
+    tables::aniso_albedo(
+        aniso_table(masking),
+        v,
+        (ggx.ax, ggx.ay),
+        tables::ggx_axis,
+        |a| e1(masking, v.z, a),
+        iso,
+    )
+}
+
+/// True when a GGX lobe needs the anisotropic albedo ([`ggx_aniso_albedo`]).
+#[inline(always)]
+fn is_aniso(ggx: &Ggx) -> bool {
+    ggx.ax != ggx.ay && !ggx.is_delta()
+}
+
 /// `E_avg = 2∫E1 μ dμ` for a masking variant.
 pub fn e1_avg(masking: Masking, alpha: f32) -> f32 {
     let t = match masking {
@@ -73,6 +106,16 @@ pub fn reflection_albedo(f: &Fresnel, masking: Masking, mu: f32, alpha: f32) -> 
             (schlick(f0, Vec3::ONE, 5.0) - a * tables::lookup2(h82, mu, y))
                 .clamp(Vec3::ZERO, Vec3::ONE)
         }
+    }
+}
+
+/// Three albedos scaled together (for [`ggx_aniso_albedo`]).
+struct AlbedoTriple([f32; 3]);
+
+impl std::ops::Mul<f32> for AlbedoTriple {
+    type Output = AlbedoTriple;
+    fn mul(self, c: f32) -> AlbedoTriple {
+        AlbedoTriple(self.0.map(|x| x * c))
     }
 }
 
@@ -214,6 +257,15 @@ pub(super) fn f82_albedo(f0: Rgb, f90: Rgb, a: Rgb, e1: f32, sq: f32, h82: f32) 
 }
 
 impl MicrofacetR {
+    /// The albedo of an anisotropic lobe at local view `v` ([`ggx_aniso_albedo`]) for
+    /// [`MicrofacetR::albedo_fresnel`] `f`, before any clamp or compensation (shared by the
+    /// scalar and the lane-parallel prepares, so they agree bit for bit).
+    pub(in crate::interp) fn aniso_albedo(&self, f: &Fresnel, v: Vec3) -> Rgb {
+        ggx_aniso_albedo(&self.ggx, self.masking, v, |a| {
+            reflection_albedo(f, self.masking, v.z, a)
+        })
+    }
+
     /// The Fresnel form the albedo tables read: a conductor through its F82 fit (§3.9),
     /// any other form as it is. The fit costs two complex Fresnel evaluations, so a compiled
     /// material computes it once per constant leaf ([`MicrofacetR::prepare_bound`]).
@@ -326,7 +378,10 @@ impl MicrofacetR {
             p.albedo = self.fresnel.eval(v.z);
             return;
         }
+        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
+        // μ do not see: it is looked up directly.
         let ess = clamp1(match &bound.curves {
+            _ if is_aniso(&self.ggx) => self.aniso_albedo(albedo_fresnel, v),
             Some(c) => c.albedo(albedo_fresnel, v.z),
             None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
         });
@@ -465,6 +520,10 @@ pub enum DielectricMode {
 ///   and the χ² test fails. Sample weights then average to the radiance-convention `E_T`.
 /// * With `t_fresnel = false` the reflection probability uses the transmission factor 1
 ///   instead of `1 − F`: `P_R = F lum(T_r) / (F lum(T_r) + lum(T_t))`.
+/// * Seen from below, a mode `T` lobe with `t_fresnel = false` is the whole interface: it
+///   evaluates as `RT` with `t_fresnel` on (the reflection layer the recipe puts above it is
+///   one-sided; spec §4.5), so glass seen from inside reflects with the inverted index and
+///   conserves energy.
 /// * Delta refraction (α below the cut-off) has weight `T_t (1 − F)/η'²` (radiance
 ///   convention, consistent with `E_T`), not `1 − F`.
 /// * `eval`'s Fresnel factor for a refraction pair is computed from the optically denser
@@ -560,6 +619,16 @@ pub(super) struct DielectricConsts {
 }
 
 impl Dielectric {
+    /// `[E_R, E_T, E_T without (1 − F)]` of an anisotropic lobe at local view `v` and relative
+    /// index `eta` ([`ggx_aniso_albedo`]; entries not in `want` are 0), shared by the scalar
+    /// and the lane-parallel prepares.
+    pub(in crate::interp) fn aniso_albedos(&self, v: Vec3, eta: f32, want: [bool; 3]) -> [f32; 3] {
+        ggx_aniso_albedo(&self.ggx, self.masking, v, |a| {
+            AlbedoTriple(dielectric_albedos_masked(self.masking, v.z, a, eta, want))
+        })
+        .0
+    }
+
     /// η, with invalid values replaced by 1.
     pub(super) fn eta0(&self) -> f32 {
         if self.eta.is_finite() && self.eta > 0.0 {
@@ -567,6 +636,16 @@ impl Dielectric {
         } else {
             1.0
         }
+    }
+
+    /// True when this lobe, seen from below (`flipped`), stands for the whole interface: a
+    /// transmission lobe without its `(1 − F)` factor leaves the reflection to a separate
+    /// layer above it, and that layer is one-sided, so from inside the lobe reflects (Fresnel
+    /// with the inverted index, total internal reflection beyond the critical angle) and
+    /// keeps `(1 − F)` on its transmission, as an `RT` lobe does (spec §4.5).
+    #[inline(always)]
+    fn whole_interface(&self, flipped: bool) -> bool {
+        flipped && self.mode == DielectricMode::T && !self.t_fresnel
     }
 
     /// The view-independent scalars of [`Dielectric::prepare`].
@@ -630,6 +709,7 @@ impl Dielectric {
         bound: &DielectricBound,
     ) -> PreparedDielectric {
         let c = &bound.consts;
+        let whole = self.whole_interface(flipped);
         let mut p = PreparedDielectric {
             ggx: self.ggx,
             masking: self.masking,
@@ -639,13 +719,13 @@ impl Dielectric {
             view: bound.ggx_view,
             g1_v: 0.0,
             inv_mu: 0.0,
-            refl: self.mode != DielectricMode::T,
+            refl: self.mode != DielectricMode::T || whole,
             trans: self.mode != DielectricMode::R,
             tint_r: self.tint_r,
             tint_t: self.tint_t,
             lum_r: c.lum_r,
             lum_t: c.lum_t,
-            t_fresnel: self.t_fresnel,
+            t_fresnel: self.t_fresnel || whole,
             delta: c.delta,
             albedo: LobeAlbedo::default(),
         };
@@ -685,8 +765,9 @@ impl Dielectric {
             let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
             [f, (1.0 - f) * t, t]
         } else {
-            let want = [refl, trans && self.t_fresnel, trans && !self.t_fresnel];
+            let want = [refl, trans && p.t_fresnel, trans && !p.t_fresnel];
             match &bound.curves {
+                _ if is_aniso(&self.ggx) => self.aniso_albedos(v, eta, want),
                 Some(c) => {
                     let c = &c[usize::from(flipped)];
                     let at = |i: usize| if want[i] { c[i].at(v.z) } else { 0.0 };
@@ -699,7 +780,7 @@ impl Dielectric {
             p.albedo.reflect = p.tint_r * er;
         }
         if trans {
-            p.albedo.transmit = self.tint_t * if self.t_fresnel { et } else { etn };
+            p.albedo.transmit = self.tint_t * if p.t_fresnel { et } else { etn };
             p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
         }
     }

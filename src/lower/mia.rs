@@ -86,11 +86,22 @@ pub fn weights<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<MiaWeights, 
     let tl_c = p(cx, n, "refr_trans_color")?;
     let conserve = p(cx, n, "brdf_conserve_energy")?;
     let metal = p(cx, n, "refl_is_metal")?;
+    let thin = cx.static_scalar(n, "thin_walled", 0.0).unwrap_or(0.0) != 0.0;
 
     let pr = &mut cx.b.prog;
     let exact = pr.bin(OpCode::FresnelDielectric, mu, ior);
     let schlick = pr.schlick(mu, r0, r90, curve);
     let c = pr.select(fresnel_mode, exact, schlick);
+    // Seen from inside a solid (μ_o < 0, not thin-walled) the one-sided highlight returns
+    // nothing and the refraction lobe is the whole interface (Fresnel reflection with the
+    // inverted index and transmission, §4.5), so the reflection takes no energy there.
+    let c = if thin {
+        c
+    } else {
+        let zero = pr.constf(0.0);
+        let front = pr.bin(OpCode::CmpGt, mu, zero);
+        pr.select(front, c, zero)
+    };
     let rc = pr.mul(reflectivity, refl_color);
     let reflect = pr.mul(rc, c);
     let diffuse = pr.mul(dw, dcol);

@@ -1,13 +1,14 @@
 //! The albedo-table generator behind `vstructc-lutgen` (spec closures.md §3.17).
 //!
-//! Every entry is a deterministic f64 quadrature over a 512 × 512 grid of cell midpoints in
-//! the unit square: VNDF-stratified for GGX lobes (the estimator averages `f μ_i / pdf`, i.e.
+//! Every entry is a deterministic f64 quadrature over a 512 × 512 grid (128 × 128 for the
+//! 3-D anisotropic tables, [`grid`]) of cell midpoints in the unit square: VNDF-stratified for GGX lobes (the estimator averages `f μ_i / pdf`, i.e.
 //! `G2/G1(V)` times the Fresnel-like factor), Walter-stratified half vectors for Ward,
 //! cosine-stratified for diffuse and sheen lobes. Sums run sequentially in a fixed order, so
 //! an entry computed alone ([`compute_entry`]) is bit-identical to the same entry computed in
 //! a batch ([`generate`]); the batch is parallel over entries with rayon.
 //!
-//! Conventions: `V = (√(1 − μ²), 0, μ)` with `μ = max(j/31, 1e-4)`; isotropic widths;
+//! Conventions: `V = (√(1 − μ²), 0, μ)` with `μ = max(j/31, 1e-4)`; isotropic widths
+//! (anisotropic tables: widths `α_x` along the view's azimuth, `α_y` across it);
 //! dielectric transmission in the radiance convention (what sampling weights average to); the
 //! `Eavg` tables integrate the piecewise-linear interpolant of their parent table exactly
 //! (`2∫E μ dμ`), so that Kulla–Conty compensation built on table lookups is energy-exact with
@@ -24,6 +25,22 @@ use std::f64::consts::PI;
 pub const GENERATOR_VERSION: u32 = 1;
 /// Grid points per axis of the per-entry quadrature (512² samples per entry).
 pub const GRID: usize = 512;
+/// Grid points per axis for the 3-D anisotropic tables (128² samples per entry: their
+/// accuracy target is 2e-2, and 512² would cost 16 times the isotropic tables' time).
+pub const GRID_ANISO: usize = 128;
+
+/// Grid points per axis of `table`'s quadrature.
+pub fn grid(table: TableId) -> usize {
+    if is_aniso(table) { GRID_ANISO } else { GRID }
+}
+
+/// True for the anisotropic (azimuth-0) tables.
+pub fn is_aniso(t: TableId) -> bool {
+    matches!(
+        t,
+        TableId::E1HcAniso | TableId::E1SepAniso | TableId::WardClassicAniso | TableId::WardGmAniso
+    )
+}
 /// Smallest μ_o used for the grazing node.
 pub const MU_MIN: f64 = 1e-4;
 
@@ -39,6 +56,8 @@ pub fn axis_value(table: TableId, axis: usize, i: usize) -> f64 {
         // √α axes → α.
         (_, 1) if is_ggx(table) => t * t,
         (TableId::WardClassic | TableId::WardGm, 1) => t * t,
+        (TableId::E1HcAniso | TableId::E1SepAniso, 1 | 2) => t * t,
+        (TableId::WardClassicAniso | TableId::WardGmAniso, 1 | 2) => t * t,
         (TableId::EavgE1Hc | TableId::EavgE1Sep | TableId::EavgH82Hc | TableId::EavgH82Sep, 0) => {
             t * t
         }
@@ -72,16 +91,24 @@ fn is_ggx(t: TableId) -> bool {
 
 /// `(cos 2πu, sin 2πu)` at the grid's cell midpoints.
 fn angles() -> Vec<(f64, f64)> {
-    (0..GRID)
+    angles_n(GRID)
+}
+
+fn angles_n(n: usize) -> Vec<(f64, f64)> {
+    (0..n)
         .map(|i| {
-            let phi = 2.0 * PI * (i as f64 + 0.5) / GRID as f64;
+            let phi = 2.0 * PI * (i as f64 + 0.5) / n as f64;
             (phi.cos(), phi.sin())
         })
         .collect()
 }
 
 fn midpoint(j: usize) -> f64 {
-    (j as f64 + 0.5) / GRID as f64
+    midpoint_n(j, GRID)
+}
+
+fn midpoint_n(j: usize, n: usize) -> f64 {
+    (j as f64 + 0.5) / n as f64
 }
 
 /// The VNDF grid's second coordinate, warped as `u2 = 1 − (1 − t)²` at cell midpoints `t`,
@@ -178,6 +205,52 @@ pub fn ward_albedo(mu: f64, alpha: f64, classic: bool) -> f64 {
     acc / (GRID * GRID) as f64
 }
 
+/// Anisotropic GGX albedo with F = 1 (widths `ax`, `ay`, view at azimuth 0) by
+/// VNDF-stratified quadrature over a `GRID_ANISO²` grid.
+pub fn ggx_albedo_aniso(mu: f64, ax: f64, ay: f64, hc: bool) -> f64 {
+    let n = GRID_ANISO;
+    let cs = angles_n(n);
+    let v = view(mu);
+    let lambda_v = ref64::ggx_lambda_aniso(ax, ay, v);
+    let mut acc = 0.0;
+    for c in &cs {
+        for j in 0..n {
+            let t = midpoint_n(j, n);
+            let (u2, wq) = (1.0 - (1.0 - t) * (1.0 - t), 2.0 * (1.0 - t));
+            let h = ref64::ggx_vndf_aniso(ax, ay, v, *c, u2);
+            let l = 2.0 * v.dot(h) * h - v;
+            if l.z <= 0.0 {
+                continue;
+            }
+            let lambda_l = ref64::ggx_lambda_aniso(ax, ay, l);
+            // G2/G1(V).
+            acc += wq
+                * if hc {
+                    (1.0 + lambda_v) / (1.0 + lambda_v + lambda_l)
+                } else {
+                    1.0 / (1.0 + lambda_l)
+                };
+        }
+    }
+    acc / (n * n) as f64
+}
+
+/// Anisotropic Ward albedo (ρ_s = 1, view at azimuth 0) by Walter-stratified half vectors
+/// over a `GRID_ANISO²` grid.
+pub fn ward_albedo_aniso(mu: f64, ax: f64, ay: f64, classic: bool) -> f64 {
+    let n = GRID_ANISO;
+    let cs = angles_n(n);
+    let v = view(mu);
+    let mut acc = 0.0;
+    for c in &cs {
+        for j in 0..n {
+            let h = ref64::ward_half_aniso(ax, ay, *c, midpoint_n(j, n));
+            acc += ref64::ward_weight(v, h, classic);
+        }
+    }
+    acc / (n * n) as f64
+}
+
 /// Albedo of a diffuse-like lobe by cosine-stratified quadrature of `π f(V, L)`.
 fn cosine_albedo(mu: f64, pi_f: impl Fn(DVec3, DVec3) -> f64) -> f64 {
     let cs = angles();
@@ -230,6 +303,10 @@ pub fn compute_entry(table: TableId, idx: [usize; 3]) -> f64 {
         TableId::SheenOrig => sheen_albedo(mu, y, false),
         TableId::Qon => qon_albedo(mu, y),
         TableId::Mia => mia_albedo(mu, y),
+        TableId::E1HcAniso => ggx_albedo_aniso(mu, y, z, true),
+        TableId::E1SepAniso => ggx_albedo_aniso(mu, y, z, false),
+        TableId::WardClassicAniso => ward_albedo_aniso(mu, y, z, true),
+        TableId::WardGmAniso => ward_albedo_aniso(mu, y, z, false),
         _ => f64::NAN,
     }
 }
@@ -264,11 +341,13 @@ pub enum Group {
     Dielectric(bool),
     /// One 2-D table computed entry by entry.
     Single(TableId),
+    /// One 3-D anisotropic table computed entry by entry.
+    Aniso(TableId),
 }
 
 impl Group {
     /// The groups, 2-D first (cheap), then 3-D.
-    pub const ALL: [Group; 10] = [
+    pub const ALL: [Group; 14] = [
         Group::Single(TableId::WardClassic),
         Group::Single(TableId::WardGm),
         Group::Single(TableId::SheenMx),
@@ -279,6 +358,10 @@ impl Group {
         Group::Ggx(false),
         Group::Dielectric(false),
         Group::Dielectric(true),
+        Group::Aniso(TableId::E1HcAniso),
+        Group::Aniso(TableId::E1SepAniso),
+        Group::Aniso(TableId::WardClassicAniso),
+        Group::Aniso(TableId::WardGmAniso),
     ];
 
     /// The tables this group writes, in output order.
@@ -290,7 +373,7 @@ impl Group {
             Group::Dielectric(true) => {
                 vec![TableId::ErDielInv, TableId::EtDielInv, TableId::EtnDielInv]
             }
-            Group::Single(t) => vec![t],
+            Group::Single(t) | Group::Aniso(t) => vec![t],
         }
     }
 }
@@ -302,6 +385,13 @@ pub fn generate(group: Group) -> Vec<(TableId, Vec<f32>)> {
             let data: Vec<f32> = (0..t.len())
                 .into_par_iter()
                 .map(|k| compute_entry(t, [k % N, k / N, 0]) as f32)
+                .collect();
+            vec![(t, data)]
+        }
+        Group::Aniso(t) => {
+            let data: Vec<f32> = (0..t.len())
+                .into_par_iter()
+                .map(|k| compute_entry(t, [k % N, (k / N) % N, k / (N * N)]) as f32)
                 .collect();
             vec![(t, data)]
         }

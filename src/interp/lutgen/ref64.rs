@@ -139,3 +139,30 @@ pub fn mia_terminator(mu: f64) -> f64 {
         8.0 * mu * mu * (1.0 - 2.0 * mu)
     }
 }
+
+/// Smith Λ for anisotropic GGX (widths `ax`, `ay`), written without cancellation.
+pub fn ggx_lambda_aniso(ax: f64, ay: f64, w: DVec3) -> f64 {
+    let z2 = (w.z * w.z).max(1e-300);
+    let x = (ax * ax * w.x * w.x + ay * ay * w.y * w.y) / z2;
+    x / (2.0 * (1.0 + (1.0 + x).sqrt()))
+}
+
+/// Visible-normal sample of anisotropic GGX (Dupuy & Benyoub 2023) with precomputed
+/// `(cos φ, sin φ)`.
+pub fn ggx_vndf_aniso(ax: f64, ay: f64, v: DVec3, cs: (f64, f64), u2: f64) -> DVec3 {
+    let vh = DVec3::new(ax * v.x, ay * v.y, v.z).normalize();
+    let z = (1.0 - u2) * (1.0 + vh.z) - vh.z;
+    let s = (1.0 - z * z).clamp(0.0, 1.0).sqrt();
+    let c = DVec3::new(s * cs.0, s * cs.1, z) + vh;
+    DVec3::new(ax * c.x, ay * c.y, c.z.max(0.0)).normalize()
+}
+
+/// Walter's anisotropic Ward half vector for the grid point `(cos 2πu₁, sin 2πu₁)`, `u₂`.
+pub fn ward_half_aniso(ax: f64, ay: f64, cs: (f64, f64), u2: f64) -> DVec3 {
+    // φ_h = atan((α_y/α_x) tan 2πu₁) in the quadrant of 2πu₁.
+    let d = DVec3::new(ax * cs.0, ay * cs.1, 0.0).normalize();
+    let t2 = -(1.0 - u2).ln() / (d.x * d.x / (ax * ax) + d.y * d.y / (ay * ay));
+    let cz = 1.0 / (1.0 + t2).sqrt();
+    let sz = (t2 / (1.0 + t2)).sqrt();
+    DVec3::new(sz * d.x, sz * d.y, cz)
+}

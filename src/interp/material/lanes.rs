@@ -168,11 +168,15 @@ impl LeafLanes {
     #[inline(always)]
     fn albedo<const W: usize>(
         &self,
-        mu: &[f32; W],
+        v: &Vec3x<W>,
         at: &LaneCoords<W>,
         out: &mut Vec3x<W>,
         e_hat: &mut [f32; W],
     ) {
+        let mu = &v.z;
+        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
+        // μ do not see: it is computed per lane, by the scalar prepare's own function.
+        let view = |k: usize| Vec3::new(v.x[k], v.y[k], v.z[k]);
         match self {
             LeafLanes::Lambert { rho, .. } => {
                 for k in 0..W {
@@ -221,6 +225,22 @@ impl LeafLanes {
                 }
             }
             LeafLanes::Conductor {
+                lobe,
+                f82: [f0, f90, a],
+                ..
+            } if lobe.ggx.ax != lobe.ggx.ay => {
+                // The bound F82 fit (`MicrofacetR::albedo_fresnel`, q = 5).
+                let f = Fresnel::F82 {
+                    f0: *f0,
+                    f90: *f90,
+                    q: 5.0,
+                    a: *a,
+                };
+                for k in 0..W {
+                    out.set(k, lobe.aniso_albedo(&f, view(k)).min(Vec3::ONE));
+                }
+            }
+            LeafLanes::Conductor {
                 f82: [f0, f90, a],
                 curves: [e1, sq, h82],
                 ..
@@ -233,10 +253,21 @@ impl LeafLanes {
                     );
                 }
             }
+            LeafLanes::DielectricR { lobe, eta, .. } if lobe.ggx.ax != lobe.ggx.ay => {
+                for k in 0..W {
+                    let [er, ..] = lobe.aniso_albedos(view(k), *eta, [true, false, false]);
+                    out.set(k, lobe.tint_r * er);
+                }
+            }
             LeafLanes::DielectricR { lobe, e_r, .. } => {
                 let e_r = e_r.at_lanes(at);
                 for k in 0..W {
                     out.set(k, lobe.tint_r * e_r[k]);
+                }
+            }
+            LeafLanes::Ward { lobe, bound } if bound.is_aniso() => {
+                for k in 0..W {
+                    out.set(k, lobe.rho * lobe.aniso_albedo(bound, view(k)));
                 }
             }
             LeafLanes::Ward { lobe, bound } => {
@@ -477,7 +508,7 @@ impl Material {
         // and the selection).
         let at = LaneCoords::new(&v.z);
         for ((leaf, a), e) in plan.leaves.iter().zip(alb.iter_mut()).zip(e_hat.iter_mut()) {
-            leaf.albedo(&v.z, &at, a, &mut e.x);
+            leaf.albedo(&v, &at, a, &mut e.x);
         }
         // Step 3: throughputs, bottom-up (op `j` writes slot `j`).
         for j in 0..n_thr {
