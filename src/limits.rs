@@ -56,7 +56,7 @@ impl Default for Limits {
             connections_per_input: 1 << 20,
             params_per_node: 1 << 20,
             expr_terms: 1 << 22,
-            expr_depth: 64,
+            expr_depth: crate::cond::parser::MAX_PAREN_DEPTH as u64,
             preview_pixels: 8192 * 8192,
         }
     }

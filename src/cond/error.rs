@@ -23,6 +23,10 @@ pub struct ParseError {
     pub found: String,
     /// Hints about the likely mistake (`use '==' to compare`, …).
     pub notes: Vec<String>,
+    /// Set when the expression exceeded a bound of [`crate::limits::Limits`]
+    /// ([`Limits::expr_terms`](crate::limits::Limits::expr_terms) or
+    /// [`Limits::expr_depth`](crate::limits::Limits::expr_depth)); `span` is where.
+    pub limit: Option<crate::limits::LimitExceeded>,
 }
 
 impl ParseError {

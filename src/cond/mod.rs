@@ -59,3 +59,13 @@ pub fn parse(text: &str) -> Result<Statement, ParseError> {
 pub fn parse_with(text: &str, ext: &Extensions) -> Result<Statement, ParseError> {
     parser::parse_statement(text, ext)
 }
+
+/// [`parse_with`] within `limits` (expression terms and parenthesis depth; see
+/// [`parser::parse_statement_limited`]).
+pub fn parse_limited(
+    text: &str,
+    ext: &Extensions,
+    limits: &crate::limits::Limits,
+) -> Result<Statement, ParseError> {
+    parser::parse_statement_limited(text, ext, limits)
+}

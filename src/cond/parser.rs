@@ -11,6 +11,7 @@
 //! Statements are desugared while parsing (§3.4). The first offending token produces a
 //! [`ParseError`] naming it and the set of tokens that were expected there.
 
+use crate::limits::{Limit, Limits};
 use super::ast::{Action, ActionKind, ElseIf, Expr, IsTest, Literal, Param, Span, Statement};
 use super::error::ParseError;
 use super::ext::{Extension, Extensions};
@@ -72,8 +73,21 @@ fn join_or(items: &[String]) -> String {
     }
 }
 
-/// Parse `text` with the given extensions.
+/// Parse `text` with the given extensions, within the default [`Limits`].
 pub fn parse_statement(text: &str, ext: &Extensions) -> Result<Statement, ParseError> {
+    parse_statement_limited(text, ext, &Limits::default())
+}
+
+/// Parse `text` with the given extensions, within `limits`: at most
+/// [`Limits::expr_terms`] predicates and [`Limits::expr_depth`] levels of parentheses (each
+/// level costs stack in the parser and in every pass over the tree, so keep it in the
+/// hundreds). Exceeding one is a VS001 error at the term or parenthesis that exceeds it, with
+/// [`ParseError::limit`] set.
+pub fn parse_statement_limited(
+    text: &str,
+    ext: &Extensions,
+    limits: &Limits,
+) -> Result<Statement, ParseError> {
     let first = next_token(text, 0);
     let mut p = Parser {
         text,
@@ -81,6 +95,8 @@ pub fn parse_statement(text: &str, ext: &Extensions) -> Result<Statement, ParseE
         previous: None,
         ext: *ext,
         depth: 0,
+        terms: 0,
+        limits: *limits,
     };
     for k in 1..LOOKAHEAD {
         p.window[k] = p.following(p.window[k - 1]);
@@ -100,14 +116,18 @@ struct Parser<'a> {
     /// The last consumed token.
     previous: Option<Token<'a>>,
     ext: Extensions,
-    /// Open parentheses around the current position (bounded by [`MAX_PAREN_DEPTH`]).
+    /// Open parentheses around the current position (bounded by [`Limits::expr_depth`]).
     depth: usize,
+    /// Predicates parsed so far (bounded by [`Limits::expr_terms`]).
+    terms: u64,
+    limits: Limits,
 }
 
-/// Deepest parenthesis nesting accepted in a conditional (robustness limit: the parser and
-/// every pass over the tree recurse once per level, while `and`/`or` chains of any length are
-/// loops over n-ary nodes; real expressions use 1–3 levels). Deeper nesting is a syntax error
-/// (VS001) at the parenthesis that exceeds it.
+/// Deepest parenthesis nesting accepted in a conditional by default
+/// ([`Limits::expr_depth`]; robustness limit: the parser and every pass over the tree recurse
+/// once per level, while `and`/`or` chains of any length are loops over n-ary nodes; real
+/// expressions use 1–3 levels). Deeper nesting is a syntax error (VS001) at the parenthesis
+/// that exceeds it.
 pub const MAX_PAREN_DEPTH: usize = 64;
 
 impl<'a> Parser<'a> {
@@ -182,6 +202,7 @@ impl<'a> Parser<'a> {
             expected,
             found,
             notes,
+            limit: None,
         }
     }
 
@@ -415,9 +436,16 @@ impl<'a> Parser<'a> {
     fn primary(&mut self) -> Result<(Expr, Span), ParseError> {
         let t = self.peek();
         if t.kind == TokenKind::LParen {
-            if self.depth >= MAX_PAREN_DEPTH {
+            if let Err(exceeded) = self
+                .limits
+                .check(Limit::ExprDepth, self.depth as u64 + 1)
+            {
                 let mut e = self.error(&[Want::Param]);
-                e.message = format!("parentheses nested deeper than {MAX_PAREN_DEPTH} levels");
+                e.message = format!(
+                    "parentheses nested deeper than {} levels",
+                    exceeded.max
+                );
+                e.limit = Some(exceeded);
                 return Err(e);
             }
             self.bump();
@@ -445,6 +473,13 @@ impl<'a> Parser<'a> {
 
     // pred := name CMP value | name ('IS' | 'IS_NOT') ('CONNECTED' | 'SET')
     fn predicate(&mut self) -> Result<Expr, ParseError> {
+        self.terms += 1;
+        if let Err(exceeded) = self.limits.check(Limit::ExprTerms, self.terms) {
+            let mut e = self.error(&[Want::Param]);
+            e.message = format!("{exceeded}");
+            e.limit = Some(exceeded);
+            return Err(e);
+        }
         let n = self.bump();
         let name = match n.kind {
             TokenKind::Param(p) => p,

@@ -40,6 +40,7 @@
 //! assert_eq!(net.find("PxrLayerMixer1"), Some(mixer));
 //! ```
 
+mod limits;
 mod param_types;
 #[doc(hidden)]
 pub mod testgen;

@@ -411,7 +411,7 @@ impl Registry {
         let def = def?;
         let tabled = entry.tables.get_or_init(|| {
             let mut diags = Vec::new();
-            let tables = VstructTables::build(&def, &mut diags);
+            let tables = VstructTables::build_limited(&def, &self.options.limits, &mut diags);
             Tabled {
                 tables: Some(Arc::new(tables)),
                 diags,
@@ -536,7 +536,14 @@ impl Registry {
             Ok(mut def) => {
                 // The id is the one the file was indexed under (the oso peek or the stem).
                 def.id = id.to_string();
-                Some(def)
+                let params = (def.inputs.len() + def.outputs.len()) as u64;
+                match self.options.limits.check(Limit::ParamsPerNode, params) {
+                    Ok(()) => Some(def),
+                    Err(e) => {
+                        diags.push(e.at(Location::file(c.name.clone())).to_diagnostic());
+                        None
+                    }
+                }
             }
             Err(Error::Input(diag)) => {
                 diags.push(*diag);

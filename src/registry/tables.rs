@@ -13,6 +13,7 @@
 //! * VS001's position is the value start plus the decoded offset (formats.md §2.6 allows it).
 //! * VS003 points at the property (the readers keep no position per attribute).
 
+use crate::limits::Limits;
 use super::model::{CondSource, Definition, Direction, Property};
 use crate::cond::{self, ParseError, Statement};
 use crate::diag::{Diagnostic, Location};
@@ -146,10 +147,22 @@ impl VstructTables {
 
     /// Builds the tables of `def`, reporting VS001–VS009 into `diags`.
     pub fn build(def: &Definition, diags: &mut Vec<Diagnostic>) -> VstructTables {
+        Self::build_limited(def, &Limits::default(), diags)
+    }
+
+    /// [`VstructTables::build`] with conditionals parsed within `limits` (expression terms
+    /// and depth; a conditional beyond them is VS001 naming the limit, and its member has no
+    /// condition).
+    pub fn build_limited(
+        def: &Definition,
+        limits: &Limits,
+        diags: &mut Vec<Diagnostic>,
+    ) -> VstructTables {
         let mut b = Builder {
             def,
             diags,
             parsed: HashMap::default(),
+            limits,
         };
         b.check_malformed_members();
         let inputs = b.input_heads();
@@ -201,6 +214,7 @@ struct Builder<'d, 'g> {
     def: &'d Definition,
     diags: &'g mut Vec<Diagnostic>,
     parsed: HashMap<String, Arc<Result<Statement, ParseError>>>,
+    limits: &'g Limits,
 }
 
 impl Builder<'_, '_> {
@@ -249,7 +263,10 @@ impl Builder<'_, '_> {
         let parsed = self
             .parsed
             .entry(src.text.clone())
-            .or_insert_with(|| Arc::new(cond::parse(&src.text)))
+            .or_insert_with(|| {
+                let ext = cond::ext::Extensions::none();
+                Arc::new(cond::parse_limited(&src.text, &ext, self.limits))
+            })
             .clone();
         if let Err(e) = parsed.as_ref() {
             self.diags.push(vs001(p, src, e));
