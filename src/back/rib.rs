@@ -79,7 +79,20 @@ pub fn write_rib(
     types: &dyn ParamTypes,
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    let w = Writer { source, net, types };
+    let mut surfaces = HashMap::new();
+    for m in net.materials() {
+        for t in m.terminals.iter().filter(|t| t.name == "surface") {
+            if let Some(id) = t.link.upstream_node() {
+                surfaces.entry(id).or_insert(m.name.as_str());
+            }
+        }
+    }
+    let w = Writer {
+        source,
+        net,
+        types,
+        surfaces,
+    };
     w.write(out)
 }
 
@@ -109,6 +122,8 @@ struct Writer<'a> {
     source: &'a [u8],
     net: &'a Network,
     types: &'a dyn ParamTypes,
+    /// The name of the first material whose `surface` terminal is each node.
+    surfaces: HashMap<NodeId, &'a str>,
 }
 
 fn invalid(msg: &str) -> io::Error {
@@ -325,15 +340,7 @@ impl Writer<'_> {
     }
 
     fn material_name_of(&self, id: NodeId) -> Option<&str> {
-        self.net
-            .materials()
-            .iter()
-            .find(|m| {
-                m.terminals
-                    .iter()
-                    .any(|t| t.name == "surface" && t.link.upstream_node() == Some(id))
-            })
-            .map(|m| m.name.as_str())
+        self.surfaces.get(&id).copied()
     }
 
     /// Decl and value exactly as written (one space between them if the source had a line
