@@ -30,6 +30,7 @@ use crate::types::{Value, format_f32};
 #[cfg(test)]
 use std::collections::BTreeMap;
 use std::collections::{HashMap, HashSet};
+use std::io::{self, Write};
 
 /// An output tree: objects are sorted maps, numbers are pre-formatted text.
 /// The tree the writer used to build before writing; kept in tests as the reference the
@@ -126,6 +127,28 @@ fn push_indent(out: &mut String, level: usize) {
 /// assert!(json.ends_with("\"vstructcNetwork\": 1\n}\n"));
 /// ```
 pub fn write_json(net: &Network) -> String {
+    let mut out = Vec::new();
+    // Writing into a Vec cannot fail.
+    let _ = write_json_to(net, &mut out);
+    // Every piece written is a `str` or serde_json's escaping of one.
+    String::from_utf8(out).unwrap_or_default()
+}
+
+/// [`write_json`] into `out`, material by material (the text of a large scene is never
+/// held in memory whole); fails with the error of `out`.
+///
+/// ```
+/// use vstructc::back::json::{write_json, write_json_to};
+/// use vstructc::network::Network;
+/// let mut net = Network::new();
+/// let s = net.add_node("s", "PxrSurface");
+/// let m = net.add_material("SG");
+/// net.set_terminal(m, "surface", s, None);
+/// let mut out = Vec::new();
+/// write_json_to(&net, &mut out).unwrap();
+/// assert_eq!(out, write_json(&net).into_bytes());
+/// ```
+pub fn write_json_to(net: &Network, out: &mut dyn Write) -> io::Result<()> {
     let mut w = Stream {
         out: Vec::with_capacity(1 << 16),
     };
@@ -136,11 +159,14 @@ pub fn write_json(net: &Network) -> String {
     for (name, k) in &named {
         w.entry(&mut first, 1, name);
         w.material(net, *k, 2);
+        if w.out.len() >= 1 << 16 {
+            out.write_all(&w.out)?;
+            w.out.clear();
+        }
     }
     w.end(first, 1, b'}');
     w.out.extend_from_slice(b",\n  \"vstructcNetwork\": 1\n}\n");
-    // Every piece written is a `str` or serde_json's escaping of one.
-    String::from_utf8(w.out).unwrap_or_default()
+    out.write_all(&w.out)
 }
 
 /// The JSON name of each material, in material order: its name, with `#1`, `#2`, … added
