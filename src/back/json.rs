@@ -6,6 +6,10 @@
 //! text that reads back to the same `f32` (plain or exponent form, whichever is shorter), two-space indentation, `\n` line ends and a final
 //! newline. Arrays of scalars are written on one line (`[0.5, 1, 0]`).
 //!
+//! The document is written as the network is walked, each object's keys sorted as it is
+//! written: no tree of the document is built (a resolved scene's JSON has millions of
+//! members).
+//!
 //! For a network read from RIB, materials are those of [`crate::front::rib::parse_rib`]: one
 //! per `Bxdf` (named by `__materialid` or handle) with the transitive upstream closure as node
 //! set, and separate materials for `Displace`, `Light` and `LightFilter` nodes. Nodes outside
@@ -28,9 +32,15 @@
 
 use crate::network::{Link, Network, NodeId, Upstream};
 use crate::types::{BaseType, Value, format_f32, saturate_f32};
-use std::collections::{BTreeMap, HashMap, HashSet};
+#[cfg(test)]
+use std::collections::BTreeMap;
+use std::collections::{HashMap, HashSet};
+use std::io::{self, Write};
 
 /// An output tree: objects are sorted maps, numbers are pre-formatted text.
+/// The tree the writer used to build before writing; kept in tests as the reference the
+/// streaming writer is compared with.
+#[cfg(test)]
 enum Out {
     Obj(BTreeMap<String, Out>),
     Arr(Vec<Out>),
@@ -38,6 +48,7 @@ enum Out {
     Raw(String),
 }
 
+#[cfg(test)]
 impl Out {
     fn obj() -> BTreeMap<String, Out> {
         BTreeMap::new()
@@ -93,6 +104,7 @@ impl Out {
     }
 }
 
+#[cfg(test)]
 fn push_indent(out: &mut String, level: usize) {
     for _ in 0..level {
         out.push_str("  ");
@@ -120,14 +132,327 @@ fn push_indent(out: &mut String, level: usize) {
 /// assert!(json.ends_with("\"vstructcNetwork\": 1\n}\n"));
 /// ```
 pub fn write_json(net: &Network) -> String {
+    let mut out = Vec::new();
+    // Writing into a Vec cannot fail.
+    let _ = write_json_to(net, &mut out);
+    // Every piece written is a `str` or serde_json's escaping of one.
+    String::from_utf8(out).unwrap_or_default()
+}
+
+/// [`write_json`] into `out`, material by material (the text of a large scene is never
+/// held in memory whole); fails with the error of `out`.
+///
+/// ```
+/// use vstructc::back::json::{write_json, write_json_to};
+/// use vstructc::network::Network;
+/// let mut net = Network::new();
+/// let s = net.add_node("s", "PxrSurface");
+/// let m = net.add_material("SG");
+/// net.set_terminal(m, "surface", s, None);
+/// let mut out = Vec::new();
+/// write_json_to(&net, &mut out).unwrap();
+/// assert_eq!(out, write_json(&net).into_bytes());
+/// ```
+pub fn write_json_to(net: &Network, out: &mut dyn Write) -> io::Result<()> {
+    let mut w = Stream {
+        out: Vec::with_capacity(1 << 16),
+    };
+    w.out.extend_from_slice(b"{\n  \"materials\": ");
+    let mut named: Vec<(String, usize)> = material_names(net).into_iter().zip(0..).collect();
+    named.sort_unstable();
+    let mut first = true;
+    for (name, k) in &named {
+        w.entry(&mut first, 1, name);
+        w.material(net, *k, 2);
+        if w.out.len() >= 1 << 16 {
+            out.write_all(&w.out)?;
+            w.out.clear();
+        }
+    }
+    w.end(first, 1, b'}');
+    w.out.extend_from_slice(b",\n  \"vstructcNetwork\": 1\n}\n");
+    out.write_all(&w.out)
+}
+
+/// The JSON name of each material, in material order: its name, with `#1`, `#2`, … added
+/// to the later ones of a name already taken.
+fn material_names(net: &Network) -> Vec<String> {
+    let mut taken: HashSet<String> = HashSet::new();
+    // Where the search for a free `name#n` of each name resumes (names only become taken,
+    // so N materials of one name cost N probes in all, not N² / 2).
+    let mut suffixes: HashMap<&str, usize> = HashMap::new();
+    let mut names = Vec::with_capacity(net.materials().len());
+    for m in net.materials() {
+        let mut name = m.name.clone();
+        if taken.contains(&name) {
+            let n = suffixes.entry(m.name.as_str()).or_insert(1);
+            while taken.contains(&name) {
+                name = format!("{}#{n}", m.name);
+                *n += 1;
+            }
+        }
+        taken.insert(name.clone());
+        names.push(name);
+    }
+    names
+}
+
+/// The streaming writer: appends to one buffer in the layout the module documents, keys
+/// sorted as they are written (no tree of the document is built).
+struct Stream {
+    out: Vec<u8>,
+}
+
+impl Stream {
+    fn indent(&mut self, level: usize) {
+        for _ in 0..level {
+            self.out.extend_from_slice(b"  ");
+        }
+    }
+
+    /// A JSON string, escaped as serde_json escapes it.
+    fn string(&mut self, s: &str) {
+        let mut ser = serde_json::Serializer::new(&mut self.out);
+        // Writing into a Vec cannot fail.
+        let _ = serde::Serialize::serialize(s, &mut ser);
+    }
+
+    /// Starts an element of a multi-line object or array at `level` (`{`/`[` first).
+    fn item(&mut self, first: &mut bool, level: usize, open: u8) {
+        if *first {
+            self.out.push(open);
+            self.out.push(b'\n');
+        } else {
+            self.out.extend_from_slice(b",\n");
+        }
+        *first = false;
+        self.indent(level + 1);
+    }
+
+    /// Starts the member `key` of a multi-line object at `level`.
+    fn entry(&mut self, first: &mut bool, level: usize, key: &str) {
+        self.item(first, level, b'{');
+        self.string(key);
+        self.out.extend_from_slice(b": ");
+    }
+
+    /// Ends a multi-line object or array at `level` (`{}` / `[]` if it had no element).
+    fn end(&mut self, first: bool, level: usize, close: u8) {
+        if first {
+            self.out.push(if close == b'}' { b'{' } else { b'[' });
+        } else {
+            self.out.push(b'\n');
+            self.indent(level);
+        }
+        self.out.push(close);
+    }
+
+    fn material(&mut self, net: &Network, index: usize, level: usize) {
+        let m = &net.materials()[index];
+        let ids = net.material_nodes(index);
+        let names = local_names(net, &ids);
+        // Sorted by name; of nodes that share a name the last one is written.
+        let mut nodes: Vec<(&str, usize, NodeId)> = ids
+            .iter()
+            .enumerate()
+            .filter_map(|(k, id)| Some((names.get(id)?.as_str(), k, *id)))
+            .collect();
+        nodes.sort_unstable();
+        let mut first = true;
+        self.entry(&mut first, level, "nodes");
+        let mut first_node = true;
+        for (i, &(name, _, id)) in nodes.iter().enumerate() {
+            if nodes.get(i + 1).is_some_and(|next| next.0 == name) {
+                continue;
+            }
+            self.entry(&mut first_node, level + 1, name);
+            self.node(net, id, &names, level + 2);
+        }
+        self.end(first_node, level + 1, b'}');
+        self.entry(&mut first, level, "primvars");
+        if m.primvars.is_empty() {
+            self.out.extend_from_slice(b"[]");
+        } else {
+            self.out.push(b'[');
+            for (i, p) in m.primvars.iter().enumerate() {
+                if i > 0 {
+                    self.out.extend_from_slice(b", ");
+                }
+                self.string(p);
+            }
+            self.out.push(b']');
+        }
+        self.entry(&mut first, level, "terminals");
+        let mut terminals: Vec<(&str, usize)> = m
+            .terminals
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (t.name.as_str(), k))
+            .collect();
+        terminals.sort_unstable();
+        let mut first_terminal = true;
+        for (i, &(name, k)) in terminals.iter().enumerate() {
+            if terminals.get(i + 1).is_some_and(|next| next.0 == name) {
+                continue;
+            }
+            self.entry(&mut first_terminal, level + 1, name);
+            self.connection(net, &m.terminals[k].link, &names, level + 2);
+        }
+        self.end(first_terminal, level + 1, b'}');
+        self.end(first, level, b'}');
+    }
+
+    fn node(&mut self, net: &Network, id: NodeId, names: &HashMap<NodeId, String>, level: usize) {
+        let node = &net[id];
+        let mut first = true;
+        self.entry(&mut first, level, "inputConnections");
+        let mut params: Vec<&crate::network::Param> = node.params_by_name().collect();
+        let mut first_input = true;
+        for p in params.iter().filter(|p| p.is_connected()) {
+            self.entry(&mut first_input, level + 1, p.name());
+            let mut first_link = true;
+            for l in p.connections() {
+                self.item(&mut first_link, level + 2, b'[');
+                self.connection(net, l, names, level + 3);
+            }
+            self.end(first_link, level + 2, b']');
+        }
+        self.end(first_input, level + 1, b'}');
+        self.entry(&mut first, level, "nodeTypeId");
+        self.string(node.shader());
+        self.entry(&mut first, level, "parameters");
+        params.retain(|p| p.value().is_some());
+        let mut first_param = true;
+        for p in params {
+            if let Some(v) = p.value() {
+                self.entry(&mut first_param, level + 1, p.name());
+                self.canonical(v, level + 2);
+            }
+        }
+        self.end(first_param, level + 1, b'}');
+        self.end(first, level, b'}');
+    }
+
+    fn connection(
+        &mut self,
+        net: &Network,
+        link: &Link,
+        names: &HashMap<NodeId, String>,
+        level: usize,
+    ) {
+        let node = match &link.upstream {
+            Upstream::Node(id) => names
+                .get(id)
+                .map(String::as_str)
+                .or_else(|| net.get(*id).map(|n| n.handle()))
+                .unwrap_or(""),
+            Upstream::Missing(h) => h.as_str(),
+        };
+        let mut first = true;
+        self.entry(&mut first, level, "upstreamNode");
+        self.string(node);
+        self.entry(&mut first, level, "upstreamOutputName");
+        self.string(link.output().unwrap_or(""));
+        self.end(first, level, b'}');
+    }
+
+    fn canonical(&mut self, v: &Value, level: usize) {
+        let ty = match v {
+            Value::Array(b, items) => format!("{}[{}]", element_type(b, items).word(), items.len()),
+            other => other.base_type().word().to_string(),
+        };
+        let mut first = true;
+        self.entry(&mut first, level, "type");
+        self.string(&ty);
+        self.entry(&mut first, level, "value");
+        self.value(v, level + 1);
+        self.end(first, level, b'}');
+    }
+
+    /// The shortest JSON text that reads back to `x` (see [`saturate_f32`] for non-finite
+    /// values).
+    fn num(&mut self, x: f32) {
+        let x = saturate_f32(x);
+        if x == 0.0 && x.is_sign_negative() {
+            self.out.extend_from_slice(b"-0.0");
+        } else {
+            let plain = format_f32(x);
+            let exp = format!("{x:e}");
+            let shorter = if exp.len() < plain.len() { exp } else { plain };
+            self.out.extend_from_slice(shorter.as_bytes());
+        }
+    }
+
+    fn nums(&mut self, xs: &[f32]) {
+        self.out.push(b'[');
+        for (i, x) in xs.iter().enumerate() {
+            if i > 0 {
+                self.out.extend_from_slice(b", ");
+            }
+            self.num(*x);
+        }
+        self.out.push(b']');
+    }
+
+    fn value(&mut self, v: &Value, level: usize) {
+        match v {
+            Value::Int(i) => self.out.extend_from_slice(i.to_string().as_bytes()),
+            Value::Float(x) => self.num(*x),
+            Value::Str(s) | Value::Token(s) | Value::Asset(s) => self.string(s),
+            Value::Bool(b) => self
+                .out
+                .extend_from_slice(if *b { b"true" } else { b"false" }),
+            Value::Triple(_, xs) => self.nums(xs),
+            Value::HPoint(xs) => self.nums(xs),
+            Value::Matrix(xs) => self.nums(xs),
+            Value::Array(_, items) if items.is_empty() => self.out.extend_from_slice(b"[]"),
+            Value::Array(_, items) if !items.iter().any(is_container) => {
+                self.out.push(b'[');
+                for (i, item) in items.iter().enumerate() {
+                    if i > 0 {
+                        self.out.extend_from_slice(b", ");
+                    }
+                    self.value(item, level);
+                }
+                self.out.push(b']');
+            }
+            Value::Array(_, items) => {
+                let mut first = true;
+                for item in items {
+                    self.item(&mut first, level, b'[');
+                    self.value(item, level + 1);
+                }
+                self.end(first, level, b']');
+            }
+        }
+    }
+}
+
+/// True for values written as JSON arrays (which put the array holding them on several
+/// lines).
+fn is_container(v: &Value) -> bool {
+    matches!(
+        v,
+        Value::Triple(..) | Value::HPoint(..) | Value::Matrix(..) | Value::Array(..)
+    )
+}
+
+/// The tree writer [`write_json`] replaced, kept as the reference of its output.
+#[cfg(test)]
+fn write_json_tree(net: &Network) -> String {
     let mut materials = Out::obj();
     let mut taken: HashSet<String> = HashSet::new();
+    // Where the search for a free `name#n` of each name resumes (names only become taken,
+    // so N materials of one name cost N probes in all, not N² / 2).
+    let mut suffixes: HashMap<&str, usize> = HashMap::new();
     for (k, m) in net.materials().iter().enumerate() {
         let mut name = m.name.clone();
-        let mut n = 1;
-        while taken.contains(&name) {
-            name = format!("{}#{n}", m.name);
-            n += 1;
+        if taken.contains(&name) {
+            let n = suffixes.entry(m.name.as_str()).or_insert(1);
+            while taken.contains(&name) {
+                name = format!("{}#{n}", m.name);
+                *n += 1;
+            }
         }
         taken.insert(name.clone());
         materials.insert(name, material(net, k));
@@ -141,6 +466,7 @@ pub fn write_json(net: &Network) -> String {
     out
 }
 
+#[cfg(test)]
 fn material(net: &Network, index: usize) -> Out {
     let m = &net.materials()[index];
     let ids = net.material_nodes(index);
@@ -204,6 +530,7 @@ fn local_names(net: &Network, ids: &[NodeId]) -> HashMap<NodeId, String> {
         .collect()
 }
 
+#[cfg(test)]
 fn connection(net: &Network, link: &Link, names: &HashMap<NodeId, String>) -> Out {
     let node = match &link.upstream {
         Upstream::Node(id) => names.get(id).cloned().unwrap_or_else(|| {
@@ -222,6 +549,7 @@ fn connection(net: &Network, link: &Link, names: &HashMap<NodeId, String>) -> Ou
 }
 
 /// `{ "type": T, "value": V }`.
+#[cfg(test)]
 fn canonical(v: &Value) -> Out {
     let ty = match v {
         Value::Array(b, items) => format!("{}[{}]", element_type(b, items).word(), items.len()),
@@ -257,6 +585,7 @@ fn element_type(declared: &BaseType, items: &[Value]) -> BaseType {
 
 /// The shortest JSON text that reads back to `x`: the shorter of the plain decimal
 /// (`0.0000001`) and the exponent form (`1e-7`), plain on ties; `-0.0` keeps its sign.
+#[cfg(test)]
 fn num(x: f32) -> Out {
     let x = saturate_f32(x);
     if x == 0.0 && x.is_sign_negative() {
@@ -267,6 +596,7 @@ fn num(x: f32) -> Out {
     Out::Raw(if exp.len() < plain.len() { exp } else { plain })
 }
 
+#[cfg(test)]
 fn json_value(v: &Value) -> Out {
     match v {
         Value::Int(i) => Out::Raw(i.to_string()),
@@ -288,6 +618,80 @@ mod tests {
         let mut s = String::new();
         o.write(&mut s, 0);
         s
+    }
+
+    /// A network with every kind of value, shared handles, dangling and whole-node links,
+    /// materials sharing a name and an empty one.
+    fn assorted() -> Network {
+        use crate::network::{Link, RequestKind};
+        let mut net = Network::new();
+        let a = net.add_node("a", "PxrFractal");
+        let a1 = net.add_node("a", "PxrFractal");
+        let s = net.add_node_of_kind("s\"q", "PxrSurface", RequestKind::Bxdf);
+        let values = [
+            Value::Int(-3),
+            Value::Float(1e-7),
+            Value::Float(-0.0),
+            Value::Float(f32::NAN),
+            Value::Float(123456789.0),
+            Value::Str("t\u{1}\"é".into()),
+            Value::Token("tok".into()),
+            Value::Bool(true),
+            Value::Triple(BaseType::Color, [0.5, 1.0, 0.1]),
+            Value::Matrix([0.25; 16]),
+            Value::Array(BaseType::Int, vec![]),
+            Value::Array(BaseType::Float, vec![Value::Float(2.0), Value::Float(0.3)]),
+            Value::Array(
+                BaseType::Color,
+                vec![
+                    Value::Triple(BaseType::Color, [1.0, 0.0, 0.5]),
+                    Value::Triple(BaseType::Color, [0.0; 3]),
+                ],
+            ),
+        ];
+        for (i, v) in values.into_iter().enumerate() {
+            net.set_param(a, &format!("p{i}"), v);
+        }
+        net.connect(s, "diffuseGain", a, "resultF");
+        net.connect(s, "diffuseGain", a1, "resultF");
+        net.connect_node(s, "whole", a1);
+        net.push_link(s, "ghost", Link::missing("nobody", Some("out")));
+        net.set_param(s, "diffuseGain", Value::Float(0.5));
+        for name in ["M", "M", "M#1", "Z"] {
+            let m = net.add_material(name);
+            net.set_terminal(m, "surface", s, None);
+            net.set_terminal(m, "displacement", a, Some("resultF"));
+        }
+        net.materials_mut()[0].primvars = vec!["st".into(), "x\ny".into()];
+        net.add_material("empty");
+        net
+    }
+
+    #[test]
+    fn streaming_writes_what_the_tree_wrote() {
+        use crate::front::rib::{RibOptions, parse_rib};
+        use crate::registry::Registry;
+        use crate::resolve::{ResolveOptions, resolve};
+        let net = assorted();
+        assert_eq!(write_json(&net), write_json_tree(&net));
+        assert_eq!(
+            write_json(&Network::new()),
+            write_json_tree(&Network::new())
+        );
+        let reg = Registry::embedded();
+        let rib = crate::network::testgen::layered_scene(3);
+        let mut diags = crate::Diagnostics::new();
+        let mut net = parse_rib(
+            rib.as_bytes(),
+            "s.rib",
+            &reg,
+            &RibOptions::default(),
+            &mut diags,
+        )
+        .unwrap();
+        assert_eq!(write_json(&net), write_json_tree(&net));
+        resolve(&mut net, &reg, &ResolveOptions::default());
+        assert_eq!(write_json(&net), write_json_tree(&net));
     }
 
     #[test]

@@ -40,6 +40,7 @@
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
 use crate::network::{Param, RequestKind, SourceParam};
 use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::{self, Write};
 use std::ops::Range;
@@ -79,7 +80,20 @@ pub fn write_rib(
     types: &dyn ParamTypes,
     out: &mut dyn Write,
 ) -> io::Result<()> {
-    let w = Writer { source, net, types };
+    let mut surfaces = HashMap::new();
+    for m in net.materials() {
+        for t in m.terminals.iter().filter(|t| t.name == "surface") {
+            if let Some(id) = t.link.upstream_node() {
+                surfaces.entry(id).or_insert(m.name.as_str());
+            }
+        }
+    }
+    let w = Writer {
+        source,
+        net,
+        types,
+        surfaces,
+    };
     w.write(out)
 }
 
@@ -109,6 +123,8 @@ struct Writer<'a> {
     source: &'a [u8],
     net: &'a Network,
     types: &'a dyn ParamTypes,
+    /// The name of the first material whose `surface` terminal is each node.
+    surfaces: HashMap<NodeId, &'a str>,
 }
 
 fn invalid(msg: &str) -> io::Error {
@@ -325,15 +341,7 @@ impl Writer<'_> {
     }
 
     fn material_name_of(&self, id: NodeId) -> Option<&str> {
-        self.net
-            .materials()
-            .iter()
-            .find(|m| {
-                m.terminals
-                    .iter()
-                    .any(|t| t.name == "surface" && t.link.upstream_node() == Some(id))
-            })
-            .map(|m| m.name.as_str())
+        self.surfaces.get(&id).copied()
     }
 
     /// Decl and value exactly as written (one space between them if the source had a line
@@ -375,17 +383,20 @@ impl Writer<'_> {
         p: &Param,
         item: Option<&SourceParam>,
     ) -> io::Result<Vec<u8>> {
-        let mut t = match (item, p.decl()) {
-            (Some(item), Some(d)) if d.reference => self.bytes(&item.decl)?.to_vec(),
-            _ => format!(
-                "\"reference {} {}\"",
-                self.connection_type(node, p),
-                escape(p.name())
-            )
-            .into_bytes(),
-        };
+        // Written piece by piece into one buffer: a resolved scene has millions of these.
+        let mut t = Vec::with_capacity(96);
+        match (item, p.decl()) {
+            (Some(item), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&item.decl)?),
+            _ => {
+                t.extend_from_slice(b"\"reference ");
+                t.extend_from_slice(self.connection_type(node, p).as_bytes());
+                t.push(b' ');
+                t.extend_from_slice(escape(p.name()).as_bytes());
+                t.push(b'"');
+            }
+        }
         t.push(b' ');
-        t.extend_from_slice(self.links_text(p.connections()).as_bytes());
+        self.push_links(&mut t, p.connections());
         Ok(t)
     }
 
@@ -420,26 +431,26 @@ impl Writer<'_> {
         }
     }
 
-    fn links_text(&self, links: &[Link]) -> String {
-        let mut text = String::from("[");
+    /// Appends `links` as a RIB array of `"handle:output"` strings.
+    fn push_links(&self, text: &mut Vec<u8>, links: &[Link]) {
+        text.push(b'[');
         for (i, l) in links.iter().enumerate() {
             let handle = match &l.upstream {
                 Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
                 Upstream::Missing(h) => h.as_str(),
             };
             if i > 0 {
-                text.push(' ');
+                text.push(b' ');
             }
-            text.push('"');
-            text.push_str(&escape(handle));
+            text.push(b'"');
+            text.extend_from_slice(escape(handle).as_bytes());
             if let Some(o) = l.output() {
-                text.push(':');
-                text.push_str(&escape(o));
+                text.push(b':');
+                text.extend_from_slice(escape(o).as_bytes());
             }
-            text.push('"');
+            text.push(b'"');
         }
-        text.push(']');
-        text
+        text.push(b']');
     }
 }
 
@@ -516,9 +527,10 @@ fn value_fits(ty: &Type, v: &Value) -> bool {
 
 /// A value in RIB syntax, always bracketed: `[1]`, `[0.5]`, `["s"]`, `[1 0 0]`.
 pub fn format_value(v: &Value) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    push_elements(v, &mut parts);
-    format!("[{}]", parts.join(" "))
+    let mut out = String::from("[");
+    push_elements(v, &mut out);
+    out.push(']');
+    out
 }
 
 /// One float as RIB text. The reader takes finite numbers only, so a non-finite float (only
@@ -527,18 +539,42 @@ fn rib_f32(x: f32) -> String {
     format_f32(saturate_f32(x))
 }
 
-fn push_elements(v: &Value, parts: &mut Vec<String>) {
+/// Appends the elements of `v` to `out` (which ends in `[` or in an element), each after a
+/// space unless it is the first.
+fn push_elements(v: &Value, out: &mut String) {
+    fn sep(out: &mut String) {
+        if !out.ends_with('[') {
+            out.push(' ');
+        }
+    }
+    fn floats(out: &mut String, xs: &[f32]) {
+        for x in xs {
+            sep(out);
+            out.push_str(&rib_f32(*x));
+        }
+    }
     match v {
-        Value::Int(i) => parts.push(i.to_string()),
-        Value::Float(x) => parts.push(rib_f32(*x)),
-        Value::Str(s) | Value::Token(s) | Value::Asset(s) => parts.push(quote(s)),
-        Value::Triple(_, xs) => parts.extend(xs.iter().map(|x| rib_f32(*x))),
-        Value::HPoint(xs) => parts.extend(xs.iter().map(|x| rib_f32(*x))),
-        Value::Matrix(xs) => parts.extend(xs.iter().map(|x| rib_f32(*x))),
-        Value::Bool(b) => parts.push(if *b { "1".into() } else { "0".into() }),
+        Value::Int(i) => {
+            sep(out);
+            out.push_str(&i.to_string());
+        }
+        Value::Float(x) => floats(out, &[*x]),
+        Value::Str(s) | Value::Token(s) | Value::Asset(s) => {
+            sep(out);
+            out.push('"');
+            out.push_str(&escape(s));
+            out.push('"');
+        }
+        Value::Triple(_, xs) => floats(out, xs),
+        Value::HPoint(xs) => floats(out, xs),
+        Value::Matrix(xs) => floats(out, xs),
+        Value::Bool(b) => {
+            sep(out);
+            out.push(if *b { '1' } else { '0' });
+        }
         Value::Array(_, items) => {
             for i in items {
-                push_elements(i, parts);
+                push_elements(i, out);
             }
         }
     }
@@ -556,13 +592,13 @@ pub fn quote(s: &str) -> String {
     format!("\"{}\"", escape(s))
 }
 
-fn escape(s: &str) -> String {
-    // Names and handles almost never need escaping: copy them whole.
+fn escape(s: &str) -> Cow<'_, str> {
+    // Names and handles almost never need escaping: use them as they are.
     if !s
         .bytes()
         .any(|b| b < 0x20 || b == 0x7f || b == b'"' || b == b'\\')
     {
-        return s.to_string();
+        return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
@@ -577,7 +613,7 @@ fn escape(s: &str) -> String {
             c => out.push(c),
         }
     }
-    out
+    Cow::Owned(out)
 }
 
 #[cfg(test)]

@@ -1,8 +1,8 @@
 //! `vstructc resolve`: expand the vstruct connections of a network and write it back.
 
 use super::CommonOptions;
-use super::input::{NetFormat, Prepared, prepare, report_error, stream_output, write_output};
-use crate::back::json::write_json;
+use super::input::{NetFormat, Prepared, prepare, report_error, stream_output};
+use crate::back::json::write_json_to;
 use crate::back::rib::write_rib;
 use crate::cond::Extensions;
 use crate::diag::Error;
@@ -97,7 +97,7 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     }
     let output = args.output.as_deref();
     let written = match args.format.unwrap_or(loaded.format) {
-        NetFormat::Json => write_output(output, write_json(&loaded.network).as_bytes()),
+        NetFormat::Json => stream_output(output, |out| write_json_to(&loaded.network, out)),
         NetFormat::Rib => {
             // Streamed: the untouched parts of a large scene are copied from the source
             // straight into the output file.

@@ -11,11 +11,11 @@
 //! Statements are desugared while parsing (§3.4). The first offending token produces a
 //! [`ParseError`] naming it and the set of tokens that were expected there.
 
-use crate::limits::{Limit, Limits};
 use super::ast::{Action, ActionKind, ElseIf, Expr, IsTest, Literal, Param, Span, Statement};
 use super::error::ParseError;
 use super::ext::{Extension, Extensions};
 use super::lexer::{CmpOp, Keyword, Token, TokenKind, next_token};
+use crate::limits::{Limit, Limits};
 
 /// What may follow at an error position; rendered into the message and the expected list.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -436,15 +436,9 @@ impl<'a> Parser<'a> {
     fn primary(&mut self) -> Result<(Expr, Span), ParseError> {
         let t = self.peek();
         if t.kind == TokenKind::LParen {
-            if let Err(exceeded) = self
-                .limits
-                .check(Limit::ExprDepth, self.depth as u64 + 1)
-            {
+            if let Err(exceeded) = self.limits.check(Limit::ExprDepth, self.depth as u64 + 1) {
                 let mut e = self.error(&[Want::Param]);
-                e.message = format!(
-                    "parentheses nested deeper than {} levels",
-                    exceeded.max
-                );
+                e.message = format!("parentheses nested deeper than {} levels", exceeded.max);
                 e.limit = Some(exceeded);
                 return Err(e);
             }

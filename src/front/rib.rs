@@ -34,7 +34,7 @@ use crate::network::{
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_string};
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -1111,6 +1111,7 @@ fn flat(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Va
 /// One material per terminal node version, in file order (formats.md §3.6, §5.4).
 fn add_materials(net: &mut Network) {
     let mut taken: HashSet<String> = HashSet::new();
+    let mut suffixes: HashMap<String, usize> = HashMap::new();
     let terminals: Vec<NodeId> = net
         .node_ids()
         .filter(|&id| net[id].kind() != RequestKind::Pattern)
@@ -1124,11 +1125,16 @@ fn add_materials(net: &mut Network) {
             RequestKind::Bxdf => node.material_id().unwrap_or(node.handle()).to_string(),
             _ => node.handle().to_string(),
         };
+        // The first free `base#n` (n ≥ 1). Names are only ever added to `taken`, so the
+        // search for a base resumes where its last one stopped: a handle defined N times
+        // costs N probes in all, not N² / 2.
         let mut name = base.clone();
-        let mut n = 1;
-        while taken.contains(&name) {
-            name = format!("{base}#{n}");
-            n += 1;
+        if taken.contains(&name) {
+            let next = suffixes.entry(base.clone()).or_insert(1);
+            while taken.contains(&name) {
+                name = format!("{base}#{next}");
+                *next += 1;
+            }
         }
         taken.insert(name.clone());
         let material = Material {

@@ -778,6 +778,9 @@ pub struct Network {
     graph: StableDiGraph<Node, Edge>,
     handles: HashMap<String, Vec<NodeId>>,
     materials: Vec<Material>,
+    /// True between [`Network::suspend_edges`] and [`Network::restore_edges`]: links are not
+    /// mirrored by graph edges then.
+    edges_suspended: bool,
 }
 
 impl Index<NodeId> for Network {
@@ -966,12 +969,16 @@ impl Network {
         old
     }
 
-    /// Make room for exactly `additional` more parameters on `node` (a hint; nothing
-    /// changes). The room is not rounded up, so call it once with the total rather than once
-    /// per parameter (resolution calls it once per expanded head).
+    /// Make room for `additional` more parameters on `node` (a hint; nothing changes). The
+    /// room is exact unless the node already has more than four times `additional`
+    /// parameters: then it grows by a quarter, so that a node that gets a few parameters at a
+    /// time thousands of times (one per expanded head) is not copied each time. Call it once
+    /// with the total rather than once per parameter (resolution calls it once per head).
     pub fn reserve_params(&mut self, node: NodeId, additional: usize) {
         let n = &mut self.graph[node];
-        n.params.reserve_exact(additional);
+        if n.params.capacity() - n.params.len() < additional {
+            n.params.reserve_exact(additional.max(n.params.len() / 4));
+        }
         n.by_name.reserve(additional, |&(_, h)| unfold(h));
     }
 
@@ -1067,6 +1074,9 @@ impl Network {
         link: &Link,
         index: usize,
     ) -> Option<EdgeId> {
+        if self.edges_suspended {
+            return None;
+        }
         let up = link.upstream_node()?;
         let input = self.graph[down].params[param].name.clone();
         Some(self.graph.add_edge(
@@ -1078,6 +1088,60 @@ impl Network {
                 index,
             },
         ))
+    }
+
+    /// Stop mirroring links by graph edges until [`Network::restore_edges`] (crate-internal:
+    /// resolution). Removing an edge from petgraph's lists walks every edge of both its
+    /// nodes, so replacing the placeholder connections of a node read by N others, or the N
+    /// connections of one input, one by one took time quadratic in N; resolution edits
+    /// connections only, and the edges are rebuilt from the links once at its end.
+    pub(crate) fn suspend_edges(&mut self) {
+        self.graph.clear_edges();
+        for node in self.graph.node_weights_mut() {
+            for p in &mut node.params {
+                p.edges.iter_mut().for_each(|e| *e = None);
+            }
+        }
+        self.edges_suspended = true;
+    }
+
+    /// Mirror every link by a graph edge again, in node, parameter and connection order
+    /// (see [`Network::suspend_edges`]).
+    pub(crate) fn restore_edges(&mut self) {
+        if !std::mem::replace(&mut self.edges_suspended, false) {
+            return;
+        }
+        let ids: Vec<NodeId> = self.graph.node_indices().collect();
+        // Exact room: a resolved scene has millions of edges, and doubling the edge table
+        // while it fills would leave up to half of it unused (and copy it each time).
+        let edges: usize = ids
+            .iter()
+            .flat_map(|&id| &self.graph[id].params)
+            .map(|p| {
+                p.links
+                    .iter()
+                    .filter(|l| l.upstream_node().is_some())
+                    .count()
+            })
+            .sum();
+        self.graph.reserve_exact_edges(edges);
+        for down in ids {
+            for i in 0..self.graph[down].params.len() {
+                for index in 0..self.graph[down].params[i].links.len() {
+                    let p = &self.graph[down].params[i];
+                    let Some(up) = p.links[index].upstream_node() else {
+                        continue;
+                    };
+                    let weight = Edge {
+                        output: p.links[index].output.clone(),
+                        input: p.name.clone(),
+                        index,
+                    };
+                    let e = self.graph.add_edge(up, down, weight);
+                    self.graph[down].params[i].edges[index] = Some(e);
+                }
+            }
+        }
     }
 
     /// Replace the connections of `down.input` with `links` (in that order); returns the old
@@ -1272,9 +1336,10 @@ impl Network {
     /// Dangling links are skipped.
     pub fn upstream_nodes(&self, node: NodeId) -> Vec<NodeId> {
         let mut ups: Vec<NodeId> = Vec::new();
+        let mut seen = rustc_hash::FxHashSet::default();
         for p in &self.graph[node].params {
             for u in p.links.iter().filter_map(Link::upstream_node) {
-                if !ups.contains(&u) {
+                if seen.insert(u) {
                     ups.push(u);
                 }
             }

@@ -80,3 +80,193 @@ fn write_material(out: &mut String, m: usize) {
     let _ = writeln!(out, "\tSphere 1 -1 1 360");
     let _ = writeln!(out, "AttributeEnd");
 }
+
+/// The scene shapes whose cost must grow linearly with their size `n` (each is a network in
+/// which one thing is shared by, or holds, `n` others). Used by the `scale` bench and test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shape {
+    /// One `PxrLayer` read by `n` `PxrLayerMixer`s, each feeding its own `PxrLayerSurface`.
+    SharedLayer,
+    /// One `PxrLayerMixer` read by `n` `PxrLayerSurface`s.
+    SharedMixer,
+    /// One input head with `n` connections (fan-in), from `n` `PxrLayer`s.
+    FanIn,
+    /// One `Bxdf` handle defined `n` times.
+    RedefinedBxdf,
+    /// An `.args` definition with `n` parameters, and a node setting each of them.
+    ArgsParams,
+    /// An `.args` definition with `n` input heads and `n` output heads, and one node
+    /// connecting every input head to another's output head.
+    ArgsHeads,
+}
+
+/// A generated scene: RIB text and, for the `.args` shapes, one extra definition.
+#[derive(Debug, Clone)]
+pub struct ShapeScene {
+    /// The RIB scene.
+    pub rib: String,
+    /// `(shader id, .args text)` of a definition the scene needs besides the embedded ones.
+    pub args: Option<(String, String)>,
+}
+
+impl Shape {
+    /// Every shape.
+    pub const ALL: [Shape; 6] = [
+        Shape::SharedLayer,
+        Shape::SharedMixer,
+        Shape::FanIn,
+        Shape::RedefinedBxdf,
+        Shape::ArgsParams,
+        Shape::ArgsHeads,
+    ];
+
+    /// A short name (bench ids, messages).
+    pub fn name(self) -> &'static str {
+        match self {
+            Shape::SharedLayer => "shared_layer",
+            Shape::SharedMixer => "shared_mixer",
+            Shape::FanIn => "fan_in",
+            Shape::RedefinedBxdf => "redefined_bxdf",
+            Shape::ArgsParams => "args_params",
+            Shape::ArgsHeads => "args_heads",
+        }
+    }
+
+    /// The scene of size `n`.
+    ///
+    /// ```
+    /// use vstructc::network::testgen::Shape;
+    /// let s = Shape::SharedMixer.scene(3);
+    /// assert_eq!(s.rib.matches("Bxdf \"PxrLayerSurface\"").count(), 3);
+    /// assert!(Shape::ArgsHeads.scene(2).args.is_some());
+    /// ```
+    pub fn scene(self, n: usize) -> ShapeScene {
+        let mut rib = String::with_capacity(n * 160 + 256);
+        rib.push_str("##RenderMan RIB\nversion 3.04\nWorldBegin\n");
+        let mut args = None;
+        match self {
+            Shape::SharedLayer => {
+                layer(&mut rib, "L", 0.5);
+                for i in 0..n {
+                    mixer(&mut rib, &format!("mix{i}"), &["L"]);
+                    surface(&mut rib, &format!("S{i}"), &format!("mix{i}"));
+                }
+            }
+            Shape::SharedMixer => {
+                layer(&mut rib, "L", 0.5);
+                mixer(&mut rib, "mix", &["L"]);
+                for i in 0..n {
+                    surface(&mut rib, &format!("S{i}"), "mix");
+                }
+            }
+            Shape::FanIn => {
+                let handles: Vec<String> = (0..n).map(|i| format!("L{i}")).collect();
+                for (i, h) in handles.iter().enumerate() {
+                    layer(&mut rib, h, (i % 97) as f32 / 97.0);
+                }
+                let refs: Vec<&str> = handles.iter().map(String::as_str).collect();
+                mixer(&mut rib, "mix", &refs);
+                surface(&mut rib, "S", "mix");
+            }
+            Shape::RedefinedBxdf => {
+                for i in 0..n {
+                    let _ = writeln!(rib, "Bxdf \"PxrSurface\" \"S\"");
+                    let _ = writeln!(rib, "\t\"float diffuseGain\" [{}]", (i % 97) as f32 / 97.0);
+                }
+            }
+            Shape::ArgsParams => {
+                let mut text = String::from("<args format=\"1.0\">\n");
+                for i in 0..n {
+                    let _ = writeln!(
+                        text,
+                        "  <param name=\"p{i}\" type=\"float\" default=\"0\"/>"
+                    );
+                }
+                text.push_str("  <output name=\"result\" type=\"float\"/>\n</args>\n");
+                let _ = writeln!(rib, "Pattern \"Wide\" \"w\"");
+                for i in 0..n {
+                    let _ = writeln!(rib, "\t\"float p{i}\" [{}]", (i % 97) as f32 / 97.0);
+                }
+                args = Some(("Wide".to_string(), text));
+            }
+            Shape::ArgsHeads => {
+                let mut text = String::from("<args format=\"1.0\">\n");
+                for i in 0..n {
+                    let _ = writeln!(text, "  <param name=\"in{i}\" type=\"vstruct\"/>");
+                    let _ = writeln!(
+                        text,
+                        "  <param name=\"in{i}_v\" type=\"float\" default=\"0\" vstructmember=\"in{i}.v\"/>"
+                    );
+                }
+                for i in 0..n {
+                    let _ = writeln!(text, "  <output name=\"out{i}\" type=\"vstruct\"/>");
+                    let _ = writeln!(
+                        text,
+                        "  <output name=\"out{i}_v\" type=\"float\" vstructmember=\"out{i}.v\"/>"
+                    );
+                }
+                text.push_str("</args>\n");
+                let _ = writeln!(rib, "Pattern \"Heads\" \"up\"");
+                let _ = writeln!(rib, "Pattern \"Heads\" \"down\"");
+                for i in 0..n {
+                    let _ = writeln!(rib, "\t\"reference vstruct in{i}\" [\"up:out{i}\"]");
+                }
+                args = Some(("Heads".to_string(), text));
+            }
+        }
+        rib.push_str("WorldEnd\n");
+        ShapeScene { rib, args }
+    }
+}
+
+fn layer(out: &mut String, handle: &str, t: f32) {
+    let _ = writeln!(out, "Pattern \"PxrLayer\" \"{handle}\"");
+    let _ = writeln!(out, "\t\"int enableDiffuse\" [1]");
+    let _ = writeln!(out, "\t\"float diffuseGain\" [{t}]");
+    let _ = writeln!(out, "\t\"int enableClearcoat\" [1]");
+}
+
+/// A mixer whose `baselayer` reads the `pxrMaterialOut` of every handle in `bases`.
+fn mixer(out: &mut String, handle: &str, bases: &[&str]) {
+    let _ = writeln!(out, "Pattern \"PxrLayerMixer\" \"{handle}\"");
+    let refs: Vec<String> = bases
+        .iter()
+        .map(|b| format!("\"{b}:pxrMaterialOut\""))
+        .collect();
+    let decl = match bases.len() {
+        1 => "vstruct".to_string(),
+        k => format!("vstruct[{k}]"),
+    };
+    let _ = writeln!(out, "\t\"reference {decl} baselayer\" [{}]", refs.join(" "));
+}
+
+fn surface(out: &mut String, handle: &str, mixer: &str) {
+    let _ = writeln!(out, "Bxdf \"PxrLayerSurface\" \"{handle}\"");
+    let _ = writeln!(
+        out,
+        "\t\"reference float inputMaterial\" [\"{mixer}:pxrMaterialOut\"]"
+    );
+}
+
+/// A RIB chain of `n` pattern nodes, each reading the previous one's output.
+///
+/// ```
+/// let rib = vstructc::network::testgen::pattern_chain(3);
+/// assert_eq!(rib.matches("Pattern ").count(), 3);
+/// ```
+pub fn pattern_chain(n: usize) -> String {
+    let mut out = String::with_capacity(n * 90 + 64);
+    out.push_str("##RenderMan RIB\nversion 3.04\nWorldBegin\n");
+    for i in 0..n {
+        let _ = writeln!(out, "Pattern \"vsClamp\" \"c{i}\"");
+        if i > 0 {
+            let _ = writeln!(
+                out,
+                "\t\"reference color input\" [\"c{}:resultRGB\"]",
+                i - 1
+            );
+        }
+    }
+    out.push_str("WorldEnd\n");
+    out
+}

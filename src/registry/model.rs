@@ -300,6 +300,8 @@ impl Definition {
 pub struct IndexedDefinition {
     def: Arc<Definition>,
     inputs: rustc_hash::FxHashMap<String, usize>,
+    /// Output name → position in `def.outputs` (the first of duplicates).
+    outputs: rustc_hash::FxHashMap<String, usize>,
     /// Per input (same order as `def.inputs`): the documented `min` / `max`, parsed once.
     ranges: Vec<NumericRange>,
 }
@@ -335,10 +337,15 @@ impl IndexedDefinition {
         for (i, p) in def.inputs.iter().enumerate() {
             inputs.entry(p.name.clone()).or_insert(i);
         }
+        let mut outputs = rustc_hash::FxHashMap::default();
+        for (i, p) in def.outputs.iter().enumerate() {
+            outputs.entry(p.name.clone()).or_insert(i);
+        }
         let ranges = def.inputs.iter().map(NumericRange::of).collect();
         IndexedDefinition {
             def,
             inputs,
+            outputs,
             ranges,
         }
     }
@@ -346,6 +353,11 @@ impl IndexedDefinition {
     /// The input named `name`.
     pub fn input(&self, name: &str) -> Option<&Property> {
         self.inputs.get(name).map(|&i| &self.def.inputs[i])
+    }
+
+    /// The output named `name`.
+    pub fn output(&self, name: &str) -> Option<&Property> {
+        self.outputs.get(name).map(|&i| &self.def.outputs[i])
     }
 
     /// The position of the input named `name` among the definition's inputs.

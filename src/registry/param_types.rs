@@ -15,7 +15,7 @@ impl ParamTypes for Registry {
     }
 
     fn output_type(&self, shader: &str, output: &str) -> Option<Type> {
-        Some(self.definition(shader)?.output(output)?.ty.clone())
+        Some(self.indexed(shader)?.output(output)?.ty.clone())
     }
 
     fn input_position(&self, shader: &str, input: &str) -> Option<usize> {

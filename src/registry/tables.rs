@@ -13,10 +13,10 @@
 //! * VS001's position is the value start plus the decoded offset (formats.md §2.6 allows it).
 //! * VS003 points at the property (the readers keep no position per attribute).
 
-use crate::limits::Limits;
 use super::model::{CondSource, Definition, Direction, Property};
 use crate::cond::{self, ParseError, Statement};
 use crate::diag::{Diagnostic, Location};
+use crate::limits::Limits;
 use crate::types::BaseType;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
@@ -92,6 +92,11 @@ impl OutputHead {
 pub struct VstructTables {
     inputs: Vec<InputHead>,
     outputs: Vec<OutputHead>,
+    /// Head name → position in `inputs` (types with thousands of heads are looked up per
+    /// expansion).
+    input_index: HashMap<String, usize>,
+    /// Head name → position in `outputs`.
+    output_index: HashMap<String, usize>,
 }
 
 impl VstructTables {
@@ -107,12 +112,12 @@ impl VstructTables {
 
     /// The input head named `head`.
     pub fn input_head(&self, head: &str) -> Option<&InputHead> {
-        self.inputs.iter().find(|h| h.name == head)
+        self.input_index.get(head).map(|&i| &self.inputs[i])
     }
 
     /// The output head named `head`.
     pub fn output_head(&self, head: &str) -> Option<&OutputHead> {
-        self.outputs.iter().find(|h| h.name == head)
+        self.output_index.get(head).map(|&i| &self.outputs[i])
     }
 
     /// Members of input head `head` in declaration order (empty if it is not one).
@@ -163,12 +168,23 @@ impl VstructTables {
             diags,
             parsed: HashMap::default(),
             limits,
+            input_names: def.inputs.iter().map(|p| p.name.as_str()).collect(),
         };
         b.check_malformed_members();
         let inputs = b.input_heads();
         let outputs = b.output_heads();
-        b.check_heads(&inputs, &outputs);
-        VstructTables { inputs, outputs }
+        let index = |names: &mut dyn Iterator<Item = &String>| -> HashMap<String, usize> {
+            names.enumerate().map(|(i, n)| (n.clone(), i)).collect()
+        };
+        let input_index = index(&mut inputs.iter().map(|h| &h.name));
+        let output_index = index(&mut outputs.iter().map(|h| &h.name));
+        b.check_heads(&inputs, &outputs, &output_index);
+        VstructTables {
+            inputs,
+            outputs,
+            input_index,
+            output_index,
+        }
     }
 }
 
@@ -215,6 +231,8 @@ struct Builder<'d, 'g> {
     diags: &'g mut Vec<Diagnostic>,
     parsed: HashMap<String, Arc<Result<Statement, ParseError>>>,
     limits: &'g Limits,
+    /// The names of the definition's inputs (conditionals' names are checked against them).
+    input_names: HashSet<&'d str>,
 }
 
 impl Builder<'_, '_> {
@@ -280,6 +298,7 @@ impl Builder<'_, '_> {
     fn input_heads(&mut self) -> Vec<InputHead> {
         let def = self.def;
         let mut heads: Vec<InputHead> = Vec::new();
+        let mut position: HashMap<&str, usize> = HashMap::default();
         for p in &def.inputs {
             let Some(m) = &p.vstruct else { continue };
             if let Some(src) = &m.cond {
@@ -299,12 +318,15 @@ impl Builder<'_, '_> {
                 property: Arc::from(p.name.as_str()),
                 names: member_names(p),
             };
-            match heads.iter_mut().find(|h| h.name == m.head) {
-                Some(h) => h.members.push(member),
-                None => heads.push(InputHead {
-                    name: m.head.clone(),
-                    members: vec![member],
-                }),
+            match position.get(m.head.as_str()) {
+                Some(&i) => heads[i].members.push(member),
+                None => {
+                    position.insert(&m.head, heads.len());
+                    heads.push(InputHead {
+                        name: m.head.clone(),
+                        members: vec![member],
+                    });
+                }
             }
         }
         heads
@@ -313,15 +335,17 @@ impl Builder<'_, '_> {
     fn output_heads(&mut self) -> Vec<OutputHead> {
         let def = self.def;
         let mut heads: Vec<OutputHead> = Vec::new();
+        let mut position: HashMap<&str, usize> = HashMap::default();
         for p in &def.outputs {
             let Some(m) = &p.vstruct else { continue };
             let cond = m.cond.as_ref().map(|src| self.parse_cond(p, src));
             if let Some(stmt) = cond.as_ref().and_then(CondEntry::statement) {
                 self.check_cond_names(p, cond.as_ref().map(|c| &c.source), stmt);
             }
-            let idx = match heads.iter().position(|h| h.name == m.head) {
-                Some(i) => i,
+            let idx = match position.get(m.head.as_str()) {
+                Some(&i) => i,
                 None => {
+                    position.insert(&m.head, heads.len());
                     heads.push(OutputHead {
                         name: m.head.clone(),
                         members: Vec::new(),
@@ -364,7 +388,7 @@ impl Builder<'_, '_> {
     fn check_cond_names(&mut self, p: &Property, src: Option<&CondSource>, stmt: &Statement) {
         let mut reported = HashSet::default();
         for name in stmt.param_names() {
-            if self.def.input(name).is_none() && reported.insert(name.to_string()) {
+            if !self.input_names.contains(name) && reported.insert(name.to_string()) {
                 let loc = src.map_or_else(|| p.location.clone(), |s| s.location.clone());
                 self.diags.push(
                     Diagnostic::warning(
@@ -381,11 +405,19 @@ impl Builder<'_, '_> {
     }
 
     /// VS005, VS007, VS008.
-    fn check_heads(&mut self, inputs: &[InputHead], outputs: &[OutputHead]) {
+    fn check_heads(
+        &mut self,
+        inputs: &[InputHead],
+        outputs: &[OutputHead],
+        output_index: &HashMap<String, usize>,
+    ) {
         let def = self.def;
+        let first_inputs = first_member_locations(&def.inputs);
         for h in inputs {
-            if outputs.iter().any(|o| o.name == h.name) {
-                let loc = first_member_location(&def.inputs, &h.name);
+            if output_index.contains_key(&h.name) {
+                let loc = first_inputs
+                    .get(h.name.as_str())
+                    .map_or_else(Location::default, |l| (*l).clone());
                 self.diags.push(
                     Diagnostic::warning(
                         "VS005",
@@ -410,8 +442,10 @@ impl Builder<'_, '_> {
         } else {
             "output"
         };
+        let declared: HashSet<&str> = props.iter().map(|p| p.name.as_str()).collect();
+        let first = first_member_locations(props);
         for h in heads {
-            if !props.iter().any(|p| p.name == *h) {
+            if !declared.contains(h) {
                 self.diags.push(
                     Diagnostic::info(
                         "VS007",
@@ -419,12 +453,15 @@ impl Builder<'_, '_> {
                             "{what} head `{h}` has members but no {what} named `{h}` is declared"
                         ),
                     )
-                    .at(first_member_location(props, h)),
+                    .at(first
+                        .get(h)
+                        .map_or_else(Location::default, |l| (*l).clone())),
                 );
             }
         }
+        let heads: HashSet<&str> = heads.iter().copied().collect();
         for p in props {
-            if p.vstruct.is_some() && heads.contains(&p.name.as_str()) {
+            if p.vstruct.is_some() && heads.contains(p.name.as_str()) {
                 self.diags.push(
                     Diagnostic::warning(
                         "VS008",
@@ -440,12 +477,15 @@ impl Builder<'_, '_> {
     }
 }
 
-fn first_member_location(props: &[Property], head: &str) -> Location {
-    props
-        .iter()
-        .find(|p| p.vstruct.as_ref().is_some_and(|m| m.head == head))
-        .map(|p| p.location.clone())
-        .unwrap_or_default()
+/// Head name → the location of its first member among `props`.
+fn first_member_locations(props: &[Property]) -> HashMap<&str, &Location> {
+    let mut first = HashMap::default();
+    for p in props {
+        if let Some(m) = &p.vstruct {
+            first.entry(m.head.as_str()).or_insert(&p.location);
+        }
+    }
+    first
 }
 
 /// VS001 for an unparsable conditional: the position is the value start plus the decoded

@@ -131,6 +131,9 @@ pub struct MemberEvent {
 /// removed (§4.7, VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
     let order = net.nodes_sorted();
+    // Resolution edits connections only; the graph's edges are rebuilt once at the end
+    // (removing them one by one is quadratic for nodes with many connections).
+    net.suspend_edges();
     // Resolution adds no nodes, so every node index stays below this bound.
     let bound = petgraph::visit::NodeIndexable::node_bound(net.graph());
     let mut r = Resolver {
@@ -150,7 +153,9 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
     };
     r.run();
     r.remove_head_values();
-    r.out
+    let out = r.out;
+    net.restore_edges();
+    out
 }
 
 /// One node under resolution on the work stack.

@@ -1,0 +1,80 @@
+//! Scaling shapes (issue targets: the 4N run ≤ 5× the N run): each shape of
+//! `network::testgen::Shape` through read, resolution and write, at sizes N and 4N, with
+//! the measured 4N / N ratio printed after each pair.
+//!
+//! `cargo bench --bench scale`. The pipeline is the one `vstructc resolve` runs (registry with
+//! the shape's definition, RIB read, resolution, RIB write); the shapes and their sizes are
+//! those of the issue, divided by 4 to keep the bench short.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+use vstructc::Diagnostics;
+use vstructc::back::rib::write_rib_to_vec;
+use vstructc::front::rib::{RibOptions, parse_rib};
+use vstructc::network::testgen::{Shape, ShapeScene};
+use vstructc::registry::Registry;
+use vstructc::resolve::{ResolveOptions, resolve};
+
+// The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+fn pipeline(scene: &ShapeScene) -> Vec<u8> {
+    let mut registry = Registry::embedded();
+    if let Some((id, text)) = &scene.args {
+        registry.add_args_text(id, text).expect("generated .args");
+    }
+    let mut diags = Diagnostics::new();
+    let rib = scene.rib.as_bytes();
+    let mut net = parse_rib(
+        rib,
+        "scene.rib",
+        &registry,
+        &RibOptions::default(),
+        &mut diags,
+    )
+    .expect("generated scene parses");
+    black_box(resolve(&mut net, &registry, &ResolveOptions::default()));
+    write_rib_to_vec(rib, &net, &registry).expect("written")
+}
+
+/// N for each shape (a quarter of the issue's).
+fn size(shape: Shape) -> usize {
+    match shape {
+        Shape::SharedLayer | Shape::SharedMixer => 1250,
+        Shape::FanIn | Shape::ArgsParams => 2500,
+        Shape::RedefinedBxdf => 625,
+        Shape::ArgsHeads => 1250,
+    }
+}
+
+/// The mean time of `runs` pipelines on `scene`.
+fn mean(scene: &ShapeScene, runs: u32) -> Duration {
+    let start = Instant::now();
+    for _ in 0..runs {
+        black_box(pipeline(scene));
+    }
+    start.elapsed() / runs
+}
+
+fn bench(c: &mut Criterion) {
+    let mut group = c.benchmark_group("scale");
+    group.sample_size(10);
+    for shape in Shape::ALL {
+        let n = size(shape);
+        let scenes = [shape.scene(n), shape.scene(4 * n)];
+        for (scene, k) in scenes.iter().zip([n, 4 * n]) {
+            group.bench_with_input(BenchmarkId::new(shape.name(), k), scene, |b, s| {
+                b.iter(|| pipeline(s))
+            });
+        }
+        // Criterion reports each size on its own; the ratio is what the target is about.
+        let ratio = mean(&scenes[1], 3).as_secs_f64() / mean(&scenes[0], 3).as_secs_f64();
+        println!("scale/{}: 4N / N = {ratio:.2}× (target ≤ 5×)", shape.name());
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
