@@ -125,7 +125,7 @@ fn furnace(m: &Material) -> Vec<Vec3> {
         ..PreviewOptions::default()
     }
     .furnace();
-    let img = render_ball(m, &opts, &|_| {});
+    let img = render_ball(m, &opts, &|_| {}).expect("valid preview options");
     let mut out = Vec::new();
     for j in 0..FURNACE_SIZE {
         for i in 0..FURNACE_SIZE {

@@ -251,7 +251,10 @@ fn strict_rib_rejects_single_quotes() {
         &data("rb011_single_quote.rib"),
         "t.rib",
         &NoDefinitions,
-        &RibOptions { strict: true },
+        &RibOptions {
+            strict: true,
+            ..RibOptions::default()
+        },
         &mut d,
     )
     .unwrap_err();
@@ -595,7 +598,10 @@ proptest! {
     fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
         let mut d = Diagnostics::new();
         let _ = parse_rib(&bytes, "r.rib", &NoDefinitions, &RibOptions::default(), &mut d);
-        let _ = parse_rib(&bytes, "r.rib", &defs(), &RibOptions { strict: true }, &mut d);
+        let _ = parse_rib(&bytes, "r.rib", &defs(), &RibOptions {
+            strict: true,
+            ..RibOptions::default()
+        }, &mut d);
     }
 
     #[test]

@@ -51,7 +51,10 @@ pub fn load_network(
             &bytes,
             &name,
             registry,
-            &RibOptions { strict: strict_rib },
+            &RibOptions {
+                strict: strict_rib,
+                ..RibOptions::default()
+            },
             diags,
         )?,
     };

@@ -56,6 +56,7 @@ pub fn resolve_options(
         extensions,
         verbose: common.verbose,
         record_events: false,
+        limits: Default::default(),
     })
 }
 

@@ -22,6 +22,7 @@
 //! * A node's request kind comes from the terminals naming it (`surface`/`volume` → `Bxdf`,
 //!   `displacement` → `Displace`, `light`, `lightFilter`); other nodes are `Pattern`s.
 
+use crate::limits::{Limit, Limits};
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamTypes, RequestKind,
@@ -208,7 +209,22 @@ pub fn parse_json(
     types: &dyn ParamTypes,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
+    parse_json_limited(bytes, path, types, &Limits::default(), diags)
+}
+
+/// [`parse_json`] within `limits`: the input's size, its nodes, each node's parameters and
+/// each input's connections ([`Network::check_limits`]); exceeding one is [`Error::Limit`].
+pub fn parse_json_limited(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(path);
+    limits
+        .check(Limit::NetworkFileBytes, bytes.len() as u64)
+        .map_err(|e| e.at(Location::file(file.clone())))?;
     let root = parse_tree(bytes, &file)?;
     let mut r = Reader {
         file,
@@ -217,6 +233,7 @@ pub fn parse_json(
         net: Network::new(),
     };
     r.document(&root)?;
+    r.net.check_limits(limits)?;
     Ok(r.net)
 }
 

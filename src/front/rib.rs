@@ -28,6 +28,7 @@
 mod lexer;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamTypes,
     RequestKind, SourceParam, Terminal,
@@ -43,6 +44,9 @@ use std::sync::Arc;
 pub struct RibOptions {
     /// `--strict-rib`: single-quoted strings are an error (RB011) instead of an info.
     pub strict: bool,
+    /// Bounds: the input's size, its nodes, each node's parameters and each input's
+    /// connections ([`Network::check_limits`]); exceeding one is [`Error::Limit`].
+    pub limits: Limits,
 }
 
 /// Legacy RSL shading requests: passed through; RB020 when they carry `reference` params.
@@ -109,6 +113,10 @@ pub fn parse_rib(
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(path);
+    options
+        .limits
+        .check(Limit::NetworkFileBytes, bytes.len() as u64)
+        .map_err(|e| e.at(Location::file(file.clone())))?;
     if bytes.starts_with(&[0x1f, 0x8b]) {
         return Err(Diagnostic::error(
             "RB001",
@@ -132,6 +140,11 @@ pub fn parse_rib(
                 if let Some(kind) = RequestKind::from_keyword(name) {
                     let (args, after) = read_args(&mut lx, diags, true)?;
                     asm.shading_request(&lx, kind, &tok, &args, diags)?;
+                    // Stop at the first node too many, before the rest is read.
+                    options
+                        .limits
+                        .check(Limit::Nodes, asm.net.node_count() as u64)
+                        .map_err(|e| e.at(lx.tok_loc(&tok)))?;
                     next = after;
                 } else {
                     let legacy = LEGACY_REQUESTS.contains(&name);
@@ -159,6 +172,7 @@ pub fn parse_rib(
         }
     }
     let mut net = asm.net;
+    net.check_limits(&options.limits)?;
     add_materials(&mut net);
     Ok(net)
 }

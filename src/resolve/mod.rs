@@ -7,6 +7,7 @@
 //! is one node being resolved, with the snapshot of its connected input heads and the position
 //! reached in it.
 
+use crate::limits::{LimitExceeded, Limits};
 use crate::cond::{
     self, Action, ActionKind, Choice, ComparisonReport, CopyOutcome, Extension, Extensions,
     Statement,
@@ -34,6 +35,10 @@ pub struct ResolveOptions {
     pub verbose: bool,
     /// Record one [`MemberEvent`] per member decision (used by `vstructc explain`).
     pub record_events: bool,
+    /// Bounds the network must meet before it is resolved ([`Network::check_limits`]: nodes,
+    /// parameters per node, connections per input). A network beyond them is not resolved:
+    /// [`Resolution::limit`] says which bound, and an LM001 error is among the diagnostics.
+    pub limits: Limits,
 }
 
 impl Default for ResolveOptions {
@@ -43,6 +48,7 @@ impl Default for ResolveOptions {
             extensions: Extensions::none(),
             verbose: false,
             record_events: false,
+            limits: Limits::default(),
         }
     }
 }
@@ -54,6 +60,9 @@ pub struct Resolution {
     pub diagnostics: Diagnostics,
     /// Member decisions, when [`ResolveOptions::record_events`] is set.
     pub events: Vec<MemberEvent>,
+    /// The bound of [`ResolveOptions::limits`] the network exceeded, when it was not
+    /// resolved for that reason.
+    pub limit: Option<LimitExceeded>,
 }
 
 /// One value an expression read on the upstream node.
@@ -130,6 +139,12 @@ pub struct MemberEvent {
 /// upstream node has been resolved completely. Afterwards authored values on input heads are
 /// removed (§4.7, VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
+    if let Err(e) = net.check_limits(&options.limits) {
+        let mut out = Resolution::default();
+        out.diagnostics.push(e.to_diagnostic());
+        out.limit = Some(e);
+        return out;
+    }
     let order = net.nodes_sorted();
     // Resolution edits connections only; the graph's edges are rebuilt once at the end
     // (removing them one by one is quadratic for nodes with many connections).
