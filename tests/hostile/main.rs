@@ -7,6 +7,7 @@
 
 mod cond;
 mod diagnostics;
+mod limits;
 mod render;
 mod values;
 // FIFOs, device nodes, symlinks and file modes: Unix only.
