@@ -10,9 +10,8 @@
 //! limit several times larger still catches a hang.
 
 use std::fmt::Write as _;
-use std::io::Read as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 /// Terms in the long chains.
@@ -107,55 +106,29 @@ struct Measured {
     max_rss_bytes: u64,
 }
 
-/// Run the CLI, measuring wall time, CPU time and the child's peak resident set.
-#[expect(
-    clippy::zombie_processes,
-    reason = "the child is reaped by `wait4` in `wait_with_rusage`, which also reads its usage"
-)]
+/// Run the CLI, measuring wall time, CPU time and the child's peak resident set (under
+/// `/usr/bin/time`, see `crate::timed_vstructc`).
 fn measure(args: &[&str]) -> Measured {
+    static RUN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = RUN.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let report = crate::scratch(
+        &format!("cond_measure_{}_{n}.usage", std::process::id()),
+        "",
+    );
     let start = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vstructc"))
-        .args(args)
-        .env("VSTRUCTC_ARGS_PATH", "")
+    let out = crate::timed_vstructc(args, &report)
         .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the vstructc binary runs");
-    let mut out_pipe = child.stdout.take().expect("stdout piped");
-    let mut err_pipe = child.stderr.take().expect("stderr piped");
-    let reader = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        let _ = out_pipe.read_to_end(&mut s);
-        s
-    });
-    let mut err = Vec::new();
-    let _ = err_pipe.read_to_end(&mut err);
-    let out = reader.join().expect("stdout reader");
-    let (status, cpu, max_rss_bytes) = wait_with_rusage(child.id());
+        .output()
+        .expect("/usr/bin/time runs");
+    let usage = crate::read_usage(&report);
     Measured {
-        status,
-        stdout: String::from_utf8_lossy(&out).into_owned(),
-        stderr: String::from_utf8_lossy(&err).into_owned(),
+        status: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
         elapsed: start.elapsed(),
-        cpu,
-        max_rss_bytes,
+        cpu: usage.cpu,
+        max_rss_bytes: usage.max_rss_kib * 1024,
     }
-}
-
-/// `wait4` on the child: its exit code (`None` when a signal ended it), CPU time (user and
-/// system) and peak RSS in bytes.
-fn wait_with_rusage(pid: u32) -> (Option<i32>, Duration, u64) {
-    let mut status = 0;
-    // SAFETY: `rusage` is plain old data; `wait4` fills it for our own child `pid`.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let r = unsafe { libc::wait4(pid as libc::pid_t, &mut status, 0, &mut usage) };
-    assert_eq!(r, pid as libc::pid_t, "wait4 failed");
-    let code = libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status));
-    let time = |t: libc::timeval| Duration::new(t.tv_sec as u64, t.tv_usec as u32 * 1000);
-    let cpu = time(usage.ru_utime) + time(usage.ru_stime);
-    // Linux reports ru_maxrss in KiB.
-    (code, cpu, usage.ru_maxrss as u64 * 1024)
 }
 
 /// Exit 0 or 1 (never a signal or a panic), within the CPU time and memory limits.

@@ -415,3 +415,47 @@ fn hostile_networks_through_compile_render_and_eval() {
     }
     let _ = std::fs::remove_dir_all(&scratch);
 }
+
+/// Peak resident set and CPU time of one `vstructc` run.
+struct Usage {
+    /// Peak resident set, KiB.
+    max_rss_kib: u64,
+    /// User plus system time.
+    cpu: Duration,
+}
+
+/// A command that runs `vstructc args` under `/usr/bin/time`, which writes the child's
+/// usage to `report` (read it with [`read_usage`] after the command ends; the command's exit
+/// status is vstructc's, or 128 + N when signal N ended it).
+///
+/// Why not `wait4` on a direct child: Linux carries the resident-set high-water mark of the
+/// address space a process was spawned from into its `ru_maxrss`, so every child of this
+/// test process would report at least this process's own peak, which other tests in the
+/// binary raise. `time` forks vstructc from its own small process.
+fn timed_vstructc(args: &[&str], report: &Path) -> Command {
+    let mut cmd = Command::new("/usr/bin/time");
+    cmd.arg("-f")
+        .arg("%M %U %S")
+        .arg("-o")
+        .arg(report)
+        .arg(env!("CARGO_BIN_EXE_vstructc"))
+        .args(args)
+        .env("VSTRUCTC_ARGS_PATH", "");
+    cmd
+}
+
+/// The usage `/usr/bin/time` wrote (its last line; a line before it may say how the child
+/// ended).
+fn read_usage(report: &Path) -> Usage {
+    let text = std::fs::read_to_string(report).expect("/usr/bin/time wrote its report");
+    let last = text.lines().last().unwrap_or_default();
+    let fields: Vec<&str> = last.split_whitespace().collect();
+    let [rss, user, system] = fields[..] else {
+        panic!("unexpected /usr/bin/time report: {text:?}");
+    };
+    let secs = |s: &str| Duration::from_secs_f64(s.parse().expect("seconds"));
+    Usage {
+        max_rss_kib: rss.parse().expect("KiB"),
+        cpu: secs(user) + secs(system),
+    }
+}

@@ -5,7 +5,6 @@
 use crate::scratch;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::Command;
 use vstructc::interp::preview::{ContactSheet, PreviewError, PreviewOptions, render_ball};
 
 /// `n` PxrSurface materials (handles `m0`…), each a little different.
@@ -24,28 +23,22 @@ fn materials(n: usize) -> String {
     rib
 }
 
-/// Exit status and peak resident set size (KiB) of `vstructc args`, from `wait4` (not
-/// `getrusage(RUSAGE_CHILDREN)`: other tests' children run at the same time).
-// The child is reaped by `wait4`, which `Child::wait` cannot replace (it gives no rusage).
-#[allow(clippy::zombie_processes)]
+/// Exit status and peak resident set size (KiB) of `vstructc args` (see
+/// `crate::timed_vstructc` for why it runs under `/usr/bin/time`).
 fn run_measured(name: &str, args: &[&str]) -> (Option<i32>, u64, String) {
     let err = scratch(&format!("{name}.stderr"), "");
-    let child = Command::new(env!("CARGO_BIN_EXE_vstructc"))
-        .args(args)
-        .env("VSTRUCTC_ARGS_PATH", "")
+    let report = err.with_extension("usage");
+    let status = crate::timed_vstructc(args, &report)
         .stdout(std::process::Stdio::null())
         .stderr(std::fs::File::create(&err).expect("stderr file"))
-        .spawn()
-        .expect("the vstructc binary runs");
-    let mut status = 0;
-    // SAFETY: `rusage` is plain data that wait4 fills; the pid is our own child, reaped here
-    // (the `Child` handle is not waited on afterwards).
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
-    assert_eq!(pid, child.id() as libc::pid_t, "wait4 failed");
-    let code = libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status));
+        .status()
+        .expect("/usr/bin/time runs");
     let stderr = std::fs::read_to_string(&err).unwrap_or_default();
-    (code, usage.ru_maxrss as u64, stderr)
+    (
+        status.code(),
+        crate::read_usage(&report).max_rss_kib,
+        stderr,
+    )
 }
 
 fn render_sheet(name: &str, n: usize, size: usize, format: &str) -> (Option<i32>, u64, String) {
