@@ -77,7 +77,7 @@ pub fn run(args: &CompileArgs, common: &CommonOptions) -> ExitCode {
         Ok(l) => l,
         Err(Error::Usage(msg)) => {
             super::report(&diags, common);
-            eprintln!("error: {msg}");
+            eprintln_quiet!("error: {msg}");
             return ExitCode::from(2);
         }
         Err(e) => return report_error(&e, common),

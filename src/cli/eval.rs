@@ -183,7 +183,7 @@ struct LeafRow {
 /// Run `vstructc eval`.
 pub fn run(args: &EvalArgs, common: &CommonOptions) -> ExitCode {
     let usage = |msg: String| {
-        eprintln!("error: {msg}");
+        eprintln_quiet!("error: {msg}");
         ExitCode::from(2)
     };
     let parsed = (|| {
@@ -275,7 +275,7 @@ pub fn run(args: &EvalArgs, common: &CommonOptions) -> ExitCode {
         match serde_json::to_string_pretty(&doc) {
             Ok(s) => text = s + "\n",
             Err(e) => {
-                eprintln!("error: {e}");
+                eprintln_quiet!("error: {e}");
                 return ExitCode::from(1);
             }
         }

@@ -24,7 +24,7 @@ pub struct ExplainArgs {
 /// Run `vstructc explain`.
 pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
     let Some((handle, input)) = args.target.rsplit_once('.') else {
-        eprintln!("error: expected HANDLE.INPUT, got `{}`", args.target);
+        eprintln_quiet!("error: expected HANDLE.INPUT, got `{}`", args.target);
         return ExitCode::from(2);
     };
     let Prepared {
@@ -38,7 +38,7 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
     };
     options.record_events = true;
     let Some(node) = loaded.network.find(handle) else {
-        eprintln!("error: no node `{handle}` in {}", loaded.name);
+        eprintln_quiet!("error: no node `{handle}` in {}", loaded.name);
         return ExitCode::from(2);
     };
     let res = resolve(&mut loaded.network, &registry, &options);

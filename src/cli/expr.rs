@@ -41,7 +41,7 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
     let ext = match Extensions::from_names(&common.ext) {
         Ok(e) => e,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln_quiet!("error: {e}");
             return ExitCode::from(2);
         }
     };

@@ -52,10 +52,10 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
         return status;
     }
     let Some(def) = def else {
-        eprintln!("error: unknown shader `{}`", args.shader);
+        eprintln_quiet!("error: unknown shader `{}`", args.shader);
         let ids = registry.ids();
         if !ids.is_empty() && ids.len() <= 50 {
-            eprintln!("  known shaders: {}", ids.join(", "));
+            eprintln_quiet!("  known shaders: {}", ids.join(", "));
         }
         return ExitCode::from(2);
     };

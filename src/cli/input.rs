@@ -190,7 +190,7 @@ pub fn prepare(
     common: &CommonOptions,
 ) -> Result<Prepared, std::process::ExitCode> {
     let options = super::resolve::resolve_options(no_conditions, common).map_err(|e| {
-        eprintln!("error: {e}");
+        eprintln_quiet!("error: {e}");
         std::process::ExitCode::from(2)
     })?;
     let registry = super::info::registry_for(common);

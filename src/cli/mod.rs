@@ -10,6 +10,15 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// `eprintln!` that ignores a failing standard error (`2>/dev/full`): the exit status still
+/// says what happened, and there is nowhere left to say more. `eprintln!` would panic.
+macro_rules! eprintln_quiet {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub mod compile;
 pub mod eval;
 pub mod explain;

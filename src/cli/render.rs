@@ -113,7 +113,7 @@ pub fn load_materials(
         Ok(l) => l,
         Err(Error::Usage(msg)) => {
             super::report(&diags, common);
-            eprintln!("error: {msg}");
+            eprintln_quiet!("error: {msg}");
             return Err(ExitCode::from(2));
         }
         Err(e) => return Err(report_error(&e, common)),
@@ -144,7 +144,7 @@ pub fn load_materials(
     }
     if out.is_empty() {
         super::report(&diags, common);
-        eprintln!("error: the input has no material with a lowering recipe");
+        eprintln_quiet!("error: the input has no material with a lowering recipe");
         return Err(ExitCode::from(1));
     }
     Ok((out, diags))
@@ -270,7 +270,7 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         return status;
     }
     let usage = |msg: String| {
-        eprintln!("error: {msg}");
+        eprintln_quiet!("error: {msg}");
         ExitCode::from(2)
     };
     if let Err(msg) = check_input_names(&materials, &args.source.inputs) {

@@ -22,8 +22,8 @@
 //! * A node's request kind comes from the terminals naming it (`surface`/`volume` → `Bxdf`,
 //!   `displacement` → `Displace`, `light`, `lightFilter`); other nodes are `Pattern`s.
 
-use crate::limits::{Limit, Limits};
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamTypes, RequestKind,
     Terminal,

@@ -531,3 +531,35 @@ fn a_full_disk_on_stdout_is_io001_in_every_command() {
         assert!(!ran.out.stderr.contains("panicked"), "{name}");
     }
 }
+
+/// A full disk on standard error (`2>/dev/full`) loses the messages but never panics: each
+/// command ends with the exit status it would have had (1 for input errors, 2 for usage
+/// errors), whether the message came from a diagnostic report or a plain `error:` line.
+#[test]
+fn a_full_disk_on_stderr_keeps_the_exit_status() {
+    let commands: &[(&[&str], i32)] = &[
+        (&["info", "NoSuchShader"], 2),
+        (&["explain", "nodot", "examples/layered.rib"], 2),
+        (&["explain", "ghost.input", "examples/layered.rib"], 2),
+        (&["expr", "connect if a = 1"], 1),
+        (&["resolve", "tests/hostile/corpus/truncated.rib"], 1),
+        (
+            &["resolve", "tests/hostile/corpus/cycle2.rib", "-o", "-"],
+            0,
+        ),
+        (
+            &["render", "--size", "0", "examples/layered.rib", "-o", "-"],
+            2,
+        ),
+    ];
+    for (args, status) in commands {
+        let full = File::options().write(true).open("/dev/full").unwrap();
+        let out = vstructc(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::from(full))
+            .status()
+            .unwrap();
+        assert_eq!(out.code(), Some(*status), "{}", args.join(" "));
+    }
+}
