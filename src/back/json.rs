@@ -441,20 +441,7 @@ fn is_container(v: &Value) -> bool {
 #[cfg(test)]
 fn write_json_tree(net: &Network) -> String {
     let mut materials = Out::obj();
-    let mut taken: HashSet<String> = HashSet::new();
-    // Where the search for a free `name#n` of each name resumes (names only become taken,
-    // so N materials of one name cost N probes in all, not N² / 2).
-    let mut suffixes: HashMap<&str, usize> = HashMap::new();
-    for (k, m) in net.materials().iter().enumerate() {
-        let mut name = m.name.clone();
-        if taken.contains(&name) {
-            let n = suffixes.entry(m.name.as_str()).or_insert(1);
-            while taken.contains(&name) {
-                name = format!("{}#{n}", m.name);
-                *n += 1;
-            }
-        }
-        taken.insert(name.clone());
+    for (k, name) in material_names(net).into_iter().enumerate() {
         materials.insert(name, material(net, k));
     }
     let mut top = Out::obj();

@@ -26,7 +26,7 @@ pub struct ParseError {
     /// Set when the expression exceeded a bound of [`crate::limits::Limits`]
     /// ([`Limits::expr_terms`](crate::limits::Limits::expr_terms) or
     /// [`Limits::expr_depth`](crate::limits::Limits::expr_depth)); `span` is where.
-    pub limit: Option<crate::limits::LimitExceeded>,
+    pub limit: Option<Box<crate::limits::LimitExceeded>>,
 }
 
 impl ParseError {

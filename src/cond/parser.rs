@@ -439,7 +439,7 @@ impl<'a> Parser<'a> {
             if let Err(exceeded) = self.limits.check(Limit::ExprDepth, self.depth as u64 + 1) {
                 let mut e = self.error(&[Want::Param]);
                 e.message = format!("parentheses nested deeper than {} levels", exceeded.max);
-                e.limit = Some(exceeded);
+                e.limit = Some(Box::new(exceeded));
                 return Err(e);
             }
             self.bump();
@@ -471,7 +471,7 @@ impl<'a> Parser<'a> {
         if let Err(exceeded) = self.limits.check(Limit::ExprTerms, self.terms) {
             let mut e = self.error(&[Want::Param]);
             e.message = format!("{exceeded}");
-            e.limit = Some(exceeded);
+            e.limit = Some(Box::new(exceeded));
             return Err(e);
         }
         let n = self.bump();

@@ -151,18 +151,7 @@ fn a_long_cycle_is_one_short_warning() {
 /// A head fed by 10,000 connections names the first and last few dropped ones.
 #[test]
 fn a_wide_fan_in_is_one_short_warning() {
-    let mut nodes: Vec<crate::JsonNode<'_>> = Vec::new();
-    let mut conns = Vec::new();
-    for i in 0..10_000 {
-        nodes.push((format!("l{i}"), "PxrLayer", Vec::new()));
-        conns.push((
-            "inputMaterial".to_string(),
-            format!("l{i}"),
-            "pxrMaterialOut",
-        ));
-    }
-    nodes.push(("s".into(), "PxrLayerSurface", conns));
-    let path = scratch("fan_in_bounded.json", crate::json_net(&nodes));
+    let path = scratch("fan_in_bounded.json", crate::fan_in_json(10_000));
     let o = run(&resolve_args(&path, &[]));
     check("fan_in_bounded.json", &o, 0, "warning[VS011]");
     let line = o

@@ -287,11 +287,11 @@ fn cycles_of_length_1_2_and_1000() {
     }
 }
 
-#[test]
-fn ten_thousand_connections_on_one_head() {
+/// A JSON network of `n` PxrLayers all connected to one PxrLayerSurface's `inputMaterial`.
+fn fan_in_json(n: usize) -> String {
     let mut nodes: Vec<JsonNode<'_>> = Vec::new();
     let mut conns = Vec::new();
-    for i in 0..10_000 {
+    for i in 0..n {
         nodes.push((format!("l{i}"), "PxrLayer", Vec::new()));
         conns.push((
             "inputMaterial".to_string(),
@@ -300,7 +300,12 @@ fn ten_thousand_connections_on_one_head() {
         ));
     }
     nodes.push(("s".into(), "PxrLayerSurface", conns));
-    let o = run_file("fan_in.json", json_net(&nodes));
+    json_net(&nodes)
+}
+
+#[test]
+fn ten_thousand_connections_on_one_head() {
+    let o = run_file("fan_in.json", fan_in_json(10_000));
     check("fan_in.json", &o, 0, "warning[VS011]");
 
     // The same in RIB: one array of 10,000 connection strings on one head.
