@@ -26,7 +26,7 @@ pub struct ExprArgs {
     /// "literal" (set) or "param" (copy), "span"}. An expression node is one of
     /// {"expr": "cmp", "param", "op", "value", "span"},
     /// {"expr": "is", "param", "test": "connected" | "set", "negated", "span"},
-    /// {"expr": "and" | "or", "terms": [nodes], "span"}: a chain `a and b and c` is one node
+    /// {"expr": "and" | "or", "terms" (a list of nodes), "span"}: a chain `a and b and c` is one node
     /// with its terms in order; only a chain parenthesised as a later term is a nested node.
     /// A param is {"name", "span"}, a literal {"type": "number", "value", "text", "span"} or
     /// {"type": "string", "value", "span"}; spans are byte offsets {"start", "end"}.
