@@ -41,9 +41,9 @@ use crate::network::{
     Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
+use rustc_hash::{FxHashMap, FxHashSet};
 use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
 use std::cell::RefCell;
-use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::sync::Arc;
 
@@ -89,28 +89,74 @@ impl J {
     }
 }
 
-/// Shared state of the tree builder: the current path (for the pointer of a duplicate key).
+/// Where a duplicate key was found. The pointer is collected as the duplicate's error
+/// travels up the readers (each adds its own segment), so no path is kept while reading.
 #[derive(Default)]
 struct Ctx {
-    path: RefCell<Vec<String>>,
-    duplicate: RefCell<Option<String>>,
+    /// The duplicate key's pointer segments, innermost first.
+    duplicate: RefCell<Option<Vec<String>>>,
 }
 
 impl Ctx {
-    fn pointer_with(&self, last: &str) -> String {
+    /// The error for a duplicate `key` (a serde error: JS002 with line and column).
+    fn duplicate_key<E: de::Error>(&self, key: &str) -> E {
+        *self.duplicate.borrow_mut() = Some(vec![key.to_string()]);
+        E::custom(format!("duplicate key `{key}`"))
+    }
+
+    /// `read`, the value under `segment`: a duplicate inside it gets `segment` in its pointer.
+    fn within<T, E>(&self, segment: impl FnOnce() -> String, read: Result<T, E>) -> Result<T, E> {
+        if read.is_err()
+            && let Some(segments) = self.duplicate.borrow_mut().as_mut()
+        {
+            segments.push(segment());
+        }
+        read
+    }
+
+    /// The duplicate key's pointer, if the error was a duplicate key.
+    fn take_pointer(&self) -> Option<String> {
+        let segments = self.duplicate.borrow_mut().take()?;
         let mut p = String::new();
-        for seg in self.path.borrow().iter() {
+        for seg in segments.iter().rev() {
             p.push('/');
             p.push_str(&escape_pointer(seg));
         }
-        p.push('/');
-        p.push_str(&escape_pointer(last));
-        p
+        Some(p)
+    }
+}
+
+/// Keys seen in one object: a scan while the object is small, a hash set beyond.
+#[derive(Default)]
+struct SeenKeys {
+    few: Vec<String>,
+    many: FxHashSet<String>,
+}
+
+impl SeenKeys {
+    const SCAN: usize = 16;
+
+    /// Record `key`; false if it was already there.
+    fn insert(&mut self, key: &str) -> bool {
+        if self.few.len() < Self::SCAN {
+            if self.few.iter().any(|k| k == key) {
+                return false;
+            }
+            self.few.push(key.to_string());
+            if self.few.len() == Self::SCAN {
+                self.many.extend(self.few.iter().cloned());
+            }
+            return true;
+        }
+        self.many.insert(key.to_string())
     }
 }
 
 /// RFC 6901 escaping of one pointer segment.
 fn escape_pointer(s: &str) -> String {
+    if !s.contains(['~', '/']) {
+        return s.to_string();
+    }
     s.replace('~', "~0").replace('/', "~1")
 }
 
@@ -155,10 +201,8 @@ impl<'de> Visitor<'de> for Seed<'_> {
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<J, A::Error> {
         let mut items = Vec::new();
         loop {
-            self.0.path.borrow_mut().push(items.len().to_string());
             let next = seq.next_element_seed(Seed(self.0));
-            self.0.path.borrow_mut().pop();
-            match next? {
+            match self.0.within(|| items.len().to_string(), next)? {
                 Some(v) => items.push(v),
                 None => return Ok(J::Arr(items)),
             }
@@ -166,24 +210,21 @@ impl<'de> Visitor<'de> for Seed<'_> {
     }
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<J, A::Error> {
         let mut members: Vec<(String, J)> = Vec::new();
-        let mut seen: HashSet<String> = HashSet::new();
+        let mut seen = SeenKeys::default();
         while let Some(key) = map.next_key::<String>()? {
-            if !seen.insert(key.clone()) {
-                let pointer = self.0.pointer_with(&key);
-                *self.0.duplicate.borrow_mut() = Some(pointer);
-                return Err(de::Error::custom(format!("duplicate key `{key}`")));
+            if !seen.insert(&key) {
+                return Err(self.0.duplicate_key(&key));
             }
-            self.0.path.borrow_mut().push(key.clone());
             let value = map.next_value_seed(Seed(self.0));
-            self.0.path.borrow_mut().pop();
-            members.push((key, value?));
+            let value = self.0.within(|| key.clone(), value)?;
+            members.push((key, value));
         }
         Ok(J::Obj(members))
     }
 }
 
 /// Nodes of one material by name; `None` for a node whose reading failed.
-type NodesByName = HashMap<String, Option<NodeId>>;
+type NodesByName = FxHashMap<String, Option<NodeId>>;
 
 /// One material while its members are read.
 struct MaterialState {
@@ -198,35 +239,26 @@ struct MaterialState {
 }
 
 /// A duplicate key of the object at the current path is a serde error (JS002 with position).
-fn check_duplicate<E: de::Error>(
-    ctx: &Ctx,
-    seen: &mut HashSet<String>,
-    key: &str,
-) -> Result<(), E> {
-    if seen.contains(key) {
-        *ctx.duplicate.borrow_mut() = Some(ctx.pointer_with(key));
-        return Err(E::custom(format!("duplicate key `{key}`")));
+fn check_duplicate<E: de::Error>(ctx: &Ctx, seen: &mut SeenKeys, key: &str) -> Result<(), E> {
+    if seen.insert(key) {
+        Ok(())
+    } else {
+        Err(ctx.duplicate_key(key))
     }
-    seen.insert(key.to_string());
-    Ok(())
 }
 
 /// Read the value of the current key as a tree (small subtrees only), under `key` in the path.
 fn value_tree<'de, A: MapAccess<'de>>(ctx: &Ctx, map: &mut A, key: &str) -> Result<J, A::Error> {
-    ctx.path.borrow_mut().push(key.to_string());
     let value = map.next_value_seed(Seed(ctx));
-    ctx.path.borrow_mut().pop();
-    value
+    ctx.within(|| key.to_string(), value)
 }
 
 /// Consume an array where an object is needed (its members are still checked for duplicates).
 fn skip_seq<'de, A: SeqAccess<'de>>(ctx: &Ctx, mut seq: A) -> Result<(), A::Error> {
     let mut i = 0usize;
     loop {
-        ctx.path.borrow_mut().push(i.to_string());
         let next = seq.next_element_seed(Seed(ctx));
-        ctx.path.borrow_mut().pop();
-        if next?.is_none() {
+        if ctx.within(|| i.to_string(), next)?.is_none() {
             return Ok(());
         }
         i += 1;
@@ -305,7 +337,7 @@ impl<'de> Visitor<'de> for DocSeed<'_, '_> {
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let r = self.0;
-        let mut seen = HashSet::new();
+        let mut seen = SeenKeys::default();
         let mut version = None;
         let mut has_materials = false;
         while let Some(key) = map.next_key::<String>()? {
@@ -314,10 +346,8 @@ impl<'de> Visitor<'de> for DocSeed<'_, '_> {
                 "vstructcNetwork" => version = Some(value_tree(&r.ctx, &mut map, &key)?),
                 "materials" => {
                     has_materials = true;
-                    r.ctx.path.borrow_mut().push(key.clone());
                     let read = map.next_value_seed(MaterialsSeed(&mut *r));
-                    r.ctx.path.borrow_mut().pop();
-                    read?;
+                    r.ctx.within(|| key.clone(), read)?;
                 }
                 _ => {
                     r.at(0, DOC_KEYS);
@@ -367,7 +397,7 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let r = self.0;
-        let mut seen = HashSet::new();
+        let mut seen = SeenKeys::default();
         while let Some(name) = map.next_key::<String>()? {
             check_duplicate(&r.ctx, &mut seen, &name)?;
             r.materials += 1;
@@ -376,20 +406,19 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
                 pointer: ptr("/materials", &name),
                 has_nodes: false,
                 ids: Vec::new(),
-                by_name: HashMap::new(),
+                by_name: Default::default(),
                 pending: Vec::new(),
                 terminals: None,
                 primvars: Vec::new(),
                 name,
             };
-            r.ctx.path.borrow_mut().push(m.name.clone());
+            let name = m.name.clone();
             let read = map.next_value_seed(MaterialSeed {
                 r: &mut *r,
                 m: Some(m),
                 group,
             });
-            r.ctx.path.borrow_mut().pop();
-            read?;
+            r.ctx.within(|| name, read)?;
         }
         Ok(())
     }
@@ -433,7 +462,7 @@ impl<'de> Visitor<'de> for MaterialSeed<'_, '_> {
         let Some(mut m) = self.m else {
             return Ok(());
         };
-        let mut seen = HashSet::new();
+        let mut seen = SeenKeys::default();
         while let Some(key) = map.next_key::<String>()? {
             check_duplicate(&r.ctx, &mut seen, &key)?;
             let p = ptr(&m.pointer, &key);
@@ -441,15 +470,13 @@ impl<'de> Visitor<'de> for MaterialSeed<'_, '_> {
             match key.as_str() {
                 "nodes" => {
                     m.has_nodes = true;
-                    r.ctx.path.borrow_mut().push(key.clone());
                     let read = map.next_value_seed(NodesSeed {
                         r: &mut *r,
                         m: &mut m,
                         pointer: p,
                         group,
                     });
-                    r.ctx.path.borrow_mut().pop();
-                    read?;
+                    r.ctx.within(|| key.clone(), read)?;
                 }
                 "terminals" => {
                     let j = value_tree(&r.ctx, &mut map, &key)?;
@@ -515,8 +542,7 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_> {
         let (r, m) = (self.r, self.m);
         while let Some(name) = map.next_key::<String>()? {
             if m.by_name.contains_key(&name) {
-                *r.ctx.duplicate.borrow_mut() = Some(r.ctx.pointer_with(&name));
-                return Err(de::Error::custom(format!("duplicate key `{name}`")));
+                return Err(r.ctx.duplicate_key(&name));
             }
             let j = value_tree(&r.ctx, &mut map, &name)?;
             r.at(self.group, MAT_NODES);
@@ -626,7 +652,7 @@ fn syntax_error(e: &serde_json::Error, bytes: &[u8], file: &Arc<str>, ctx: &Ctx)
         e.line() as u32,
         char_column(bytes, e.line(), e.column()),
     );
-    let duplicate = ctx.duplicate.borrow_mut().take();
+    let duplicate = ctx.take_pointer();
     let d = match (e.classify(), duplicate) {
         (serde_json::error::Category::Data, Some(pointer)) => {
             loc.pointer = Some(pointer);
@@ -714,7 +740,15 @@ struct Reader<'t> {
 }
 
 fn ptr(base: &str, seg: &str) -> String {
-    format!("{base}/{}", escape_pointer(seg))
+    let mut p = String::with_capacity(base.len() + seg.len() + 1);
+    p.push_str(base);
+    p.push('/');
+    if seg.contains(['~', '/']) {
+        p.push_str(&escape_pointer(seg));
+    } else {
+        p.push_str(seg);
+    }
+    p
 }
 
 impl Reader<'_> {
@@ -828,7 +862,7 @@ impl Reader<'_> {
             }
         }
         // A node's kind comes from the first terminal naming it.
-        let mut named: HashSet<&str> = HashSet::new();
+        let mut named: FxHashSet<&str> = Default::default();
         for (t, c) in &terms {
             if named.insert(c.node.as_str())
                 && let Some(&Some(id)) = m.by_name.get(c.node.as_str())
@@ -961,18 +995,24 @@ impl Reader<'_> {
                 format!("node `{name}` has no `nodeTypeId`"),
             ));
         };
-        let mut params: Vec<Param> = Vec::new();
-        let mut index: HashMap<&str, usize> = HashMap::new();
+        let mut params: Vec<Param> = Vec::with_capacity(parameters.len() + inputs.len());
+        let mut index: FxHashMap<&str, usize> = Default::default();
         let ppointer = ptr(pointer, "parameters");
         for (pname, pj) in parameters {
             let p = ptr(&ppointer, pname);
             let (value, decl) = self.parameter(shader, pname, pj, &p)?;
             index.insert(pname, params.len());
+            let location = Location {
+                file: self.file.clone(),
+                line: 0,
+                column: 0,
+                pointer: Some(p),
+            };
             params.push(Param::from_source(
                 pname.clone(),
                 Some(value),
                 Some(decl),
-                Some(self.loc(&p)),
+                Some(location),
                 None,
             ));
         }
@@ -1231,6 +1271,24 @@ mod tests {
         assert_eq!((loc.line, loc.column), (2, 8));
         assert_eq!(tree("[1] x").unwrap_err().code(), Some("JS001"));
         assert_eq!(tree("").unwrap_err().code(), Some("JS001"));
+    }
+
+    #[test]
+    fn duplicate_keys_are_found_in_large_objects() {
+        // Objects beyond SeenKeys::SCAN keys switch to a hash set: duplicates of an early and
+        // of a late key are both found, with their pointers.
+        for dup in ["k3", "k19"] {
+            let mut text = String::from("{\"x\": {");
+            for i in 0..20 {
+                text.push_str(&format!("\"k{i}\": {i}, "));
+            }
+            text.push_str(&format!("\"{dup}\": 0}}}}"));
+            let e = tree(&text).unwrap_err();
+            let d = e.diagnostic().unwrap();
+            assert_eq!(d.code, "JS002");
+            let pointer = d.location.as_ref().unwrap().pointer.clone();
+            assert_eq!(pointer, Some(format!("/x/{dup}")));
+        }
     }
 
     #[test]
