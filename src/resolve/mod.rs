@@ -7,12 +7,12 @@
 //! is one node being resolved, with the snapshot of its connected input heads and the position
 //! reached in it.
 
-use crate::limits::{LimitExceeded, Limits};
 use crate::cond::{
     self, Action, ActionKind, Choice, ComparisonReport, CopyOutcome, Extension, Extensions,
     Statement,
 };
 use crate::diag::{Diagnostic, Diagnostics, LIST_ENDS, Location, join_bounded};
+use crate::limits::{LimitExceeded, Limits};
 use crate::network::{Link, Network, NodeId, Slot};
 use crate::registry::tables::{CondEntry, InputMember, OutputMember, VstructTables};
 use crate::registry::{IndexedDefinition, Registry};
