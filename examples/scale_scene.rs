@@ -7,7 +7,7 @@
 //! SHAPE is `layered` (the bench scene of N materials), `chain` (a pattern chain of N nodes)
 //! or one of the scaling shapes (`shared_layer`, `shared_mixer`, `fan_in`, `redefined_bxdf`,
 //! `args_params`, `args_heads`). Writes `DIR/scene.rib`, and for the `.args` shapes the
-//! definition next to it (pass `--args DIR` to `vstructc`). For `layered` and `chain` it also
+//! definition next to it (pass `--args DIR` to `vstructc`). For `layered` it also
 //! writes `DIR/scene.json`, the same network in the JSON form (for the JSON reader's figures).
 
 use std::path::PathBuf;
@@ -29,7 +29,7 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     };
     let dir = PathBuf::from(dir);
-    let json = matches!(shape.as_str(), "layered" | "chain");
+    let json = shape == "layered";
     let (rib, args) = match shape.as_str() {
         "layered" => (testgen::layered_scene(n), None),
         "chain" => (testgen::pattern_chain(n), None),
