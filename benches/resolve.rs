@@ -1,7 +1,8 @@
 //! Resolution throughput on a generated scene of layered materials (issue 4 targets: resolve
 //! 10,000 materials ≤ 300 ms single-threaded; doubling the scene ≤ 2.2× the time).
 //!
-//! `scene/*` is wall-clock time. `scene_cpu/resolve` is the same resolution measured as the
+//! `scene/*` is wall-clock time; `scene/parse_json` reads the same network from its JSON form
+//! (issue 33: ≤ 1.5× `scene/parse`). `scene_cpu/resolve` is the same resolution measured as the
 //! thread's CPU time (ns): resolution is single-threaded, and on the shared development
 //! machine wall-clock time mostly measures the other processes.
 
@@ -13,7 +14,9 @@ mod cpu_time;
 use cpu_time::CpuTime;
 use std::hint::black_box;
 use vstructc::Diagnostics;
+use vstructc::back::json::write_json;
 use vstructc::back::rib::write_rib_to_vec;
+use vstructc::front::json::parse_json;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::network::Network;
 use vstructc::network::testgen::layered_scene;
@@ -61,6 +64,18 @@ fn bench(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
             b.iter(|| black_box(parse()))
         });
+        let json = write_json(&parsed).into_bytes();
+        group.bench_with_input(
+            BenchmarkId::new("parse_json", materials),
+            &materials,
+            |b, _| {
+                b.iter(|| {
+                    let mut diags = Diagnostics::new();
+                    black_box(parse_json(&json, "scene.json", &reg, &mut diags).unwrap())
+                })
+            },
+        );
+        drop(json);
         bench_resolve(&mut group, &reg, &parsed, materials);
         let mut resolved = parsed.clone();
         resolve(&mut resolved, &reg, &ResolveOptions::default());

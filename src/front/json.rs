@@ -6,9 +6,21 @@
 //! several materials gives several nodes (keys `name#0`, `name#1`, … in file order), since
 //! each material is resolved on its own node set.
 //!
-//! Duplicate object keys are an error (JS002): the text is read with a custom serde visitor
-//! that sees every key (serde_json's own maps keep only the last). Diagnostics carry a JSON
-//! Pointer (RFC 6901); syntax errors (JS001) and duplicate keys also carry line and column.
+//! The network is built while serde reads the text: custom `DeserializeSeed`s for the
+//! document, `materials`, each material and its `nodes` create nodes as they come; only one
+//! node (and a material's `terminals` and `primvars`) is held as a small tree at a time.
+//! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
+//! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
+//! and duplicate keys also carry line and column.
+//!
+//! Diagnostics do not depend on the order of the keys: findings are collected with the place
+//! of their check and reported once the whole text is valid JSON, in this order: any syntax
+//! error or duplicate key first (nothing else is then reported); the version; unknown
+//! top-level keys; `materials`; then per material, in document order, its own keys and
+//! `primvars`, a missing `nodes`, its terminals, its nodes, and its dangling connections
+//! (JS010). The first error ends the report; warnings before it are kept. A node's kind is
+//! set when its material's terminals are read (they may follow the nodes, as in the order
+//! the JSON writer uses).
 //!
 //! Choices where the spec is silent:
 //!
@@ -29,9 +41,9 @@ use crate::network::{
     Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
+use rustc_hash::{FxHashMap, FxHashSet};
 use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
 use std::cell::RefCell;
-use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::sync::Arc;
 
@@ -77,28 +89,74 @@ impl J {
     }
 }
 
-/// Shared state of the tree builder: the current path (for the pointer of a duplicate key).
+/// Where a duplicate key was found. The pointer is collected as the duplicate's error
+/// travels up the readers (each adds its own segment), so no path is kept while reading.
 #[derive(Default)]
 struct Ctx {
-    path: RefCell<Vec<String>>,
-    duplicate: RefCell<Option<String>>,
+    /// The duplicate key's pointer segments, innermost first.
+    duplicate: RefCell<Option<Vec<String>>>,
 }
 
 impl Ctx {
-    fn pointer_with(&self, last: &str) -> String {
+    /// The error for a duplicate `key` (a serde error: JS002 with line and column).
+    fn duplicate_key<E: de::Error>(&self, key: &str) -> E {
+        *self.duplicate.borrow_mut() = Some(vec![key.to_string()]);
+        E::custom(format!("duplicate key `{key}`"))
+    }
+
+    /// `read`, the value under `segment`: a duplicate inside it gets `segment` in its pointer.
+    fn within<T, E>(&self, segment: impl FnOnce() -> String, read: Result<T, E>) -> Result<T, E> {
+        if read.is_err()
+            && let Some(segments) = self.duplicate.borrow_mut().as_mut()
+        {
+            segments.push(segment());
+        }
+        read
+    }
+
+    /// The duplicate key's pointer, if the error was a duplicate key.
+    fn take_pointer(&self) -> Option<String> {
+        let segments = self.duplicate.borrow_mut().take()?;
         let mut p = String::new();
-        for seg in self.path.borrow().iter() {
+        for seg in segments.iter().rev() {
             p.push('/');
             p.push_str(&escape_pointer(seg));
         }
-        p.push('/');
-        p.push_str(&escape_pointer(last));
-        p
+        Some(p)
+    }
+}
+
+/// Keys seen in one object: a scan while the object is small, a hash set beyond.
+#[derive(Default)]
+struct SeenKeys {
+    few: Vec<String>,
+    many: FxHashSet<String>,
+}
+
+impl SeenKeys {
+    const SCAN: usize = 16;
+
+    /// Record `key`; false if it was already there.
+    fn insert(&mut self, key: &str) -> bool {
+        if self.few.len() < Self::SCAN {
+            if self.few.iter().any(|k| k == key) {
+                return false;
+            }
+            self.few.push(key.to_string());
+            if self.few.len() == Self::SCAN {
+                self.many.extend(self.few.iter().cloned());
+            }
+            return true;
+        }
+        self.many.insert(key.to_string())
     }
 }
 
 /// RFC 6901 escaping of one pointer segment.
 fn escape_pointer(s: &str) -> String {
+    if !s.contains(['~', '/']) {
+        return s.to_string();
+    }
     s.replace('~', "~0").replace('/', "~1")
 }
 
@@ -143,10 +201,8 @@ impl<'de> Visitor<'de> for Seed<'_> {
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<J, A::Error> {
         let mut items = Vec::new();
         loop {
-            self.0.path.borrow_mut().push(items.len().to_string());
             let next = seq.next_element_seed(Seed(self.0));
-            self.0.path.borrow_mut().pop();
-            match next? {
+            match self.0.within(|| items.len().to_string(), next)? {
                 Some(v) => items.push(v),
                 None => return Ok(J::Arr(items)),
             }
@@ -154,19 +210,356 @@ impl<'de> Visitor<'de> for Seed<'_> {
     }
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<J, A::Error> {
         let mut members: Vec<(String, J)> = Vec::new();
-        let mut seen: HashSet<String> = HashSet::new();
+        let mut seen = SeenKeys::default();
         while let Some(key) = map.next_key::<String>()? {
-            if !seen.insert(key.clone()) {
-                let pointer = self.0.pointer_with(&key);
-                *self.0.duplicate.borrow_mut() = Some(pointer);
-                return Err(de::Error::custom(format!("duplicate key `{key}`")));
+            if !seen.insert(&key) {
+                return Err(self.0.duplicate_key(&key));
             }
-            self.0.path.borrow_mut().push(key.clone());
             let value = map.next_value_seed(Seed(self.0));
-            self.0.path.borrow_mut().pop();
-            members.push((key, value?));
+            let value = self.0.within(|| key.clone(), value)?;
+            members.push((key, value));
         }
         Ok(J::Obj(members))
+    }
+}
+
+/// Nodes of one material by name; `None` for a node whose reading failed.
+type NodesByName = FxHashMap<String, Option<NodeId>>;
+
+/// One material while its members are read.
+struct MaterialState {
+    name: String,
+    pointer: String,
+    has_nodes: bool,
+    ids: Vec<NodeId>,
+    by_name: NodesByName,
+    pending: Vec<(NodeId, NodeConns)>,
+    terminals: Option<J>,
+    primvars: Vec<String>,
+}
+
+/// A duplicate key of the object at the current path is a serde error (JS002 with position).
+fn check_duplicate<E: de::Error>(ctx: &Ctx, seen: &mut SeenKeys, key: &str) -> Result<(), E> {
+    if seen.insert(key) {
+        Ok(())
+    } else {
+        Err(ctx.duplicate_key(key))
+    }
+}
+
+/// Read the value of the current key as a tree (small subtrees only), under `key` in the path.
+fn value_tree<'de, A: MapAccess<'de>>(ctx: &Ctx, map: &mut A, key: &str) -> Result<J, A::Error> {
+    let value = map.next_value_seed(Seed(ctx));
+    ctx.within(|| key.to_string(), value)
+}
+
+/// Consume an array where an object is needed (its members are still checked for duplicates).
+fn skip_seq<'de, A: SeqAccess<'de>>(ctx: &Ctx, mut seq: A) -> Result<(), A::Error> {
+    let mut i = 0usize;
+    loop {
+        let next = seq.next_element_seed(Seed(ctx));
+        if ctx.within(|| i.to_string(), next)?.is_none() {
+            return Ok(());
+        }
+        i += 1;
+    }
+}
+
+/// The visitor methods of a streamed object for every value that is not an object: the
+/// visitor's `not_object` records the error, and the value is consumed.
+macro_rules! needs_object {
+    () => {
+        fn visit_bool<E: de::Error>(mut self, _: bool) -> Result<(), E> {
+            self.not_object("a boolean");
+            Ok(())
+        }
+        fn visit_i64<E: de::Error>(mut self, _: i64) -> Result<(), E> {
+            self.not_object("a number");
+            Ok(())
+        }
+        fn visit_u64<E: de::Error>(mut self, _: u64) -> Result<(), E> {
+            self.not_object("a number");
+            Ok(())
+        }
+        fn visit_f64<E: de::Error>(mut self, _: f64) -> Result<(), E> {
+            self.not_object("a number");
+            Ok(())
+        }
+        fn visit_str<E: de::Error>(mut self, _: &str) -> Result<(), E> {
+            self.not_object("a string");
+            Ok(())
+        }
+        fn visit_unit<E: de::Error>(mut self) -> Result<(), E> {
+            self.not_object("null");
+            Ok(())
+        }
+        fn visit_none<E: de::Error>(mut self) -> Result<(), E> {
+            self.not_object("null");
+            Ok(())
+        }
+        fn visit_seq<A: SeqAccess<'de>>(mut self, seq: A) -> Result<(), A::Error> {
+            self.not_object("an array");
+            skip_seq(self.ctx(), seq)
+        }
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("a JSON value")
+        }
+    };
+}
+
+/// The document object.
+struct DocSeed<'r, 't>(&'r mut Reader<'t>);
+
+impl DocSeed<'_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.0.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        self.0.at(0, DOC_VERSION);
+        let e = self.0.error(
+            "JS002",
+            "",
+            format!("the document must be an object, found {kind}"),
+        );
+        self.0.fail(e);
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for DocSeed<'_, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for DocSeed<'_, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let r = self.0;
+        let mut seen = SeenKeys::default();
+        let mut version = None;
+        let mut has_materials = false;
+        while let Some(key) = map.next_key::<String>()? {
+            check_duplicate(&r.ctx, &mut seen, &key)?;
+            match key.as_str() {
+                "vstructcNetwork" => version = Some(value_tree(&r.ctx, &mut map, &key)?),
+                "materials" => {
+                    has_materials = true;
+                    let read = map.next_value_seed(MaterialsSeed(&mut *r));
+                    r.ctx.within(|| key.clone(), read)?;
+                }
+                _ => {
+                    r.at(0, DOC_KEYS);
+                    r.unknown_key(&ptr("", &key), &key, "the document");
+                    value_tree(&r.ctx, &mut map, &key)?;
+                }
+            }
+        }
+        r.at(0, DOC_VERSION);
+        r.check_version(version.as_ref());
+        if !has_materials {
+            r.at(0, DOC_MATERIALS);
+            let e = r.error("JS002", "", "missing `materials`");
+            r.fail(e);
+        }
+        Ok(())
+    }
+}
+
+/// The `materials` object: each material is read and closed in turn.
+struct MaterialsSeed<'r, 't>(&'r mut Reader<'t>);
+
+impl MaterialsSeed<'_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.0.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        self.0.at(0, DOC_MATERIALS);
+        let e = self.0.error(
+            "JS002",
+            "/materials",
+            format!("`materials` must be an object, found {kind}"),
+        );
+        self.0.fail(e);
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for MaterialsSeed<'_, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let r = self.0;
+        let mut seen = SeenKeys::default();
+        while let Some(name) = map.next_key::<String>()? {
+            check_duplicate(&r.ctx, &mut seen, &name)?;
+            r.materials += 1;
+            let group = r.materials;
+            let m = MaterialState {
+                pointer: ptr("/materials", &name),
+                has_nodes: false,
+                ids: Vec::new(),
+                by_name: Default::default(),
+                pending: Vec::new(),
+                terminals: None,
+                primvars: Vec::new(),
+                name,
+            };
+            let name = m.name.clone();
+            let read = map.next_value_seed(MaterialSeed {
+                r: &mut *r,
+                m: Some(m),
+                group,
+            });
+            r.ctx.within(|| name, read)?;
+        }
+        Ok(())
+    }
+}
+
+/// One material object.
+struct MaterialSeed<'r, 't> {
+    r: &'r mut Reader<'t>,
+    m: Option<MaterialState>,
+    group: u32,
+}
+
+impl MaterialSeed<'_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        self.r.at(self.group, MAT_KEYS);
+        let pointer = self.m.as_ref().map_or("", |m| m.pointer.as_str());
+        let e = self.r.error(
+            "JS002",
+            pointer,
+            format!("a material must be an object, found {kind}"),
+        );
+        self.r.fail(e);
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for MaterialSeed<'_, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for MaterialSeed<'_, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, group) = (self.r, self.group);
+        let Some(mut m) = self.m else {
+            return Ok(());
+        };
+        let mut seen = SeenKeys::default();
+        while let Some(key) = map.next_key::<String>()? {
+            check_duplicate(&r.ctx, &mut seen, &key)?;
+            let p = ptr(&m.pointer, &key);
+            r.at(group, MAT_KEYS);
+            match key.as_str() {
+                "nodes" => {
+                    m.has_nodes = true;
+                    let read = map.next_value_seed(NodesSeed {
+                        r: &mut *r,
+                        m: &mut m,
+                        pointer: p,
+                        group,
+                    });
+                    r.ctx.within(|| key.clone(), read)?;
+                }
+                "terminals" => {
+                    let j = value_tree(&r.ctx, &mut map, &key)?;
+                    match r.object(&j, &p, "`terminals`") {
+                        Ok(_) => m.terminals = Some(j),
+                        Err(e) => r.fail(e),
+                    }
+                }
+                "primvars" => {
+                    let j = value_tree(&r.ctx, &mut map, &key)?;
+                    match r.primvars(&j, &p) {
+                        Ok(v) => m.primvars = v,
+                        Err(e) => r.fail(e),
+                    }
+                }
+                _ => {
+                    r.unknown_key(&p, &key, "a material");
+                    value_tree(&r.ctx, &mut map, &key)?;
+                }
+            }
+        }
+        r.finish_material(m, group);
+        Ok(())
+    }
+}
+
+/// The `nodes` object of a material: each node is read (as a small tree) and inserted in turn;
+/// its kind is set when the material's terminals are known.
+struct NodesSeed<'r, 't, 'm> {
+    r: &'r mut Reader<'t>,
+    m: &'m mut MaterialState,
+    pointer: String,
+    group: u32,
+}
+
+impl NodesSeed<'_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        self.r.at(self.group, MAT_KEYS);
+        let e = self.r.error(
+            "JS002",
+            &self.pointer,
+            format!("`nodes` must be an object, found {kind}"),
+        );
+        self.r.fail(e);
+        self.m.has_nodes = false;
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for NodesSeed<'_, '_, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, m) = (self.r, self.m);
+        while let Some(name) = map.next_key::<String>()? {
+            if m.by_name.contains_key(&name) {
+                return Err(r.ctx.duplicate_key(&name));
+            }
+            let j = value_tree(&r.ctx, &mut map, &name)?;
+            r.at(self.group, MAT_NODES);
+            let read = r.node(&name, &j, RequestKind::Pattern, &ptr(&self.pointer, &name));
+            match read {
+                Ok((id, conns)) => {
+                    m.ids.push(id);
+                    m.pending.push((id, conns));
+                    m.by_name.insert(name, Some(id));
+                }
+                Err(e) => {
+                    r.fail(e);
+                    m.by_name.insert(name, None);
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -225,41 +618,49 @@ pub fn parse_json_limited(
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    let root = parse_tree(bytes, &file)?;
     let mut r = Reader {
-        file,
+        file: file.clone(),
         types,
-        diags,
         net: Network::new(),
+        ctx: Ctx::default(),
+        found: Vec::new(),
+        order: Order::default(),
+        materials: 0,
     };
-    r.document(&root)?;
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    let read = DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end());
+    if let Err(e) = read {
+        return Err(syntax_error(&e, bytes, &file, &r.ctx));
+    }
+    // Report in the order of the checks, not of the document: a material's terminals are
+    // checked before its nodes, the version before the materials (module docs).
+    r.found.sort_by_key(|(order, _)| *order);
+    for (_, found) in r.found {
+        match found {
+            Found::Warning(d) => diags.push(d),
+            Found::Error(e) => return Err(e),
+        }
+    }
     r.net.check_limits(limits)?;
     Ok(r.net)
 }
 
-/// Parse the text into a tree; JS001 (syntax) and JS002 (duplicate key) with line/column.
-fn parse_tree(bytes: &[u8], file: &Arc<str>) -> Result<J, Error> {
-    let ctx = Ctx::default();
-    let mut de = serde_json::Deserializer::from_slice(bytes);
-    let result = Seed(&ctx)
-        .deserialize(&mut de)
-        .and_then(|j| de.end().map(|()| j));
-    result.map_err(|e| {
-        let mut loc = Location::new(
-            file.clone(),
-            e.line() as u32,
-            char_column(bytes, e.line(), e.column()),
-        );
-        let duplicate = ctx.duplicate.borrow_mut().take();
-        let d = match (e.classify(), duplicate) {
-            (serde_json::error::Category::Data, Some(pointer)) => {
-                loc.pointer = Some(pointer);
-                Diagnostic::error("JS002", strip_position(&e))
-            }
-            _ => Diagnostic::error("JS001", format!("not valid JSON: {}", strip_position(&e))),
-        };
-        d.at(loc).into()
-    })
+/// A syntax error (JS001) or a duplicate key (JS002), with line and column.
+fn syntax_error(e: &serde_json::Error, bytes: &[u8], file: &Arc<str>, ctx: &Ctx) -> Error {
+    let mut loc = Location::new(
+        file.clone(),
+        e.line() as u32,
+        char_column(bytes, e.line(), e.column()),
+    );
+    let duplicate = ctx.take_pointer();
+    let d = match (e.classify(), duplicate) {
+        (serde_json::error::Category::Data, Some(pointer)) => {
+            loc.pointer = Some(pointer);
+            Diagnostic::error("JS002", strip_position(e))
+        }
+        _ => Diagnostic::error("JS001", format!("not valid JSON: {}", strip_position(e))),
+    };
+    d.at(loc).into()
 }
 
 /// serde_json's message without its " at line L column C" suffix (the location says it).
@@ -297,18 +698,60 @@ struct Conn {
     pointer: String,
 }
 
-struct Reader<'d, 't> {
+/// Where a diagnostic falls in the order of the checks: the document's checks (group 0) come
+/// before its materials' (group 1 + the material's index); within a group, `phase` orders the
+/// kinds of check and `seq` is the document order.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Order {
+    group: u32,
+    phase: u8,
+    seq: u32,
+}
+
+/// Phases of the document's checks.
+const DOC_VERSION: u8 = 0;
+const DOC_KEYS: u8 = 1;
+const DOC_MATERIALS: u8 = 2;
+/// Phases of a material's checks.
+const MAT_KEYS: u8 = 0;
+const MAT_NO_NODES: u8 = 1;
+const MAT_TERMINALS: u8 = 2;
+const MAT_NODES: u8 = 3;
+const MAT_BIND: u8 = 4;
+
+/// A diagnostic found while reading, reported once the whole text is known to be valid JSON.
+enum Found {
+    Warning(Diagnostic),
+    Error(Error),
+}
+
+/// The network being built while serde reads the text.
+struct Reader<'t> {
     file: Arc<str>,
     types: &'t dyn ParamTypes,
-    diags: &'d mut Diagnostics,
     net: Network,
+    /// The key path, for the pointer of a duplicate key.
+    ctx: Ctx,
+    found: Vec<(Order, Found)>,
+    /// The group and phase of the check running now; `seq` counts every finding.
+    order: Order,
+    /// Materials read so far.
+    materials: u32,
 }
 
 fn ptr(base: &str, seg: &str) -> String {
-    format!("{base}/{}", escape_pointer(seg))
+    let mut p = String::with_capacity(base.len() + seg.len() + 1);
+    p.push_str(base);
+    p.push('/');
+    if seg.contains(['~', '/']) {
+        p.push_str(&escape_pointer(seg));
+    } else {
+        p.push_str(seg);
+    }
+    p
 }
 
-impl Reader<'_, '_> {
+impl Reader<'_> {
     fn loc(&self, pointer: &str) -> Location {
         Location {
             file: self.file.clone(),
@@ -320,6 +763,25 @@ impl Reader<'_, '_> {
 
     fn error(&self, code: &'static str, pointer: &str, msg: impl Into<String>) -> Error {
         Diagnostic::error(code, msg).at(self.loc(pointer)).into()
+    }
+
+    /// Checks from now on belong to `group` and `phase`.
+    fn at(&mut self, group: u32, phase: u8) {
+        self.order.group = group;
+        self.order.phase = phase;
+    }
+
+    fn record(&mut self, found: Found) {
+        self.found.push((self.order, found));
+        self.order.seq += 1;
+    }
+
+    fn warn(&mut self, d: Diagnostic) {
+        self.record(Found::Warning(d));
+    }
+
+    fn fail(&mut self, e: Error) {
+        self.record(Found::Error(e));
     }
 
     fn object<'j>(&self, j: &'j J, pointer: &str, what: &str) -> Result<&'j [(String, J)], Error> {
@@ -347,101 +809,75 @@ impl Reader<'_, '_> {
     fn unknown_key(&mut self, pointer: &str, key: &str, where_: &str) {
         let d = Diagnostic::warning("JS011", format!("unknown key `{key}` in {where_}; ignored"))
             .at(self.loc(pointer));
-        self.diags.push(d);
+        self.warn(d);
     }
 
-    fn document(&mut self, root: &J) -> Result<(), Error> {
-        let top = self.object(root, "", "the document")?;
-        let get = |k: &str| top.iter().find(|(key, _)| key == k).map(|(_, v)| v);
-        match get("vstructcNetwork") {
-            None => return Err(self.error("JS002", "", "missing `vstructcNetwork`")),
-            Some(J::Num(n)) if n.as_f64() == 1.0 => {}
-            Some(J::Num(n)) => {
-                return Err(self.error(
-                    "JS003",
-                    "/vstructcNetwork",
-                    format!(
-                        "unsupported vstructcNetwork version {}; only 1 is supported",
-                        n.as_f64()
-                    ),
-                ));
-            }
-            Some(other) => {
-                return Err(self.error(
-                    "JS002",
-                    "/vstructcNetwork",
-                    format!(
-                        "`vstructcNetwork` must be the integer 1, found {}",
-                        other.kind()
-                    ),
-                ));
-            }
-        }
-        for (k, _) in top {
-            if k != "vstructcNetwork" && k != "materials" {
-                self.unknown_key(&ptr("", k), k, "the document");
-            }
-        }
-        let Some(materials) = get("materials") else {
-            return Err(self.error("JS002", "", "missing `materials`"));
-        };
-        let materials = self.object(materials, "/materials", "`materials`")?;
-        for (name, m) in materials {
-            self.material(name, m, &ptr("/materials", name))?;
-        }
-        Ok(())
-    }
-
-    fn material(&mut self, name: &str, j: &J, pointer: &str) -> Result<(), Error> {
-        let members = self.object(j, pointer, "a material")?;
-        let mut nodes = None;
-        let mut terminals: &[(String, J)] = &[];
-        let mut primvars = Vec::new();
-        for (k, v) in members {
-            let p = ptr(pointer, k);
-            match k.as_str() {
-                "nodes" => nodes = Some(self.object(v, &p, "`nodes`")?),
-                "terminals" => terminals = self.object(v, &p, "`terminals`")?,
-                "primvars" => primvars = self.primvars(v, &p)?,
-                _ => self.unknown_key(&p, k, "a material"),
-            }
-        }
-        let Some(nodes) = nodes else {
-            return Err(self.error(
+    /// The `vstructcNetwork` member (`None` when missing).
+    fn check_version(&mut self, version: Option<&J>) {
+        let e = match version {
+            None => self.error("JS002", "", "missing `vstructcNetwork`"),
+            Some(J::Num(n)) if n.as_f64() == 1.0 => return,
+            Some(J::Num(n)) => self.error(
+                "JS003",
+                "/vstructcNetwork",
+                format!(
+                    "unsupported vstructcNetwork version {}; only 1 is supported",
+                    n.as_f64()
+                ),
+            ),
+            Some(other) => self.error(
                 "JS002",
-                pointer,
-                format!("material `{name}` has no `nodes`"),
-            ));
+                "/vstructcNetwork",
+                format!(
+                    "`vstructcNetwork` must be the integer 1, found {}",
+                    other.kind()
+                ),
+            ),
         };
-        let tpointer = ptr(pointer, "terminals");
-        let terms: Vec<(String, Conn)> = terminals
-            .iter()
-            .map(|(t, c)| Ok((t.clone(), self.connection(c, &ptr(&tpointer, t))?)))
-            .collect::<Result<_, Error>>()?;
+        self.fail(e);
+    }
+
+    /// Close a material once all its members are read: terminals, node kinds, bindings.
+    fn finish_material(&mut self, m: MaterialState, group: u32) {
+        let pointer = m.pointer;
+        if !m.has_nodes {
+            self.at(group, MAT_NO_NODES);
+            let e = self.error(
+                "JS002",
+                &pointer,
+                format!("material `{}` has no `nodes`", m.name),
+            );
+            self.fail(e);
+        }
+        self.at(group, MAT_TERMINALS);
+        let tpointer = ptr(&pointer, "terminals");
+        let mut terms: Vec<(String, Conn)> = Vec::new();
+        for (t, c) in m.terminals.as_ref().map_or(&[][..], |j| match j {
+            J::Obj(members) => members.as_slice(),
+            _ => &[],
+        }) {
+            match self.connection(c, &ptr(&tpointer, t)) {
+                Ok(conn) => terms.push((t.clone(), conn)),
+                Err(e) => self.fail(e),
+            }
+        }
         // A node's kind comes from the first terminal naming it.
-        let mut kinds: HashMap<&str, RequestKind> = HashMap::new();
+        let mut named: FxHashSet<&str> = Default::default();
         for (t, c) in &terms {
-            kinds
-                .entry(c.node.as_str())
-                .or_insert(RequestKind::from_terminal_name(t));
+            if named.insert(c.node.as_str())
+                && let Some(&Some(id)) = m.by_name.get(c.node.as_str())
+            {
+                self.net
+                    .set_node_kind(id, RequestKind::from_terminal_name(t));
+            }
         }
-        let npointer = ptr(pointer, "nodes");
-        let mut ids: Vec<NodeId> = Vec::with_capacity(nodes.len());
-        let mut by_name: HashMap<&str, NodeId> = HashMap::new();
-        let mut pending: Vec<(NodeId, NodeConns)> = Vec::new();
-        for (node_name, nj) in nodes {
-            let kind = kinds
-                .get(node_name.as_str())
-                .copied()
-                .unwrap_or(RequestKind::Pattern);
-            let (id, conns) = self.node(node_name, nj, kind, &ptr(&npointer, node_name))?;
-            ids.push(id);
-            by_name.insert(node_name, id);
-            pending.push((id, conns));
-        }
-        for (id, conns) in pending {
+        self.at(group, MAT_BIND);
+        for (id, conns) in m.pending {
             for (param, list) in conns {
-                let links = list.iter().map(|c| self.bind(c, &by_name, name)).collect();
+                let links = list
+                    .iter()
+                    .map(|c| self.bind(c, &m.by_name, &m.name))
+                    .collect();
                 self.net.push_source_links(id, param, links);
             }
         }
@@ -449,18 +885,17 @@ impl Reader<'_, '_> {
             .iter()
             .map(|(t, c)| Terminal {
                 name: t.clone(),
-                link: self.bind(c, &by_name, name),
+                link: self.bind(c, &m.by_name, &m.name),
             })
             .collect();
-        let location = Some(self.loc(pointer));
+        let location = Some(self.loc(&pointer));
         self.net.materials_mut().push(Material {
-            name: name.to_string(),
+            name: m.name,
             terminals,
-            nodes: MaterialNodes::Explicit(ids),
-            primvars,
+            nodes: MaterialNodes::Explicit(m.ids),
+            primvars: m.primvars,
             location,
         });
-        Ok(())
     }
 
     fn primvars(&self, j: &J, pointer: &str) -> Result<Vec<String>, Error> {
@@ -482,10 +917,10 @@ impl Reader<'_, '_> {
     }
 
     /// Bind a connection to a node of the material, or keep it dangling (JS010).
-    fn bind(&mut self, c: &Conn, by_name: &HashMap<&str, NodeId>, material: &str) -> Link {
+    fn bind(&mut self, c: &Conn, by_name: &NodesByName, material: &str) -> Link {
         match by_name.get(c.node.as_str()) {
-            Some(&id) => Link::node(id, c.output.as_deref()),
-            None => {
+            Some(&Some(id)) => Link::node(id, c.output.as_deref()),
+            _ => {
                 let d = Diagnostic::warning(
                     "JS010",
                     format!(
@@ -494,7 +929,7 @@ impl Reader<'_, '_> {
                     ),
                 )
                 .at(self.loc(&c.pointer));
-                self.diags.push(d);
+                self.warn(d);
                 Link::missing(&c.node, c.output.as_deref())
             }
         }
@@ -560,18 +995,24 @@ impl Reader<'_, '_> {
                 format!("node `{name}` has no `nodeTypeId`"),
             ));
         };
-        let mut params: Vec<Param> = Vec::new();
-        let mut index: HashMap<&str, usize> = HashMap::new();
+        let mut params: Vec<Param> = Vec::with_capacity(parameters.len() + inputs.len());
+        let mut index: FxHashMap<&str, usize> = Default::default();
         let ppointer = ptr(pointer, "parameters");
         for (pname, pj) in parameters {
             let p = ptr(&ppointer, pname);
             let (value, decl) = self.parameter(shader, pname, pj, &p)?;
             index.insert(pname, params.len());
+            let location = Location {
+                file: self.file.clone(),
+                line: 0,
+                column: 0,
+                pointer: Some(p),
+            };
             params.push(Param::from_source(
                 pname.clone(),
                 Some(value),
                 Some(decl),
-                Some(self.loc(&p)),
+                Some(location),
                 None,
             ));
         }
@@ -801,8 +1242,14 @@ fn scalar(base: &BaseType, j: &J) -> Result<Value, String> {
 mod tests {
     use super::*;
 
-    fn tree(s: &str) -> Result<J, Error> {
-        parse_tree(s.as_bytes(), &Arc::from("t.json"))
+    fn tree(s: &str) -> Result<Network, Error> {
+        let mut diags = Diagnostics::new();
+        parse_json(
+            s.as_bytes(),
+            "t.json",
+            &crate::network::NoDefinitions,
+            &mut diags,
+        )
     }
 
     #[test]
@@ -824,6 +1271,24 @@ mod tests {
         assert_eq!((loc.line, loc.column), (2, 8));
         assert_eq!(tree("[1] x").unwrap_err().code(), Some("JS001"));
         assert_eq!(tree("").unwrap_err().code(), Some("JS001"));
+    }
+
+    #[test]
+    fn duplicate_keys_are_found_in_large_objects() {
+        // Objects beyond SeenKeys::SCAN keys switch to a hash set: duplicates of an early and
+        // of a late key are both found, with their pointers.
+        for dup in ["k3", "k19"] {
+            let mut text = String::from("{\"x\": {");
+            for i in 0..20 {
+                text.push_str(&format!("\"k{i}\": {i}, "));
+            }
+            text.push_str(&format!("\"{dup}\": 0}}}}"));
+            let e = tree(&text).unwrap_err();
+            let d = e.diagnostic().unwrap();
+            assert_eq!(d.code, "JS002");
+            let pointer = d.location.as_ref().unwrap().pointer.clone();
+            assert_eq!(pointer, Some(format!("/x/{dup}")));
+        }
     }
 
     #[test]

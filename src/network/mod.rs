@@ -849,6 +849,12 @@ impl Network {
         id
     }
 
+    /// Change the request kind of node `id` (crate-internal: the JSON reader learns a node's
+    /// kind from terminals that may follow the node in the document).
+    pub(crate) fn set_node_kind(&mut self, id: NodeId, kind: RequestKind) {
+        self.graph[id].kind = kind;
+    }
+
     /// The node `id`, or `None` if it is not in this network.
     pub fn get(&self, id: NodeId) -> Option<&Node> {
         self.graph.node_weight(id)
