@@ -125,7 +125,7 @@ fn furnace(m: &Material) -> Vec<Vec3> {
         ..PreviewOptions::default()
     }
     .furnace();
-    let img = render_ball(m, &opts, &|_| {}).expect("valid preview options");
+    let img = render_ball(m, &opts, &|_| {}).expect("a furnace preview renders");
     let mut out = Vec::new();
     for j in 0..FURNACE_SIZE {
         for i in 0..FURNACE_SIZE {
@@ -729,13 +729,7 @@ fn mia_reflection_returns_its_weight_at_every_angle() {
                         },
                         7,
                     );
-                    // Anisotropic: the documented approximation of `leaf_tolerance`.
-                    let tol = if aniso == 1.0 {
-                        ALBEDO_TOL
-                    } else {
-                        ANISO_WARD_TOL
-                    };
-                    if !close_rel(r, e, tol) {
+                    if !close_rel(r, e, ALBEDO_TOL) {
                         failures.push(format!(
                             "gloss {gloss} aniso {aniso} μ {mu} φ {phi}: albedo {r}, ∫eval {e}"
                         ));
@@ -938,36 +932,29 @@ fn is_aniso(lobe: &Lobe) -> bool {
     }
 }
 
-/// The bound a leaf is held to: 2e-2 (spec §3.17), except the documented approximations,
-/// each held to its measured worst case (rounded up) so that it cannot get worse unseen.
+/// The bound a leaf is held to: 2e-2 (spec §3.17), anisotropic lobes included, except the
+/// isotropic conductor, whose albedo the specification prescribes (§3.9: the complex Fresnel
+/// fitted by Hoffman's F82 with `F0 = F(1)`, `t = F(1/7)/F_Schlick(1/7)`, then the
+/// generalized-Schlick tables); that fit is held to its measured worst case (gold, 3.2e-2 at
+/// μ_o = 0.2), rounded up, so that it cannot get worse unseen. (An anisotropic conductor's
+/// albedo is vstructc's choice, §3.17, and uses the exact Fresnel: it meets 2e-2.)
 fn leaf_tolerance(name: &str, lobe: &Lobe) -> (f32, &'static str) {
-    let fresnel_weighted = !name.starts_with("microfacet one");
     match lobe {
-        Lobe::MicrofacetR(_) if name.starts_with("microfacet conductor") => (
+        Lobe::MicrofacetR(_) if name.starts_with("microfacet conductor") && !is_aniso(lobe) => (
             CONDUCTOR_TOL,
-            "conductor: the albedo of §3.9's F82 fit of the complex Fresnel (isotropic too)",
+            "conductor: the albedo of §3.9's F82 fit of the complex Fresnel",
         ),
-        Lobe::MicrofacetR(_) | Lobe::Dielectric(_) if is_aniso(lobe) && fresnel_weighted => (
-            ANISO_FRESNEL_TOL,
-            "anisotropic GGX with a Fresnel weighting: the isotropic Fresnel moments at the \
-             view's projected width, scaled by the anisotropic E1 table",
-        ),
-        Lobe::Ward(_) | Lobe::MiaHighlight3(_) if is_aniso(lobe) => (
-            ANISO_WARD_TOL,
-            "anisotropic Ward: the cos² blend of the azimuth-0 and azimuth-90° table values",
-        ),
+        _ if is_aniso(lobe) => (ALBEDO_TOL, "spec §3.17, anisotropic"),
         _ => (ALBEDO_TOL, "spec §3.17"),
     }
 }
 
-/// Measured worst cases of the documented approximations (see [`leaf_tolerance`]).
-const CONDUCTOR_TOL: f32 = 6e-2;
-const ANISO_FRESNEL_TOL: f32 = 1e-1;
-const ANISO_WARD_TOL: f32 = 1e-1;
+/// Measured worst case of the conductor's prescribed F82 fit (see [`leaf_tolerance`]).
+const CONDUCTOR_TOL: f32 = 4e-2;
 
 /// `albedo()` of every leaf family against the integral of its `eval`, at μ_o ∈ {1, 0.6,
-/// 0.2} and three view azimuths (spec §3.17): within 2e-2, but for the approximations
-/// [`leaf_tolerance`] names.
+/// 0.2} and three view azimuths (spec §3.17): within 2e-2, but for the conductor's
+/// prescribed fit ([`leaf_tolerance`]).
 #[test]
 fn leaf_albedo_matches_integral_of_eval() {
     let mut failures = Vec::new();
@@ -1014,16 +1001,8 @@ fn leaf_albedo_matches_integral_of_eval() {
     );
 }
 
-/// Draws whose albedo error exceeds 2e-2 because they hold the lobes [`leaf_tolerance`]
-/// names, with their measured worst relative error (rounded up).
-const RECIPE_EXCEPTIONS: &[(&str, &str, f32)] = &[
-    ("PxrSurface", "draw 0", 8e-2),
-    ("PxrSurface", "draw 2", 3e-2),
-];
-
 /// `albedo()` of every recipe (defaults and three random draws) against the integral of its
-/// `eval` plus the albedo of its delta lobes (which `eval` cannot show): within 2e-2, but for
-/// [`RECIPE_EXCEPTIONS`].
+/// `eval` plus the albedo of its delta lobes (which `eval` cannot show): within 2e-2.
 #[test]
 fn recipe_albedo_matches_integral_of_eval() {
     let mut failures = Vec::new();
@@ -1034,10 +1013,7 @@ fn recipe_albedo_matches_integral_of_eval() {
             ms.push((format!("draw {d}"), random_material(recipe, &mut rng).0));
         }
         for (name, m) in &ms {
-            let tol = RECIPE_EXCEPTIONS
-                .iter()
-                .find(|(r, n, _)| r == recipe && n == name)
-                .map_or(ALBEDO_TOL, |e| e.2);
+            let tol = ALBEDO_TOL;
             let mut worst = 0.0f32;
             for mu in MUS {
                 for phi in PHIS {

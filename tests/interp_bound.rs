@@ -3,17 +3,33 @@
 //! `Lobe::prepare`: albedos and responses agree to relative 1e-5 for every family that binds
 //! something, at random views (from above and, two-sided, from below) and directions. Also:
 //! a baked albedo curve (`tables::MuCurve`) equals the bilinear/trilinear table lookups.
+//!
+//! One documented exception: an anisotropic lobe with a Fresnel weighting multiplies its
+//! `E1` by a Fresnel ratio that a bound lobe bakes over μ and azimuth at bind
+//! (`microfacet::RatioGrid`) and a plain prepare estimates at the view, both by the same
+//! 16 × 16 quadrature; the two estimates of one integral differ by that quadrature's error,
+//! so their albedos (and the responses of Kulla–Conty's term, which reads the albedo) are
+//! held to [`ANISO_RATIO_TOL`] (what the albedo must meet against the integral of `eval`
+//! anyway, spec §3.17); every other lobe, and glass seen from below (its index is then below
+//! 1, where no ratio is baked), still to 1e-5.
 
 use glam::Vec3;
 use vstructc::interp::tables::{self, MuCurve, TableId};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 
-fn close(a: Vec3, b: Vec3, what: &str) {
-    let tol = 1e-5 * a.abs().max(b.abs()).max_element().max(1e-6);
+/// Relative agreement (floor 0.1) of a bound and a plain anisotropic lobe's Fresnel-weighted
+/// albedo (measured 1.4e-2).
+const ANISO_RATIO_TOL: f32 = 2e-2;
+
+fn close_to(a: Vec3, b: Vec3, rel: f32, what: &str) {
+    // Relative, with a floor of 0.1 on the scale for the looser bound (as tests/energy.rs
+    // measures albedos), 1e-6 otherwise.
+    let floor = if rel > 1e-5 { 0.1 } else { 1e-6 };
+    let tol = rel * a.abs().max(b.abs()).max_element().max(floor);
     assert!(
         (a - b).abs().max_element() <= tol,
-        "{what}: bound {b} vs unbound {a}"
+        "{what} ({rel}): bound {b} vs unbound {a}"
     );
 }
 
@@ -97,6 +113,15 @@ fn lobes() -> Vec<(&'static str, Lobe)> {
     ]
 }
 
+/// True for an anisotropic lobe with a Fresnel weighting (a baked ratio grid when bound).
+fn baked_ratio(lobe: &Lobe) -> bool {
+    match lobe {
+        Lobe::MicrofacetR(m) => m.ggx.ax != m.ggx.ay && m.fresnel != Fresnel::One,
+        Lobe::Dielectric(d) => d.ggx.ax != d.ggx.ay,
+        _ => false,
+    }
+}
+
 #[test]
 fn bound_prepare_equals_prepare() {
     tables::init_all();
@@ -113,13 +138,24 @@ fn bound_prepare_equals_prepare() {
             let (a, b) = (lobe.prepare(v, sides), bound.prepare(v, sides));
             assert_eq!(a.is_inactive(), b.is_inactive(), "{name}");
             let (aa, ba) = (a.albedo(), b.albedo());
-            close(aa.reflect, ba.reflect, name);
-            close(aa.transmit, ba.transmit, name);
+            // Glass seen from below has the index 1/1.5, for which no ratio is baked.
+            let below_glass = matches!(lobe, Lobe::Dielectric(_)) && v.z < 0.0;
+            let rel = if baked_ratio(&lobe) && !below_glass {
+                ANISO_RATIO_TOL
+            } else {
+                1e-5
+            };
+            let name = &format!("{name} v {v} {sides:?}");
+            close_to(aa.reflect, ba.reflect, rel, name);
+            close_to(aa.transmit, ba.transmit, rel, name);
+            // Kulla–Conty's multiple-scattering lobe and its sampling probability read the
+            // albedo, so a baked ratio reaches their responses too.
+            let eval_rel = rel;
             for _ in 0..8 {
                 let l = rng.sphere();
                 let (ea, eb) = (a.eval(l), b.eval(l));
-                close(ea.f_cos, eb.f_cos, name);
-                close(Vec3::splat(ea.pdf), Vec3::splat(eb.pdf), name);
+                close_to(ea.f_cos, eb.f_cos, eval_rel, name);
+                close_to(Vec3::splat(ea.pdf), Vec3::splat(eb.pdf), eval_rel, name);
             }
         }
     }

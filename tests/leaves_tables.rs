@@ -1,7 +1,9 @@
 //! Albedo tables (spec closures.md §3.17): every blob decodes, its header records the
-//! generator version and its sample count (512², 128² for the anisotropic tables); a seeded random sample of 64 entries regenerated with
-//! the generator's f64 quadrature matches to 1e-6; each `Eavg` table is the average of its
-//! parent; lookups interpolate linearly.
+//! generator version and its sample count (512², 128² for the anisotropic tables); a seeded
+//! random sample of 64 entries regenerated with the generator's f64 quadrature matches to
+//! 1e-6; each `Eavg` table is the average of its parent; lookups interpolate linearly; the
+//! anisotropic tables' azimuth interpolation goes through its nodes, and the symmetry it
+//! relies on holds in the tables.
 
 use vstructc::interp::lutgen::{self, GENERATOR_VERSION};
 use vstructc::interp::tables::{self, N, TableId};
@@ -81,4 +83,44 @@ fn lookups_hit_nodes_and_interpolate() {
     // Clamping outside the axis ranges.
     assert_eq!(tables::lookup2(TableId::E1Hc, 2.0, 2.0), d[N * N - 1]);
     assert_eq!(tables::lookup2(TableId::E1Hc, -1.0, f32::NAN), d[0]);
+}
+
+/// The anisotropic albedo's azimuth interpolation (`tables::aniso_albedo`) goes through the
+/// five tabulated azimuths `kπ/8` (at `x = cos 2φ = cos(kπ/4)`) and keeps a constant.
+#[test]
+fn azimuth_interpolation_hits_its_nodes() {
+    let e = [0.9, 0.7, 0.45, 0.3, 0.1];
+    for (k, want) in e.iter().enumerate() {
+        let x = (k as f32 * std::f32::consts::FRAC_PI_4).cos();
+        let got = tables::azimuth_interpolate(e, x);
+        assert!((got - want).abs() < 1e-6, "node {k}: {got} vs {want}");
+    }
+    for x in [-1.0, -0.3, 0.0, 0.55, 1.0] {
+        assert!((tables::azimuth_interpolate([0.4; 5], x) - 0.4).abs() < 1e-6);
+    }
+}
+
+/// The interpolation reads the 22.5° tables with the widths swapped for 67.5°, which assumes
+/// the albedo is unchanged when the view is mirrored across the diagonal and the widths
+/// swapped: the 45° tables, their own mirror image, must then be symmetric in their widths.
+#[test]
+fn diagonal_tables_are_symmetric_in_their_widths() {
+    for id in [
+        TableId::E1HcAniso45,
+        TableId::E1SepAniso45,
+        TableId::WardClassicAniso45,
+        TableId::WardGmAniso45,
+    ] {
+        let d = &tables::lut(id).data;
+        for mu in [3, 17, 31] {
+            for (j, k) in [(2, 29), (5, 11), (20, 30)] {
+                let (a, b) = (d[mu + N * (j + N * k)], d[mu + N * (k + N * j)]);
+                assert!(
+                    (a - b).abs() <= 1e-5 * a.abs().max(1e-3),
+                    "{} μ {mu} ({j}, {k}): {a} vs {b}",
+                    id.name()
+                );
+            }
+        }
+    }
 }

@@ -1,6 +1,6 @@
 //! `vstructc-lutgen`: generates the interpreter's albedo tables (spec closures.md §3.17).
 //!
-//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|all]` (default: all groups, into
+//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]` (default: all groups, into
 //! `src/interp/tables/` of this crate). Run it in release mode; the 3-D dielectric tables
 //! take several CPU-minutes. Each group's tables (and the `Eavg` tables derived from them)
 //! are written as soon as the group is done. `--entry NAME I J K` prints one entry.
@@ -25,7 +25,7 @@ fn main() {
             ("--only", Some(v)) => only = v,
             _ => {
                 eprintln!(
-                    "usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|all]"
+                    "usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]"
                 );
                 std::process::exit(2);
             }
@@ -44,6 +44,10 @@ fn main() {
             "diel-fwd" => group == Group::Dielectric(false),
             "diel-inv" => group == Group::Dielectric(true),
             "aniso" => matches!(group, Group::Aniso(_)),
+            // Only the tables with the view off azimuth 0 (22.5° and 45°).
+            "aniso-az" => {
+                matches!(group, Group::Aniso(t) if lutgen::aniso_azimuth(t) != Some(0.0))
+            }
             _ => false,
         };
         if !selected {

@@ -1327,7 +1327,10 @@ impl AlbedoSource for TableAlbedo {
     fn albedo(&self, leaf: &Leaf, regs: &[Vec3], mu_o: f32) -> Vec3 {
         let mu = mu_o.clamp(-1.0, 1.0);
         let v = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+        // Bound, as a compiled material binds a constant leaf: an anisotropic lobe's Fresnel
+        // ratios are then the baked ones the compiled material reads.
         let a = leaf_lobe(&leaf.kind, regs)
+            .bind()
             .prepare(v, Sides::Front)
             .albedo();
         a.reflect + a.transmit_energy

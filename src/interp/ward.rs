@@ -41,10 +41,18 @@ pub fn ward_albedo(variant: WardVariant, mu: f32, ax: f32, ay: f32) -> f32 {
     tables::lookup2(t, mu, tables::ward_axis((ax * ay).sqrt()))
 }
 
-fn aniso_table(variant: WardVariant) -> TableId {
+fn aniso_tables(variant: WardVariant) -> [TableId; 3] {
     match variant {
-        WardVariant::Classic => TableId::WardClassicAniso,
-        WardVariant::Gm => TableId::WardGmAniso,
+        WardVariant::Classic => [
+            TableId::WardClassicAniso,
+            TableId::WardClassicAniso22,
+            TableId::WardClassicAniso45,
+        ],
+        WardVariant::Gm => [
+            TableId::WardGmAniso,
+            TableId::WardGmAniso22,
+            TableId::WardGmAniso45,
+        ],
     }
 }
 
@@ -54,15 +62,7 @@ pub fn ward_albedo_at(variant: WardVariant, v: Vec3, ax: f32, ay: f32) -> f32 {
     if ax == ay {
         ward_albedo(variant, v.z, ax, ay)
     } else {
-        let iso = |a: f32| ward_albedo(variant, v.z, a, a);
-        tables::aniso_albedo(
-            aniso_table(variant),
-            v,
-            (ax, ay),
-            tables::ward_axis,
-            iso,
-            iso,
-        )
+        tables::aniso_albedo(aniso_tables(variant), v, (ax, ay), tables::ward_axis)
     }
 }
 

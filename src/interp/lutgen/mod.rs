@@ -34,12 +34,20 @@ pub fn grid(table: TableId) -> usize {
     if is_aniso(table) { GRID_ANISO } else { GRID }
 }
 
-/// True for the anisotropic (azimuth-0) tables.
+/// True for the anisotropic tables (views at azimuths 0, 22.5° and 45°).
 pub fn is_aniso(t: TableId) -> bool {
-    matches!(
-        t,
-        TableId::E1HcAniso | TableId::E1SepAniso | TableId::WardClassicAniso | TableId::WardGmAniso
-    )
+    aniso_azimuth(t).is_some()
+}
+
+/// The view's azimuth of an anisotropic table (radians), `None` for the other tables.
+pub fn aniso_azimuth(t: TableId) -> Option<f64> {
+    use TableId::*;
+    Some(match t {
+        E1HcAniso | E1SepAniso | WardClassicAniso | WardGmAniso => 0.0,
+        E1HcAniso22 | E1SepAniso22 | WardClassicAniso22 | WardGmAniso22 => PI / 8.0,
+        E1HcAniso45 | E1SepAniso45 | WardClassicAniso45 | WardGmAniso45 => PI / 4.0,
+        _ => return None,
+    })
 }
 /// Smallest μ_o used for the grazing node.
 pub const MU_MIN: f64 = 1e-4;
@@ -56,8 +64,7 @@ pub fn axis_value(table: TableId, axis: usize, i: usize) -> f64 {
         // √α axes → α.
         (_, 1) if is_ggx(table) => t * t,
         (TableId::WardClassic | TableId::WardGm, 1) => t * t,
-        (TableId::E1HcAniso | TableId::E1SepAniso, 1 | 2) => t * t,
-        (TableId::WardClassicAniso | TableId::WardGmAniso, 1 | 2) => t * t,
+        (_, 1 | 2) if is_aniso(table) => t * t,
         (TableId::EavgE1Hc | TableId::EavgE1Sep | TableId::EavgH82Hc | TableId::EavgH82Sep, 0) => {
             t * t
         }
@@ -123,6 +130,15 @@ fn vndf_u2(j: usize) -> (f64, f64) {
 
 fn view(mu: f64) -> DVec3 {
     DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
+}
+
+/// The view with cosine `mu` at azimuth `phi` (exactly [`view`] at `phi = 0`).
+fn view_at(mu: f64, phi: f64) -> DVec3 {
+    if phi == 0.0 {
+        return view(mu);
+    }
+    let s = (1.0 - mu * mu).max(0.0).sqrt();
+    DVec3::new(s * phi.cos(), s * phi.sin(), mu)
 }
 
 /// GGX moments at one (μ, α): `[E1, H82, S_q for each q in qs]`, F = 1, masking per `hc`.
@@ -205,12 +221,12 @@ pub fn ward_albedo(mu: f64, alpha: f64, classic: bool) -> f64 {
     acc / (GRID * GRID) as f64
 }
 
-/// Anisotropic GGX albedo with F = 1 (widths `ax`, `ay`, view at azimuth 0) by
+/// Anisotropic GGX albedo with F = 1 (widths `ax`, `ay`, view at azimuth `phi`) by
 /// VNDF-stratified quadrature over a `GRID_ANISO²` grid.
-pub fn ggx_albedo_aniso(mu: f64, ax: f64, ay: f64, hc: bool) -> f64 {
+pub fn ggx_albedo_aniso(mu: f64, phi: f64, ax: f64, ay: f64, hc: bool) -> f64 {
     let n = GRID_ANISO;
     let cs = angles_n(n);
-    let v = view(mu);
+    let v = view_at(mu, phi);
     let lambda_v = ref64::ggx_lambda_aniso(ax, ay, v);
     let mut acc = 0.0;
     for c in &cs {
@@ -235,12 +251,12 @@ pub fn ggx_albedo_aniso(mu: f64, ax: f64, ay: f64, hc: bool) -> f64 {
     acc / (n * n) as f64
 }
 
-/// Anisotropic Ward albedo (ρ_s = 1, view at azimuth 0) by Walter-stratified half vectors
-/// over a `GRID_ANISO²` grid.
-pub fn ward_albedo_aniso(mu: f64, ax: f64, ay: f64, classic: bool) -> f64 {
+/// Anisotropic Ward albedo (ρ_s = 1, view at azimuth `phi`) by Walter-stratified half
+/// vectors over a `GRID_ANISO²` grid.
+pub fn ward_albedo_aniso(mu: f64, phi: f64, ax: f64, ay: f64, classic: bool) -> f64 {
     let n = GRID_ANISO;
     let cs = angles_n(n);
-    let v = view(mu);
+    let v = view_at(mu, phi);
     let mut acc = 0.0;
     for c in &cs {
         for j in 0..n {
@@ -303,11 +319,20 @@ pub fn compute_entry(table: TableId, idx: [usize; 3]) -> f64 {
         TableId::SheenOrig => sheen_albedo(mu, y, false),
         TableId::Qon => qon_albedo(mu, y),
         TableId::Mia => mia_albedo(mu, y),
-        TableId::E1HcAniso => ggx_albedo_aniso(mu, y, z, true),
-        TableId::E1SepAniso => ggx_albedo_aniso(mu, y, z, false),
-        TableId::WardClassicAniso => ward_albedo_aniso(mu, y, z, true),
-        TableId::WardGmAniso => ward_albedo_aniso(mu, y, z, false),
-        _ => f64::NAN,
+        t => {
+            use TableId::*;
+            let Some(phi) = aniso_azimuth(t) else {
+                return f64::NAN;
+            };
+            match t {
+                E1HcAniso | E1HcAniso22 | E1HcAniso45 => ggx_albedo_aniso(mu, phi, y, z, true),
+                E1SepAniso | E1SepAniso22 | E1SepAniso45 => ggx_albedo_aniso(mu, phi, y, z, false),
+                WardClassicAniso | WardClassicAniso22 | WardClassicAniso45 => {
+                    ward_albedo_aniso(mu, phi, y, z, true)
+                }
+                _ => ward_albedo_aniso(mu, phi, y, z, false),
+            }
+        }
     }
 }
 
@@ -347,7 +372,7 @@ pub enum Group {
 
 impl Group {
     /// The groups, 2-D first (cheap), then 3-D.
-    pub const ALL: [Group; 14] = [
+    pub const ALL: [Group; 22] = [
         Group::Single(TableId::WardClassic),
         Group::Single(TableId::WardGm),
         Group::Single(TableId::SheenMx),
@@ -362,6 +387,14 @@ impl Group {
         Group::Aniso(TableId::E1SepAniso),
         Group::Aniso(TableId::WardClassicAniso),
         Group::Aniso(TableId::WardGmAniso),
+        Group::Aniso(TableId::E1HcAniso22),
+        Group::Aniso(TableId::E1HcAniso45),
+        Group::Aniso(TableId::E1SepAniso22),
+        Group::Aniso(TableId::E1SepAniso45),
+        Group::Aniso(TableId::WardClassicAniso22),
+        Group::Aniso(TableId::WardClassicAniso45),
+        Group::Aniso(TableId::WardGmAniso22),
+        Group::Aniso(TableId::WardGmAniso45),
     ];
 
     /// The tables this group writes, in output order.

@@ -30,7 +30,7 @@ use crate::interp::ggx::{GgxView, ViewTerms};
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{
-    Compensation, Dielectric, DielectricMode, MicrofacetR, f82_albedo,
+    Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid, f82_albedo,
 };
 use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking};
 use crate::interp::simd::{Level, call_widest, widest_versions};
@@ -62,6 +62,8 @@ pub(super) enum LeafLanes {
         ggx_view: GgxView,
         f82: [Rgb; 3],
         curves: [MuCurve; 3],
+        /// An anisotropic lobe's Fresnel ratios (`MicrofacetBound::aniso`).
+        aniso: Option<RatioGrid>,
     },
     /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
     DielectricR {
@@ -69,6 +71,8 @@ pub(super) enum LeafLanes {
         ggx_view: GgxView,
         eta: f32,
         e_r: MuCurve,
+        /// An anisotropic lobe's ratios at η (`DielectricBound::aniso`).
+        aniso: Option<RatioGrid>,
     },
     /// Ward (classic or GM).
     Ward { lobe: Ward, bound: WardBound },
@@ -132,6 +136,7 @@ impl LeafLanes {
                     ggx_view: bound.ggx_view,
                     f82: [f0, f90, a],
                     curves: bound.curves?.f82_curves()?,
+                    aniso: bound.aniso,
                 }
             }
             // Turquin's factor makes the tint view-dependent; the scalar prepare applies it
@@ -146,6 +151,7 @@ impl LeafLanes {
                     ggx_view: bound.ggx_view,
                     eta: d.eta0(),
                     e_r: bound.curves?[0][0],
+                    aniso: bound.aniso.and_then(|g| g[0]),
                 }
             }
             (Lobe::Ward(w), Aux::Ward(bound)) => LeafLanes::Ward {
@@ -224,20 +230,9 @@ impl LeafLanes {
                     }
                 }
             }
-            LeafLanes::Conductor {
-                lobe,
-                f82: [f0, f90, a],
-                ..
-            } if lobe.ggx.ax != lobe.ggx.ay => {
-                // The bound F82 fit (`MicrofacetR::albedo_fresnel`, q = 5).
-                let f = Fresnel::F82 {
-                    f0: *f0,
-                    f90: *f90,
-                    q: 5.0,
-                    a: *a,
-                };
+            LeafLanes::Conductor { lobe, aniso, .. } if lobe.ggx.ax != lobe.ggx.ay => {
                 for k in 0..W {
-                    out.set(k, lobe.aniso_albedo(&f, view(k)).min(Vec3::ONE));
+                    out.set(k, lobe.aniso_albedo(aniso.as_ref(), view(k)).min(Vec3::ONE));
                 }
             }
             LeafLanes::Conductor {
@@ -253,9 +248,12 @@ impl LeafLanes {
                     );
                 }
             }
-            LeafLanes::DielectricR { lobe, eta, .. } if lobe.ggx.ax != lobe.ggx.ay => {
+            LeafLanes::DielectricR {
+                lobe, eta, aniso, ..
+            } if lobe.ggx.ax != lobe.ggx.ay => {
                 for k in 0..W {
-                    let [er, ..] = lobe.aniso_albedos(view(k), *eta, [true, false, false]);
+                    let [er, ..] =
+                        lobe.aniso_albedos(aniso.as_ref(), view(k), *eta, [true, false, false]);
                     out.set(k, lobe.tint_r * er);
                 }
             }
