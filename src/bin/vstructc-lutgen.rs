@@ -1,4 +1,4 @@
-//! `vstructc-lutgen`: generates the interpreter's albedo tables (spec closures.md §3.17).
+//! `vstructc-lutgen`: generates the interpreter's albedo tables (see docs/albedo-tables.md).
 //!
 //! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]` (default: all groups, into
 //! `src/interp/tables/` of this crate). Run it in release mode; the 3-D dielectric tables

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 pub enum NetFormat {
     /// RenderMan RIB.
     Rib,
-    /// The JSON network form (formats.md §5).
+    /// The JSON network form (see docs/file-formats.md).
     Json,
 }
 

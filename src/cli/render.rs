@@ -1,5 +1,5 @@
 //! `vstructc render INPUT [-o ball.png] [--size N] [--furnace] [--pfm] [--aov lobe:NAME]
-//! [--input NAME=VALUE]... [--material HANDLE]`: the material-ball preview of closures.md §1.6.
+//! [--input NAME=VALUE]... [--material HANDLE]`: the material-ball preview (docs/preview.md).
 //!
 //! The input is read, resolved and lowered as by `compile`; each material is compiled for
 //! the interpreter and rendered ([`crate::interp::preview`]). With several materials and no

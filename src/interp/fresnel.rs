@@ -76,7 +76,7 @@ pub fn dielectric(mu: f32, eta: f32) -> f32 {
 /// `a = (G − m)/(G + m)` and `b = (m(G + m) − |H|²)/(m(G − m) + |H|²)`, so `V·h` (a square
 /// root and a division) is never formed. Apart from the cost, this is also the better
 /// conditioned form near η = 1, where `g − μ` cancels: against f64, its worst relative error
-/// over random GGX reflections was 1e-4 where normalising first gave 1e-3 (BENCHMARKS.md, S7).
+/// over random GGX reflections was 1e-4 where normalising first gave 1e-3.
 /// The scalar dielectric leaf and the batched kernels share it, so they agree to rounding.
 #[inline(always)]
 pub fn dielectric_half_quotient(m: f32, hh: f32, e2m1: f32) -> (f32, f32) {

@@ -592,7 +592,7 @@ impl PreparedLobe {
     /// `f(V, L)·|μ_i|` (RGB) and the pdf of [`PreparedLobe::sample`] at `l` (local frame).
     // Always inlined, as are the family `eval`s it dispatches to: a non-inlined call returns
     // its `LobeEval` through memory, written as 8 + 4 + 4 bytes and read back as 16, and that
-    // store-forwarding stall was half of `Prepared::eval`'s own time (perf annotate, S6).
+    // store-forwarding stall was half of `Prepared::eval`'s own time (perf annotate).
     #[inline(always)]
     pub fn eval(&self, l: Vec3) -> LobeEval {
         self.eval_unflipped(if self.flipped { flip(l) } else { l })

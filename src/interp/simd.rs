@@ -19,8 +19,7 @@
 //!
 //! Why not only `-C target-cpu=native`: a build for distribution cannot assume AVX-512, and on
 //! Intel server cores LLVM's tuning for `native` prefers 256-bit vectors, while these kernels,
-//! limited by the divide/square-root unit, run fastest 512 bits wide (BENCHMARKS.md,
-//! session 7).
+//! limited by the divide/square-root unit, run fastest 512 bits wide.
 
 /// The vector extensions an entry point can be run with (batched or scalar), narrowest
 /// first.
@@ -49,7 +48,7 @@ impl Level {
 /// The level the scalar entry points run at ([`crate::interp::Material::prepare_into`],
 /// [`crate::interp::Prepared::eval`] and their kin) when the CPU has it. AVX2, not AVX-512:
 /// on the development host the AVX2 version ran ref10's prepare + one eval in 370 ns, the
-/// baseline in 405 ns and the AVX-512 version in 461 ns (BENCHMARKS.md, session 16).
+/// baseline in 405 ns and the AVX-512 version in 461 ns.
 pub const SCALAR_LEVEL: Level = Level::Avx2;
 
 /// The widest [`Level`] this CPU supports, asked once and then read from a static (the

@@ -80,7 +80,7 @@ impl<const W: usize> Vec3x<W> {
 /// A standalone kernel tuned for throughput (spec §6.4's single-lobe budget): it does not
 /// rescale the half vector as [`GgxView::core`] does, so when V and L are nearly opposite
 /// within about 1e-6 of the horizon (`|V + L|²` below about 1e-12) its powers of `|H|`
-/// underflow and the lane is NaN. Rescaling costs about 10 % here (measured in S8); the
+/// underflow and the lane is NaN. Rescaling costs about 10 % here; the
 /// material path's kernels do rescale.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DielectricRBatch<const W: usize> {

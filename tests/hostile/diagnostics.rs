@@ -30,6 +30,18 @@ fn resolve_args(input: &std::path::Path, extra: &[&str]) -> Vec<String> {
     args
 }
 
+/// `resolve PATH`, which must exit 0 (the message shows the start of stderr: it may be huge).
+fn resolved_with_status_0(path: &std::path::Path) -> crate::Outcome {
+    let o = run(&resolve_args(path, &[]));
+    assert_eq!(
+        o.status,
+        Some(0),
+        "{}",
+        &o.stderr[..o.stderr.len().min(2000)]
+    );
+    o
+}
+
 fn count(stderr: &str, needle: &str) -> usize {
     stderr.lines().filter(|l| l.contains(needle)).count()
 }
@@ -40,13 +52,7 @@ fn count(stderr: &str, needle: &str) -> usize {
 fn a_flood_of_forward_references_prints_a_bounded_number_of_lines() {
     let n = 250_000;
     let path = scratch("forward_flood.rib", forward_references(n));
-    let o = run(&resolve_args(&path, &[]));
-    assert_eq!(
-        o.status,
-        Some(0),
-        "{}",
-        &o.stderr[..o.stderr.len().min(2000)]
-    );
+    let o = resolved_with_status_0(&path);
     assert_eq!(count(&o.stderr, "warning[RB018]"), 20);
     assert!(
         o.stderr.lines().count() <= 2 * 20 + 1,
@@ -117,13 +123,7 @@ fn json_diagnostics_keep_everything_unless_limited() {
 fn a_long_cycle_is_one_short_warning() {
     let n = 100_000;
     let path = scratch("ring100k.json", crate::mixer_ring(n));
-    let o = run(&resolve_args(&path, &[]));
-    assert_eq!(
-        o.status,
-        Some(0),
-        "{}",
-        &o.stderr[..o.stderr.len().min(2000)]
-    );
+    let o = resolved_with_status_0(&path);
     let line = o
         .stderr
         .lines()
