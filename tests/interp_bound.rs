@@ -4,14 +4,13 @@
 //! something, at random views (from above and, two-sided, from below) and directions. Also:
 //! a baked albedo curve (`tables::MuCurve`) equals the bilinear/trilinear table lookups.
 //!
-//! One documented exception: an anisotropic lobe with a Fresnel weighting multiplies its
-//! `E1` by a Fresnel ratio that a bound lobe bakes over μ and azimuth at bind
-//! (`microfacet::RatioGrid`) and a plain prepare estimates at the view, both by the same
-//! 16 × 16 quadrature; the two estimates of one integral differ by that quadrature's error,
-//! so their albedos (and the responses of Kulla–Conty's term, which reads the albedo) are
-//! held to [`ANISO_RATIO_TOL`] (what the albedo must meet against the integral of `eval`
-//! anyway, spec §3.17); every other lobe, and glass seen from below (its index is then below
-//! 1, where no ratio is baked), still to 1e-5.
+//! One documented exception: an anisotropic lobe with a Fresnel weighting, and a rough
+//! conductor, multiply their `E1` by a Fresnel ratio that a bound lobe bakes over μ (and
+//! azimuth) at bind (`microfacet::RatioGrid`) and a plain prepare estimates at the view, both
+//! by the same quadrature; the two estimates of one integral differ by that quadrature's
+//! error, so their albedos (and the responses of Kulla–Conty's term, which reads the albedo)
+//! are held to [`ANISO_RATIO_TOL`] (what the albedo must meet against the integral of `eval`
+//! anyway, spec §3.17); every other lobe still to 1e-5.
 
 use glam::Vec3;
 use vstructc::interp::tables::{self, MuCurve, TableId};
@@ -21,6 +20,10 @@ use vstructc::interp::*;
 /// Relative agreement (floor 0.1) of a bound and a plain anisotropic lobe's Fresnel-weighted
 /// albedo (measured 1.4e-2).
 const ANISO_RATIO_TOL: f32 = 2e-2;
+
+/// [`ANISO_RATIO_TOL`] for anisotropic glass seen from below, where the two estimates are each
+/// within 2e-2 of the integral of `eval` (tests/energy.rs) but can differ by more.
+const BELOW_GLASS_RATIO_TOL: f32 = 3e-2;
 
 fn close_to(a: Vec3, b: Vec3, rel: f32, what: &str) {
     // Relative, with a floor of 0.1 on the scale for the looser bound (as tests/energy.rs
@@ -113,9 +116,11 @@ fn lobes() -> Vec<(&'static str, Lobe)> {
     ]
 }
 
-/// True for an anisotropic lobe with a Fresnel weighting (a baked ratio grid when bound).
+/// True for an anisotropic lobe with a Fresnel weighting and for a rough conductor (a baked
+/// ratio grid when bound).
 fn baked_ratio(lobe: &Lobe) -> bool {
     match lobe {
+        Lobe::MicrofacetR(m) if m.fresnel.is_conductor() => !m.ggx.is_delta(),
         Lobe::MicrofacetR(m) => m.ggx.ax != m.ggx.ay && m.fresnel != Fresnel::One,
         Lobe::Dielectric(d) => d.ggx.ax != d.ggx.ay,
         _ => false,
@@ -138,9 +143,12 @@ fn bound_prepare_equals_prepare() {
             let (a, b) = (lobe.prepare(v, sides), bound.prepare(v, sides));
             assert_eq!(a.is_inactive(), b.is_inactive(), "{name}");
             let (aa, ba) = (a.albedo(), b.albedo());
-            // Glass seen from below has the index 1/1.5, for which no ratio is baked.
+            // From below, the grid's linear steps across total internal reflection add
+            // to the quadrature's error (measured 2.0e-2 between the two).
             let below_glass = matches!(lobe, Lobe::Dielectric(_)) && v.z < 0.0;
-            let rel = if baked_ratio(&lobe) && !below_glass {
+            let rel = if baked_ratio(&lobe) && below_glass {
+                BELOW_GLASS_RATIO_TOL
+            } else if baked_ratio(&lobe) {
                 ANISO_RATIO_TOL
             } else {
                 1e-5

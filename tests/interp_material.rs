@@ -298,6 +298,20 @@ fn materials() -> Vec<(String, MaterialIr)> {
 
 #[test]
 fn sample_pdf_weight_and_mean_agree_with_eval_and_albedo() {
+    // The relative error of the albedo tables at view `v` (§3.17: 2e-3 for α ≥ 0.05, more
+    // for the sheen fits), but 5e-2 for a view from inside the materials' glass (η = 1.5)
+    // within one table node of its critical angle: there the albedo of a smooth interface
+    // steps with total internal reflection, which the 32 linear μ nodes cannot follow (the
+    // coat of ref10, α = 0.05, reads 2.9 % low at μ_o = 0.740 against μ_c = 0.745; the same
+    // exception as tests/leaves_chi2.rs).
+    fn table_tolerance(v: Vec3) -> f64 {
+        let critical = (1.0f32 - 1.0 / (1.5 * 1.5)).sqrt();
+        if v.z < 0.0 && (v.z.abs() - critical).abs() < 1.0 / 31.0 {
+            5e-2
+        } else {
+            5e-3
+        }
+    }
     for (name, ir) in materials() {
         let m = compile(&ir);
         let mut rng = Rng::new(0x5eed ^ name.len() as u64);
@@ -344,10 +358,10 @@ fn sample_pdf_weight_and_mean_agree_with_eval_and_albedo() {
             let se = (var / n as f64).powf(0.5);
             let a = p.albedo();
             let expect = (a.reflect + a.transmit_radiance + p.transparency()).as_dvec3();
+            let table = table_tolerance(v);
             for c in 0..3 {
-                // 3 standard errors, plus the albedo tables' own error (§3.17: 2e-3 for
-                // α ≥ 0.05, more for the sheen fits) relative to the value.
-                let tol = 3.0 * se[c] + 5e-3 * expect[c].max(1e-3);
+                // 3 standard errors, plus the albedo tables' own error relative to the value.
+                let tol = 3.0 * se[c] + table * expect[c].max(1e-3);
                 assert!(
                     (mean[c] - expect[c]).abs() <= tol,
                     "{name} run {run} v {v}: mean {mean} vs albedo {expect} (se {se})"

@@ -63,6 +63,9 @@ pub fn ggx_aniso_e1(ggx: &Ggx, masking: Masking, v: Vec3) -> f32 {
 /// elevation.
 const RATIO_GRID: (usize, usize) = (16, 16);
 
+/// [`RATIO_GRID`] for a dielectric seen from its denser side.
+const RATIO_GRID_DENSE: (usize, usize) = (32, 32);
+
 /// A deterministic VNDF-stratified quadrature over the visible normals of `ggx` at view `v`
 /// (`v_z > 0`): `visit(h, v·h, w)` for each of the [`RATIO_GRID`] cell midpoints, with the
 /// second coordinate warped as the tables' generator warps it (`u₂ = 1 − (1 − t)²`, weight
@@ -74,8 +77,18 @@ const RATIO_GRID: (usize, usize) = (16, 16);
 /// widths and on the view's azimuth, which no isotropic table at one effective width
 /// reproduces (measured up to 36 % off at anisotropy 0.95 for dielectric transmission).
 #[inline]
-fn vndf_quadrature(ggx: &Ggx, v: Vec3, mut visit: impl FnMut(Vec3, f32, f32)) {
-    let (n1, n2) = RATIO_GRID;
+fn vndf_quadrature(ggx: &Ggx, v: Vec3, visit: impl FnMut(Vec3, f32, f32)) {
+    vndf_quadrature_n(ggx, v, RATIO_GRID, visit)
+}
+
+/// [`vndf_quadrature`] with `(n1, n2)` strata.
+#[inline]
+fn vndf_quadrature_n(
+    ggx: &Ggx,
+    v: Vec3,
+    (n1, n2): (usize, usize),
+    mut visit: impl FnMut(Vec3, f32, f32),
+) {
     for i in 0..n1 {
         let u1 = (i as f32 + 0.5) / n1 as f32;
         for j in 0..n2 {
@@ -131,7 +144,15 @@ fn aniso_dielectric_ratios(
     let lambda_v = ggx.lambda(v);
     let inv_eta2 = 1.0 / (eta * eta);
     let (mut one, mut acc) = (0.0f32, [0.0f32; 3]);
-    vndf_quadrature(ggx, v, |h, vh, w| {
+    // From the denser side, total internal reflection makes the Fresnel factor jump inside
+    // the cells: four times the strata there (measured up to 4.4e-2 off the integral of
+    // `eval` with 16 × 16, 1.4e-2 with 32 × 32).
+    let strata = if eta < 1.0 {
+        RATIO_GRID_DENSE
+    } else {
+        RATIO_GRID
+    };
+    vndf_quadrature_n(ggx, v, strata, |h, vh, w| {
         let f = fresnel::dielectric(vh, eta);
         let lr = 2.0 * vh * h - v;
         if lr.z > 0.0 {
@@ -169,6 +190,9 @@ const RATIO_MU: usize = 32;
 pub(in crate::interp) struct RatioGrid {
     /// `[channel][μ node][azimuth node]`.
     nodes: [[[f32; 5]; RATIO_MU]; 3],
+    /// An isotropic lobe's grid ([`RatioGrid::isotropic`]): the albedo `E1 · R` itself, the
+    /// same at every azimuth node, read along μ only.
+    isotropic: bool,
 }
 
 impl RatioGrid {
@@ -187,7 +211,10 @@ impl RatioGrid {
                 }
             }
         }
-        RatioGrid { nodes }
+        RatioGrid {
+            nodes,
+            isotropic: false,
+        }
     }
 
     /// The ratios at local view `v`.
@@ -212,6 +239,37 @@ impl RatioGrid {
 #[inline(always)]
 fn is_aniso(ggx: &Ggx) -> bool {
     ggx.ax != ggx.ay && !ggx.is_delta()
+}
+
+impl RatioGrid {
+    /// The grid of an isotropic lobe's albedo `albedo(μ)`: one evaluation per view cosine,
+    /// the same at every azimuth node (a fifth of [`RatioGrid::new`]'s work), read back by
+    /// [`RatioGrid::at_mu`].
+    #[allow(clippy::needless_range_loop)] // the nodes are stored channel-major
+    fn isotropic(albedo: impl Fn(Vec3) -> [f32; 3]) -> RatioGrid {
+        let mut nodes = [[[0.0; 5]; RATIO_MU]; 3];
+        for i in 0..RATIO_MU {
+            let mu = (i as f32 / (RATIO_MU - 1) as f32).max(1e-4);
+            let r = albedo(Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu));
+            for c in 0..3 {
+                nodes[c][i] = [r[c]; 5];
+            }
+        }
+        RatioGrid {
+            nodes,
+            isotropic: true,
+        }
+    }
+
+    /// An isotropic grid's values at view cosine `mu`, linearly between the μ nodes.
+    #[inline]
+    fn at_mu(&self, mu: f32) -> [f32; 3] {
+        #[allow(clippy::manual_clamp)] // NaN → 0, as `tables::axis_coord`
+        let t = mu.max(0.0).min(1.0) * (RATIO_MU - 1) as f32;
+        let i = (t as usize).min(RATIO_MU - 2);
+        let w = t - i as f32;
+        self.nodes.map(|c| c[i][0] + (c[i + 1][0] - c[i][0]) * w)
+    }
 }
 
 /// `E_avg = 2∫E1 μ dμ` for a masking variant.
@@ -351,8 +409,8 @@ pub struct MicrofacetBound {
     pub(super) alpha: f32,
     /// The distribution is a delta ([`Ggx::is_delta`]).
     pub(super) delta: bool,
-    /// An anisotropic lobe's Fresnel ratio per channel (`None` for an isotropic lobe, for
-    /// F = 1, and in the one-off bound of [`MicrofacetR::prepare`]).
+    /// The Fresnel ratio per channel of a lobe that [`MicrofacetR::uses_ratio`] (`None`
+    /// for other lobes, and in the one-off bound of [`MicrofacetR::prepare`]).
     pub(super) aniso: Option<RatioGrid>,
 }
 
@@ -379,11 +437,6 @@ impl ReflectionCurves {
             _ => Vec3::splat(e1v),
         }
     }
-
-    /// The F82 form's three curves `(E1, S_q, H82)`, when it has them.
-    pub(super) fn f82_curves(&self) -> Option<[MuCurve; 3]> {
-        Some([self.e1, self.sq?, self.h82?])
-    }
 }
 
 /// The F82 albedo of [`ReflectionCurves::albedo`] from the curves' values `E1`, `S_q`, `H82`
@@ -394,18 +447,33 @@ pub(super) fn f82_albedo(f0: Rgb, f90: Rgb, a: Rgb, e1: f32, sq: f32, h82: f32) 
 }
 
 impl MicrofacetR {
-    /// The albedo of an anisotropic lobe at local view `v`, before any clamp or compensation:
-    /// the anisotropic `E1` table times the ratio of the lobe's own Fresnel (a conductor's
-    /// exact complex Fresnel, not its F82 fit: the anisotropic albedo is vstructc's choice,
-    /// spec §3.17) to F = 1, from `grid` (a bound lobe's) or else the quadrature at `v`
-    /// ([`vndf_quadrature`]). Shared by the scalar and the lane-parallel prepares, so they
-    /// agree bit for bit.
-    pub(in crate::interp) fn aniso_albedo(&self, grid: Option<&RatioGrid>, v: Vec3) -> Rgb {
+    /// True when the lobe's albedo is `E1` times the ratio of its own Fresnel to F = 1
+    /// ([`MicrofacetR::ratio_albedo`]): an anisotropic lobe, whose albedo depends on the
+    /// view's azimuth, and any rough conductor, whose complex Fresnel the
+    /// generalized-Schlick tables only approximate (its F82 fit reads up to 3 % off).
+    #[inline(always)]
+    pub(in crate::interp) fn uses_ratio(&self) -> bool {
+        is_aniso(&self.ggx) || (self.fresnel.is_conductor() && !self.ggx.is_delta())
+    }
+
+    /// The albedo of a lobe that [`MicrofacetR::uses_ratio`] at local view `v`, before any
+    /// clamp or compensation: the `E1` table (the anisotropic one for an anisotropic lobe)
+    /// times the ratio of the lobe's own Fresnel (a conductor's exact complex Fresnel, not
+    /// its F82 fit) to F = 1, from `grid` (a bound lobe's; an isotropic lobe's holds the
+    /// product) or else the quadrature at `v` ([`vndf_quadrature`]). Shared by the scalar and
+    /// the lane-parallel prepares, so they agree bit for bit.
+    pub(in crate::interp) fn ratio_albedo(&self, grid: Option<&RatioGrid>, v: Vec3) -> Rgb {
         let ratio = match grid {
+            Some(g) if g.isotropic => return Vec3::from_array(g.at_mu(v.z)),
             Some(g) => Vec3::from_array(g.at(v)),
             None => aniso_fresnel_ratio(&self.fresnel, &self.ggx, self.masking, v),
         };
-        ggx_aniso_e1(&self.ggx, self.masking, v) * ratio
+        let e1v = if is_aniso(&self.ggx) {
+            ggx_aniso_e1(&self.ggx, self.masking, v)
+        } else {
+            e1(self.masking, v.z, self.ggx.lookup_alpha())
+        };
+        e1v * ratio
     }
 
     /// The Fresnel form the albedo tables read: a conductor through its F82 fit (§3.9),
@@ -471,10 +539,19 @@ impl MicrofacetR {
             }),
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
-            aniso: (is_aniso(&self.ggx) && self.fresnel != Fresnel::One).then(|| {
-                RatioGrid::new(|v| {
-                    aniso_fresnel_ratio(&self.fresnel, &self.ggx, self.masking, v).to_array()
-                })
+            aniso: (self.uses_ratio() && self.fresnel != Fresnel::One).then(|| {
+                let ratio =
+                    |v| aniso_fresnel_ratio(&self.fresnel, &self.ggx, self.masking, v).to_array();
+                if is_aniso(&self.ggx) {
+                    RatioGrid::new(ratio)
+                } else {
+                    // The albedo itself (E1 · R), so a prepare reads one curve.
+                    let alpha = self.ggx.lookup_alpha();
+                    RatioGrid::isotropic(|v| {
+                        let e1v = e1(self.masking, v.z, alpha);
+                        ratio(v).map(|r| e1v * r)
+                    })
+                }
             }),
         }
     }
@@ -527,9 +604,10 @@ impl MicrofacetR {
             return;
         }
         // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
-        // μ do not see: it is looked up directly.
+        // μ do not see, and a conductor's exact Fresnel is not a form the curves hold: both
+        // are E1 times a Fresnel ratio.
         let ess = clamp1(match &bound.curves {
-            _ if is_aniso(&self.ggx) => self.aniso_albedo(bound.aniso.as_ref(), v),
+            _ if self.uses_ratio() => self.ratio_albedo(bound.aniso.as_ref(), v),
             Some(c) => c.albedo(albedo_fresnel, v.z),
             None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
         });
@@ -745,9 +823,9 @@ pub struct PreparedDielectric {
 #[derive(Debug, Clone, Copy)]
 pub struct DielectricBound {
     pub(super) curves: Option<[[MuCurve; 3]; 2]>,
-    /// An anisotropic lobe's ratios `[E_R, E_T, E_T without (1 − F)]/E1` at η and at 1/η,
-    /// for the index that is at least 1 ([`Dielectric::aniso_albedos`]; `None` for an
-    /// isotropic or delta lobe, and in the one-off bound of [`Dielectric::prepare`]).
+    /// An anisotropic lobe's ratios `[E_R, E_T, E_T without (1 − F)]/E1` at η and at 1/η
+    /// ([`Dielectric::aniso_albedos`]; `None` for an isotropic or delta lobe, and in the
+    /// one-off bound of [`Dielectric::prepare`]).
     pub(super) aniso: Option<[Option<RatioGrid>; 2]>,
     /// The distribution's view-independent constants ([`GgxView::constants`]).
     pub(super) ggx_view: GgxView,
@@ -786,18 +864,6 @@ impl Dielectric {
         let e1 = ggx_aniso_e1(&self.ggx, self.masking, v);
         let ratios = match grid {
             Some(g) => g.at(v),
-            // Below 1 (a view from the denser side), total internal reflection makes the
-            // Fresnel factor jump inside the quadrature's cells (measured 2 % off against
-            // sampling at μ_o = 0.74, η = 1/1.5): the isotropic tables at the view's
-            // projected width, rescaled by the anisotropic E1, are closer there.
-            None if eta < 1.0 => {
-                let c2 = tables::aniso_weight(v);
-                let (ax, ay) = (self.ggx.ax, self.ggx.ay);
-                let alpha_o = (c2 * ax * ax + (1.0 - c2) * ay * ay).sqrt();
-                let iso = dielectric_albedos_masked(self.masking, v.z, alpha_o, eta, want);
-                let inv = 1.0 / self::e1(self.masking, v.z, alpha_o).max(1e-6);
-                iso.map(|a| a * inv)
-            }
             None => aniso_dielectric_ratios(&self.ggx, self.masking, v, eta, want),
         };
         let mut k = 0;
@@ -842,12 +908,16 @@ impl Dielectric {
         let ggx_view = GgxView::constants(&self.ggx);
         let consts = self.consts();
         let aniso = is_aniso(&self.ggx).then(|| {
+            // A reflection-only lobe needs no transmission ratios.
+            let want = [
+                true,
+                self.mode != DielectricMode::R,
+                self.mode != DielectricMode::R,
+            ];
             [consts.eta0, 1.0 / consts.eta0].map(|eta| {
-                (eta >= 1.0).then(|| {
-                    RatioGrid::new(|v| {
-                        aniso_dielectric_ratios(&self.ggx, self.masking, v, eta, [true; 3])
-                    })
-                })
+                Some(RatioGrid::new(|v| {
+                    aniso_dielectric_ratios(&self.ggx, self.masking, v, eta, want)
+                }))
             })
         });
         if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {

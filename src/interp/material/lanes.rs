@@ -29,9 +29,7 @@ use crate::interp::fresnel::Fresnel;
 use crate::interp::ggx::{GgxView, ViewTerms};
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
-use crate::interp::microfacet::{
-    Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid, f82_albedo,
-};
+use crate::interp::microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid};
 use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking};
 use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
@@ -55,14 +53,12 @@ pub(super) enum LeafLanes {
         lobe: OrenNayar,
         bound: OrenNayarBound,
     },
-    /// GGX reflection with a conductor Fresnel, no compensation: the F82 fit's colours and
-    /// its albedo curves `(E1, S_q, H82)`.
+    /// GGX reflection with a conductor Fresnel, no compensation: its albedo is `E1` times
+    /// the exact Fresnel's ratio grid ([`MicrofacetR::ratio_albedo`]).
     Conductor {
         lobe: MicrofacetR,
         ggx_view: GgxView,
-        f82: [Rgb; 3],
-        curves: [MuCurve; 3],
-        /// An anisotropic lobe's Fresnel ratios (`MicrofacetBound::aniso`).
+        /// The lobe's Fresnel ratios (`MicrofacetBound::aniso`).
         aniso: Option<RatioGrid>,
     },
     /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
@@ -128,15 +124,10 @@ impl LeafLanes {
                     && !m.ggx.is_delta()
                     && m.comp == Compensation::None =>
             {
-                let Fresnel::F82 { f0, f90, a, .. } = bound.albedo_fresnel else {
-                    return None;
-                };
                 LeafLanes::Conductor {
                     lobe: *m,
                     ggx_view: bound.ggx_view,
-                    f82: [f0, f90, a],
-                    curves: bound.curves?.f82_curves()?,
-                    aniso: bound.aniso,
+                    aniso: Some(bound.aniso?),
                 }
             }
             // Turquin's factor makes the tint view-dependent; the scalar prepare applies it
@@ -230,22 +221,9 @@ impl LeafLanes {
                     }
                 }
             }
-            LeafLanes::Conductor { lobe, aniso, .. } if lobe.ggx.ax != lobe.ggx.ay => {
+            LeafLanes::Conductor { lobe, aniso, .. } => {
                 for k in 0..W {
-                    out.set(k, lobe.aniso_albedo(aniso.as_ref(), view(k)).min(Vec3::ONE));
-                }
-            }
-            LeafLanes::Conductor {
-                f82: [f0, f90, a],
-                curves: [e1, sq, h82],
-                ..
-            } => {
-                let (e1, sq, h82) = (e1.at_lanes(at), sq.at_lanes(at), h82.at_lanes(at));
-                for k in 0..W {
-                    out.set(
-                        k,
-                        f82_albedo(*f0, *f90, *a, e1[k], sq[k], h82[k]).min(Vec3::ONE),
-                    );
+                    out.set(k, lobe.ratio_albedo(aniso.as_ref(), view(k)).min(Vec3::ONE));
                 }
             }
             LeafLanes::DielectricR {
