@@ -38,7 +38,7 @@
 //!   kept while the value is unchanged and dropped when the value is replaced.
 
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
-use crate::network::{Param, RequestKind, SourceParam};
+use crate::network::{Memo, Param, RequestKind, SourceParam};
 use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -88,10 +88,12 @@ pub fn write_rib(
             }
         }
     }
+    // The writer asks for the type and position of every new parameter.
+    let types = Memo::new(types);
     let w = Writer {
         source,
         net,
-        types,
+        types: &types,
         surfaces,
     };
     w.write(out)
@@ -437,7 +439,7 @@ impl Writer<'_> {
         for (i, l) in links.iter().enumerate() {
             let handle = match &l.upstream {
                 Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
-                Upstream::Missing(h) => h.as_str(),
+                Upstream::Missing(h) => &**h,
             };
             if i > 0 {
                 text.push(b' ');

@@ -30,8 +30,8 @@ mod lexer;
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
-    Decl, Link, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamTypes,
-    RequestKind, SourceParam, Terminal,
+    Decl, Link, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
+    ParamTypes, RequestKind, SourceParam, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_string};
@@ -126,9 +126,11 @@ pub fn parse_rib(
         .into());
     }
     let mut lx = Lexer::new(bytes, file.clone(), options.strict);
+    // The reader asks about the type of every parameter of every node.
+    let types = Memo::new(types);
     let mut asm = Assembler {
         src: bytes,
-        types,
+        types: &types,
         net: Network::new(),
     };
     let mut next = lx.next_token(diags)?;

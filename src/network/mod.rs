@@ -45,12 +45,14 @@ mod param_types;
 #[doc(hidden)]
 pub mod testgen;
 
+pub(crate) use param_types::Memo;
 pub use param_types::{NoDefinitions, ParamTypes};
 
 use crate::diag::Location;
 use crate::types::{Type, Value};
 use hashbrown::HashTable;
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
+use petgraph::visit::EdgeRef;
 use rustc_hash::FxBuildHasher;
 use smallvec::SmallVec;
 use std::collections::HashMap;
@@ -185,8 +187,9 @@ pub enum Upstream {
     Node(NodeId),
     /// A reference to a handle that names no node (RIB: not defined before the referencing
     /// request, RB018; JSON: not in the material, JS010). Kept so the writers reproduce it and
-    /// resolution can report it (VS010).
-    Missing(String),
+    /// resolution can report it (VS010). Boxed rather than a `String`, so that a link is no
+    /// larger than the shared output name and a node index.
+    Missing(Box<str>),
 }
 
 /// One connection of an input: upstream node (or missing handle) and output name.
@@ -236,7 +239,7 @@ impl Link {
     /// ```
     pub fn missing(handle: &str, output: Option<&str>) -> Link {
         Link {
-            upstream: Upstream::Missing(handle.to_string()),
+            upstream: Upstream::Missing(Box::from(handle)),
             output: output.map(Arc::from),
         }
     }
@@ -301,11 +304,14 @@ type Links = SmallVec<[Link; 1]>;
 pub struct Param {
     name: Arc<str>,
     /// Boxed, like `source`: most members of a resolved scene are connections, not values.
-    value: Option<Box<Value>>,
+    /// Shared: resolution writes the same `set` value into many members (one per expansion
+    /// with the same decision), and they share one block.
+    value: Option<Arc<Value>>,
     /// Inline for the usual single connection: a resolved scene has millions of member
-    /// connections, and a heap block each for links and edge ids was most of their cost.
+    /// connections, and a heap block each was most of their cost. The graph edges that mirror
+    /// them are found through the downstream node's incoming edges when a link changes
+    /// (removing a petgraph edge walks those anyway), so a parameter keeps no edge ids.
     links: Links,
-    edges: SmallVec<[Option<EdgeId>; 1]>,
     /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
     /// a smaller `Param` keeps nodes with hundreds of members compact.
     source: Option<Box<ParamSource>>,
@@ -327,7 +333,6 @@ impl Param {
             name,
             value: None,
             links: Links::new(),
-            edges: SmallVec::new(),
             source: None,
             value_touched: false,
             links_touched: false,
@@ -344,9 +349,8 @@ impl Param {
     ) -> Param {
         Param {
             name: Arc::from(name),
-            value: value.map(Box::new),
+            value: value.map(Arc::new),
             links: Links::new(),
-            edges: SmallVec::new(),
             source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
                 Box::new(ParamSource {
                     decl,
@@ -967,7 +971,7 @@ impl Network {
     pub fn remove_value(&mut self, node: NodeId, name: &str) -> Option<Value> {
         let n = &mut self.graph[node];
         let i = n.index_of(name)?;
-        let old = n.params[i].value.take().map(|old| *old);
+        let old = n.params[i].value.take().map(Arc::unwrap_or_clone);
         if old.is_some() {
             n.params[i].value_touched = true;
             n.dirty = true;
@@ -1051,11 +1055,10 @@ impl Network {
     /// Append `link` to the parameter at position `i` of `down`, with its graph edge.
     fn append_link(&mut self, down: NodeId, i: usize, link: Link) {
         let index = self.graph[down].params[i].links.len();
-        let edge = self.add_edge_for(down, i, &link, index);
+        self.add_edge_for(down, i, &link, index);
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         p.links.push(link);
-        p.edges.push(edge);
         p.links_touched = true;
         n.dirty = true;
     }
@@ -1064,28 +1067,22 @@ impl Network {
     pub(crate) fn push_source_links(&mut self, down: NodeId, param: usize, links: Vec<Link>) {
         for link in links {
             let index = self.graph[down].params[param].links.len();
-            let edge = self.add_edge_for(down, param, &link, index);
-            let p = &mut self.graph[down].params[param];
-            p.links.push(link);
-            p.edges.push(edge);
+            self.add_edge_for(down, param, &link, index);
+            self.graph[down].params[param].links.push(link);
         }
     }
 
     /// The graph edge of `link`, the `index`-th connection of parameter `param` of `down`
     /// (none for a dangling link). The edge shares the parameter and output names.
-    fn add_edge_for(
-        &mut self,
-        down: NodeId,
-        param: usize,
-        link: &Link,
-        index: usize,
-    ) -> Option<EdgeId> {
+    fn add_edge_for(&mut self, down: NodeId, param: usize, link: &Link, index: usize) {
         if self.edges_suspended {
-            return None;
+            return;
         }
-        let up = link.upstream_node()?;
+        let Some(up) = link.upstream_node() else {
+            return;
+        };
         let input = self.graph[down].params[param].name.clone();
-        Some(self.graph.add_edge(
+        self.graph.add_edge(
             up,
             down,
             Edge {
@@ -1093,7 +1090,21 @@ impl Network {
                 input,
                 index,
             },
-        ))
+        );
+    }
+
+    /// The graph edges mirroring the links of parameter `param` of `down`, with their
+    /// element index (none while edges are suspended).
+    fn edges_of(&self, down: NodeId, param: usize) -> Vec<(EdgeId, usize)> {
+        if self.edges_suspended {
+            return Vec::new();
+        }
+        let name = &self.graph[down].params[param].name;
+        self.graph
+            .edges_directed(down, petgraph::Direction::Incoming)
+            .filter(|e| *e.weight().input == **name)
+            .map(|e| (e.id(), e.weight().index))
+            .collect()
     }
 
     /// Stop mirroring links by graph edges until [`Network::restore_edges`] (crate-internal:
@@ -1103,11 +1114,6 @@ impl Network {
     /// connections only, and the edges are rebuilt from the links once at its end.
     pub(crate) fn suspend_edges(&mut self) {
         self.graph.clear_edges();
-        for node in self.graph.node_weights_mut() {
-            for p in &mut node.params {
-                p.edges.iter_mut().for_each(|e| *e = None);
-            }
-        }
         self.edges_suspended = true;
     }
 
@@ -1143,8 +1149,7 @@ impl Network {
                         input: p.name.clone(),
                         index,
                     };
-                    let e = self.graph.add_edge(up, down, weight);
-                    self.graph[down].params[i].edges[index] = Some(e);
+                    self.graph.add_edge(up, down, weight);
                 }
             }
         }
@@ -1237,25 +1242,38 @@ impl Network {
         }
         p.value_touched = true;
         n.dirty = true;
-        p.value.replace(Box::new(value)).map(|old| *old)
+        p.value.replace(Arc::new(value)).map(Arc::unwrap_or_clone)
+    }
+
+    /// Give the parameter `name` of `node`, which is not there yet (`hash` is its
+    /// [`name_hash`]), the shared `value` (resolution's fast path for `set` into a new member).
+    pub(crate) fn add_shared_value(
+        &mut self,
+        node: NodeId,
+        name: &Arc<str>,
+        hash: u64,
+        value: &Arc<Value>,
+    ) {
+        let n = &mut self.graph[node];
+        let i = n.insert_param_hashed(name.clone(), hash);
+        let p = &mut n.params[i];
+        p.value = Some(value.clone());
+        p.value_touched = true;
+        n.dirty = true;
     }
 
     fn replace_links(&mut self, down: NodeId, i: usize, links: Links) -> Links {
         if self.graph[down].params[i].links == links {
             return links;
         }
-        let old_edges = std::mem::take(&mut self.graph[down].params[i].edges);
-        for e in old_edges.into_iter().flatten() {
+        for (e, _) in self.edges_of(down, i) {
             self.graph.remove_edge(e);
         }
-        let edges = links
-            .iter()
-            .enumerate()
-            .map(|(index, link)| self.add_edge_for(down, i, link, index))
-            .collect();
+        for (index, link) in links.iter().enumerate() {
+            self.add_edge_for(down, i, link, index);
+        }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
-        p.edges = edges;
         p.links_touched = true;
         n.dirty = true;
         std::mem::replace(&mut p.links, links)
@@ -1297,27 +1315,20 @@ impl Network {
         if index >= self.graph[down].params[i].links.len() {
             return None;
         }
+        for (e, k) in self.edges_of(down, i) {
+            if k == index {
+                self.graph.remove_edge(e);
+            } else if k > index
+                && let Some(w) = self.graph.edge_weight_mut(e)
+            {
+                w.index = k - 1;
+            }
+        }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         let link = p.links.remove(index);
-        let edge = p.edges.remove(index);
-        let later: Vec<(usize, EdgeId)> = p
-            .edges
-            .iter()
-            .enumerate()
-            .skip(index)
-            .filter_map(|(k, e)| e.map(|e| (k, e)))
-            .collect();
         p.links_touched = true;
         n.dirty = true;
-        if let Some(e) = edge {
-            self.graph.remove_edge(e);
-        }
-        for (k, e) in later {
-            if let Some(w) = self.graph.edge_weight_mut(e) {
-                w.index = k;
-            }
-        }
         Some(link)
     }
 
