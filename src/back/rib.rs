@@ -690,6 +690,30 @@ mod tests {
         );
     }
 
+    fn value_type_text(v: &Value) -> String {
+        let mut t = Vec::new();
+        push_value_type(&mut t, v);
+        String::from_utf8(t).unwrap()
+    }
+
+    #[test]
+    fn pushed_values_are_formatted_values() {
+        for v in [
+            Value::Int(-7),
+            Value::Float(0.1),
+            Value::Float(1.0),
+            Value::Float(f32::INFINITY),
+            Value::Float(f32::NAN),
+            Value::Float(-3.0e-40),
+            Value::Triple(BaseType::Color, [0.5, 1.0, 0.25]),
+            Value::Str("a\"b".into()),
+        ] {
+            let mut t = Vec::new();
+            push_value(&mut t, &v);
+            assert_eq!(String::from_utf8(t).unwrap(), format_value(&v), "{v:?}");
+        }
+    }
+
     #[test]
     fn value_type_texts() {
         assert_eq!(value_type_text(&Value::Int(1)), "int");

@@ -322,7 +322,8 @@ pub struct Param {
 /// Where a parameter read from a file came from.
 #[derive(Debug, Clone, PartialEq)]
 struct ParamSource {
-    decl: Option<Decl>,
+    /// Shared by the parameters of every node that repeats the declaration.
+    decl: Option<Arc<Decl>>,
     location: Option<Location>,
     origin: Option<u32>,
 }
@@ -347,9 +348,27 @@ impl Param {
         location: Option<Location>,
         origin: Option<u32>,
     ) -> Param {
+        Param::from_shared(
+            Arc::from(name),
+            value.map(Arc::new),
+            decl.map(Arc::new),
+            location,
+            origin,
+        )
+    }
+
+    /// [`Param::from_source`] with a name, value and declaration that may be shared with
+    /// other parameters (the RIB reader shares repeated ones).
+    pub(crate) fn from_shared(
+        name: Arc<str>,
+        value: Option<Arc<Value>>,
+        decl: Option<Arc<Decl>>,
+        location: Option<Location>,
+        origin: Option<u32>,
+    ) -> Param {
         Param {
-            name: Arc::from(name),
-            value: value.map(Arc::new),
+            name,
+            value,
             links: Links::new(),
             source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
                 Box::new(ParamSource {
@@ -391,7 +410,7 @@ impl Param {
 
     /// The declaration read from the source, if any.
     pub fn decl(&self) -> Option<&Decl> {
-        self.source.as_ref()?.decl.as_ref()
+        self.source.as_ref()?.decl.as_deref()
     }
 
     /// Where the parameter was declared (RIB decl string; JSON pointer), if known.
