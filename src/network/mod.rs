@@ -487,13 +487,17 @@ pub struct SourceParam {
 /// One shader node (one RIB request, one JSON node).
 #[derive(Debug, Clone)]
 pub struct Node {
+    /// `handle#version` once the node is in a network; the handle is its first
+    /// `handle_len` bytes (one string for both).
     key: String,
-    handle: String,
+    handle_len: usize,
     version: u32,
-    shader: String,
+    /// Shared by every node of the network with this shader id.
+    shader: Arc<str>,
     kind: RequestKind,
     params: Vec<Param>,
-    /// Indices into `params`, hashed by parameter name. Resolution looks parameters up by
+    /// Indices into `params`, hashed by parameter name, once the node has more than
+    /// [`SMALL_NODE`] parameters (fewer are scanned). Resolution looks parameters up by
     /// name several times per member; nodes such as PxrLayerMixer have hundreds of them.
     /// (position in `params`, the name's hash folded to 32 bits): keeping the hash lets the
     /// table grow without hashing every name again.
@@ -503,7 +507,6 @@ pub struct Node {
     dirty: bool,
 }
 
-/// The hash of a parameter name in [`Node`]'s index.
 /// Where a parameter is among a node's parameters: at a position, or not there yet (with the
 /// hash of its name, so that adding it does not hash the name again).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -525,6 +528,20 @@ impl Slot {
             Slot::Missing { .. } => None,
         }
     }
+}
+
+/// `n` in decimal, written into `buf` (no allocation).
+fn itoa(mut n: usize, buf: &mut [u8; 20]) -> &str {
+    let mut i = buf.len();
+    loop {
+        i -= 1;
+        buf[i] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    std::str::from_utf8(&buf[i..]).unwrap_or("0")
 }
 
 /// The first eight bytes of `s` as a big-endian number, zero-padded: comparing two of these
@@ -551,11 +568,15 @@ fn unfold(h: u32) -> u64 {
     u64::from(h) << 32 | u64::from(h)
 }
 
+/// A node with at most this many parameters has no name index: scanning them is as fast, and
+/// most nodes of a scene are that small.
+const SMALL_NODE: usize = 8;
+
 impl PartialEq for Node {
     /// Compares everything but the name index (which is derived from `params`).
     fn eq(&self, other: &Node) -> bool {
         self.key == other.key
-            && self.handle == other.handle
+            && self.handle_len == other.handle_len
             && self.version == other.version
             && self.shader == other.shader
             && self.kind == other.kind
@@ -570,10 +591,10 @@ impl Node {
     /// A node with no parameters (crate-internal; use [`Network::add_node`]).
     pub(crate) fn new_raw(handle: &str, shader: &str, kind: RequestKind) -> Node {
         Node {
-            key: String::new(),
-            handle: handle.to_string(),
+            key: handle.to_string(),
+            handle_len: handle.len(),
             version: 0,
-            shader: shader.to_string(),
+            shader: Arc::from(shader),
             kind,
             params: Vec::new(),
             by_name: HashTable::new(),
@@ -586,13 +607,26 @@ impl Node {
     /// Replace the parameters (crate-internal: readers). Names must be unique.
     pub(crate) fn set_raw_params(&mut self, params: Vec<Param>) {
         self.params = params;
+        self.by_name = HashTable::new();
+        if self.params.len() > SMALL_NODE {
+            self.build_index(0);
+        }
+    }
+
+    /// Builds the name index of a node that has none, with room for `additional` more names.
+    fn build_index(&mut self, additional: usize) {
         let params = &self.params;
-        let mut by_name = HashTable::with_capacity(params.len());
+        let mut by_name = HashTable::with_capacity(params.len() + additional);
         for (i, p) in params.iter().enumerate() {
             let hash = name_hash(&p.name);
             by_name.insert_unique(hash, (i as u32, hash as u32), |&(_, h)| unfold(h));
         }
         self.by_name = by_name;
+    }
+
+    /// True if the node has a name index (see [`SMALL_NODE`]).
+    fn indexed(&self) -> bool {
+        self.params.len() > SMALL_NODE
     }
 
     /// Set where the node came from (crate-internal: readers).
@@ -608,7 +642,7 @@ impl Node {
 
     /// The handle (RIB) or node name (JSON).
     pub fn handle(&self) -> &str {
-        &self.handle
+        &self.key[..self.handle_len]
     }
 
     /// The version `k` of the handle (0 for the first definition).
@@ -649,8 +683,8 @@ impl Node {
     /// ```
     pub fn display_name(&self) -> String {
         match (&self.location, self.version) {
-            (_, 0) => self.handle.clone(),
-            (Some(loc), _) if loc.line > 0 => format!("{} (line {})", self.handle, loc.line),
+            (_, 0) => self.handle().to_string(),
+            (Some(loc), _) if loc.line > 0 => format!("{} (line {})", self.handle(), loc.line),
             _ => self.key.clone(),
         }
     }
@@ -662,6 +696,9 @@ impl Node {
     /// [`Self::index_of`] with the name's [`name_hash`] already known.
     fn index_of_hashed(&self, name: &str, hash: u64) -> Option<usize> {
         let params = &self.params;
+        if !self.indexed() {
+            return params.iter().position(|p| &*p.name == name);
+        }
         self.by_name
             .find(hash, |&(i, _)| &*params[i as usize].name == name)
             .map(|&(i, _)| i as usize)
@@ -683,9 +720,14 @@ impl Node {
     /// [`Self::insert_param`] with the name's [`name_hash`] already known.
     fn insert_param_hashed(&mut self, name: Arc<str>, hash: u64) -> usize {
         let idx = self.params.len();
+        let was_indexed = self.indexed();
         self.params.push(Param::empty(name));
-        self.by_name
-            .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
+        if was_indexed {
+            self.by_name
+                .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
+        } else if self.indexed() {
+            self.build_index(0);
+        }
         idx
     }
 
@@ -799,7 +841,10 @@ pub struct Material {
 #[derive(Debug, Clone, Default)]
 pub struct Network {
     graph: StableDiGraph<Node, Edge>,
-    handles: HashMap<String, Vec<NodeId>>,
+    /// Every version of each handle, oldest first (usually one, kept inline).
+    handles: HashMap<Box<str>, SmallVec<[NodeId; 1]>>,
+    /// The shader ids of the nodes, each stored once.
+    shaders: std::collections::HashSet<Arc<str>>,
     materials: Vec<Material>,
     /// True between [`Network::suspend_edges`] and [`Network::restore_edges`]: links are not
     /// mirrored by graph edges then.
@@ -864,11 +909,24 @@ impl Network {
 
     /// Insert a prepared node, assigning its version and key (crate-internal: readers).
     pub(crate) fn insert_node(&mut self, mut node: Node) -> NodeId {
-        let versions = self.handles.entry(node.handle.clone()).or_default();
-        node.version = versions.len() as u32;
-        node.key = format!("{}#{}", node.handle, node.version);
+        let handle = node.handle();
+        let version = match self.handles.get(handle) {
+            Some(versions) => versions.len(),
+            None => 0,
+        };
+        node.version = version as u32;
+        node.key.truncate(node.handle_len);
+        node.key.push('#');
+        node.key.push_str(itoa(version, &mut [0; 20]));
+        match self.shaders.get(&*node.shader) {
+            Some(shared) => node.shader = shared.clone(),
+            None => {
+                self.shaders.insert(node.shader.clone());
+            }
+        }
+        let key: Box<str> = Box::from(node.handle());
         let id = self.graph.add_node(node);
-        versions.push(id);
+        self.handles.entry(key).or_default().push(id);
         id
     }
 
@@ -900,7 +958,7 @@ impl Network {
 
     /// Every version of `handle`, oldest first.
     pub fn versions(&self, handle: &str) -> &[NodeId] {
-        self.handles.get(handle).map_or(&[], Vec::as_slice)
+        self.handles.get(handle).map_or(&[], |v| v.as_slice())
     }
 
     /// The node with key `handle#k`.
@@ -946,7 +1004,7 @@ impl Network {
             .graph
             .node_indices()
             .map(|id| {
-                let handle = self.graph[id].handle.as_str();
+                let handle = self.graph[id].handle();
                 (prefix_key(handle), handle, self.graph[id].version, id)
             })
             .collect();
@@ -1008,7 +1066,11 @@ impl Network {
         if n.params.capacity() - n.params.len() < additional {
             n.params.reserve_exact(additional.max(n.params.len() / 4));
         }
-        n.by_name.reserve(additional, |&(_, h)| unfold(h));
+        if n.indexed() {
+            n.by_name.reserve(additional, |&(_, h)| unfold(h));
+        } else if n.params.len() + additional > SMALL_NODE {
+            n.build_index(additional);
+        }
     }
 
     /// The connections of `node.input` in connection order (empty if none).
@@ -1526,7 +1588,7 @@ mod tests {
             let mut expected: Vec<NodeId> = net.graph.node_indices().collect();
             expected.sort_by(|&x, &y| {
                 let (nx, ny) = (&net.graph[x], &net.graph[y]);
-                nx.handle.cmp(&ny.handle).then(nx.version.cmp(&ny.version))
+                nx.handle().cmp(ny.handle()).then(nx.version.cmp(&ny.version))
             });
             proptest::prop_assert_eq!(net.nodes_sorted(), expected);
         }
@@ -1619,6 +1681,51 @@ mod tests {
         assert_eq!(net.connections(d, "x")[1].missing_handle(), Some("ghost"));
         net.clear_connections(d, "x");
         assert_eq!(net.graph().edge_count(), 0);
+    }
+
+    /// Small nodes are scanned, larger ones indexed: look-ups find every parameter on both
+    /// sides of the boundary, whether the node grows one parameter at a time, by a reserved
+    /// block, or is read with many.
+    #[test]
+    fn lookups_across_the_small_node_boundary() {
+        let mut net = Network::new();
+        let one = net.add_node("one", "X");
+        let block = net.add_node("block", "X");
+        let names: Vec<String> = (0..3 * SMALL_NODE).map(|i| format!("p{i}")).collect();
+        for (k, name) in names.iter().enumerate() {
+            net.set_param(one, name, Value::Int(k as i32));
+            for (j, seen) in names[..=k].iter().enumerate() {
+                assert_eq!(net.value(one, seen), Some(&Value::Int(j as i32)));
+            }
+            assert!(net[one].param("absent").is_none());
+        }
+        net.set_param(block, "first", Value::Int(-1));
+        net.reserve_params(block, 2 * SMALL_NODE);
+        for (k, name) in names.iter().enumerate() {
+            let name: Arc<str> = Arc::from(name.as_str());
+            let slot = net.slot_of(block, &name, name_hash(&name));
+            net.set_slot(block, slot, &name, Value::Int(k as i32));
+        }
+        assert_eq!(net.value(block, "first"), Some(&Value::Int(-1)));
+        for (k, name) in names.iter().enumerate() {
+            assert_eq!(net.value(block, name), Some(&Value::Int(k as i32)));
+        }
+        let mut read = Node::new_raw("read", "X", RequestKind::Pattern);
+        read.set_raw_params(
+            names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| {
+                    Param::from_source(n.clone(), Some(Value::Int(k as i32)), None, None, None)
+                })
+                .collect(),
+        );
+        let read = net.insert_node(read);
+        for (k, name) in names.iter().enumerate() {
+            assert_eq!(net.value(read, name), Some(&Value::Int(k as i32)));
+        }
+        assert_eq!(net[read].key(), "read#0");
+        assert_eq!(net[read].handle(), "read");
     }
 
     #[test]
