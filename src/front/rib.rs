@@ -31,7 +31,7 @@ use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
-    ParamTypes, RequestKind, SourceParam, Terminal,
+    ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_string};
@@ -136,7 +136,10 @@ pub fn parse_rib(
         decls: FxHashMap::default(),
         values: FxHashMap::default(),
         shared_values: 0,
+        outputs: FxHashMap::default(),
     };
+    // One argument buffer for every request: its room is reused.
+    let mut args = Args::default();
     let mut next = lx.next_token(diags)?;
     while let Some(tok) = next {
         match tok.kind {
@@ -144,7 +147,7 @@ pub fn parse_rib(
             TokKind::Ident => {
                 let name = std::str::from_utf8(lx.bytes(&tok)).unwrap_or("");
                 if let Some(kind) = RequestKind::from_keyword(name) {
-                    let (args, after) = read_args(&mut lx, diags, true)?;
+                    let after = read_args(&mut lx, diags, true, &mut args)?;
                     asm.shading_request(&lx, kind, &tok, &args, diags)?;
                     // Stop at the first node too many, before the rest is read.
                     options
@@ -154,7 +157,7 @@ pub fn parse_rib(
                     next = after;
                 } else {
                     let legacy = LEGACY_REQUESTS.contains(&name);
-                    let (args, after) = read_args(&mut lx, diags, legacy)?;
+                    let after = read_args(&mut lx, diags, legacy, &mut args)?;
                     if legacy && has_reference_decl(bytes, &args.pieces) {
                         diags.push(
                             Diagnostic::info(
@@ -239,25 +242,27 @@ impl Piece {
     }
 }
 
-/// Read the arguments of a request up to the next request name (returned) or the end.
-/// Validates arrays (flat, homogeneous, closed). With `keep == false` nothing is stored, so
-/// pass-through requests of any size cost no memory.
+/// Read the arguments of a request into `args` (emptied first) up to the next request name
+/// (returned) or the end. Validates arrays (flat, homogeneous, closed). With `keep == false`
+/// nothing is stored, so pass-through requests of any size cost no memory.
 fn read_args(
     lx: &mut Lexer<'_>,
     diags: &mut Diagnostics,
     keep: bool,
-) -> Result<(Args, Option<Token>), Error> {
-    let mut args = Args::default();
+    args: &mut Args,
+) -> Result<Option<Token>, Error> {
+    args.pieces.clear();
+    args.items.clear();
     let mut array: Option<(Token, usize, Option<TokKind>)> = None;
     loop {
         let Some(tok) = lx.next_token(diags)? else {
             if let Some((open, ..)) = array {
                 return Err(unterminated_array(lx, &open));
             }
-            return Ok((args, None));
+            return Ok(None);
         };
         match (tok.kind, array.as_mut()) {
-            (TokKind::Ident, None) => return Ok((args, Some(tok))),
+            (TokKind::Ident, None) => return Ok(Some(tok)),
             (TokKind::Ident, Some((open, ..))) => {
                 let open = *open;
                 return Err(Diagnostic::error(
@@ -436,6 +441,9 @@ struct Assembler<'a, 't> {
     values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
+    /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), shared by
+    /// every connection to the same output name.
+    outputs: FxHashMap<Box<str>, Arc<str>>,
 }
 
 /// At most this many distinct values are remembered for sharing while a file is read.
@@ -772,6 +780,18 @@ impl<'a> Assembler<'a, '_> {
         Ok(param)
     }
 
+    /// The shared copy of output name `name` (see [`Assembler::outputs`]).
+    fn output_name(&mut self, name: &str) -> Arc<str> {
+        if let Some(shared) = self.outputs.get(name) {
+            return shared.clone();
+        }
+        let shared: Arc<str> = Arc::from(name);
+        if self.outputs.len() < MAX_SHARED_VALUES {
+            self.outputs.insert(Box::from(name), shared.clone());
+        }
+        shared
+    }
+
     /// The name and declaration of a parameter from its decl token, and whether they are
     /// remembered: per shader and token text, when reading them reported nothing (see
     /// [`Assembler::decls`]).
@@ -972,7 +992,7 @@ impl<'a> Assembler<'a, '_> {
     /// Connections of a `reference` parameter: one `handle:output` string per element, split
     /// at the last `:`, bound to the latest version of the handle defined so far.
     fn read_links(
-        &self,
+        &mut self,
         p: &ReadParam,
         ty: &Type,
         elems: Vec<Elem<'_>>,
@@ -1012,8 +1032,12 @@ impl<'a> Assembler<'a, '_> {
                 Some(k) => (&s[..k], Some(&s[k + 1..])),
                 None => (s.as_str(), None),
             };
+            let output = output.map(|o| self.output_name(o));
             match self.net.find(handle) {
-                Some(id) => links.push(Link::node(id, output)),
+                Some(id) => links.push(Link {
+                    upstream: Upstream::Node(id),
+                    output,
+                }),
                 None => {
                     diags.push(
                         Diagnostic::warning(
@@ -1022,7 +1046,10 @@ impl<'a> Assembler<'a, '_> {
                         )
                         .at(p.location.clone()),
                     );
-                    links.push(Link::missing(handle, output));
+                    links.push(Link {
+                        upstream: Upstream::Missing(Box::from(handle)),
+                        output,
+                    });
                 }
             }
         }
@@ -1298,9 +1325,19 @@ mod tests {
         let (net, d) = read(
             "Pattern \"P\" \"a\" \"float f\" [2] \"color c\" [1 0 0]\n\
              Pattern \"P\" \"b\" \"float f\" [2] \"color c\" [1 0 1]\n\
-             Pattern \"Q\" \"c\" \"float f\" [2]\n",
+             Pattern \"Q\" \"c\" \"float f\" [2]\n\
+             Pattern \"R\" \"d\" \"reference float x\" [\"a:resultF\"]\n\
+             Pattern \"R\" \"e\" \"reference float x\" [\"b:resultF\"]\n",
         );
         assert!(d.is_empty(), "{d:?}");
+        let out = |h: &str| net.connections(net.find(h).unwrap(), "x")[0].output.clone();
+        let (d_out, e_out) = (out("d").unwrap(), out("e").unwrap());
+        assert_eq!(&*d_out, "resultF");
+        assert!(Arc::ptr_eq(&d_out, &e_out));
+        assert_eq!(
+            net.connections(net.find("e").unwrap(), "x")[0].upstream_node(),
+            net.find("b")
+        );
         let p = |h: &str, n: &str| net[net.find(h).unwrap()].param(n).unwrap();
         assert!(std::ptr::eq(
             p("a", "f").decl().unwrap(),
