@@ -436,7 +436,7 @@ struct Assembler<'a, 't> {
     /// the same few declarations on thousands of nodes, and their parameters share one name
     /// and one [`Decl`]. Only declarations that were read without a diagnostic are kept, so
     /// a hit reports nothing, exactly as reading them again would.
-    decls: FxHashMap<Box<str>, FxHashMap<Box<[u8]>, (Arc<str>, Arc<Decl>)>>,
+    decls: FxHashMap<Box<str>, FxHashMap<Box<[u8]>, SharedDecl>>,
     /// Short values read before without a diagnostic, per declaration and value text.
     values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
@@ -445,6 +445,9 @@ struct Assembler<'a, 't> {
     /// every connection to the same output name.
     outputs: FxHashMap<Box<str>, Arc<str>>,
 }
+
+/// A parameter name and declaration shared by the parameters that repeat a decl token.
+type SharedDecl = (Arc<str>, Arc<Decl>);
 
 /// At most this many distinct values are remembered for sharing while a file is read.
 const MAX_SHARED_VALUES: usize = 1 << 16;
