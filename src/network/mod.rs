@@ -1177,10 +1177,13 @@ impl Network {
     /// The graph edges mirroring the links of parameter `param` of `down`, with their
     /// element index (none while edges are suspended).
     fn edges_of(&self, down: NodeId, param: usize) -> Vec<(EdgeId, usize)> {
-        if self.edges_suspended {
+        let p = &self.graph[down].params[param];
+        // A parameter without bound links has no edges: no walk (building a node's inputs
+        // one by one stays linear).
+        if self.edges_suspended || p.links.iter().all(|l| l.upstream_node().is_none()) {
             return Vec::new();
         }
-        let name = &self.graph[down].params[param].name;
+        let name = &p.name;
         self.graph
             .edges_directed(down, petgraph::Direction::Incoming)
             .filter(|e| *e.weight().input == **name)
