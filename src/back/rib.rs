@@ -645,11 +645,13 @@ pub fn quote(s: &str) -> String {
 }
 
 fn escape(s: &str) -> Cow<'_, str> {
-    // Names and handles almost never need escaping: use them as they are.
-    if !s
-        .bytes()
-        .any(|b| b < 0x20 || b == 0x7f || b == b'"' || b == b'\\')
-    {
+    // Names and handles almost never need escaping: use them as they are. The check looks
+    // at every byte without stopping early, which lets it run on whole vectors of bytes
+    // (the writer checks millions of names).
+    let special = s.bytes().fold(false, |found, b| {
+        found | (b < 0x20) | (b == 0x7f) | (b == b'"') | (b == b'\\')
+    });
+    if !special {
         return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len());

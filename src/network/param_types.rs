@@ -189,6 +189,26 @@ impl<'t> Memo<'t> {
     /// first time.
     fn known(&self, input: bool, shader: &str, name: &str, ask: Ask) -> Known {
         let cell = if input { &self.inputs } else { &self.outputs };
+        // The usual case: asked before, answered without copying the other answers.
+        if let Some(k) = cell.borrow().get(shader).and_then(|m| m.get(name)) {
+            let answered = match ask {
+                Ask::Type => k.ty.as_ref().map(|ty| Known {
+                    ty: Some(ty.clone()),
+                    ..Known::default()
+                }),
+                Ask::Position => k.position.map(|position| Known {
+                    position: Some(position),
+                    ..Known::default()
+                }),
+                Ask::Head => k.head.map(|head| Known {
+                    head: Some(head),
+                    ..Known::default()
+                }),
+            };
+            if let Some(answer) = answered {
+                return answer;
+            }
+        }
         let mut k = cell
             .borrow()
             .get(shader)
