@@ -346,7 +346,7 @@ impl Stream {
                 .map(String::as_str)
                 .or_else(|| net.get(*id).map(|n| n.handle()))
                 .unwrap_or(""),
-            Upstream::Missing(h) => h.as_str(),
+            Upstream::Missing(h) => &**h,
         };
         let mut first = true;
         self.entry(&mut first, level, "upstreamNode");
@@ -524,7 +524,7 @@ fn connection(net: &Network, link: &Link, names: &HashMap<NodeId, String>) -> Ou
             net.get(*id)
                 .map_or_else(String::new, |n| n.handle().to_string())
         }),
-        Upstream::Missing(h) => h.clone(),
+        Upstream::Missing(h) => h.to_string(),
     };
     let mut c = Out::obj();
     c.insert("upstreamNode".into(), Out::Str(node));

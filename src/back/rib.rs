@@ -38,7 +38,7 @@
 //!   kept while the value is unchanged and dropped when the value is replaced.
 
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
-use crate::network::{Param, RequestKind, SourceParam};
+use crate::network::{Memo, Param, RequestKind, SourceParam};
 use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -88,11 +88,14 @@ pub fn write_rib(
             }
         }
     }
+    // The writer asks for the type and position of every new parameter.
+    let types = Memo::new(types);
     let w = Writer {
         source,
         net,
-        types,
+        types: &types,
         surfaces,
+        scratch: Default::default(),
     };
     w.write(out)
 }
@@ -125,6 +128,8 @@ struct Writer<'a> {
     types: &'a dyn ParamTypes,
     /// The name of the first material whose `surface` terminal is each node.
     surfaces: HashMap<NodeId, &'a str>,
+    /// The buffer of the request being written, kept from one request to the next.
+    scratch: std::cell::RefCell<Vec<u8>>,
 }
 
 fn invalid(msg: &str) -> io::Error {
@@ -243,14 +248,13 @@ impl Writer<'_> {
         order
     }
 
-    fn header(&self, node: &Node) -> Vec<u8> {
-        let mut h = Vec::new();
+    /// Appends the request line of `node` (keyword, shader and handle) to `h`.
+    fn header(&self, node: &Node, h: &mut Vec<u8>) {
         h.extend_from_slice(node.kind().keyword().as_bytes());
         h.push(b' ');
-        h.extend_from_slice(quote(node.shader()).as_bytes());
+        push_quoted(h, node.shader());
         h.push(b' ');
-        h.extend_from_slice(quote(node.handle()).as_bytes());
-        h
+        push_quoted(h, node.handle());
     }
 
     /// Re-serialise a modified node read from the source (formats.md §3.7 item 3).
@@ -259,46 +263,44 @@ impl Writer<'_> {
         let Some(src) = node.source() else {
             return self.fresh_node(out, id, indent);
         };
-        let mut lines = Lines::new(indent);
-        out.write_all(&self.header(node))?;
+        let mut lines = Lines::new(indent, self.scratch.take());
+        self.header(node, &mut lines.body);
         for item in &src.items {
             for c in &item.leading_comments {
-                lines.pending.push(self.bytes(c)?.to_vec());
+                lines.pending.push(self.bytes(c)?);
             }
             let param = item.param.and_then(|k| node.all_params().get(k as usize));
-            let text = match param {
-                None => None,
-                Some(p) => match p.change() {
-                    ParamChange::Removed => None,
-                    ParamChange::Unchanged | ParamChange::Added => Some(self.original_text(item)?),
-                    ParamChange::ValueReplaced => Some(self.value_text(node, p, Some(item))?),
-                    ParamChange::Connected => Some(self.connection_text(node, p, Some(item))?),
-                },
-            };
             let trailing = match &item.trailing_comment {
-                Some(c) => Some(self.bytes(c)?.to_vec()),
+                Some(c) => Some(self.bytes(c)?),
                 None => None,
             };
-            match text {
-                Some(mut t) => {
-                    if let Some(c) = trailing {
-                        t.push(b' ');
-                        t.extend_from_slice(&c);
-                    }
-                    lines.param(t);
-                }
+            let Some((p, change)) = param
+                .map(|p| (p, p.change()))
+                .filter(|(_, change)| *change != ParamChange::Removed)
+            else {
                 // Comments of omitted parameters move to the next written parameter.
-                None => lines.pending.extend(trailing),
+                lines.pending.extend(trailing);
+                continue;
+            };
+            let t = lines.begin();
+            match change {
+                ParamChange::ValueReplaced => self.value_text(node, p, Some(item), t)?,
+                ParamChange::Connected => self.connection_text(node, p, Some(item), t)?,
+                _ => self.original_text(item, t)?,
+            }
+            if let Some(c) = trailing {
+                t.push(b' ');
+                t.extend_from_slice(c);
             }
         }
         for c in &src.end_comments {
-            lines.pending.push(self.bytes(c)?.to_vec());
+            lines.pending.push(self.bytes(c)?);
         }
         for p in self.added_params(node) {
-            let t = self.fresh_param_text(node, p)?;
-            lines.param(t);
+            self.fresh_param_text(node, p, lines.begin())?;
         }
-        lines.finish(out)
+        self.scratch.replace(lines.finish(out)?);
+        Ok(())
     }
 
     /// Parameters not from the source, in declaration order (unknown positions last, in the
@@ -324,93 +326,105 @@ impl Writer<'_> {
     /// A node not read from the source: request line and every live parameter.
     fn fresh_node(&self, out: &mut dyn Write, id: NodeId, indent: &[u8]) -> io::Result<()> {
         let node = &self.net[id];
-        out.write_all(&self.header(node))?;
-        let mut lines = Lines::new(indent);
+        let mut lines = Lines::new(indent, self.scratch.take());
+        self.header(node, &mut lines.body);
         for p in node.params() {
-            let t = self.fresh_param_text(node, p)?;
-            lines.param(t);
+            self.fresh_param_text(node, p, lines.begin())?;
         }
         if node.kind() == RequestKind::Bxdf && node.material_id().is_none() {
             if let Some(name) = self.material_name_of(id) {
                 if name != node.handle() {
-                    lines.param(format!("\"string __materialid\" [{}]", quote(name)).into_bytes());
+                    let t = lines.begin();
+                    t.extend_from_slice(b"\"string __materialid\" [");
+                    push_quoted(t, name);
+                    t.push(b']');
                 }
             }
         }
-        lines.finish(out)
+        self.scratch.replace(lines.finish(out)?);
+        Ok(())
     }
 
     fn material_name_of(&self, id: NodeId) -> Option<&str> {
         self.surfaces.get(&id).copied()
     }
 
-    /// Decl and value exactly as written (one space between them if the source had a line
-    /// break or comment there).
-    fn original_text(&self, item: &SourceParam) -> io::Result<Vec<u8>> {
+    /// Appends decl and value exactly as written (one space between them if the source had a
+    /// line break or comment there).
+    fn original_text(&self, item: &SourceParam, t: &mut Vec<u8>) -> io::Result<()> {
         let between = self.bytes(&(item.decl.end..item.value.start))?;
         if between.iter().all(|&b| b == b' ' || b == b'\t') {
-            return Ok(self.bytes(&(item.decl.start..item.value.end))?.to_vec());
+            t.extend_from_slice(self.bytes(&(item.decl.start..item.value.end))?);
+            return Ok(());
         }
-        let mut t = self.bytes(&item.decl)?.to_vec();
+        t.extend_from_slice(self.bytes(&item.decl)?);
         t.push(b' ');
         t.extend_from_slice(self.bytes(&item.value)?);
-        Ok(t)
+        Ok(())
     }
 
+    /// Appends the decl and value of a parameter with a value.
     fn value_text(
         &self,
         node: &Node,
         p: &Param,
         item: Option<&SourceParam>,
-    ) -> io::Result<Vec<u8>> {
+        t: &mut Vec<u8>,
+    ) -> io::Result<()> {
         let Some(v) = p.value() else {
-            return self.connection_text(node, p, item);
+            return self.connection_text(node, p, item, t);
         };
-        let mut t = match (item, p.decl()) {
-            (Some(item), Some(d)) if !d.reference && d.inline_type && value_fits(&d.ty, v) => {
-                self.bytes(&item.decl)?.to_vec()
-            }
-            _ => format!("\"{} {}\"", value_type_text(v), escape(p.name())).into_bytes(),
-        };
-        t.push(b' ');
-        t.extend_from_slice(format_value(v).as_bytes());
-        Ok(t)
-    }
-
-    fn connection_text(
-        &self,
-        node: &Node,
-        p: &Param,
-        item: Option<&SourceParam>,
-    ) -> io::Result<Vec<u8>> {
-        // Written piece by piece into one buffer: a resolved scene has millions of these.
-        let mut t = Vec::with_capacity(96);
         match (item, p.decl()) {
-            (Some(item), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&item.decl)?),
+            (Some(item), Some(d)) if !d.reference && d.inline_type && value_fits(&d.ty, v) => {
+                t.extend_from_slice(self.bytes(&item.decl)?)
+            }
             _ => {
-                t.extend_from_slice(b"\"reference ");
-                t.extend_from_slice(self.connection_type(node, p).as_bytes());
+                t.push(b'"');
+                push_value_type(t, v);
                 t.push(b' ');
                 t.extend_from_slice(escape(p.name()).as_bytes());
                 t.push(b'"');
             }
         }
         t.push(b' ');
-        self.push_links(&mut t, p.connections());
-        Ok(t)
+        push_value(t, v);
+        Ok(())
     }
 
-    fn fresh_param_text(&self, node: &Node, p: &Param) -> io::Result<Vec<u8>> {
+    /// Appends the decl and connections of a connected parameter.
+    fn connection_text(
+        &self,
+        node: &Node,
+        p: &Param,
+        item: Option<&SourceParam>,
+        t: &mut Vec<u8>,
+    ) -> io::Result<()> {
+        match (item, p.decl()) {
+            (Some(item), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&item.decl)?),
+            _ => {
+                t.extend_from_slice(b"\"reference ");
+                self.connection_type(node, p, t);
+                t.push(b' ');
+                t.extend_from_slice(escape(p.name()).as_bytes());
+                t.push(b'"');
+            }
+        }
+        t.push(b' ');
+        self.push_links(t, p.connections());
+        Ok(())
+    }
+
+    fn fresh_param_text(&self, node: &Node, p: &Param, t: &mut Vec<u8>) -> io::Result<()> {
         if p.is_connected() {
-            self.connection_text(node, p, None)
+            self.connection_text(node, p, None, t)
         } else {
-            self.value_text(node, p, None)
+            self.value_text(node, p, None, t)
         }
     }
 
-    /// Decl type of a new connection: definition input type, else upstream output type, else
-    /// the source decl's type, else `float`.
-    fn connection_type(&self, node: &Node, p: &Param) -> String {
+    /// Appends the decl type of a new connection: definition input type, else upstream output
+    /// type, else the source decl's type, else `float`.
+    fn connection_type(&self, node: &Node, p: &Param, t: &mut Vec<u8>) {
         let n = p.connections().len();
         let upstream_type = || {
             let link = p.connections().first()?;
@@ -423,11 +437,15 @@ impl Writer<'_> {
             .or_else(upstream_type)
             .or_else(|| p.decl().map(|d| d.ty.clone()))
             .unwrap_or(Type::scalar(BaseType::Float));
-        let word = decl_word(&ty.base);
+        t.extend_from_slice(decl_word(&ty.base).as_bytes());
         match ty.array {
-            ArraySpec::None if n <= 1 => word.to_string(),
-            ArraySpec::Fixed(k) if k == n => format!("{word}[{k}]"),
-            _ => format!("{word}[{n}]"),
+            ArraySpec::None if n <= 1 => {}
+            ArraySpec::Fixed(k) if k == n => {
+                let _ = write!(t, "[{k}]");
+            }
+            _ => {
+                let _ = write!(t, "[{n}]");
+            }
         }
     }
 
@@ -437,7 +455,7 @@ impl Writer<'_> {
         for (i, l) in links.iter().enumerate() {
             let handle = match &l.upstream {
                 Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
-                Upstream::Missing(h) => h.as_str(),
+                Upstream::Missing(h) => &**h,
             };
             if i > 0 {
                 text.push(b' ');
@@ -454,41 +472,52 @@ impl Writer<'_> {
     }
 }
 
-/// Accumulates parameter lines; comments wait in `pending` until the next parameter.
-struct Lines<'i> {
+/// Accumulates a request: its header, then parameter lines; comments wait in `pending`
+/// until the next parameter. Everything is appended to one buffer (a resolved scene has
+/// millions of parameter lines).
+struct Lines<'i, 's> {
     indent: &'i [u8],
     body: Vec<u8>,
-    pending: Vec<Vec<u8>>,
+    pending: Vec<&'s [u8]>,
 }
 
-impl<'i> Lines<'i> {
-    fn new(indent: &'i [u8]) -> Self {
+impl<'i, 's> Lines<'i, 's> {
+    /// Lines after `indent`, in `buffer` (emptied first).
+    fn new(indent: &'i [u8], mut buffer: Vec<u8>) -> Self {
+        buffer.clear();
         Lines {
             indent,
-            body: Vec::new(),
+            body: buffer,
             pending: Vec::new(),
         }
     }
 
-    fn line(&mut self, text: &[u8]) {
+    /// Starts a new line (after its indent and tab).
+    fn line(&mut self) {
         self.body.push(b'\n');
         self.body.extend_from_slice(self.indent);
         self.body.push(b'\t');
-        self.body.extend_from_slice(text);
     }
 
-    fn param(&mut self, text: Vec<u8>) {
+    /// Writes the pending comments, each on its line, and starts the line of a parameter:
+    /// the caller appends its text to the returned buffer.
+    fn begin(&mut self) -> &mut Vec<u8> {
         for c in std::mem::take(&mut self.pending) {
-            self.line(&c);
+            self.line();
+            self.body.extend_from_slice(c);
         }
-        self.line(&text);
+        self.line();
+        &mut self.body
     }
 
-    fn finish(mut self, out: &mut dyn Write) -> io::Result<()> {
+    /// Writes the request to `out`; returns the buffer for the next one.
+    fn finish(mut self, out: &mut dyn Write) -> io::Result<Vec<u8>> {
         for c in std::mem::take(&mut self.pending) {
-            self.line(&c);
+            self.line();
+            self.body.extend_from_slice(c);
         }
-        out.write_all(&self.body)
+        out.write_all(&self.body)?;
+        Ok(self.body)
     }
 }
 
@@ -502,12 +531,35 @@ fn decl_word(b: &BaseType) -> &str {
     }
 }
 
-/// The decl type text describing value `v` (`float`, `color`, `int[1]`, …).
-fn value_type_text(v: &Value) -> String {
+/// Appends the decl type text describing value `v` (`float`, `color`, `int[1]`, …).
+fn push_value_type(t: &mut Vec<u8>, v: &Value) {
     match v {
-        Value::Array(b, items) => format!("{}[{}]", decl_word(b), items.len()),
-        other => decl_word(&other.base_type()).to_string(),
+        Value::Array(b, items) => {
+            let _ = write!(t, "{}[{}]", decl_word(b), items.len());
+        }
+        other => t.extend_from_slice(decl_word(&other.base_type()).as_bytes()),
     }
+}
+
+/// Appends `v` in RIB syntax ([`format_value`]).
+fn push_value(t: &mut Vec<u8>, v: &Value) {
+    match v {
+        // The usual values of a resolved scene: no intermediate string.
+        Value::Int(i) => {
+            let _ = write!(t, "[{i}]");
+        }
+        Value::Float(x) => {
+            let _ = write!(t, "[{}]", saturate_f32(*x));
+        }
+        other => t.extend_from_slice(format_value(other).as_bytes()),
+    }
+}
+
+/// Appends `s` as a RIB string literal ([`quote`]).
+fn push_quoted(t: &mut Vec<u8>, s: &str) {
+    t.push(b'"');
+    t.extend_from_slice(escape(s).as_bytes());
+    t.push(b'"');
 }
 
 /// True if a decl of type `ty` describes value `v` exactly (so its text can be kept).
@@ -593,11 +645,13 @@ pub fn quote(s: &str) -> String {
 }
 
 fn escape(s: &str) -> Cow<'_, str> {
-    // Names and handles almost never need escaping: use them as they are.
-    if !s
-        .bytes()
-        .any(|b| b < 0x20 || b == 0x7f || b == b'"' || b == b'\\')
-    {
+    // Names and handles almost never need escaping: use them as they are. The check looks
+    // at every byte without stopping early, which lets it run on whole vectors of bytes
+    // (the writer checks millions of names).
+    let special = s.bytes().fold(false, |found, b| {
+        found | (b < 0x20) | (b == 0x7f) | (b == b'"') | (b == b'\\')
+    });
+    if !special {
         return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len());
@@ -636,6 +690,30 @@ mod tests {
             )),
             r#"["a" "b\\"]"#
         );
+    }
+
+    fn value_type_text(v: &Value) -> String {
+        let mut t = Vec::new();
+        push_value_type(&mut t, v);
+        String::from_utf8(t).unwrap()
+    }
+
+    #[test]
+    fn pushed_values_are_formatted_values() {
+        for v in [
+            Value::Int(-7),
+            Value::Float(0.1),
+            Value::Float(1.0),
+            Value::Float(f32::INFINITY),
+            Value::Float(f32::NAN),
+            Value::Float(-3.0e-40),
+            Value::Triple(BaseType::Color, [0.5, 1.0, 0.25]),
+            Value::Str("a\"b".into()),
+        ] {
+            let mut t = Vec::new();
+            push_value(&mut t, &v);
+            assert_eq!(String::from_utf8(t).unwrap(), format_value(&v), "{v:?}");
+        }
     }
 
     #[test]

@@ -30,11 +30,12 @@ mod lexer;
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
-    Decl, Link, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamTypes,
-    RequestKind, SourceParam, Terminal,
+    Decl, Link, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
+    ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_string};
+use rustc_hash::FxHashMap;
 use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 use std::sync::Arc;
@@ -126,11 +127,19 @@ pub fn parse_rib(
         .into());
     }
     let mut lx = Lexer::new(bytes, file.clone(), options.strict);
+    // The reader asks about the type of every parameter of every node.
+    let types = Memo::new(types);
     let mut asm = Assembler {
         src: bytes,
-        types,
+        types: &types,
         net: Network::new(),
+        decls: FxHashMap::default(),
+        values: FxHashMap::default(),
+        shared_values: 0,
+        outputs: FxHashMap::default(),
     };
+    // One argument buffer for every request: its room is reused.
+    let mut args = Args::default();
     let mut next = lx.next_token(diags)?;
     while let Some(tok) = next {
         match tok.kind {
@@ -138,7 +147,7 @@ pub fn parse_rib(
             TokKind::Ident => {
                 let name = std::str::from_utf8(lx.bytes(&tok)).unwrap_or("");
                 if let Some(kind) = RequestKind::from_keyword(name) {
-                    let (args, after) = read_args(&mut lx, diags, true)?;
+                    let after = read_args(&mut lx, diags, true, &mut args)?;
                     asm.shading_request(&lx, kind, &tok, &args, diags)?;
                     // Stop at the first node too many, before the rest is read.
                     options
@@ -148,7 +157,7 @@ pub fn parse_rib(
                     next = after;
                 } else {
                     let legacy = LEGACY_REQUESTS.contains(&name);
-                    let (args, after) = read_args(&mut lx, diags, legacy)?;
+                    let after = read_args(&mut lx, diags, legacy, &mut args)?;
                     if legacy && has_reference_decl(bytes, &args.pieces) {
                         diags.push(
                             Diagnostic::info(
@@ -233,25 +242,27 @@ impl Piece {
     }
 }
 
-/// Read the arguments of a request up to the next request name (returned) or the end.
-/// Validates arrays (flat, homogeneous, closed). With `keep == false` nothing is stored, so
-/// pass-through requests of any size cost no memory.
+/// Read the arguments of a request into `args` (emptied first) up to the next request name
+/// (returned) or the end. Validates arrays (flat, homogeneous, closed). With `keep == false`
+/// nothing is stored, so pass-through requests of any size cost no memory.
 fn read_args(
     lx: &mut Lexer<'_>,
     diags: &mut Diagnostics,
     keep: bool,
-) -> Result<(Args, Option<Token>), Error> {
-    let mut args = Args::default();
+    args: &mut Args,
+) -> Result<Option<Token>, Error> {
+    args.pieces.clear();
+    args.items.clear();
     let mut array: Option<(Token, usize, Option<TokKind>)> = None;
     loop {
         let Some(tok) = lx.next_token(diags)? else {
             if let Some((open, ..)) = array {
                 return Err(unterminated_array(lx, &open));
             }
-            return Ok((args, None));
+            return Ok(None);
         };
         match (tok.kind, array.as_mut()) {
-            (TokKind::Ident, None) => return Ok((args, Some(tok))),
+            (TokKind::Ident, None) => return Ok(Some(tok)),
             (TokKind::Ident, Some((open, ..))) => {
                 let open = *open;
                 return Err(Diagnostic::error(
@@ -421,11 +432,32 @@ struct Assembler<'a, 't> {
     src: &'a [u8],
     types: &'t dyn ParamTypes,
     net: Network,
+    /// Declarations read before, per shader and decl token (as written): a scene repeats
+    /// the same few declarations on thousands of nodes, and their parameters share one name
+    /// and one [`Decl`]. Only declarations that were read without a diagnostic are kept, so
+    /// a hit reports nothing, exactly as reading them again would.
+    decls: FxHashMap<Box<str>, FxHashMap<Box<[u8]>, SharedDecl>>,
+    /// Short values read before without a diagnostic, per declaration and value text.
+    values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
+    /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
+    shared_values: usize,
+    /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), shared by
+    /// every connection to the same output name.
+    outputs: FxHashMap<Box<str>, Arc<str>>,
 }
+
+/// A parameter name and declaration shared by the parameters that repeat a decl token.
+type SharedDecl = (Arc<str>, Arc<Decl>);
+
+/// At most this many distinct values are remembered for sharing while a file is read.
+const MAX_SHARED_VALUES: usize = 1 << 16;
+
+/// Values written in at most this many bytes are remembered for sharing.
+const MAX_SHARED_VALUE_BYTES: usize = 48;
 
 /// A decl and its value as found in a request, before interpretation.
 struct RawParam<'p> {
-    decl_text: String,
+    decl_tok: Token,
     location: Location,
     value: &'p Piece,
     /// The request's array elements ([`Args::items`]).
@@ -435,9 +467,9 @@ struct RawParam<'p> {
 
 /// A parameter read from a request, before the node exists.
 struct ReadParam {
-    name: String,
-    decl: Decl,
-    value: Option<Value>,
+    name: Arc<str>,
+    decl: Arc<Decl>,
+    value: Option<Arc<Value>>,
     links: Vec<Link>,
     location: Location,
     item: SourceParam,
@@ -513,9 +545,9 @@ impl<'a> Assembler<'a, '_> {
                 pending.push(c.start..c.end);
                 i += 1;
             }
-            let decl_text = decode_string(self.src, &decl_tok);
             let location = lx.tok_loc(&decl_tok);
             let Some(value_piece) = pieces.get(i) else {
+                let decl_text = decode_string(self.src, &decl_tok);
                 return Err(Diagnostic::error(
                     "RB007",
                     format!("parameter `{}` has no value", decl_text.trim()),
@@ -540,7 +572,7 @@ impl<'a> Assembler<'a, '_> {
                 }
             }
             let raw = RawParam {
-                decl_text,
+                decl_tok,
                 location,
                 value: value_piece,
                 arena: &args.items,
@@ -614,7 +646,7 @@ impl<'a> Assembler<'a, '_> {
         };
         self.net[prev].shader() == shader
             && read.iter().all(|p| {
-                p.name == "__materialid"
+                &*p.name == "__materialid"
                     && !p.decl.reference
                     && p.decl.ty == Type::scalar(BaseType::String)
             })
@@ -646,7 +678,7 @@ impl<'a> Assembler<'a, '_> {
             }
             item.param = Some(params.len() as u32);
             items.push(item);
-            params.push(Param::from_source(
+            params.push(Param::from_shared(
                 rp.name,
                 rp.value,
                 Some(rp.decl),
@@ -674,24 +706,117 @@ impl<'a> Assembler<'a, '_> {
     }
 
     fn read_param(
-        &self,
+        &mut self,
         shader: &str,
         raw: RawParam<'_>,
         diags: &mut Diagnostics,
     ) -> Result<ReadParam, Error> {
         let RawParam {
-            decl_text,
+            decl_tok,
             location,
             value,
             arena,
             item,
         } = raw;
+        let (name, decl, remembered) = self.declaration(shader, &decl_tok, &location, diags)?;
+        let mut param = ReadParam {
+            decl,
+            name,
+            value: None,
+            links: Vec::new(),
+            location,
+            item,
+        };
+        let reference = param.decl.reference;
+        let elems = self.elems(value, arena);
+        if reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
+            let ty = param.decl.ty.clone();
+            param.links = self.read_links(&param, &ty, elems, diags)?;
+            return Ok(param);
+        }
+        if reference {
+            diags.push(
+                Diagnostic::warning(
+                    "RB014",
+                    format!("`reference` parameter `{}` has numbers instead of `handle:output` strings; kept as a value", param.name),
+                )
+                .at(param.location.clone()),
+            );
+        }
+        // Keyed by the declaration's address: only remembered declarations, which stay alive
+        // (so keep their address) until the file is read.
+        let text = &self.src[value.range()];
+        let key = Arc::as_ptr(&param.decl) as usize;
+        if !remembered {
+            param.value = Some(Arc::new(convert_value(
+                &param.decl.ty,
+                &elems,
+                &param.name,
+                &param.location,
+                diags,
+            )));
+            return Ok(param);
+        }
+        if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
+            param.value = Some(v.clone());
+            return Ok(param);
+        }
+        let before = diags.len();
+        let v = Arc::new(convert_value(
+            &param.decl.ty,
+            &elems,
+            &param.name,
+            &param.location,
+            diags,
+        ));
+        if diags.len() == before
+            && text.len() <= MAX_SHARED_VALUE_BYTES
+            && self.shared_values < MAX_SHARED_VALUES
+        {
+            self.shared_values += 1;
+            self.values
+                .entry(key)
+                .or_default()
+                .insert(Box::from(text), v.clone());
+        }
+        param.value = Some(v);
+        Ok(param)
+    }
+
+    /// The shared copy of output name `name` (see [`Assembler::outputs`]).
+    fn output_name(&mut self, name: &str) -> Arc<str> {
+        if let Some(shared) = self.outputs.get(name) {
+            return shared.clone();
+        }
+        let shared: Arc<str> = Arc::from(name);
+        if self.outputs.len() < MAX_SHARED_VALUES {
+            self.outputs.insert(Box::from(name), shared.clone());
+        }
+        shared
+    }
+
+    /// The name and declaration of a parameter from its decl token, and whether they are
+    /// remembered: per shader and token text, when reading them reported nothing (see
+    /// [`Assembler::decls`]).
+    fn declaration(
+        &mut self,
+        shader: &str,
+        decl_tok: &Token,
+        location: &Location,
+        diags: &mut Diagnostics,
+    ) -> Result<(Arc<str>, Arc<Decl>, bool), Error> {
+        let raw = &self.src[decl_tok.start..decl_tok.end];
+        if let Some((name, decl)) = self.decls.get(shader).and_then(|m| m.get(raw)) {
+            return Ok((name.clone(), decl.clone(), true));
+        }
+        let before = diags.len();
+        let decl_text = decode_string(self.src, decl_tok);
         let Some(words) = split_decl(&decl_text) else {
             return Err(Diagnostic::error("RB006", "empty parameter declaration")
-                .at(location)
+                .at(location.clone())
                 .into());
         };
-        let name = words.name.to_string();
+        let name: Arc<str> = Arc::from(words.name);
         if !words.extra.is_empty() {
             diags.push(
                 Diagnostic::warning(
@@ -704,48 +829,30 @@ impl<'a> Assembler<'a, '_> {
                 .at(location.clone()),
             );
         }
-        let (ty, inline_type) = self.decl_type(shader, &words, &location, diags)?;
-        let elems = self.elems(value, arena);
+        let (ty, inline_type) = self.decl_type(shader, &words, location, diags)?;
         let class = words.class.map(str::to_string);
         let reference = words.reference;
-        let mut param = ReadParam {
-            decl: Decl {
-                text: decl_text,
-                class,
-                reference,
-                ty: ty.clone(),
-                inline_type,
-            },
-            name,
-            value: None,
-            links: Vec::new(),
-            location,
-            item,
+        let decl = Decl {
+            text: decl_text,
+            class,
+            reference,
+            ty,
+            inline_type,
         };
         if inline_type {
-            self.check_definition_type(shader, &param, diags);
+            self.check_definition_type(shader, &name, &decl, location, diags);
         }
-        if reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
-            param.links = self.read_links(&param, &ty, elems, diags)?;
-        } else {
-            if reference {
-                diags.push(
-                    Diagnostic::warning(
-                        "RB014",
-                        format!("`reference` parameter `{}` has numbers instead of `handle:output` strings; kept as a value", param.name),
-                    )
-                    .at(param.location.clone()),
-                );
-            }
-            param.value = Some(convert_value(
-                &ty,
-                &elems,
-                &param.name,
-                &param.location,
-                diags,
-            ));
+        let decl = Arc::new(decl);
+        if diags.len() != before {
+            return Ok((name, decl, false));
         }
-        Ok(param)
+        if !self.decls.contains_key(shader) {
+            self.decls.insert(Box::from(shader), FxHashMap::default());
+        }
+        if let Some(m) = self.decls.get_mut(shader) {
+            m.insert(Box::from(raw), (name.clone(), decl.clone()));
+        }
+        Ok((name, decl, true))
     }
 
     /// The parameter type: inline, or from the definition (RB012), or RB006.
@@ -828,18 +935,25 @@ impl<'a> Assembler<'a, '_> {
     }
 
     /// RB016: the inline type differs from the definition's (not on input heads).
-    fn check_definition_type(&self, shader: &str, p: &ReadParam, diags: &mut Diagnostics) {
+    fn check_definition_type(
+        &self,
+        shader: &str,
+        name: &str,
+        decl: &Decl,
+        location: &Location,
+        diags: &mut Diagnostics,
+    ) {
         if !self.types.has_definitions()
-            || matches!(p.decl.ty.base, BaseType::Unknown(_))
-            || self.types.is_input_head(shader, &p.name)
+            || matches!(decl.ty.base, BaseType::Unknown(_))
+            || self.types.is_input_head(shader, name)
         {
             return;
         }
-        let Some(def) = self.types.input_type(shader, &p.name) else {
+        let Some(def) = self.types.input_type(shader, name) else {
             return;
         };
-        if !types_compatible(&p.decl.ty, &def) {
-            let what = if p.decl.reference {
+        if !types_compatible(&decl.ty, &def) {
+            let what = if decl.reference {
                 "connection"
             } else {
                 "value"
@@ -848,11 +962,11 @@ impl<'a> Assembler<'a, '_> {
                 Diagnostic::warning(
                     "RB016",
                     format!(
-                        "{what} `{}` is declared `{}` but `{shader}` declares it `{def}`",
-                        p.name, p.decl.ty
+                        "{what} `{name}` is declared `{}` but `{shader}` declares it `{def}`",
+                        decl.ty
                     ),
                 )
-                .at(p.location.clone()),
+                .at(location.clone()),
             );
         }
     }
@@ -881,7 +995,7 @@ impl<'a> Assembler<'a, '_> {
     /// Connections of a `reference` parameter: one `handle:output` string per element, split
     /// at the last `:`, bound to the latest version of the handle defined so far.
     fn read_links(
-        &self,
+        &mut self,
         p: &ReadParam,
         ty: &Type,
         elems: Vec<Elem<'_>>,
@@ -921,8 +1035,12 @@ impl<'a> Assembler<'a, '_> {
                 Some(k) => (&s[..k], Some(&s[k + 1..])),
                 None => (s.as_str(), None),
             };
+            let output = output.map(|o| self.output_name(o));
             match self.net.find(handle) {
-                Some(id) => links.push(Link::node(id, output)),
+                Some(id) => links.push(Link {
+                    upstream: Upstream::Node(id),
+                    output,
+                }),
                 None => {
                     diags.push(
                         Diagnostic::warning(
@@ -931,7 +1049,10 @@ impl<'a> Assembler<'a, '_> {
                         )
                         .at(p.location.clone()),
                     );
-                    links.push(Link::missing(handle, output));
+                    links.push(Link {
+                        upstream: Upstream::Missing(Box::from(handle)),
+                        output,
+                    });
                 }
             }
         }
@@ -1168,6 +1289,74 @@ fn add_materials(net: &mut Network) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::network::NoDefinitions;
+
+    fn read(src: &str) -> (Network, Diagnostics) {
+        let mut d = Diagnostics::new();
+        let net = parse_rib(
+            src.as_bytes(),
+            "t.rib",
+            &NoDefinitions,
+            &RibOptions::default(),
+            &mut d,
+        )
+        .unwrap();
+        (net, d)
+    }
+
+    /// Declarations and values are shared between nodes only when reading them reported
+    /// nothing: a repeated declaration or value with a finding reports it at every place.
+    #[test]
+    fn repeated_findings_are_reported_each_time() {
+        let (_, d) = read(
+            "Pattern \"P\" \"a\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2]\n\
+             Pattern \"P\" \"b\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2]\n",
+        );
+        assert_eq!(d.count("RB013"), 2, "{d:?}");
+        assert_eq!(d.count("RB014"), 2, "{d:?}");
+        let lines: Vec<u32> = d
+            .with_code("RB014")
+            .filter_map(|x| x.location.as_ref().map(|l| l.line))
+            .collect();
+        assert_eq!(lines, [1, 2]);
+    }
+
+    /// Parameters of different nodes with the same declaration and value share them, and
+    /// read the same as when each is read alone.
+    #[test]
+    fn repeated_declarations_and_values_are_shared() {
+        let (net, d) = read(
+            "Pattern \"P\" \"a\" \"float f\" [2] \"color c\" [1 0 0]\n\
+             Pattern \"P\" \"b\" \"float f\" [2] \"color c\" [1 0 1]\n\
+             Pattern \"Q\" \"c\" \"float f\" [2]\n\
+             Pattern \"R\" \"d\" \"reference float x\" [\"a:resultF\"]\n\
+             Pattern \"R\" \"e\" \"reference float x\" [\"b:resultF\"]\n",
+        );
+        assert!(d.is_empty(), "{d:?}");
+        let out = |h: &str| net.connections(net.find(h).unwrap(), "x")[0].output.clone();
+        let (d_out, e_out) = (out("d").unwrap(), out("e").unwrap());
+        assert_eq!(&*d_out, "resultF");
+        assert!(Arc::ptr_eq(&d_out, &e_out));
+        assert_eq!(
+            net.connections(net.find("e").unwrap(), "x")[0].upstream_node(),
+            net.find("b")
+        );
+        let p = |h: &str, n: &str| net[net.find(h).unwrap()].param(n).unwrap();
+        assert!(std::ptr::eq(
+            p("a", "f").decl().unwrap(),
+            p("b", "f").decl().unwrap()
+        ));
+        assert!(std::ptr::eq(
+            p("a", "f").value().unwrap(),
+            p("b", "f").value().unwrap()
+        ));
+        assert_eq!(p("c", "f").value(), Some(&Value::Float(2.0)));
+        assert_eq!(
+            p("b", "c").value(),
+            Some(&Value::Triple(BaseType::Color, [1.0, 0.0, 1.0]))
+        );
+        assert_ne!(p("a", "c").value(), p("b", "c").value());
+    }
 
     #[test]
     fn decl_words() {

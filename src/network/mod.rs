@@ -45,12 +45,14 @@ mod param_types;
 #[doc(hidden)]
 pub mod testgen;
 
+pub(crate) use param_types::Memo;
 pub use param_types::{NoDefinitions, ParamTypes};
 
 use crate::diag::Location;
 use crate::types::{Type, Value};
 use hashbrown::HashTable;
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
+use petgraph::visit::EdgeRef;
 use rustc_hash::FxBuildHasher;
 use smallvec::SmallVec;
 use std::collections::HashMap;
@@ -185,8 +187,9 @@ pub enum Upstream {
     Node(NodeId),
     /// A reference to a handle that names no node (RIB: not defined before the referencing
     /// request, RB018; JSON: not in the material, JS010). Kept so the writers reproduce it and
-    /// resolution can report it (VS010).
-    Missing(String),
+    /// resolution can report it (VS010). Boxed rather than a `String`, so that a link is no
+    /// larger than the shared output name and a node index.
+    Missing(Box<str>),
 }
 
 /// One connection of an input: upstream node (or missing handle) and output name.
@@ -236,7 +239,7 @@ impl Link {
     /// ```
     pub fn missing(handle: &str, output: Option<&str>) -> Link {
         Link {
-            upstream: Upstream::Missing(handle.to_string()),
+            upstream: Upstream::Missing(Box::from(handle)),
             output: output.map(Arc::from),
         }
     }
@@ -301,11 +304,14 @@ type Links = SmallVec<[Link; 1]>;
 pub struct Param {
     name: Arc<str>,
     /// Boxed, like `source`: most members of a resolved scene are connections, not values.
-    value: Option<Box<Value>>,
+    /// Shared: resolution writes the same `set` value into many members (one per expansion
+    /// with the same decision), and they share one block.
+    value: Option<Arc<Value>>,
     /// Inline for the usual single connection: a resolved scene has millions of member
-    /// connections, and a heap block each for links and edge ids was most of their cost.
+    /// connections, and a heap block each was most of their cost. The graph edges that mirror
+    /// them are found through the downstream node's incoming edges when a link changes
+    /// (removing a petgraph edge walks those anyway), so a parameter keeps no edge ids.
     links: Links,
-    edges: SmallVec<[Option<EdgeId>; 1]>,
     /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
     /// a smaller `Param` keeps nodes with hundreds of members compact.
     source: Option<Box<ParamSource>>,
@@ -316,7 +322,8 @@ pub struct Param {
 /// Where a parameter read from a file came from.
 #[derive(Debug, Clone, PartialEq)]
 struct ParamSource {
-    decl: Option<Decl>,
+    /// Shared by the parameters of every node that repeats the declaration.
+    decl: Option<Arc<Decl>>,
     location: Option<Location>,
     origin: Option<u32>,
 }
@@ -327,7 +334,6 @@ impl Param {
             name,
             value: None,
             links: Links::new(),
-            edges: SmallVec::new(),
             source: None,
             value_touched: false,
             links_touched: false,
@@ -342,11 +348,28 @@ impl Param {
         location: Option<Location>,
         origin: Option<u32>,
     ) -> Param {
+        Param::from_shared(
+            Arc::from(name),
+            value.map(Arc::new),
+            decl.map(Arc::new),
+            location,
+            origin,
+        )
+    }
+
+    /// [`Param::from_source`] with a name, value and declaration that may be shared with
+    /// other parameters (the RIB reader shares repeated ones).
+    pub(crate) fn from_shared(
+        name: Arc<str>,
+        value: Option<Arc<Value>>,
+        decl: Option<Arc<Decl>>,
+        location: Option<Location>,
+        origin: Option<u32>,
+    ) -> Param {
         Param {
-            name: Arc::from(name),
-            value: value.map(Box::new),
+            name,
+            value,
             links: Links::new(),
-            edges: SmallVec::new(),
             source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
                 Box::new(ParamSource {
                     decl,
@@ -387,7 +410,7 @@ impl Param {
 
     /// The declaration read from the source, if any.
     pub fn decl(&self) -> Option<&Decl> {
-        self.source.as_ref()?.decl.as_ref()
+        self.source.as_ref()?.decl.as_deref()
     }
 
     /// Where the parameter was declared (RIB decl string; JSON pointer), if known.
@@ -464,13 +487,17 @@ pub struct SourceParam {
 /// One shader node (one RIB request, one JSON node).
 #[derive(Debug, Clone)]
 pub struct Node {
+    /// `handle#version` once the node is in a network; the handle is its first
+    /// `handle_len` bytes (one string for both).
     key: String,
-    handle: String,
+    handle_len: usize,
     version: u32,
-    shader: String,
+    /// Shared by every node of the network with this shader id.
+    shader: Arc<str>,
     kind: RequestKind,
     params: Vec<Param>,
-    /// Indices into `params`, hashed by parameter name. Resolution looks parameters up by
+    /// Indices into `params`, hashed by parameter name, once the node has more than
+    /// [`SMALL_NODE`] parameters (fewer are scanned). Resolution looks parameters up by
     /// name several times per member; nodes such as PxrLayerMixer have hundreds of them.
     /// (position in `params`, the name's hash folded to 32 bits): keeping the hash lets the
     /// table grow without hashing every name again.
@@ -480,7 +507,6 @@ pub struct Node {
     dirty: bool,
 }
 
-/// The hash of a parameter name in [`Node`]'s index.
 /// Where a parameter is among a node's parameters: at a position, or not there yet (with the
 /// hash of its name, so that adding it does not hash the name again).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -502,6 +528,20 @@ impl Slot {
             Slot::Missing { .. } => None,
         }
     }
+}
+
+/// `n` in decimal, written into `buf` (no allocation).
+fn itoa(mut n: usize, buf: &mut [u8; 20]) -> &str {
+    let mut i = buf.len();
+    loop {
+        i -= 1;
+        buf[i] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    std::str::from_utf8(&buf[i..]).unwrap_or("0")
 }
 
 /// The first eight bytes of `s` as a big-endian number, zero-padded: comparing two of these
@@ -528,11 +568,15 @@ fn unfold(h: u32) -> u64 {
     u64::from(h) << 32 | u64::from(h)
 }
 
+/// A node with at most this many parameters has no name index: scanning them is as fast, and
+/// most nodes of a scene are that small.
+const SMALL_NODE: usize = 8;
+
 impl PartialEq for Node {
     /// Compares everything but the name index (which is derived from `params`).
     fn eq(&self, other: &Node) -> bool {
         self.key == other.key
-            && self.handle == other.handle
+            && self.handle_len == other.handle_len
             && self.version == other.version
             && self.shader == other.shader
             && self.kind == other.kind
@@ -547,10 +591,10 @@ impl Node {
     /// A node with no parameters (crate-internal; use [`Network::add_node`]).
     pub(crate) fn new_raw(handle: &str, shader: &str, kind: RequestKind) -> Node {
         Node {
-            key: String::new(),
-            handle: handle.to_string(),
+            key: handle.to_string(),
+            handle_len: handle.len(),
             version: 0,
-            shader: shader.to_string(),
+            shader: Arc::from(shader),
             kind,
             params: Vec::new(),
             by_name: HashTable::new(),
@@ -563,13 +607,26 @@ impl Node {
     /// Replace the parameters (crate-internal: readers). Names must be unique.
     pub(crate) fn set_raw_params(&mut self, params: Vec<Param>) {
         self.params = params;
+        self.by_name = HashTable::new();
+        if self.params.len() > SMALL_NODE {
+            self.build_index(0);
+        }
+    }
+
+    /// Builds the name index of a node that has none, with room for `additional` more names.
+    fn build_index(&mut self, additional: usize) {
         let params = &self.params;
-        let mut by_name = HashTable::with_capacity(params.len());
+        let mut by_name = HashTable::with_capacity(params.len() + additional);
         for (i, p) in params.iter().enumerate() {
             let hash = name_hash(&p.name);
             by_name.insert_unique(hash, (i as u32, hash as u32), |&(_, h)| unfold(h));
         }
         self.by_name = by_name;
+    }
+
+    /// True if the node has a name index (see [`SMALL_NODE`]).
+    fn indexed(&self) -> bool {
+        self.params.len() > SMALL_NODE
     }
 
     /// Set where the node came from (crate-internal: readers).
@@ -585,7 +642,7 @@ impl Node {
 
     /// The handle (RIB) or node name (JSON).
     pub fn handle(&self) -> &str {
-        &self.handle
+        &self.key[..self.handle_len]
     }
 
     /// The version `k` of the handle (0 for the first definition).
@@ -626,8 +683,8 @@ impl Node {
     /// ```
     pub fn display_name(&self) -> String {
         match (&self.location, self.version) {
-            (_, 0) => self.handle.clone(),
-            (Some(loc), _) if loc.line > 0 => format!("{} (line {})", self.handle, loc.line),
+            (_, 0) => self.handle().to_string(),
+            (Some(loc), _) if loc.line > 0 => format!("{} (line {})", self.handle(), loc.line),
             _ => self.key.clone(),
         }
     }
@@ -639,6 +696,9 @@ impl Node {
     /// [`Self::index_of`] with the name's [`name_hash`] already known.
     fn index_of_hashed(&self, name: &str, hash: u64) -> Option<usize> {
         let params = &self.params;
+        if !self.indexed() {
+            return params.iter().position(|p| &*p.name == name);
+        }
         self.by_name
             .find(hash, |&(i, _)| &*params[i as usize].name == name)
             .map(|&(i, _)| i as usize)
@@ -660,9 +720,14 @@ impl Node {
     /// [`Self::insert_param`] with the name's [`name_hash`] already known.
     fn insert_param_hashed(&mut self, name: Arc<str>, hash: u64) -> usize {
         let idx = self.params.len();
+        let was_indexed = self.indexed();
         self.params.push(Param::empty(name));
-        self.by_name
-            .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
+        if was_indexed {
+            self.by_name
+                .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
+        } else if self.indexed() {
+            self.build_index(0);
+        }
         idx
     }
 
@@ -776,7 +841,10 @@ pub struct Material {
 #[derive(Debug, Clone, Default)]
 pub struct Network {
     graph: StableDiGraph<Node, Edge>,
-    handles: HashMap<String, Vec<NodeId>>,
+    /// Every version of each handle, oldest first (usually one, kept inline).
+    handles: HashMap<Box<str>, SmallVec<[NodeId; 1]>>,
+    /// The shader ids of the nodes, each stored once.
+    shaders: std::collections::HashSet<Arc<str>>,
     materials: Vec<Material>,
     /// True between [`Network::suspend_edges`] and [`Network::restore_edges`]: links are not
     /// mirrored by graph edges then.
@@ -841,11 +909,24 @@ impl Network {
 
     /// Insert a prepared node, assigning its version and key (crate-internal: readers).
     pub(crate) fn insert_node(&mut self, mut node: Node) -> NodeId {
-        let versions = self.handles.entry(node.handle.clone()).or_default();
-        node.version = versions.len() as u32;
-        node.key = format!("{}#{}", node.handle, node.version);
+        let handle = node.handle();
+        let version = match self.handles.get(handle) {
+            Some(versions) => versions.len(),
+            None => 0,
+        };
+        node.version = version as u32;
+        node.key.truncate(node.handle_len);
+        node.key.push('#');
+        node.key.push_str(itoa(version, &mut [0; 20]));
+        match self.shaders.get(&*node.shader) {
+            Some(shared) => node.shader = shared.clone(),
+            None => {
+                self.shaders.insert(node.shader.clone());
+            }
+        }
+        let key: Box<str> = Box::from(node.handle());
         let id = self.graph.add_node(node);
-        versions.push(id);
+        self.handles.entry(key).or_default().push(id);
         id
     }
 
@@ -877,7 +958,7 @@ impl Network {
 
     /// Every version of `handle`, oldest first.
     pub fn versions(&self, handle: &str) -> &[NodeId] {
-        self.handles.get(handle).map_or(&[], Vec::as_slice)
+        self.handles.get(handle).map_or(&[], |v| v.as_slice())
     }
 
     /// The node with key `handle#k`.
@@ -923,7 +1004,7 @@ impl Network {
             .graph
             .node_indices()
             .map(|id| {
-                let handle = self.graph[id].handle.as_str();
+                let handle = self.graph[id].handle();
                 (prefix_key(handle), handle, self.graph[id].version, id)
             })
             .collect();
@@ -967,7 +1048,7 @@ impl Network {
     pub fn remove_value(&mut self, node: NodeId, name: &str) -> Option<Value> {
         let n = &mut self.graph[node];
         let i = n.index_of(name)?;
-        let old = n.params[i].value.take().map(|old| *old);
+        let old = n.params[i].value.take().map(Arc::unwrap_or_clone);
         if old.is_some() {
             n.params[i].value_touched = true;
             n.dirty = true;
@@ -985,7 +1066,11 @@ impl Network {
         if n.params.capacity() - n.params.len() < additional {
             n.params.reserve_exact(additional.max(n.params.len() / 4));
         }
-        n.by_name.reserve(additional, |&(_, h)| unfold(h));
+        if n.indexed() {
+            n.by_name.reserve(additional, |&(_, h)| unfold(h));
+        } else if n.params.len() + additional > SMALL_NODE {
+            n.build_index(additional);
+        }
     }
 
     /// The connections of `node.input` in connection order (empty if none).
@@ -1051,11 +1136,10 @@ impl Network {
     /// Append `link` to the parameter at position `i` of `down`, with its graph edge.
     fn append_link(&mut self, down: NodeId, i: usize, link: Link) {
         let index = self.graph[down].params[i].links.len();
-        let edge = self.add_edge_for(down, i, &link, index);
+        self.add_edge_for(down, i, &link, index);
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         p.links.push(link);
-        p.edges.push(edge);
         p.links_touched = true;
         n.dirty = true;
     }
@@ -1064,28 +1148,22 @@ impl Network {
     pub(crate) fn push_source_links(&mut self, down: NodeId, param: usize, links: Vec<Link>) {
         for link in links {
             let index = self.graph[down].params[param].links.len();
-            let edge = self.add_edge_for(down, param, &link, index);
-            let p = &mut self.graph[down].params[param];
-            p.links.push(link);
-            p.edges.push(edge);
+            self.add_edge_for(down, param, &link, index);
+            self.graph[down].params[param].links.push(link);
         }
     }
 
     /// The graph edge of `link`, the `index`-th connection of parameter `param` of `down`
     /// (none for a dangling link). The edge shares the parameter and output names.
-    fn add_edge_for(
-        &mut self,
-        down: NodeId,
-        param: usize,
-        link: &Link,
-        index: usize,
-    ) -> Option<EdgeId> {
+    fn add_edge_for(&mut self, down: NodeId, param: usize, link: &Link, index: usize) {
         if self.edges_suspended {
-            return None;
+            return;
         }
-        let up = link.upstream_node()?;
+        let Some(up) = link.upstream_node() else {
+            return;
+        };
         let input = self.graph[down].params[param].name.clone();
-        Some(self.graph.add_edge(
+        self.graph.add_edge(
             up,
             down,
             Edge {
@@ -1093,7 +1171,24 @@ impl Network {
                 input,
                 index,
             },
-        ))
+        );
+    }
+
+    /// The graph edges mirroring the links of parameter `param` of `down`, with their
+    /// element index (none while edges are suspended).
+    fn edges_of(&self, down: NodeId, param: usize) -> Vec<(EdgeId, usize)> {
+        let p = &self.graph[down].params[param];
+        // A parameter without bound links has no edges: no walk (building a node's inputs
+        // one by one stays linear).
+        if self.edges_suspended || p.links.iter().all(|l| l.upstream_node().is_none()) {
+            return Vec::new();
+        }
+        let name = &p.name;
+        self.graph
+            .edges_directed(down, petgraph::Direction::Incoming)
+            .filter(|e| *e.weight().input == **name)
+            .map(|e| (e.id(), e.weight().index))
+            .collect()
     }
 
     /// Stop mirroring links by graph edges until [`Network::restore_edges`] (crate-internal:
@@ -1103,11 +1198,6 @@ impl Network {
     /// connections only, and the edges are rebuilt from the links once at its end.
     pub(crate) fn suspend_edges(&mut self) {
         self.graph.clear_edges();
-        for node in self.graph.node_weights_mut() {
-            for p in &mut node.params {
-                p.edges.iter_mut().for_each(|e| *e = None);
-            }
-        }
         self.edges_suspended = true;
     }
 
@@ -1143,8 +1233,7 @@ impl Network {
                         input: p.name.clone(),
                         index,
                     };
-                    let e = self.graph.add_edge(up, down, weight);
-                    self.graph[down].params[i].edges[index] = Some(e);
+                    self.graph.add_edge(up, down, weight);
                 }
             }
         }
@@ -1237,25 +1326,38 @@ impl Network {
         }
         p.value_touched = true;
         n.dirty = true;
-        p.value.replace(Box::new(value)).map(|old| *old)
+        p.value.replace(Arc::new(value)).map(Arc::unwrap_or_clone)
+    }
+
+    /// Give the parameter `name` of `node`, which is not there yet (`hash` is its
+    /// [`name_hash`]), the shared `value` (resolution's fast path for `set` into a new member).
+    pub(crate) fn add_shared_value(
+        &mut self,
+        node: NodeId,
+        name: &Arc<str>,
+        hash: u64,
+        value: &Arc<Value>,
+    ) {
+        let n = &mut self.graph[node];
+        let i = n.insert_param_hashed(name.clone(), hash);
+        let p = &mut n.params[i];
+        p.value = Some(value.clone());
+        p.value_touched = true;
+        n.dirty = true;
     }
 
     fn replace_links(&mut self, down: NodeId, i: usize, links: Links) -> Links {
         if self.graph[down].params[i].links == links {
             return links;
         }
-        let old_edges = std::mem::take(&mut self.graph[down].params[i].edges);
-        for e in old_edges.into_iter().flatten() {
+        for (e, _) in self.edges_of(down, i) {
             self.graph.remove_edge(e);
         }
-        let edges = links
-            .iter()
-            .enumerate()
-            .map(|(index, link)| self.add_edge_for(down, i, link, index))
-            .collect();
+        for (index, link) in links.iter().enumerate() {
+            self.add_edge_for(down, i, link, index);
+        }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
-        p.edges = edges;
         p.links_touched = true;
         n.dirty = true;
         std::mem::replace(&mut p.links, links)
@@ -1297,27 +1399,20 @@ impl Network {
         if index >= self.graph[down].params[i].links.len() {
             return None;
         }
+        for (e, k) in self.edges_of(down, i) {
+            if k == index {
+                self.graph.remove_edge(e);
+            } else if k > index
+                && let Some(w) = self.graph.edge_weight_mut(e)
+            {
+                w.index = k - 1;
+            }
+        }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         let link = p.links.remove(index);
-        let edge = p.edges.remove(index);
-        let later: Vec<(usize, EdgeId)> = p
-            .edges
-            .iter()
-            .enumerate()
-            .skip(index)
-            .filter_map(|(k, e)| e.map(|e| (k, e)))
-            .collect();
         p.links_touched = true;
         n.dirty = true;
-        if let Some(e) = edge {
-            self.graph.remove_edge(e);
-        }
-        for (k, e) in later {
-            if let Some(w) = self.graph.edge_weight_mut(e) {
-                w.index = k;
-            }
-        }
         Some(link)
     }
 
@@ -1496,7 +1591,7 @@ mod tests {
             let mut expected: Vec<NodeId> = net.graph.node_indices().collect();
             expected.sort_by(|&x, &y| {
                 let (nx, ny) = (&net.graph[x], &net.graph[y]);
-                nx.handle.cmp(&ny.handle).then(nx.version.cmp(&ny.version))
+                nx.handle().cmp(ny.handle()).then(nx.version.cmp(&ny.version))
             });
             proptest::prop_assert_eq!(net.nodes_sorted(), expected);
         }
@@ -1589,6 +1684,51 @@ mod tests {
         assert_eq!(net.connections(d, "x")[1].missing_handle(), Some("ghost"));
         net.clear_connections(d, "x");
         assert_eq!(net.graph().edge_count(), 0);
+    }
+
+    /// Small nodes are scanned, larger ones indexed: look-ups find every parameter on both
+    /// sides of the boundary, whether the node grows one parameter at a time, by a reserved
+    /// block, or is read with many.
+    #[test]
+    fn lookups_across_the_small_node_boundary() {
+        let mut net = Network::new();
+        let one = net.add_node("one", "X");
+        let block = net.add_node("block", "X");
+        let names: Vec<String> = (0..3 * SMALL_NODE).map(|i| format!("p{i}")).collect();
+        for (k, name) in names.iter().enumerate() {
+            net.set_param(one, name, Value::Int(k as i32));
+            for (j, seen) in names[..=k].iter().enumerate() {
+                assert_eq!(net.value(one, seen), Some(&Value::Int(j as i32)));
+            }
+            assert!(net[one].param("absent").is_none());
+        }
+        net.set_param(block, "first", Value::Int(-1));
+        net.reserve_params(block, 2 * SMALL_NODE);
+        for (k, name) in names.iter().enumerate() {
+            let name: Arc<str> = Arc::from(name.as_str());
+            let slot = net.slot_of(block, &name, name_hash(&name));
+            net.set_slot(block, slot, &name, Value::Int(k as i32));
+        }
+        assert_eq!(net.value(block, "first"), Some(&Value::Int(-1)));
+        for (k, name) in names.iter().enumerate() {
+            assert_eq!(net.value(block, name), Some(&Value::Int(k as i32)));
+        }
+        let mut read = Node::new_raw("read", "X", RequestKind::Pattern);
+        read.set_raw_params(
+            names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| {
+                    Param::from_source(n.clone(), Some(Value::Int(k as i32)), None, None, None)
+                })
+                .collect(),
+        );
+        let read = net.insert_node(read);
+        for (k, name) in names.iter().enumerate() {
+            assert_eq!(net.value(read, name), Some(&Value::Int(k as i32)));
+        }
+        assert_eq!(net[read].key(), "read#0");
+        assert_eq!(net[read].handle(), "read");
     }
 
     #[test]

@@ -475,8 +475,10 @@ impl Resolver<'_> {
                 (Verdict::Connect, Some((_, output))) => self.connect(&ctx, &output.property),
                 // A new parameter has no value to replace (VS018), so writing is all there is.
                 (Verdict::Write(value), Some(_)) if matches!(slot, Slot::Missing { .. }) => {
-                    self.net
-                        .set_slot(node, slot, &member.property, value.clone());
+                    if let Slot::Missing { hash } = slot {
+                        self.net
+                            .add_shared_value(node, &member.property, hash, value);
+                    }
                 }
                 (_, Some((name, output))) => self.apply_member(&ctx, &member.names[*name], output),
                 (_, None) => self.no_counterpart(&ctx, &member.names),
@@ -552,7 +554,9 @@ impl Resolver<'_> {
                                         .and_then(|d| d.input(&member.property))
                                         .map(|p| &p.ty);
                                     match cond::set_value(literal, dest, &self.options.extensions) {
-                                        Ok(set) if !set.saturated => Verdict::Write(set.value),
+                                        Ok(set) if !set.saturated => {
+                                            Verdict::Write(Arc::new(set.value))
+                                        }
                                         _ => Verdict::General,
                                     }
                                 }

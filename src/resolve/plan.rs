@@ -160,7 +160,7 @@ pub(super) enum Verdict {
     Connect,
     /// Write this value: the conditional chose a `set` that applies to the member's type
     /// without saturating, and reported nothing.
-    Write(Value),
+    Write(Arc<Value>),
     /// Anything else (`copy`, VS015 reports, no counterpart, an unparsable or
     /// unevaluated conditional): the general path.
     General,
