@@ -426,7 +426,7 @@ impl Lobe {
 }
 
 /// A [`Lobe`] with the part of `prepare` that depends on neither the point nor the view
-/// computed once (a conductor's F82 fit, §3.9; the albedo tables at the lobe's roughness,
+/// computed once (a conductor's albedo along μ and F82 fit; the albedo tables at the lobe's roughness,
 /// index and exponent): what a compiled material keeps for leaves whose parameters are
 /// constants. [`BoundLobe::prepare`] equals [`Lobe::prepare`].
 #[derive(Debug, Clone, Copy)]
