@@ -5,6 +5,10 @@
 //! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
 //! `run_file`) live here and are visible to every module.
 
+#[macro_use]
+#[path = "../common/mod.rs"]
+mod common;
+
 mod cond;
 mod diagnostics;
 mod limits;
