@@ -79,12 +79,50 @@ pub fn not_run(why: &str) {
     report_at_exit();
 }
 
+/// Folders of scratch files to remove when the test binary exits.
+static SCRATCH: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Whether a test of this run panicked (failed).
+static FAILED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Remove `dir`, a folder of scratch files under the target folder, when the test binary exits,
+/// unless a test of this run failed: then the files stay to be looked at. (Some tests write
+/// hundreds of megabytes of monster inputs and outputs.)
+pub fn remove_at_exit(dir: &std::path::Path) {
+    SCRATCH
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(dir.to_path_buf());
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            FAILED.store(true, std::sync::atomic::Ordering::SeqCst);
+            previous(info)
+        }));
+    });
+    report_at_exit();
+}
+
+/// What the binary does at exit: report the tests that did not run, remove the scratch
+/// folders of a run without failures.
+fn at_exit() -> String {
+    if !FAILED.load(std::sync::atomic::Ordering::SeqCst)
+        && let Ok(dirs) = SCRATCH.try_lock()
+    {
+        for dir in dirs.iter() {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
+    not_run_report()
+}
+
 #[cfg(unix)]
 fn report_at_exit() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         extern "C" fn report() {
-            let text = not_run_report();
+            let text = at_exit();
             // The harness captures `print!`; at exit, write to the standard output itself.
             // SAFETY: writes `text`'s bytes, which outlive the call, to descriptor 1.
             unsafe { libc::write(1, text.as_ptr().cast(), text.len()) };
@@ -94,7 +132,8 @@ fn report_at_exit() {
     });
 }
 
-/// Without `atexit`, each test that did not run is written out at once.
+/// Without `atexit`, each test that did not run is written out at once (and scratch files
+/// stay).
 #[cfg(not(unix))]
 fn report_at_exit() {
     use std::io::Write as _;
