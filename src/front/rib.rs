@@ -8,7 +8,7 @@
 //! comments ([`crate::network::NodeSource`]), never copies of the text, so reading a large
 //! scene costs about one copy of its shading requests.
 //!
-//! Choices where the spec is silent (documented here, tested in `tests/rib_reader.rs`):
+//! Choices where the spec is silent (documented here, tested in `tests/front/rib_reader.rs`):
 //!
 //! * A request that re-uses a handle with an empty parameter list (or only
 //!   `"string __materialid"`) is a *use* of the earlier node only if it names the same shader;

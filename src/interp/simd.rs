@@ -14,8 +14,8 @@
 //!
 //! Results do not depend on the version that runs: each does the same IEEE operations per
 //! lane in the same order (Rust never fuses `a * b + c` into one rounding, and lanes do not
-//! interact), so the outputs are bit-identical; `tests/interp_soa.rs` and
-//! `tests/interp_levels.rs` check this.
+//! interact), so the outputs are bit-identical; `tests/interp/soa.rs` and
+//! `tests/interp/levels.rs` check this.
 //!
 //! Why not only `-C target-cpu=native`: a build for distribution cannot assume AVX-512, and on
 //! Intel server cores LLVM's tuning for `native` prefers 256-bit vectors, while these kernels,

@@ -6,7 +6,7 @@
 //! anchor), and the kernels the batched material path runs per lobe slot — Lambert,
 //! Oren–Nayar/EON, GGX conductor and dielectric reflection, Ward, sheen (CK, LTC); other
 //! families fall back to the scalar lobe lane by lane. Results equal the scalar
-//! [`super::PreparedLobe::eval`] to relative 1e-5 (`tests/interp_soa_kernels.rs`).
+//! [`super::PreparedLobe::eval`] to relative 1e-5 (`tests/interp/soa_kernels.rs`).
 
 use super::fresnel::{self, Fresnel, dielectric_half, dielectric_half_quotient};
 use super::ggx::GgxView;

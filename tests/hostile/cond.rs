@@ -165,9 +165,9 @@ fn tail(s: &str) -> &str {
 /// A folder `NAME` holding `Up.args`, `Down.args` and a network `net.rib` where `D` (Down) takes
 /// `inputMaterial` from `U` (Up).
 fn chain_setup(name: &str, conds: &[(&str, String)]) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("hostile/cond")
-        .join(name);
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hostile");
+    crate::common::remove_at_exit(&root);
+    let dir = root.join("cond").join(name);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let members: Vec<(&str, &str)> = conds.iter().map(|(m, e)| (*m, e.as_str())).collect();
     std::fs::write(dir.join("Up.args"), up_args(&members)).expect("Up.args");

@@ -5,6 +5,10 @@
 //! One module per area of attack; the shared runners (`run`, `check`, `scratch`,
 //! `run_file`) live here and are visible to every module.
 
+#[macro_use]
+#[path = "../common/mod.rs"]
+mod common;
+
 mod cond;
 mod diagnostics;
 mod limits;
@@ -152,9 +156,11 @@ fn corpus_files_fail_cleanly() {
     }
 }
 
-/// Write `text` to a fresh file in the target dir and return its path.
+/// Write `text` to a fresh file in the target dir and return its path. The folder is removed
+/// when the binary exits after a run without failures.
 fn scratch(name: &str, text: impl AsRef<[u8]>) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hostile");
+    common::remove_at_exit(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let path = dir.join(name);
     std::fs::write(&path, text).expect("scratch file");

@@ -191,7 +191,7 @@ fn a_symlink_target_stays_a_link_and_its_file_is_replaced() {
 #[test]
 fn a_foreign_symlink_in_a_shared_folder_is_not_followed() {
     if !is_root() {
-        eprintln!("NOT RUN: a_foreign_symlink_in_a_shared_folder_is_not_followed needs root");
+        crate::common::not_run("needs root");
         return;
     }
     let dir = folder("sticky");
@@ -366,7 +366,7 @@ fn a_failing_run_leaves_the_target_byte_identical() {
 #[test]
 fn a_character_device_is_written_in_place() {
     if !is_root() {
-        eprintln!("NOT RUN: a_character_device_is_written_in_place needs root for mknod");
+        crate::common::not_run("needs root");
         return;
     }
     let dir = folder("chardev");
@@ -377,7 +377,7 @@ fn a_character_device_is_written_in_place() {
     if unsafe { libc::mknod(c.as_ptr(), libc::S_IFCHR | 0o666, rdev) } != 0 {
         let e = std::io::Error::last_os_error();
         assert_eq!(e.raw_os_error(), Some(libc::EPERM), "mknod: {e}");
-        eprintln!("NOT RUN: a_character_device_is_written_in_place: mknod refused ({e})");
+        crate::common::not_run(&format!("mknod refused here ({e})"));
         return;
     }
     for args in [

@@ -231,7 +231,7 @@ fn preview_size_is_validated_by_the_library() {
         ContactSheet::new(Vec::new(), glam::Vec3::ZERO),
         Err(PreviewError::SheetBalls { .. })
     ));
-    let _ = render_ball; // `render_ball` validates too (tests/render_regression.rs renders).
+    let _ = render_ball; // `render_ball` validates too (tests/materials/render_regression.rs renders).
 
     let input = scratch("size_limit.rib", materials(2));
     for (size, message) in [

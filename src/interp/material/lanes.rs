@@ -17,7 +17,7 @@
 //!    weights folded in as [`super::super::soa::Kernel::rebuild`] folds them.
 //!
 //! Every formula is the scalar leaf's, in the same order, so each lane agrees with
-//! [`Material::prepare`] to rounding (`tests/interp_batch_lanes.rs`).
+//! [`Material::prepare`] to rounding (`tests/interp/batch_lanes.rs`).
 
 use super::{Material, Target, ThrOp, clean, sat};
 use crate::interp::batch::{PreparedBatch, ShadingBatch};

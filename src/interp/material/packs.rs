@@ -9,7 +9,7 @@
 //! Ward lobes become one instruction, its two GGX dielectrics another. The kernels compute
 //! the scalar leaf's formula per lane with polynomial transcendentals, so a pack's sum
 //! equals the lobes' own evaluations to relative 1e-5 (the batched path's tolerance, §1.5;
-//! `tests/interp_packs.rs`). [`super::PrepareOptions::pack_lobes`] turns packing off.
+//! `tests/interp/packs.rs`). [`super::PrepareOptions::pack_lobes`] turns packing off.
 //!
 //! Four lanes are one SSE register, the baseline x86-64 width; a family with more than four
 //! lobes fills several packs. Lobes no kernel covers, and a family's only lobe, are

@@ -21,7 +21,7 @@
 //! 7. the selection probabilities.
 //!
 //! Every formula is the general path's, in the same order, so the two agree bit for bit
-//! (`tests/interp_uniform.rs`).
+//! (`tests/interp/uniform.rs`).
 
 use super::{Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
 use crate::interp::frame::Frame;

@@ -1,6 +1,6 @@
 //! Extract `vstructConditionalExpr` values from the fixture files with simple scanning (the
 //! real readers live elsewhere; this must not depend on them). Shared by
-//! `tests/cond_fixtures.rs` and `benches/cond_parse.rs` through `#[path]`.
+//! `tests/cond/fixtures.rs` and `benches/cond_parse.rs` through `#[path]`.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};

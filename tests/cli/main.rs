@@ -1,0 +1,11 @@
+//! The `vstructc` command line: each subcommand's output, exit codes and determinism.
+
+#[macro_use]
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cond;
+mod determinism;
+mod eval;
+mod info;
+mod render;

@@ -1,0 +1,263 @@
+//! RIB writer (formats.md §3.7): re-serialisation of modified nodes, pass-through, fresh
+//! nodes, determinism, re-parsability.
+
+use crate::common::network as network_common;
+
+use network_common::{Table, summary};
+use vstructc::back::rib::write_rib_to_vec;
+use vstructc::front::rib::{RibOptions, parse_rib};
+use vstructc::network::{Link, Network, NoDefinitions, ParamTypes, RequestKind};
+use vstructc::{BaseType, Diagnostics, Value};
+
+fn defs() -> Table {
+    Table::new()
+        .shader(
+            "PxrSurface",
+            &[
+                ("diffuseGain", "float"),
+                ("diffuseColor", "color"),
+                ("diffuseRoughness", "float"),
+                ("specularFaceColor", "color"),
+                ("specularRoughness", "float"),
+                ("presence", "float"),
+                ("bumpNormal", "normal"),
+            ],
+            &[],
+        )
+        .shader(
+            "PxrFractal",
+            &[("layers", "int")],
+            &[("resultF", "float"), ("resultRGB", "color")],
+        )
+        .shader(
+            "PxrTexture",
+            &[("filename", "string")],
+            &[("resultRGB", "color"), ("resultA", "float")],
+        )
+}
+
+fn read(src: &str, types: &dyn ParamTypes) -> Network {
+    let mut d = Diagnostics::new();
+    parse_rib(
+        src.as_bytes(),
+        "in.rib",
+        types,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap()
+}
+
+fn write(src: &str, net: &Network, types: &dyn ParamTypes) -> String {
+    String::from_utf8(write_rib_to_vec(src.as_bytes(), net, types).unwrap()).unwrap()
+}
+
+const SCENE: &str = r#"##RenderMan RIB
+# A material
+AttributeBegin
+	Pattern "PxrFractal" "noise"
+		"int layers" [6] # octaves
+		"float frequency"  [2]
+	Pattern "PxrTexture" "tex" "string filename" ["wood.tex"]
+	Bxdf "PxrSurface" "surf"
+		# base colour
+		"color diffuseColor" [0.5 0.5 0.5]
+		# will be removed
+		"float diffuseGain" [1] # gain comment
+		"float specularRoughness" [0.2]
+		"reference float presence" ["tex:resultA"]
+		"string __materialid" ["SurfSG"] # id
+	Sphere 1 -1 1 360
+AttributeEnd
+"#;
+
+#[test]
+fn modified_node_is_reserialised_in_place() {
+    let types = defs();
+    let mut net = read(SCENE, &types);
+    let noise = net.find("noise").unwrap();
+    let tex = net.find("tex").unwrap();
+    let surf = net.find("surf").unwrap();
+    net.set_param(noise, "layers", Value::Int(3));
+    net.connect(surf, "diffuseColor", tex, "resultRGB");
+    net.remove_param(surf, "diffuseGain");
+    net.set_param(surf, "specularRoughness", Value::Float(0.35));
+    net.clear_connections(surf, "presence");
+    // Added in reverse declaration order: written in declaration order.
+    net.set_param(
+        surf,
+        "specularFaceColor",
+        Value::Triple(BaseType::Color, [0.04, 0.04, 0.04]),
+    );
+    net.connect(surf, "diffuseRoughness", noise, "resultF");
+    assert!(!net.is_modified(tex));
+
+    let out = write(SCENE, &net, &types);
+    insta::assert_snapshot!("modified_node", out);
+
+    // Re-parsable, and the re-read network is the modified network.
+    let again = read(&out, &types);
+    assert_eq!(summary(&again), summary(&net));
+    // Deterministic.
+    assert_eq!(write(SCENE, &net, &types), out);
+}
+
+#[test]
+fn connected_parameter_keeps_value_but_writes_only_the_connection() {
+    let mut net = read(SCENE, &NoDefinitions);
+    let noise = net.find("noise").unwrap();
+    let surf = net.find("surf").unwrap();
+    net.connect(surf, "specularRoughness", noise, "resultF");
+    assert_eq!(
+        net.value(surf, "specularRoughness"),
+        Some(&Value::Float(0.2))
+    );
+    let out = write(SCENE, &net, &NoDefinitions);
+    // No definitions: the type comes from the source decl (float).
+    assert!(out.contains("\t\t\"reference float specularRoughness\" [\"noise:resultF\"]\n"));
+    assert!(!out.contains("[0.2]"));
+}
+
+#[test]
+fn new_connection_type_falls_back_to_upstream_output_type() {
+    let types = Table::new().shader("PxrFractal", &[], &[("resultRGB", "color")]);
+    let mut net = read(SCENE, &types);
+    let noise = net.find("noise").unwrap();
+    let surf = net.find("surf").unwrap();
+    net.connect(surf, "emission", noise, "resultRGB");
+    net.push_link(surf, "ghost", Link::missing("Nowhere", None));
+    let out = write(SCENE, &net, &types);
+    assert!(
+        out.contains("\"reference color emission\" [\"noise:resultRGB\"]"),
+        "{out}"
+    );
+    assert!(
+        out.contains("\"reference float ghost\" [\"Nowhere\"]"),
+        "{out}"
+    );
+}
+
+#[test]
+fn replaced_value_of_other_type_gets_a_new_decl() {
+    let mut net = read(SCENE, &NoDefinitions);
+    let surf = net.find("surf").unwrap();
+    net.set_param(surf, "diffuseGain", Value::Int(2));
+    net.set_param(
+        surf,
+        "diffuseColor",
+        Value::Triple(BaseType::Color, [1.0, 0.25, 0.0]),
+    );
+    let out = write(SCENE, &net, &NoDefinitions);
+    assert!(
+        out.contains("\t\t\"int diffuseGain\" [2] # gain comment\n"),
+        "{out}"
+    );
+    assert!(
+        out.contains("\t\t\"color diffuseColor\" [1 0.25 0]\n"),
+        "{out}"
+    );
+    // A source connection replaced by a value.
+    net.clear_connections(surf, "presence");
+    net.set_param(surf, "presence", Value::Float(0.5));
+    let out = write(SCENE, &net, &NoDefinitions);
+    assert!(out.contains("\t\t\"float presence\" [0.5]\n"), "{out}");
+}
+
+#[test]
+fn network_built_in_code_is_written_upstream_first() {
+    let mut net = Network::new();
+    let surf = net.add_node_of_kind("surf", "PxrSurface", RequestKind::Bxdf);
+    let noise = net.add_node("noise", "PxrFractal");
+    net.set_param(noise, "layers", Value::Int(4));
+    net.connect(surf, "diffuseGain", noise, "resultF");
+    net.set_param(
+        surf,
+        "diffuseColor",
+        Value::Triple(BaseType::Color, [1.0, 0.5, 0.0]),
+    );
+    net.set_param(surf, "label", Value::Str("say \"hi\"\n".into()));
+    let m = net.add_material("MySG");
+    net.set_terminal(m, "surface", surf, None);
+    let out = String::from_utf8(write_rib_to_vec(b"", &net, &NoDefinitions).unwrap()).unwrap();
+    insta::assert_snapshot!("built_in_code", out);
+    let again = read(&out, &NoDefinitions);
+    let s = again.find("surf").unwrap();
+    assert_eq!(again[s].material_id(), Some("MySG"));
+    assert_eq!(
+        again.value(s, "label"),
+        Some(&Value::Str("say \"hi\"\n".into()))
+    );
+    assert_eq!(
+        again.connections(s, "diffuseGain")[0].upstream_node(),
+        again.find("noise")
+    );
+}
+
+#[test]
+fn new_node_in_a_read_network_goes_before_its_first_user() {
+    let src = "Pattern \"PxrFractal\" \"noise\"\n\tBxdf \"PxrSurface\" \"surf\"\n\t\t\"float diffuseGain\" [1]\nWorldBegin\n";
+    let mut net = read(src, &NoDefinitions);
+    let noise = net.find("noise").unwrap();
+    let surf = net.find("surf").unwrap();
+    let remap = net.add_node("remap", "PxrRemap");
+    net.connect(remap, "inputF", noise, "resultF");
+    net.connect(surf, "diffuseGain", remap, "resultF");
+    let out = write(src, &net, &NoDefinitions);
+    insta::assert_snapshot!("inserted_node", out);
+    let again = read(&out, &NoDefinitions);
+    let s = again.find("surf").unwrap();
+    assert_eq!(
+        again.connections(s, "diffuseGain")[0].upstream_node(),
+        again.find("remap")
+    );
+}
+
+#[test]
+fn unused_new_node_goes_at_the_end() {
+    let src = "Pattern \"PxrFractal\" \"noise\"";
+    let mut net = read(src, &NoDefinitions);
+    let extra = net.add_node("extra", "PxrFractal");
+    net.set_param(extra, "layers", Value::Int(1));
+    let out = write(src, &net, &NoDefinitions);
+    assert_eq!(
+        out,
+        "Pattern \"PxrFractal\" \"noise\"\nPattern \"PxrFractal\" \"extra\"\n\t\"int layers\" [1]\n"
+    );
+}
+
+#[test]
+fn duplicate_parameters_keep_the_winner_and_move_comments() {
+    let src = "Pattern \"P\" \"p\"\n\t# first\n\t\"int x\" [1]\n\t\"int y\" [0]\n\t\"int x\" [2]\n";
+    let mut net = read(src, &NoDefinitions);
+    let p = net.find("p").unwrap();
+    net.set_param(p, "y", Value::Int(5));
+    let out = write(src, &net, &NoDefinitions);
+    assert_eq!(
+        out,
+        "Pattern \"P\" \"p\"\n\t# first\n\t\"int y\" [5]\n\t\"int x\" [2]\n"
+    );
+    let again = read(&out, &NoDefinitions);
+    assert_eq!(summary(&again), summary(&net));
+}
+
+#[test]
+fn header_comments_without_parameters() {
+    let src = "Pattern # odd place\n \"P\" \"p\" \"int x\" [1]\nPattern \"Q\" # c\n \"q\"\n";
+    let mut net = read(src, &NoDefinitions);
+    let p = net.find("p").unwrap();
+    let q = net.find("q").unwrap();
+    net.set_param(p, "x", Value::Int(2));
+    net.set_param(q, "y", Value::Int(3));
+    let out = write(src, &net, &NoDefinitions);
+    assert_eq!(
+        out,
+        "Pattern \"P\" \"p\"\n\t# odd place\n\t\"int x\" [2]\nPattern \"Q\" \"q\"\n\t# c\n\t\"int y\" [3]\n"
+    );
+}
+
+#[test]
+fn writer_rejects_mismatched_source() {
+    let net = read(SCENE, &NoDefinitions);
+    let err = write_rib_to_vec(b"short", &net, &NoDefinitions).unwrap_err();
+    assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+}

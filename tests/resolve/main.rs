@@ -1,0 +1,15 @@
+//! Definitions and networks: the registry (search paths, vstruct tables), the network API,
+//! vstruct resolution (rules, examples, the golden network) and its linear scaling.
+
+#[macro_use]
+#[path = "../common/mod.rs"]
+mod common;
+
+mod examples;
+mod golden;
+mod large_scene;
+mod network_api;
+mod registry_search;
+mod registry_tables;
+mod rules;
+mod scale;
