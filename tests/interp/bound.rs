@@ -22,7 +22,7 @@ use vstructc::interp::*;
 const ANISO_RATIO_TOL: f32 = 2e-2;
 
 /// [`ANISO_RATIO_TOL`] for anisotropic glass seen from below, where the two estimates are each
-/// within 2e-2 of the integral of `eval` (tests/energy.rs) but can differ by more.
+/// within 2e-2 of the integral of `eval` (tests/materials/energy.rs) but can differ by more.
 const BELOW_GLASS_RATIO_TOL: f32 = 3e-2;
 
 fn close_to(a: Vec3, b: Vec3, rel: f32, what: &str) {

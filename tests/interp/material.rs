@@ -303,7 +303,7 @@ fn sample_pdf_weight_and_mean_agree_with_eval_and_albedo() {
     // within one table node of its critical angle: there the albedo of a smooth interface
     // steps with total internal reflection, which the 32 linear μ nodes cannot follow (the
     // coat of ref10, α = 0.05, reads 2.9 % low at μ_o = 0.740 against μ_c = 0.745; the same
-    // exception as tests/leaves_chi2.rs).
+    // exception as tests/materials/leaves_chi2.rs).
     fn table_tolerance(v: Vec3) -> f64 {
         let critical = (1.0f32 - 1.0 / (1.5 * 1.5)).sqrt();
         if v.z < 0.0 && (v.z.abs() - critical).abs() < 1.0 / 31.0 {
