@@ -40,7 +40,5 @@ pub mod lower;
 
 pub mod back;
 
-pub mod cli;
-
 pub use diag::{Diagnostic, Diagnostics, Error, Location, Result, Severity};
 pub use types::{ArraySpec, BaseType, Type, Value};

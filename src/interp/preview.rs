@@ -36,6 +36,7 @@ use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
 use crate::limits::{Limit, LimitExceeded, Limits};
 use glam::{Vec2, Vec3};
+#[cfg(feature = "parallel")]
 use rayon::prelude::*;
 use std::f32::consts::{PI, TAU};
 
@@ -137,7 +138,8 @@ pub struct PreviewOptions {
     /// prepare ([`Material::prepares_lanes`]), which the scalar path otherwise uses at
     /// one lane. For comparisons; the two agree to relative 1e-5.
     pub general_prepare: bool,
-    /// Shade rows in parallel (rayon's global pool).
+    /// Shade rows in parallel (rayon's global pool); ignored without the `parallel`
+    /// feature.
     pub parallel: bool,
     /// Bounds; a ball has at most [`Limits::preview_pixels`] pixels.
     pub limits: Limits,
@@ -292,18 +294,19 @@ pub fn render_ball(
         st.shade(material, opts, j, out);
         progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
     };
+    #[cfg(feature = "parallel")]
     if opts.parallel {
         img.pixels
             .par_chunks_mut(size)
             .enumerate()
             .for_each_init(RowState::default, row);
-    } else {
-        let mut st = RowState::default();
-        img.pixels
-            .chunks_mut(size)
-            .enumerate()
-            .for_each(|r| row(&mut st, r));
+        return Ok(img);
     }
+    let mut st = RowState::default();
+    img.pixels
+        .chunks_mut(size)
+        .enumerate()
+        .for_each(|r| row(&mut st, r));
     Ok(img)
 }
 
@@ -616,16 +619,17 @@ impl<'m> ContactSheet<'m> {
                 st.shade(ball.material, &ball.options, j, out);
             }
         };
+        #[cfg(feature = "parallel")]
         if self.balls[0].options.parallel {
             band.par_chunks_mut(self.size)
                 .enumerate()
                 .for_each_init(RowState::default, cell);
-        } else {
-            let mut st = RowState::default();
-            band.chunks_mut(self.size)
-                .enumerate()
-                .for_each(|x| cell(&mut st, x));
+            return;
         }
+        let mut st = RowState::default();
+        band.chunks_mut(self.size)
+            .enumerate()
+            .for_each(|x| cell(&mut st, x));
     }
 }
 

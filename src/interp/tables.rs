@@ -1,7 +1,7 @@
 //! Albedo tables (spec closures.md §3.17): identities, on-disk format, loading and lookups.
 //!
 //! Every table is a committed little-endian f32 blob under `src/interp/tables/`, written by
-//! `vstructc-lutgen` (see [`crate::interp::lutgen`]) and embedded with `include_bytes!`. A blob
+//! the `lutgen` example (module `interp::lutgen`, feature `testkit`) and embedded with `include_bytes!`. A blob
 //! starts with a 96-byte header recording the generator version and parameters:
 //!
 //! | offset | size | content |
@@ -491,7 +491,7 @@ pub fn lut(id: TableId) -> &'static Lut {
     static CELLS: [OnceLock<Lut>; 40] = [const { OnceLock::new() }; 40];
     CELLS[id.index()].get_or_init(|| match decode(id, blob(id)) {
         Ok(l) => l,
-        Err(e) => panic!("{e}: regenerate it with `cargo run --release --bin vstructc-lutgen`"),
+        Err(e) => panic!("{e}: regenerate it with `cargo run --release --features testkit --example lutgen`"),
     })
 }
 

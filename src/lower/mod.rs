@@ -18,6 +18,7 @@ pub mod network;
 pub mod patterns;
 pub mod physical;
 pub mod pxr;
+#[cfg(feature = "testkit")]
 pub mod scene;
 pub mod vray;
 
@@ -649,17 +650,19 @@ where
         let r = lower_node_cached(graph, defs, cache, *id, name, &mut d);
         (r, d)
     };
+    #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        terminals
+        return terminals
             .par_iter()
             // Each rayon job builds its own cache; jobs of at least 128 materials keep
             // that one-time indexing small next to the lowering itself.
             .with_min_len(128)
             .map_init(DefinitionCache::default, one)
-            .collect()
-    } else {
-        let mut cache = DefinitionCache::default();
-        terminals.iter().map(|t| one(&mut cache, t)).collect()
+            .collect();
     }
+    #[cfg(not(feature = "parallel"))]
+    let _ = parallel;
+    let mut cache = DefinitionCache::default();
+    terminals.iter().map(|t| one(&mut cache, t)).collect()
 }

@@ -42,7 +42,7 @@
 
 mod limits;
 mod param_types;
-#[doc(hidden)]
+#[cfg(feature = "testkit")]
 pub mod testgen;
 
 pub use param_types::{NoDefinitions, ParamTypes};

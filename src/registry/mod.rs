@@ -83,15 +83,6 @@ pub enum Prefer {
     Args,
 }
 
-impl From<crate::cli::Prefer> for Prefer {
-    fn from(p: crate::cli::Prefer) -> Self {
-        match p {
-            crate::cli::Prefer::Oso => Prefer::Oso,
-            crate::cli::Prefer::Args => Prefer::Args,
-        }
-    }
-}
-
 /// How a [`Registry`] finds its definitions.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RegistryOptions {

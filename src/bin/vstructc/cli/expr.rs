@@ -7,8 +7,8 @@
 
 use super::CommonOptions;
 use super::input::print_stdout;
-use crate::cond::{self, Extensions};
-use crate::diag::{Diagnostics, Location, Severity};
+use vstructc::cond::{self, Extensions};
+use vstructc::diag::{Diagnostics, Location, Severity};
 use std::process::ExitCode;
 
 /// Arguments of `vstructc expr`.

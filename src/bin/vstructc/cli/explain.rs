@@ -2,8 +2,8 @@
 
 use super::CommonOptions;
 use super::input::{Prepared, prepare, print_stdout};
-use crate::network::Network;
-use crate::resolve::{MemberEvent, Outcome, ReadSource, resolve};
+use vstructc::network::Network;
+use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -6,8 +6,8 @@
 //! a missing `--args` path), 2 when the shader id is unknown.
 
 use super::{CommonOptions, report};
-use crate::front::args::ArgsOptions;
-use crate::registry::{Definition, Property, Registry, RegistryOptions, VstructTables};
+use vstructc::front::args::ArgsOptions;
+use vstructc::registry::{Definition, Property, Registry, RegistryOptions, VstructTables};
 use std::fmt::Write as _;
 use std::process::ExitCode;
 
@@ -28,7 +28,7 @@ pub fn registry_options(common: &CommonOptions) -> RegistryOptions {
     let ext = |name: &str| common.ext.iter().any(|e| e == name || e == "all");
     RegistryOptions {
         paths: common.args.clone(),
-        prefer: common.prefer.into(),
+        prefer: common.prefer,
         args: ArgsOptions {
             child_meta: ext("args-child-meta"),
         },
@@ -81,8 +81,8 @@ pub fn render_human(
     let mut out = String::new();
     let _ = writeln!(out, "{}: {}", def.id, def.kind);
     let source = match def.source {
-        crate::registry::SourceKind::Args => ".args",
-        crate::registry::SourceKind::Oso => ".oso",
+        vstructc::registry::SourceKind::Args => ".args",
+        vstructc::registry::SourceKind::Oso => ".oso",
     };
     let _ = writeln!(out, "  defined in {} ({source})", def.path);
     for (_, other) in registry.sources(&def.id) {

@@ -2,13 +2,13 @@
 
 use super::CommonOptions;
 use super::input::{NetFormat, Prepared, prepare, report_error, stream_output};
-use crate::back::json::write_json_to;
-use crate::back::rib::write_rib;
-use crate::cond::Extensions;
-use crate::diag::Error;
-use crate::network::Network;
-use crate::registry::Registry;
-use crate::resolve::{ResolveOptions, resolve, unsupported_extensions};
+use vstructc::back::json::write_json_to;
+use vstructc::back::rib::write_rib;
+use vstructc::cond::Extensions;
+use vstructc::diag::Error;
+use vstructc::network::Network;
+use vstructc::registry::Registry;
+use vstructc::resolve::{ResolveOptions, resolve, unsupported_extensions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

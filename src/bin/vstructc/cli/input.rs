@@ -1,15 +1,15 @@
 //! Reading a network input (RIB or JSON, a file or `-` for standard input) and writing output
-//! (files by [`crate::back::output`]'s rules, or standard output). Shared by every command.
+//! (files by [`vstructc::back::output`]'s rules, or standard output). Shared by every command.
 
 use super::CommonOptions;
-use crate::back::output;
-use crate::diag::{Diagnostics, Error, Location};
-use crate::front::json::parse_json;
-use crate::front::rib::{RibOptions, parse_rib};
-use crate::front::source::{ReadError, read_stream};
-use crate::limits::{Limit, LimitExceeded, Limits};
-use crate::network::Network;
-use crate::registry::Registry;
+use vstructc::back::output;
+use vstructc::diag::{Diagnostics, Error, Location};
+use vstructc::front::json::parse_json;
+use vstructc::front::rib::{RibOptions, parse_rib};
+use vstructc::front::source::{ReadError, read_stream};
+use vstructc::limits::{Limit, LimitExceeded, Limits};
+use vstructc::network::Network;
+use vstructc::registry::Registry;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -134,7 +134,7 @@ fn detect_format(path: &Path, bytes: &[u8]) -> NetFormat {
 }
 
 /// Write `data` to `path` (`None` or `-`: standard output) by the rules of
-/// [`crate::back::output`]: a regular file is replaced atomically (a failure never leaves a
+/// [`vstructc::back::output`]: a regular file is replaced atomically (a failure never leaves a
 /// partial file, and reading and writing the same path is safe since the input was read
 /// completely before), a device or FIFO is written in place, a symlink is written through.
 pub fn write_output(path: Option<&Path>, data: &[u8]) -> Result<(), Error> {
@@ -171,7 +171,7 @@ pub fn report_error(err: &Error, common: &CommonOptions) -> std::process::ExitCo
 /// read from the input, and the diagnostics so far.
 pub struct Prepared {
     /// Resolution options from the command line.
-    pub options: crate::resolve::ResolveOptions,
+    pub options: vstructc::resolve::ResolveOptions,
     /// The registry of the common options.
     pub registry: Registry,
     /// The input and its network.

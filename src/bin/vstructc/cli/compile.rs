@@ -8,11 +8,11 @@
 
 use super::CommonOptions;
 use super::input::{Prepared, prepare, report_error};
-use crate::diag::Error;
-use crate::interp::TableAlbedo;
-use crate::ir::{MaterialIr, print};
-use crate::lower::network::{lower_terminal, report_placeholders, terminals};
-use crate::resolve::resolve;
+use vstructc::diag::Error;
+use vstructc::interp::TableAlbedo;
+use vstructc::ir::{MaterialIr, print};
+use vstructc::lower::network::{lower_terminal, report_placeholders, terminals};
+use vstructc::resolve::resolve;
 use clap::ValueEnum;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -53,7 +53,7 @@ pub fn render(ir: &MaterialIr, emit: Emit) -> String {
     match emit {
         Emit::Ir => print::ir_text(ir),
         Emit::Lobes => print::lobes_text(ir, &TableAlbedo),
-        Emit::Dot => crate::back::dot::to_dot(ir),
+        Emit::Dot => vstructc::back::dot::to_dot(ir),
     }
 }
 

@@ -2,7 +2,7 @@
 //! [--input NAME=VALUE]... [--material HANDLE]`: the material-ball preview (docs/preview.md).
 //!
 //! The input is read, resolved and lowered as by `compile`; each material is compiled for
-//! the interpreter and rendered ([`crate::interp::preview`]). With several materials and no
+//! the interpreter and rendered ([`vstructc::interp::preview`]). With several materials and no
 //! `--material`, the balls are arranged in a contact sheet (a grid, `⌈√n⌉` columns, row-major
 //! in material order).
 //!
@@ -12,8 +12,8 @@
 //!
 //! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
 //! rows at a time and each row is encoded into the output as it is finished
-//! ([`crate::interp::preview::ContactSheet`]). `--size` is checked by the library
-//! ([`PreviewOptions::validate`], at most [`crate::limits::Limits::preview_pixels`] pixels); a
+//! ([`vstructc::interp::preview::ContactSheet`]). `--size` is checked by the library
+//! ([`PreviewOptions::validate`], at most [`vstructc::limits::Limits::preview_pixels`] pixels); a
 //! size outside it is a usage error.
 //!
 //! `--input NAME=VALUE` sets an external input slot (its name as `compile --emit ir` lists
@@ -25,13 +25,13 @@
 
 use super::CommonOptions;
 use super::input::{Prepared as Loaded, prepare, report_error, stream_output};
-use crate::back::png::{ImageFormat, write_rows};
-use crate::diag::{Diagnostics, Error};
-use crate::interp::Material;
-use crate::interp::preview::{Ball, ContactSheet, PreviewOptions};
-use crate::ir::MaterialIr;
-use crate::lower::network::{lower_terminal, report_placeholders, terminals};
-use crate::resolve::resolve;
+use vstructc::back::png::{ImageFormat, write_rows};
+use vstructc::diag::{Diagnostics, Error};
+use vstructc::interp::Material;
+use vstructc::interp::preview::{Ball, ContactSheet, PreviewOptions};
+use vstructc::ir::MaterialIr;
+use vstructc::lower::network::{lower_terminal, report_placeholders, terminals};
+use vstructc::resolve::resolve;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -13,7 +13,7 @@
 
 use super::CommonOptions;
 use super::render::{MaterialArgs, check_input_names, load_materials, packed_inputs};
-use crate::interp::{Prepared, ShadingPoint};
+use vstructc::interp::{Prepared, ShadingPoint};
 use glam::{Vec2, Vec3};
 use serde_json::{Value as Json, json};
 use std::fmt::Write as _;
