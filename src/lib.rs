@@ -27,6 +27,7 @@ pub mod limits;
 pub mod types;
 
 pub mod front;
+pub mod model;
 pub mod registry;
 
 pub mod cond;
@@ -39,6 +40,9 @@ pub mod ir;
 pub mod lower;
 
 pub mod back;
+pub mod raster;
+
+pub mod pipeline;
 
 pub use diag::{Diagnostic, Diagnostics, Error, Location, Result, Severity};
 pub use types::{ArraySpec, BaseType, Type, Value};

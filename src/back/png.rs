@@ -7,8 +7,7 @@
 //! out the rows in the format's [`ImageFormat::order`]). [`encode_png`] and [`encode_pfm`]
 //! encode an image held in memory the same way.
 
-use crate::interp::Rgb;
-use crate::interp::preview::{Image, RowOrder};
+use crate::raster::{Image, RowOrder};
 use glam::Vec3;
 use std::io::{self, Write};
 
@@ -75,7 +74,7 @@ impl<'a> RowSink<'a> {
     }
 
     /// Write the next row (`width` pixels).
-    pub fn write_row(&mut self, row: &[Rgb]) -> io::Result<()> {
+    pub fn write_row(&mut self, row: &[Vec3]) -> io::Result<()> {
         if row.len() != self.width {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,

@@ -26,7 +26,7 @@
 //!   write an infinity back where a `copy` puts it.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
-use crate::registry::{
+use crate::model::{
     CondSource, Definition, Direction, MemberDecl, MetaKey, Metadata, Property, SourceKind,
     meta_key,
 };

@@ -38,6 +38,8 @@ use crate::limits::{Limit, LimitExceeded, Limits};
 use glam::{Vec2, Vec3};
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
+
+pub use crate::raster::{Image, RowOrder};
 use std::f32::consts::{PI, TAU};
 
 /// Lanes of the batched preview path.
@@ -86,33 +88,6 @@ pub enum PreviewError {
         /// The distinct sizes of the balls given (empty: no ball).
         sizes: Vec<usize>,
     },
-}
-
-/// A linear RGB image, rows top to bottom.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Image {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// `width × height` pixels, row-major, top row first.
-    pub pixels: Vec<Rgb>,
-}
-
-impl Image {
-    /// An image filled with one colour.
-    pub fn filled(width: usize, height: usize, c: Rgb) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![c; width * height],
-        }
-    }
-
-    /// The pixel at column `x`, row `y` (row 0 at the top).
-    pub fn at(&self, x: usize, y: usize) -> Rgb {
-        self.pixels[y * self.width + x]
-    }
 }
 
 /// What the preview shows.
@@ -484,15 +459,6 @@ pub struct Ball<'m> {
     pub material: &'m Material,
     /// Its preview options (every ball of a sheet has the same [`PreviewOptions::size`]).
     pub options: PreviewOptions,
-}
-
-/// The order in which [`ContactSheet::render_rows`] hands out pixel rows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RowOrder {
-    /// Top row first (PNG).
-    TopDown,
-    /// Bottom row first (PFM).
-    BottomUp,
 }
 
 /// Balls of equal size in a grid of `⌈√n⌉` columns, row-major in the given order, empty

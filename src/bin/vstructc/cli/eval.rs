@@ -12,7 +12,7 @@
 //! transparency. `--json` prints the same as one JSON object.
 
 use super::CommonOptions;
-use super::render::{MaterialArgs, check_input_names, load_materials, packed_inputs};
+use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
 use vstructc::interp::{Prepared, ShadingPoint};
 use glam::{Vec2, Vec3};
 use serde_json::{Value as Json, json};

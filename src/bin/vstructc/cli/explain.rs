@@ -1,7 +1,7 @@
 //! `vstructc explain HANDLE.INPUT INPUT`: the story of one member input's value.
 
 use super::CommonOptions;
-use super::input::{Prepared, prepare, print_stdout};
+use super::input::{ReadInput, print_stdout, read};
 use vstructc::network::Network;
 use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 use std::fmt::Write as _;
@@ -27,21 +27,21 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         eprintln_quiet!("error: expected HANDLE.INPUT, got `{}`", args.target);
         return ExitCode::from(2);
     };
-    let Prepared {
+    let ReadInput {
         mut options,
         registry,
-        mut loaded,
-        ..
-    } = match prepare(&args.input, args.no_conditions, false, common) {
+        name,
+        mut network,
+    } = match read(&args.input, args.no_conditions, common) {
         Ok(p) => p,
         Err(status) => return status,
     };
     options.record_events = true;
-    let Some(node) = loaded.network.find(handle) else {
-        eprintln_quiet!("error: no node `{handle}` in {}", loaded.name);
+    let Some(node) = network.find(handle) else {
+        eprintln_quiet!("error: no node `{handle}` in {}", name);
         return ExitCode::from(2);
     };
-    let res = resolve(&mut loaded.network, &registry, &options);
+    let res = resolve(&mut network, &registry, &options);
     let events: Vec<&MemberEvent> = res
         .events
         .iter()
@@ -51,12 +51,12 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         format!(
             "{handle}.{input} was not expanded from any vstruct connection: it is not a member \
              of a connected input head of `{}`.\n",
-            loaded.network[node].shader()
+            network[node].shader()
         )
     } else {
         events
             .iter()
-            .map(|e| render_event(&loaded.network, e))
+            .map(|e| render_event(&network, e))
             .collect()
     };
     match print_stdout(&text, common) {

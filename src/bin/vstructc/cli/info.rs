@@ -6,8 +6,8 @@
 //! a missing `--args` path), 2 when the shader id is unknown.
 
 use super::{CommonOptions, report};
-use vstructc::front::args::ArgsOptions;
-use vstructc::registry::{Definition, Property, Registry, RegistryOptions, VstructTables};
+use super::input::registry_for;
+use vstructc::registry::{Definition, Property, Registry, VstructTables};
 use std::fmt::Write as _;
 use std::process::ExitCode;
 
@@ -20,25 +20,6 @@ pub struct InfoArgs {
     /// Print a JSON document instead of the readable summary.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Registry options implied by the common command-line options (`--args`, `--prefer`,
-/// `--ext args-child-meta`); the environment and the embedded definitions are searched too.
-pub fn registry_options(common: &CommonOptions) -> RegistryOptions {
-    let ext = |name: &str| common.ext.iter().any(|e| e == name || e == "all");
-    RegistryOptions {
-        paths: common.args.clone(),
-        prefer: common.prefer,
-        args: ArgsOptions {
-            child_meta: ext("args-child-meta"),
-        },
-        ..RegistryOptions::default()
-    }
-}
-
-/// The registry for a command line (see [`registry_options`]).
-pub fn registry_for(common: &CommonOptions) -> Registry {
-    Registry::new(registry_options(common))
 }
 
 /// Run `vstructc info`.

@@ -1,68 +1,100 @@
-//! Reading a network input (RIB or JSON, a file or `-` for standard input) and writing output
-//! (files by [`vstructc::back::output`]'s rules, or standard output). Shared by every command.
+//! What the commands share: the registry and resolution options of the common options,
+//! reading a network input (RIB or JSON, a file or `-` for standard input) and running the
+//! library's pipeline on it, and writing output (files by [`vstructc::back::output`]'s
+//! rules, or standard output).
 
 use super::CommonOptions;
-use vstructc::back::output;
-use vstructc::diag::{Diagnostics, Error, Location};
-use vstructc::front::json::parse_json;
-use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::front::source::{ReadError, read_stream};
-use vstructc::limits::{Limit, LimitExceeded, Limits};
-use vstructc::network::Network;
-use vstructc::registry::Registry;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use vstructc::back::output;
+use vstructc::cond::Extensions;
+use vstructc::diag::{Diagnostics, Error, Location};
+use vstructc::front::args::ArgsOptions;
+use vstructc::front::source::{ReadError, read_stream};
+use vstructc::front::{NetFormat, ReadOptions, read_network};
+use vstructc::limits::{Limit, LimitExceeded, Limits};
+use vstructc::network::Network;
+use vstructc::pipeline::{self, Lowering, PipelineOptions, PipelineOutput};
+use vstructc::registry::{Registry, RegistryOptions};
+use vstructc::resolve::{ResolveOptions, unsupported_extensions};
 
-/// The format of a network file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum NetFormat {
-    /// RenderMan RIB.
-    Rib,
-    /// The JSON network form (see docs/file-formats.md).
-    Json,
+/// `--format`'s values, mapped onto the library's [`NetFormat`].
+pub fn format_parser() -> impl clap::builder::TypedValueParser<Value = NetFormat> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new([
+        PossibleValue::new("rib").help("RenderMan RIB"),
+        PossibleValue::new("json").help("The JSON network form (see docs/file-formats.md)"),
+    ])
+    .map(|s| match s.as_str() {
+        "json" => NetFormat::Json,
+        _ => NetFormat::Rib,
+    })
 }
 
-/// A network read from an input, with the bytes it came from (the RIB writer passes
-/// everything outside the network through unchanged).
+/// Registry options implied by the common command-line options (`--args`, `--prefer`,
+/// `--ext args-child-meta`); the environment and the embedded definitions are searched too.
+pub fn registry_options(common: &CommonOptions) -> RegistryOptions {
+    let ext = |name: &str| common.ext.iter().any(|e| e == name || e == "all");
+    RegistryOptions {
+        paths: common.args.clone(),
+        prefer: common.prefer,
+        args: ArgsOptions {
+            child_meta: ext("args-child-meta"),
+        },
+        ..RegistryOptions::default()
+    }
+}
+
+/// The registry for a command line (see [`registry_options`]).
+pub fn registry_for(common: &CommonOptions) -> Registry {
+    Registry::new(registry_options(common))
+}
+
+/// Resolution options from the command line; unknown or unsupported extensions are usage
+/// errors.
+pub fn resolve_options(
+    no_conditions: bool,
+    common: &CommonOptions,
+) -> Result<ResolveOptions, Error> {
+    let extensions =
+        Extensions::from_names(&common.ext).map_err(|e| Error::Usage(e.to_string()))?;
+    let missing = unsupported_extensions(&extensions);
+    if !missing.is_empty() {
+        return Err(Error::Usage(format!(
+            "extension(s) {} are not implemented in resolution yet",
+            missing.join(", ")
+        )));
+    }
+    Ok(ResolveOptions {
+        conditions: !no_conditions,
+        extensions,
+        verbose: common.verbose,
+        record_events: false,
+        limits: Default::default(),
+    })
+}
+
+/// An input's bytes, with the name used in diagnostics (`<stdin>` for `-`) and its format
+/// (the RIB writer passes everything outside the network through unchanged).
 pub struct LoadedInput {
-    /// The name used in diagnostics (`<stdin>` for `-`).
+    /// The name used in diagnostics.
     pub name: String,
     /// The input bytes.
     pub bytes: Vec<u8>,
     /// The detected format.
     pub format: NetFormat,
-    /// The network.
-    pub network: Network,
 }
 
-/// Read `path` (`-`: standard input) and parse it as RIB or JSON (by extension, else by the
-/// first non-blank byte). Reader warnings go to `diags`.
-pub fn load_network(
-    path: &Path,
-    registry: &Registry,
-    strict_rib: bool,
-    diags: &mut Diagnostics,
-) -> Result<LoadedInput, Error> {
+/// Read `path` (`-`: standard input); the format is detected by extension, else by the
+/// first non-blank byte.
+pub fn load_input(path: &Path) -> Result<LoadedInput, Error> {
     let (name, bytes) = read_bytes(path)?;
-    let format = detect_format(path, &bytes);
-    let network = match format {
-        NetFormat::Json => parse_json(&bytes, &name, registry, diags)?,
-        NetFormat::Rib => parse_rib(
-            &bytes,
-            &name,
-            registry,
-            &RibOptions {
-                strict: strict_rib,
-                ..RibOptions::default()
-            },
-            diags,
-        )?,
-    };
+    let format = NetFormat::detect(&name, &bytes);
     Ok(LoadedInput {
         name,
         bytes,
         format,
-        network,
     })
 }
 
@@ -122,27 +154,12 @@ fn too_large(size: u64, max: u64, name: &str) -> Error {
     .into()
 }
 
-fn detect_format(path: &Path, bytes: &[u8]) -> NetFormat {
-    match path.extension().and_then(|e| e.to_str()) {
-        Some("json") => NetFormat::Json,
-        Some("rib") => NetFormat::Rib,
-        _ => match bytes.iter().find(|b| !b.is_ascii_whitespace()) {
-            Some(b'{') => NetFormat::Json,
-            _ => NetFormat::Rib,
-        },
-    }
-}
-
-/// Write `data` to `path` (`None` or `-`: standard output) by the rules of
-/// [`vstructc::back::output`]: a regular file is replaced atomically (a failure never leaves a
-/// partial file, and reading and writing the same path is safe since the input was read
-/// completely before), a device or FIFO is written in place, a symlink is written through.
-pub fn write_output(path: Option<&Path>, data: &[u8]) -> Result<(), Error> {
-    stream_output(path, |out| out.write_all(data))
-}
-
-/// [`write_output`] for output produced piece by piece: `produce` writes into the destination
-/// (buffered), so a large scene is never held in memory a second time.
+/// Write the output `produce` writes to `path` (`None` or `-`: standard output) by the rules
+/// of [`vstructc::back::output`]: a regular file is replaced atomically (a failure never
+/// leaves a partial file, and reading and writing the same path is safe since the input was
+/// read completely before), a device or FIFO is written in place, a symlink is written
+/// through. The destination is buffered, so a large scene is never held in memory a second
+/// time.
 pub fn stream_output(
     path: Option<&Path>,
     produce: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -167,42 +184,119 @@ pub fn report_error(err: &Error, common: &CommonOptions) -> std::process::ExitCo
     super::report(&diags, common)
 }
 
-/// What every network command starts from: resolution options, the registry, the network
-/// read from the input, and the diagnostics so far.
-pub struct Prepared {
+/// The common start of the network commands, on failure already reported: the exit status
+/// to return (2 for usage errors, 1 for input errors).
+fn start(
+    input: &Path,
+    no_conditions: bool,
+    common: &CommonOptions,
+) -> Result<(ResolveOptions, Registry, LoadedInput), ExitCode> {
+    let options = resolve_options(no_conditions, common).map_err(|e| {
+        eprintln_quiet!("error: {e}");
+        ExitCode::from(2)
+    })?;
+    let registry = registry_for(common);
+    let loaded = load_input(input).map_err(|e| report_error(&e, common))?;
+    Ok((options, registry, loaded))
+}
+
+/// A network read but not resolved, for `explain`.
+pub struct ReadInput {
     /// Resolution options from the command line.
-    pub options: vstructc::resolve::ResolveOptions,
+    pub options: ResolveOptions,
     /// The registry of the common options.
     pub registry: Registry,
-    /// The input and its network.
+    /// The input's name.
+    pub name: String,
+    /// The network.
+    pub network: Network,
+}
+
+/// Read the input's network with the registry and options of the command line. On failure
+/// the diagnostics are printed and the exit status to return is given.
+pub fn read(
+    input: &Path,
+    no_conditions: bool,
+    common: &CommonOptions,
+) -> Result<ReadInput, ExitCode> {
+    let (options, registry, loaded) = start(input, no_conditions, common)?;
+    let mut diags = Diagnostics::new();
+    let read = ReadOptions::default();
+    match read_network(
+        &loaded.name,
+        &loaded.bytes,
+        loaded.format,
+        &registry,
+        &read,
+        &mut diags,
+    ) {
+        Ok(network) => Ok(ReadInput {
+            options,
+            registry,
+            name: loaded.name,
+            network,
+        }),
+        Err(e) => {
+            super::report(&diags, common);
+            Err(report_error(&e, common))
+        }
+    }
+}
+
+/// What the library's pipeline made of one input.
+pub struct Ran {
+    /// The input read.
     pub loaded: LoadedInput,
-    /// Reader diagnostics.
+    /// The registry of the common options.
+    pub registry: Registry,
+    /// The resolved network and lowered materials.
+    pub output: PipelineOutput,
+    /// Every diagnostic so far, sorted.
     pub diags: Diagnostics,
 }
 
-/// The shared start of `resolve`, `explain` and `compile`: check the options, build the
-/// registry and read the input. On failure the diagnostics are printed and the exit status to
-/// return is given (2 for usage errors, 1 for input errors).
-pub fn prepare(
+/// What the network commands share: read `input` and run [`pipeline::run`] on it. On
+/// failure the diagnostics are printed and the exit status to return is given (2 for usage
+/// errors, among them a `--material` no material has, 1 for input errors).
+pub fn run_pipeline(
     input: &Path,
     no_conditions: bool,
     strict_rib: bool,
+    drop_unresolved: bool,
+    lowering: Lowering,
     common: &CommonOptions,
-) -> Result<Prepared, std::process::ExitCode> {
-    let options = super::resolve::resolve_options(no_conditions, common).map_err(|e| {
-        eprintln_quiet!("error: {e}");
-        std::process::ExitCode::from(2)
-    })?;
-    let registry = super::info::registry_for(common);
+) -> Result<Ran, ExitCode> {
+    let (resolve, registry, loaded) = start(input, no_conditions, common)?;
+    let options = PipelineOptions {
+        resolve,
+        strict_rib,
+        drop_unresolved,
+        lowering,
+    };
     let mut diags = Diagnostics::new();
-    match load_network(input, &registry, strict_rib, &mut diags) {
-        Ok(loaded) => Ok(Prepared {
-            options,
-            registry,
+    let ran = pipeline::run(
+        &loaded.name,
+        &loaded.bytes,
+        loaded.format,
+        &registry,
+        &options,
+        &mut diags,
+    );
+    match ran {
+        Ok(output) => Ok(Ran {
             loaded,
+            registry,
+            output,
             diags,
         }),
+        Err(Error::Usage(msg)) => {
+            diags.sort();
+            super::report(&diags, common);
+            eprintln_quiet!("error: {msg}");
+            Err(ExitCode::from(2))
+        }
         Err(e) => {
+            diags.sort();
             super::report(&diags, common);
             Err(report_error(&e, common))
         }

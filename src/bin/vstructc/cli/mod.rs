@@ -26,6 +26,7 @@ pub mod explain;
 pub mod expr;
 pub mod info;
 pub mod input;
+pub mod material;
 pub mod render;
 pub mod resolve;
 
