@@ -152,7 +152,7 @@ fn vs015_report_names_the_reason_and_the_predicate() {
     );
     let d = r.to_diagnostic(text);
     assert_eq!(
-        (d.code, d.severity, d.span.clone()),
+        (d.code.as_str(), d.severity, d.span.clone()),
         ("VS015", Severity::Warning, Some(34..40))
     );
     assert!(d.notes[0].ends_with("^~~~~~"), "{:?}", d.notes);

@@ -22,7 +22,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     let _ = resolve(&mut net, registry, &ResolveOptions::default());
-    let json = write_json(&net);
+    let json = write_json(&net).unwrap();
     let mut again = Diagnostics::new();
     let back = parse_json(json.as_bytes(), "fuzz.json", registry, &mut again);
     assert!(

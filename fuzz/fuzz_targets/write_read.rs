@@ -56,7 +56,7 @@ fuzz_target!(|net: Net| {
         );
     }
 
-    let json = write_json(&network);
+    let json = write_json(&network).unwrap();
     let mut diags = Diagnostics::new();
     let back = parse_json(json.as_bytes(), "fuzz.json", registry, &mut diags);
     if let Err(e) = back

@@ -1407,7 +1407,7 @@ struct Issues {
 impl Issues {
     fn add(&mut self, severity: Severity, msg: String) {
         match &self.worst {
-            Some((s, _)) if *s <= severity => {}
+            Some((s, _)) if *s >= severity => {}
             _ => self.worst = Some((severity, msg)),
         }
     }

@@ -491,7 +491,9 @@ pub fn lut(id: TableId) -> &'static Lut {
     static CELLS: [OnceLock<Lut>; 40] = [const { OnceLock::new() }; 40];
     CELLS[id.index()].get_or_init(|| match decode(id, blob(id)) {
         Ok(l) => l,
-        Err(e) => panic!("{e}: regenerate it with `cargo run --release --features testkit --example lutgen`"),
+        Err(e) => panic!(
+            "{e}: regenerate it with `cargo run --release --features testkit --example lutgen`"
+        ),
     })
 }
 

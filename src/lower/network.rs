@@ -109,7 +109,7 @@ pub fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagn
                 if let Some(l) = net[id].location() {
                     d = d.at(l.clone());
                 }
-                diags.push(d);
+                diags.push(d.with_node(net[id].handle()).with_param(input.as_str()));
             }
         }
     }

@@ -13,10 +13,10 @@
 //! * VS001's position is the value start plus the decoded offset (formats.md §2.6 allows it).
 //! * VS003 points at the property (the readers keep no position per attribute).
 
-use crate::model::{CondSource, Definition, Direction, Property};
 use crate::cond::{self, ParseError, Statement};
 use crate::diag::{Diagnostic, Location};
 use crate::limits::Limits;
+use crate::model::{CondSource, Definition, Direction, Property};
 use crate::types::BaseType;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;

@@ -13,11 +13,11 @@
 
 use super::CommonOptions;
 use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
-use vstructc::interp::{Prepared, ShadingPoint};
 use glam::{Vec2, Vec3};
 use serde_json::{Value as Json, json};
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use vstructc::interp::{Prepared, ShadingPoint};
 
 /// Arguments of `vstructc eval`.
 #[derive(Debug, clap::Args)]

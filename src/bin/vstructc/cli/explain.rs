@@ -2,11 +2,11 @@
 
 use super::CommonOptions;
 use super::input::{ReadInput, print_stdout, read};
-use vstructc::network::Network;
-use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vstructc::network::Network;
+use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 
 /// Arguments of `vstructc explain`.
 #[derive(Debug, clap::Args)]
@@ -54,10 +54,7 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
             network[node].shader()
         )
     } else {
-        events
-            .iter()
-            .map(|e| render_event(&network, e))
-            .collect()
+        events.iter().map(|e| render_event(&network, e)).collect()
     };
     match print_stdout(&text, common) {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,11 +5,11 @@
 //! Exit status: 0 on success, 1 when an input error was reported (a rejected definition file,
 //! a missing `--args` path), 2 when the shader id is unknown.
 
-use super::{CommonOptions, report};
 use super::input::registry_for;
-use vstructc::registry::{Definition, Property, Registry, VstructTables};
+use super::{CommonOptions, report};
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use vstructc::registry::{Definition, Property, Registry, VstructTables};
 
 /// Arguments of `vstructc info`.
 #[derive(Debug, clap::Args)]

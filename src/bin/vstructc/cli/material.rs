@@ -141,4 +141,3 @@ pub fn check_input_names(materials: &[Compiled], settings: &[String]) -> Result<
     }
     Ok(())
 }
-

@@ -4,12 +4,14 @@
 //! Exit status: 0 success (warnings on stderr), 1 input errors (or warnings under
 //! `--deny-warnings`), 2 usage errors.
 
-use vstructc::diag::{DEFAULT_MAX_PER_CODE, Diagnostics, MAX_HUMAN_LINE, Severity, Shown, bound_line};
 use clap::{Parser, Subcommand, ValueEnum};
-use vstructc::registry::Prefer;
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vstructc::diag::{
+    DEFAULT_MAX_PER_CODE, Diagnostics, MAX_HUMAN_LINE, Severity, Shown, bound_line,
+};
+use vstructc::registry::Prefer;
 
 /// `eprintln!` that ignores a failing standard error (`2>/dev/full`): the exit status still
 /// says what happened, and there is nowhere left to say more. `eprintln!` would panic.

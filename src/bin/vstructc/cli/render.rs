@@ -26,14 +26,14 @@
 use super::CommonOptions;
 use super::input::{report_error, stream_output};
 use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
-use vstructc::back::png::{ImageFormat, write_rows};
-use vstructc::interp::Material;
-use vstructc::interp::preview::{Ball, ContactSheet, PreviewOptions};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+use vstructc::back::png::{ImageFormat, write_rows};
+use vstructc::interp::Material;
+use vstructc::interp::preview::{Ball, ContactSheet, PreviewOptions};
 
 /// Arguments of `vstructc render`.
 #[derive(Debug, clap::Args)]
