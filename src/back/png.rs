@@ -12,7 +12,7 @@ use glam::Vec3;
 use std::io::{self, Write};
 
 /// The sRGB transfer function of one linear value, clamped to [0, 1].
-pub fn srgb_encode(x: f32) -> f32 {
+pub(crate) fn srgb_encode(x: f32) -> f32 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     if x <= 0.003_130_8 {
         12.92 * x
@@ -185,7 +185,11 @@ pub fn encode_pfm(img: &Image) -> Vec<u8> {
 }
 
 /// Write `img` in `format` on `out`.
-pub fn encode_image(img: &Image, format: ImageFormat, out: &mut dyn Write) -> io::Result<()> {
+pub(crate) fn encode_image(
+    img: &Image,
+    format: ImageFormat,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     write_rows(format, out, img.width, img.height, |sink| {
         let rows = img.pixels.chunks(img.width.max(1));
         match format.order() {

@@ -171,7 +171,7 @@ impl Graph for SimpleGraph {
 }
 
 /// Which recipe lowers a terminal of this shader type, if any.
-pub fn recipe_for(shader: &str) -> Option<crate::ir::RecipeId> {
+pub(crate) fn recipe_for(shader: &str) -> Option<crate::ir::RecipeId> {
     use crate::ir::RecipeId::*;
     Some(match shader {
         "PxrSurface" | "PxrLayerSurface" => PxrSurface,
@@ -224,7 +224,7 @@ impl DefinitionCache {
 }
 
 /// [`lower_node`] with a definition cache shared across calls (see [`lower_many`]).
-pub fn lower_node_cached<G: Graph>(
+pub(crate) fn lower_node_cached<G: Graph>(
     graph: &G,
     defs: &dyn Definitions,
     cache: &mut DefinitionCache,
@@ -590,14 +590,14 @@ impl<'a, G: Graph> Lower<'a, G> {
 }
 
 /// True for the pattern types the lowering turns into program expressions.
-pub fn is_interpreted(shader: &str) -> bool {
+pub(crate) fn is_interpreted(shader: &str) -> bool {
     matches!(shader, "PxrLayer" | "PxrLayerMixer") || patterns::is_pattern(shader)
 }
 
 /// Anisotropic widths from roughness `r` and anisotropy `a ∈ [−1, 1]` (§0):
 /// `α = clamp(r², 1e-6, 1)`, `s = √(1 − min(|a|, 0.98))`, `α_x = min(α/s, 1)`, `α_y = α s`,
 /// roles swapped for `a < 0`.
-pub fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
+pub(crate) fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
     let p = &mut b.prog;
     let r2 = p.mul(r, r);
     let alpha = p.clamp(r2, 1e-6, 1.0);

@@ -92,7 +92,7 @@ pub fn lower_terminal(
 }
 
 /// LW030 for every placeholder (a connection into a head) that survived resolution.
-pub fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagnostics) {
+pub(crate) fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagnostics) {
     for id in net.nodes_sorted() {
         let Some(tables) = registry.tables(net[id].shader()) else {
             continue;

@@ -200,7 +200,7 @@ fn head_names(props: &[Property]) -> Vec<&str> {
 
 /// Registry normalisation (vstruct.md §2.5): a property named like a head of its own direction
 /// gets type `Vstruct` (array shape and declared type kept) and loses its default.
-pub fn normalize_heads(def: &mut Definition) {
+pub(crate) fn normalize_heads(def: &mut Definition) {
     fn normalize(props: &mut [Property]) {
         let heads: HashSet<String> = head_names(props).into_iter().map(String::from).collect();
         for p in props.iter_mut().filter(|p| heads.contains(&p.name)) {
