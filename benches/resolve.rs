@@ -64,7 +64,7 @@ fn bench(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
             b.iter(|| black_box(parse()))
         });
-        let json = write_json(&parsed).into_bytes();
+        let json = write_json(&parsed).unwrap().into_bytes();
         group.bench_with_input(
             BenchmarkId::new("parse_json", materials),
             &materials,

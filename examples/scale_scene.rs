@@ -76,5 +76,5 @@ fn json_of(rib: &str) -> String {
         &mut diags,
     )
     .expect("generated scene parses");
-    write_json(&net)
+    write_json(&net).unwrap()
 }

@@ -11,22 +11,29 @@
 //! [`Error`], which wraps the same positioned [`Diagnostic`].
 
 use std::fmt;
-use std::ops::Range;
+use std::ops::{Deref, Range};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// How serious a diagnostic is. Ordered from most to least severe.
+/// How serious a diagnostic is. Ordered from least to most severe, so that
+/// `d.severity >= Severity::Warning` reads "a warning or an error".
+///
+/// ```
+/// use vstructc::Severity;
+/// assert!(Severity::Error > Severity::Warning);
+/// assert!(Severity::Warning > Severity::Info && Severity::Info > Severity::Note);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Severity {
-    /// Processing of the affected input stopped.
-    Error,
-    /// A likely mistake; processing continued.
-    Warning,
-    /// Something the user may want to know; shown by default.
-    Info,
     /// Detail shown only with `--verbose`.
     Note,
+    /// Something the user may want to know; shown by default.
+    Info,
+    /// A likely mistake; processing continued.
+    Warning,
+    /// Processing of the affected input stopped.
+    Error,
 }
 
 impl Severity {
@@ -38,6 +45,94 @@ impl Severity {
             Severity::Info => "info",
             Severity::Note => "note",
         }
+    }
+}
+
+mod codes;
+
+/// A diagnostic's stable code (`VS009`, `AR004`, …): two letters naming the stage and three
+/// digits. [`Code::meaning`] gives its documented meaning. A `Code` compares equal to its text
+/// (`d.code == "VS009"`) and dereferences to it.
+///
+/// ```
+/// use vstructc::diag::Code;
+/// let c = Code::new("VS009");
+/// assert_eq!(c, "VS009");
+/// assert!(c.meaning().unwrap().contains("not an input"));
+/// assert_eq!(Code::new("XX999").meaning(), None);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Code(&'static str);
+
+impl Code {
+    /// The code with this text.
+    pub const fn new(code: &'static str) -> Code {
+        Code(code)
+    }
+    /// The code's text.
+    pub fn as_str(self) -> &'static str {
+        self.0
+    }
+    /// The code's documented meaning (one line, as in the tables of the user documentation),
+    /// or `None` for a code vstructc does not report.
+    pub fn meaning(self) -> Option<&'static str> {
+        codes::CODES
+            .binary_search_by(|(c, _)| (*c).cmp(self.0))
+            .ok()
+            .map(|i| codes::CODES[i].1)
+    }
+    /// Every code vstructc reports, in order, with its meaning.
+    pub fn all() -> impl Iterator<Item = (Code, &'static str)> {
+        codes::CODES.iter().map(|(c, m)| (Code(c), *m))
+    }
+}
+
+impl Deref for Code {
+    type Target = str;
+    fn deref(&self) -> &str {
+        self.0
+    }
+}
+
+impl std::borrow::Borrow<str> for Code {
+    fn borrow(&self) -> &str {
+        self.0
+    }
+}
+
+impl From<&'static str> for Code {
+    fn from(code: &'static str) -> Code {
+        Code(code)
+    }
+}
+
+impl PartialEq<str> for Code {
+    fn eq(&self, other: &str) -> bool {
+        self.0 == other
+    }
+}
+
+impl PartialEq<&str> for Code {
+    fn eq(&self, other: &&str) -> bool {
+        self.0 == *other
+    }
+}
+
+impl PartialEq<Code> for &str {
+    fn eq(&self, other: &Code) -> bool {
+        *self == other.0
+    }
+}
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.0)
+    }
+}
+
+impl serde::Serialize for Code {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.0)
     }
 }
 
@@ -121,8 +216,8 @@ pub fn line_column(text: &str, offset: usize) -> (u32, u32) {
 pub struct Diagnostic {
     /// Severity.
     pub severity: Severity,
-    /// Stable code such as `VS001` or `AR004`.
-    pub code: &'static str,
+    /// Stable code such as `VS001` or `AR004`, with its documented meaning.
+    pub code: Code,
     /// One-line message.
     pub message: String,
     /// Primary location, if known.
@@ -136,35 +231,46 @@ pub struct Diagnostic {
     /// Related locations with a short label each.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub related: Vec<(String, Location)>,
+    /// The handle of the network node the diagnostic is about, if it is about one (set by
+    /// resolution and lowering, also for networks built in memory, which have no
+    /// [`Location`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node: Option<String>,
+    /// The parameter (input or output) of [`Diagnostic::node`] the diagnostic is about, if
+    /// any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub param: Option<String>,
 }
 
 impl Diagnostic {
     /// A diagnostic without location.
-    pub fn new(severity: Severity, code: &'static str, message: impl Into<String>) -> Self {
+    pub fn new(severity: Severity, code: impl Into<Code>, message: impl Into<String>) -> Self {
         Diagnostic {
             severity,
-            code,
+            code: code.into(),
             message: message.into(),
             location: None,
             span: None,
             notes: Vec::new(),
             related: Vec::new(),
+            node: None,
+            param: None,
         }
     }
     /// An error diagnostic.
-    pub fn error(code: &'static str, message: impl Into<String>) -> Self {
+    pub fn error(code: impl Into<Code>, message: impl Into<String>) -> Self {
         Self::new(Severity::Error, code, message)
     }
     /// A warning diagnostic.
-    pub fn warning(code: &'static str, message: impl Into<String>) -> Self {
+    pub fn warning(code: impl Into<Code>, message: impl Into<String>) -> Self {
         Self::new(Severity::Warning, code, message)
     }
     /// An info diagnostic.
-    pub fn info(code: &'static str, message: impl Into<String>) -> Self {
+    pub fn info(code: impl Into<Code>, message: impl Into<String>) -> Self {
         Self::new(Severity::Info, code, message)
     }
     /// A note diagnostic (shown only with `--verbose`).
-    pub fn note(code: &'static str, message: impl Into<String>) -> Self {
+    pub fn note(code: impl Into<Code>, message: impl Into<String>) -> Self {
         Self::new(Severity::Note, code, message)
     }
     /// Builder: set the primary location.
@@ -180,6 +286,16 @@ impl Diagnostic {
     /// Builder: add a line of explanation.
     pub fn with_note(mut self, note: impl Into<String>) -> Self {
         self.notes.push(note.into());
+        self
+    }
+    /// Builder: the handle of the node the diagnostic is about.
+    pub fn with_node(mut self, handle: impl Into<String>) -> Self {
+        self.node = Some(handle.into());
+        self
+    }
+    /// Builder: the parameter of the node the diagnostic is about.
+    pub fn with_param(mut self, name: impl Into<String>) -> Self {
+        self.param = Some(name.into());
         self
     }
     /// Builder: add a related location.
@@ -260,7 +376,7 @@ impl Diagnostics {
     }
     /// True if any diagnostic is a warning or error.
     pub fn has_warnings(&self) -> bool {
-        self.items.iter().any(|d| d.severity <= Severity::Warning)
+        self.items.iter().any(|d| d.severity >= Severity::Warning)
     }
     /// Diagnostics with the given code.
     pub fn with_code<'a>(&'a self, code: &'a str) -> impl Iterator<Item = &'a Diagnostic> + 'a {
@@ -277,7 +393,7 @@ impl Diagnostics {
             let ka = a.location.as_ref().map(|l| (&*l.file, l.line, l.column));
             let kb = b.location.as_ref().map(|l| (&*l.file, l.line, l.column));
             match (ka, kb) {
-                (Some(x), Some(y)) => x.cmp(&y).then(a.code.cmp(b.code)),
+                (Some(x), Some(y)) => x.cmp(&y).then(a.code.cmp(&b.code)),
                 (Some(_), None) => std::cmp::Ordering::Less,
                 (None, Some(_)) => std::cmp::Ordering::Greater,
                 (None, None) => std::cmp::Ordering::Equal,
@@ -342,18 +458,24 @@ impl Diagnostics {
             suppressed: Vec::new(),
         };
         for d in self.items.iter().filter(|d| keep(d)) {
-            if dedup && !seen.insert((d.severity, d.code, d.location.as_ref(), d.message.as_str()))
+            if dedup
+                && !seen.insert((
+                    d.severity,
+                    d.code.as_str(),
+                    d.location.as_ref(),
+                    d.message.as_str(),
+                ))
             {
                 continue;
             }
-            let count = per_code.entry(d.code).or_insert(0);
+            let count = per_code.entry(d.code.as_str()).or_insert(0);
             *count += 1;
             if max_per_code == 0 || *count <= max_per_code {
                 shown.items.push(d);
             } else if let Some(s) = shown.suppressed.iter_mut().find(|(c, _)| *c == d.code) {
                 s.1 += 1;
             } else {
-                shown.suppressed.push((d.code, 1));
+                shown.suppressed.push((d.code.as_str(), 1));
             }
         }
         shown
@@ -474,7 +596,7 @@ impl Error {
     pub fn code(&self) -> Option<&'static str> {
         match self {
             Error::Limit(_) => Some("LM001"),
-            _ => self.diagnostic().map(|d| d.code),
+            _ => self.diagnostic().map(|d| d.code.as_str()),
         }
     }
 
@@ -528,7 +650,7 @@ mod tests {
         d.push(Diagnostic::warning("VS009", "none"));
         d.push(Diagnostic::warning("VS003", "c").at(Location::new("f", 1, 9)));
         d.sort();
-        let codes: Vec<_> = d.iter().map(|x| x.code).collect();
+        let codes: Vec<_> = d.iter().map(|x| x.code.as_str()).collect();
         assert_eq!(codes, ["VS003", "VS001", "VS002", "VS009"]);
     }
 
@@ -545,7 +667,7 @@ mod tests {
         let lines: Vec<(&str, u32)> = shown
             .items
             .iter()
-            .map(|d| (d.code, d.location.as_ref().map_or(0, |l| l.line)))
+            .map(|d| (d.code.as_str(), d.location.as_ref().map_or(0, |l| l.line)))
             .collect();
         assert_eq!(lines, [("RB018", 1), ("RB018", 2), ("VS018", 0)]);
         // Lines 3 and 4, and the other message on line 1: three distinct ones left out.
@@ -578,5 +700,117 @@ mod tests {
             "error[AR004]: duplicate parameter `x`\n  --> a.args:3:5"
         );
         assert!(d.render_json().contains("\"code\":\"AR004\""));
+    }
+
+    /// The rows `| CODE | severity | meaning |` of the user documentation's tables.
+    fn documented() -> Vec<(String, String)> {
+        let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs");
+        let mut rows = Vec::new();
+        for entry in std::fs::read_dir(docs).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "md") {
+                continue;
+            }
+            for line in std::fs::read_to_string(&path).unwrap().lines() {
+                let cells: Vec<&str> = line.split(" | ").collect();
+                let code = cells[0].trim_start_matches("| ");
+                let is_code = code.len() == 5
+                    && code[..2].bytes().all(|b| b.is_ascii_uppercase())
+                    && code[2..].bytes().all(|b| b.is_ascii_digit());
+                if line.starts_with("| ") && cells.len() >= 3 && is_code {
+                    let meaning = cells[2..].join(" | ");
+                    rows.push((code.to_string(), meaning.trim_end_matches(" |").to_string()));
+                }
+            }
+        }
+        rows.sort();
+        rows
+    }
+
+    /// Every code's meaning is the documented one, and every documented code has one.
+    #[test]
+    fn code_meanings_are_the_documented_ones() {
+        let table: Vec<(String, String)> = Code::all()
+            .map(|(c, m)| (c.to_string(), m.to_string()))
+            .collect();
+        let mut sorted = table.clone();
+        sorted.sort();
+        assert_eq!(table, sorted, "CODES must stay sorted (binary search)");
+        assert_eq!(table, documented());
+        assert!(
+            Code::new("VS009")
+                .meaning()
+                .unwrap()
+                .contains("not an input")
+        );
+    }
+
+    /// Every code the library reports (a quoted code literal in `src/`) has a meaning.
+    #[test]
+    fn every_reported_code_has_a_meaning() {
+        fn scan(dir: &std::path::Path, found: &mut std::collections::BTreeSet<String>) {
+            for entry in std::fs::read_dir(dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    scan(&path, found);
+                } else if path.ends_with("diag/codes.rs") {
+                    // The table itself.
+                    continue;
+                } else if path.extension().is_some_and(|e| e == "rs") {
+                    let text = std::fs::read_to_string(&path).unwrap();
+                    let b = text.as_bytes();
+                    for i in 0..b.len().saturating_sub(6) {
+                        let lit = &b[i..i + 7];
+                        if lit[0] == b'"'
+                            && lit[6] == b'"'
+                            && lit[1..3].iter().all(u8::is_ascii_uppercase)
+                            && lit[3..6].iter().all(u8::is_ascii_digit)
+                        {
+                            found.insert(text[i + 1..i + 6].to_string());
+                        }
+                    }
+                }
+            }
+        }
+        let mut found = std::collections::BTreeSet::new();
+        scan(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
+            &mut found,
+        );
+        assert!(found.len() > 50, "{found:?}");
+        let missing: Vec<&String> = found
+            .iter()
+            .filter(|c| Code::all().all(|(known, _)| known != c.as_str()))
+            .filter(|c| c.as_str() != "XX999")
+            .collect();
+        assert!(
+            missing.is_empty(),
+            "codes without a documented meaning: {missing:?}"
+        );
+    }
+
+    #[test]
+    fn severity_orders_error_highest() {
+        let mut all = [
+            Severity::Error,
+            Severity::Note,
+            Severity::Warning,
+            Severity::Info,
+        ];
+        all.sort();
+        assert_eq!(
+            all,
+            [
+                Severity::Note,
+                Severity::Info,
+                Severity::Warning,
+                Severity::Error
+            ]
+        );
+        let mut d = Diagnostics::new();
+        d.push(Diagnostic::info("VS018", "i"));
+        assert!(!d.has_warnings());
+        d.push(Diagnostic::warning("VS010", "w"));
+        assert!(d.has_warnings() && !d.has_errors());
     }
 }

@@ -17,6 +17,15 @@
 //!    CPU interpreter;
 //! 7. [`back`]: writers for RIB, JSON, Graphviz dot and images.
 //!
+//! [`pipeline`] chains them: a network's text in, closure IR or interpreter materials out.
+//! [`model`] holds the definition model the readers produce and the registry holds;
+//! [`raster`] the image type the preview renderer and the image writers share.
+//!
+//! Features: `cli` (default; the `vstructc` binary's dependencies), `png` (PNG encoding of
+//! previews, on with `cli`), `parallel` (default; rayon), `testkit` (test and benchmark
+//! support, not a stable API). A crate embedding vstructc can turn the defaults off:
+//! `vstructc = { version = "0.1", default-features = false }`.
+//!
 //! Problems are reported as [`diag::Diagnostic`]s with stable codes and positions; conditions
 //! that stop processing are [`diag::Error`]s.
 
@@ -27,6 +36,7 @@ pub mod limits;
 pub mod types;
 
 pub mod front;
+pub mod model;
 pub mod registry;
 
 pub mod cond;
@@ -39,8 +49,16 @@ pub mod ir;
 pub mod lower;
 
 pub mod back;
+pub mod raster;
 
-pub mod cli;
+pub mod pipeline;
 
-pub use diag::{Diagnostic, Diagnostics, Error, Location, Result, Severity};
+pub use diag::{Code, Diagnostic, Diagnostics, Error, Location, Result, Severity};
+
+/// The vector types of the interpreter's signatures (`glam::Vec3` directions and colours):
+/// use `vstructc::glam` to get the same version.
+pub use glam;
+/// The graph library under [`network::Network`] (its node and edge ids are petgraph's
+/// indices): use `vstructc::petgraph` to get the same version.
+pub use petgraph;
 pub use types::{ArraySpec, BaseType, Type, Value};

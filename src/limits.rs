@@ -47,6 +47,10 @@ pub struct Limits {
     pub preview_pixels: u64,
 }
 
+/// The default of [`Limits::expr_depth`]: the deepest parenthesis nesting of a conditional
+/// (real expressions use 1–3 levels; the parser recurses once per level).
+pub const DEFAULT_EXPR_DEPTH: u64 = 64;
+
 impl Default for Limits {
     fn default() -> Self {
         Limits {
@@ -56,7 +60,7 @@ impl Default for Limits {
             connections_per_input: 1 << 20,
             params_per_node: 1 << 20,
             expr_terms: 1 << 22,
-            expr_depth: crate::cond::parser::MAX_PAREN_DEPTH as u64,
+            expr_depth: DEFAULT_EXPR_DEPTH,
             preview_pixels: 8192 * 8192,
         }
     }

@@ -337,7 +337,7 @@ impl Value {
 }
 
 /// Formats a float with the shortest decimal text that reads back to the same `f32`.
-pub fn format_f32(x: f32) -> String {
+pub(crate) fn format_f32(x: f32) -> String {
     format!("{x}")
 }
 

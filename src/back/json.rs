@@ -111,7 +111,21 @@ fn push_indent(out: &mut String, level: usize) {
     }
 }
 
-/// Write the network's materials as a JSON network document.
+/// The JSON form holds materials only: a network with nodes but no material would be
+/// written as `{"materials": {}}`, losing every node. The writers refuse it with this error.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "the network has {nodes} node(s) but no material, so its JSON form would hold none of \
+     them; add a material with a terminal (`Network::add_material`, `Network::set_terminal`)"
+)]
+pub struct NoMaterials {
+    /// The number of nodes the output would have lost.
+    pub nodes: usize,
+}
+
+/// Write the network's materials as a JSON network document. Fails with [`NoMaterials`]
+/// when the network has nodes but no material (an empty network is written as an empty
+/// document).
 ///
 /// ```
 /// use vstructc::back::json::write_json;
@@ -126,21 +140,35 @@ fn push_indent(out: &mut String, level: usize) {
 /// let m = net.add_material("SG");
 /// net.set_terminal(m, "surface", surface, None);
 ///
-/// let json = write_json(&net);
+/// let json = write_json(&net).unwrap();
 /// assert!(json.starts_with("{\n  \"materials\": {\n    \"SG\": {\n"));
 /// assert!(json.contains("\"value\": [0.1, 0.5, 1]"));
 /// assert!(json.ends_with("\"vstructcNetwork\": 1\n}\n"));
+///
+/// let mut loose = Network::new();
+/// loose.add_node("PxrLayer1", "PxrLayer");
+/// assert_eq!(write_json(&loose).unwrap_err().nodes, 1);
 /// ```
-pub fn write_json(net: &Network) -> String {
+pub fn write_json(net: &Network) -> Result<String, NoMaterials> {
+    check_materials(net)?;
     let mut out = Vec::new();
     // Writing into a Vec cannot fail.
     let _ = write_json_to(net, &mut out);
     // Every piece written is a `str` or serde_json's escaping of one.
-    String::from_utf8(out).unwrap_or_default()
+    Ok(String::from_utf8(out).unwrap_or_default())
+}
+
+fn check_materials(net: &Network) -> Result<(), NoMaterials> {
+    match net.node_count() {
+        nodes if nodes > 0 && net.materials().is_empty() => Err(NoMaterials { nodes }),
+        _ => Ok(()),
+    }
 }
 
 /// [`write_json`] into `out`, material by material (the text of a large scene is never
-/// held in memory whole); fails with the error of `out`.
+/// held in memory whole); fails with the error of `out`, or with an
+/// [`io::ErrorKind::InvalidInput`] error wrapping [`NoMaterials`] (nothing written) when
+/// the network has nodes but no material.
 ///
 /// ```
 /// use vstructc::back::json::{write_json, write_json_to};
@@ -151,9 +179,10 @@ pub fn write_json(net: &Network) -> String {
 /// net.set_terminal(m, "surface", s, None);
 /// let mut out = Vec::new();
 /// write_json_to(&net, &mut out).unwrap();
-/// assert_eq!(out, write_json(&net).into_bytes());
+/// assert_eq!(out, write_json(&net).unwrap().into_bytes());
 /// ```
 pub fn write_json_to(net: &Network, out: &mut dyn Write) -> io::Result<()> {
+    check_materials(net).map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
     let mut w = Stream {
         out: Vec::with_capacity(1 << 16),
     };
@@ -660,9 +689,9 @@ mod tests {
         use crate::registry::Registry;
         use crate::resolve::{ResolveOptions, resolve};
         let net = assorted();
-        assert_eq!(write_json(&net), write_json_tree(&net));
+        assert_eq!(write_json(&net).unwrap(), write_json_tree(&net));
         assert_eq!(
-            write_json(&Network::new()),
+            write_json(&Network::new()).unwrap(),
             write_json_tree(&Network::new())
         );
         let reg = Registry::embedded();
@@ -676,9 +705,9 @@ mod tests {
             &mut diags,
         )
         .unwrap();
-        assert_eq!(write_json(&net), write_json_tree(&net));
+        assert_eq!(write_json(&net).unwrap(), write_json_tree(&net));
         resolve(&mut net, &reg, &ResolveOptions::default());
-        assert_eq!(write_json(&net), write_json_tree(&net));
+        assert_eq!(write_json(&net).unwrap(), write_json_tree(&net));
     }
 
     #[test]

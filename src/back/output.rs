@@ -54,7 +54,7 @@ use std::path::{Path, PathBuf};
 pub const STDOUT_NAME: &str = "<stdout>";
 
 /// The longest symlink chain followed to find the file to replace (Linux's own limit).
-pub const MAX_SYMLINK_CHAIN: usize = 40;
+pub(crate) const MAX_SYMLINK_CHAIN: usize = 40;
 
 /// Capacity of the buffer between the producer and the file.
 const BUFFER: usize = 1 << 16;

@@ -1,5 +1,5 @@
 //! Image encoders for previews: 8-bit sRGB PNG through the `png` crate (values clamped to
-//! [0, 1]) and linear PFM (`PF`, little-endian f32, rows bottom to top as the format
+//! [0, 1]; feature `png`, on by default) and linear PFM (`PF`, little-endian f32, rows bottom to top as the format
 //! requires).
 //!
 //! [`write_rows`] writes an image row by row as it is rendered, so a contact sheet of any
@@ -7,14 +7,12 @@
 //! out the rows in the format's [`ImageFormat::order`]). [`encode_png`] and [`encode_pfm`]
 //! encode an image held in memory the same way.
 
-use crate::diag::{Diagnostic, Error};
-use crate::interp::Rgb;
-use crate::interp::preview::{Image, RowOrder};
+use crate::raster::{Image, RowOrder};
 use glam::Vec3;
 use std::io::{self, Write};
 
 /// The sRGB transfer function of one linear value, clamped to [0, 1].
-pub fn srgb_encode(x: f32) -> f32 {
+pub(crate) fn srgb_encode(x: f32) -> f32 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     if x <= 0.003_130_8 {
         12.92 * x
@@ -33,6 +31,7 @@ pub fn srgb8(c: Vec3) -> [u8; 3] {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageFormat {
     /// 8-bit sRGB PNG (values clamped to [0, 1]).
+    #[cfg(feature = "png")]
     Png,
     /// Linear little-endian PFM (`PF`, scale −1).
     Pfm,
@@ -42,6 +41,7 @@ impl ImageFormat {
     /// The order the format stores rows in: top down for PNG, bottom up for PFM.
     pub fn order(self) -> RowOrder {
         match self {
+            #[cfg(feature = "png")]
             ImageFormat::Png => RowOrder::TopDown,
             ImageFormat::Pfm => RowOrder::BottomUp,
         }
@@ -61,6 +61,7 @@ pub struct RowSink<'a> {
 impl<'a> RowSink<'a> {
     fn new(out: &'a mut dyn Write, format: ImageFormat, width: usize) -> Self {
         let bytes_per_pixel = match format {
+            #[cfg(feature = "png")]
             ImageFormat::Png => 3,
             ImageFormat::Pfm => 12,
         };
@@ -73,7 +74,7 @@ impl<'a> RowSink<'a> {
     }
 
     /// Write the next row (`width` pixels).
-    pub fn write_row(&mut self, row: &[Rgb]) -> io::Result<()> {
+    pub fn write_row(&mut self, row: &[Vec3]) -> io::Result<()> {
         if row.len() != self.width {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
@@ -86,6 +87,7 @@ impl<'a> RowSink<'a> {
         }
         self.buf.clear();
         match self.format {
+            #[cfg(feature = "png")]
             ImageFormat::Png => {
                 for p in row {
                     self.buf.extend_from_slice(&srgb8(*p));
@@ -109,6 +111,7 @@ impl<'a> RowSink<'a> {
 /// it gives fewer rows than `height`.
 ///
 /// ```
+/// # #[cfg(feature = "png")] {
 /// use vstructc::back::png::{ImageFormat, write_rows};
 /// use glam::Vec3;
 /// let mut png = Vec::new();
@@ -117,6 +120,7 @@ impl<'a> RowSink<'a> {
 /// })
 /// .unwrap();
 /// assert_eq!(&png[1..4], b"PNG");
+/// # }
 /// ```
 pub fn write_rows<W: Write>(
     format: ImageFormat,
@@ -140,6 +144,7 @@ pub fn write_rows<W: Write>(
             produce(&mut RowSink::new(&mut out, format, width))?;
             out.flush()
         }
+        #[cfg(feature = "png")]
         ImageFormat::Png => {
             let side = |n: usize| u32::try_from(n).ok().filter(|&n| n < 1 << 31);
             let (Some(w), Some(h)) = (side(width), side(height)) else {
@@ -160,7 +165,9 @@ pub fn write_rows<W: Write>(
 }
 
 /// Encode `img` as an 8-bit sRGB PNG.
-pub fn encode_png(img: &Image) -> Result<Vec<u8>, Error> {
+#[cfg(feature = "png")]
+pub fn encode_png(img: &Image) -> Result<Vec<u8>, crate::diag::Error> {
+    use crate::diag::{Diagnostic, Error};
     let mut out = Vec::new();
     encode_image(img, ImageFormat::Png, &mut out)
         .map_err(|e| Error::Input(Box::new(Diagnostic::error("IO002", format!("PNG: {e}")))))?;
@@ -178,7 +185,11 @@ pub fn encode_pfm(img: &Image) -> Vec<u8> {
 }
 
 /// Write `img` in `format` on `out`.
-pub fn encode_image(img: &Image, format: ImageFormat, out: &mut dyn Write) -> io::Result<()> {
+pub(crate) fn encode_image(
+    img: &Image,
+    format: ImageFormat,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     write_rows(format, out, img.width, img.height, |sink| {
         let rows = img.pixels.chunks(img.width.max(1));
         match format.order() {

@@ -59,7 +59,7 @@ impl fmt::Display for SetRejection {
 }
 
 /// Truncation toward zero into `i32`, saturating; returns `(value, saturated)`.
-pub fn truncate_to_i32(x: f64) -> (i32, bool) {
+pub(crate) fn truncate_to_i32(x: f64) -> (i32, bool) {
     let t = x.trunc();
     if t > f64::from(i32::MAX) {
         (i32::MAX, true)

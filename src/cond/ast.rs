@@ -52,7 +52,7 @@ impl Param {
 }
 
 /// `(base, index)` for a name of the form `base[digits]`.
-pub fn split_index(name: &str) -> Option<(&str, usize)> {
+pub(crate) fn split_index(name: &str) -> Option<(&str, usize)> {
     let inner = name.strip_suffix(']')?;
     let open = inner.find('[')?;
     let index = inner[open + 1..].parse().ok()?;

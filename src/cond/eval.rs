@@ -219,7 +219,7 @@ pub fn evaluate<'s, U: Upstream + ?Sized>(
 
 /// The action of `stmt` that `choice` names (so a caller may keep the choice, which is
 /// `Copy`, instead of the action).
-pub fn chosen_action(stmt: &Statement, choice: Choice) -> &Action {
+pub(crate) fn chosen_action(stmt: &Statement, choice: Choice) -> &Action {
     match choice {
         Choice::Unconditional | Choice::Condition => &stmt.action,
         Choice::ElseIf(i) => stmt.else_ifs.get(i).map_or(&stmt.action, |l| &l.action),

@@ -229,7 +229,7 @@ impl TokenKind<'_> {
 
 /// A character as shown in messages: printable characters as themselves, the whitespace and
 /// control characters as C escapes (`\r`, `\v`, `\u{1b}`).
-pub fn escape_char(c: char) -> String {
+pub(crate) fn escape_char(c: char) -> String {
     match c {
         '\r' => "\\r".into(),
         '\n' => "\\n".into(),
@@ -261,7 +261,7 @@ impl Token<'_> {
 }
 
 /// The §3.1 whitespace set: space, `\t`, `\v`, `\n`, `\f` — **not** `\r`.
-pub fn is_space(c: char) -> bool {
+pub(crate) fn is_space(c: char) -> bool {
     matches!(c, ' ' | '\t' | '\u{0b}' | '\n' | '\u{0c}')
 }
 

@@ -1,5 +1,6 @@
 //! The `vstructConditionalExpr` language (spec vstruct.md §3–§4.3, §5.6, §9): lexer, parser,
-//! AST, evaluator, `set`/`copy` typing, the VS009 check and the opt-in extensions.
+//! AST, evaluator, `set`/`copy` typing and the opt-in extensions (the definition-time VS009
+//! check of the names a conditional reads is the registry's, `registry::VstructTables`).
 //!
 //! The formal grammar users read is `grammar/vstruct-conditional.ebnf`.
 //!
@@ -27,7 +28,6 @@
 
 pub mod action;
 pub mod ast;
-pub mod check;
 pub mod error;
 pub mod eval;
 pub mod ext;
@@ -41,7 +41,6 @@ pub use ast::{
     Action, ActionKind, ElseIf, Expr, ExprKind, IsTest, Literal, LiteralKind, Param, Span,
     Statement, dump,
 };
-pub use check::check_params;
 pub use error::{ParseError, location_in, render_caret};
 pub use eval::{
     Choice, ComparisonReport, Evaluation, FalseReason, MapUpstream, Upstream, evaluate,

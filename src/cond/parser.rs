@@ -128,7 +128,7 @@ struct Parser<'a> {
 /// once per level, while `and`/`or` chains of any length are loops over n-ary nodes; real
 /// expressions use 1–3 levels). Deeper nesting is a syntax error (VS001) at the parenthesis
 /// that exceeds it.
-pub const MAX_PAREN_DEPTH: usize = 64;
+pub const MAX_PAREN_DEPTH: usize = crate::limits::DEFAULT_EXPR_DEPTH as usize;
 
 impl<'a> Parser<'a> {
     /// The token `k` positions ahead, `k < LOOKAHEAD` (the final `Eof` repeats).

@@ -26,7 +26,7 @@
 //!   write an infinity back where a `copy` puts it.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location, Severity};
-use crate::registry::{
+use crate::model::{
     CondSource, Definition, Direction, MemberDecl, MetaKey, Metadata, Property, SourceKind,
     meta_key,
 };
@@ -233,11 +233,11 @@ struct PropertyChildren {
 /// Largest fixed `arraySize` accepted (robustness limit; the reference has none). A larger
 /// size would make the zero-padded default allocate gigabytes, so it is reported (AR013) and
 /// the property becomes a dynamic array, keeping whatever default values were written.
-pub const MAX_FIXED_ARRAY: usize = 1 << 20;
+pub(crate) const MAX_FIXED_ARRAY: usize = 1 << 20;
 
 /// Deepest `<page>` nesting accepted (robustness limit; real files use 1–3 levels). Deeper
 /// nesting is rejected with AR001, so recursion and page-path building stay bounded.
-pub const MAX_PAGE_DEPTH: usize = 64;
+pub(crate) const MAX_PAGE_DEPTH: usize = 64;
 
 const KNOWN_KINDS: &[&str] = &[
     "bxdf",
@@ -1331,7 +1331,7 @@ fn attr_error_position(e: &quick_xml::events::attributes::AttrError) -> usize {
 
 /// Splits `vstructmember` at the first `.`; `None` when head or member would be empty or there
 /// is no dot (vstruct.md §2.2). Nothing is trimmed.
-pub fn split_member(value: &str) -> Option<(String, String)> {
+pub(crate) fn split_member(value: &str) -> Option<(String, String)> {
     let (head, member) = value.split_once('.')?;
     (!head.is_empty() && !member.is_empty()).then(|| (head.to_string(), member.to_string()))
 }
@@ -1359,7 +1359,7 @@ fn parse_options_attr(value: &str) -> Vec<(String, String)> {
 }
 
 /// A type word of a `type` attribute or a tag (formats.md §2.4); `None` if unknown.
-pub fn args_type(word: &str) -> Option<Type> {
+pub(crate) fn args_type(word: &str) -> Option<Type> {
     if let Some(rest) = word.strip_prefix("struct")
         && rest.starts_with(char::is_whitespace)
     {
@@ -1407,7 +1407,7 @@ struct Issues {
 impl Issues {
     fn add(&mut self, severity: Severity, msg: String) {
         match &self.worst {
-            Some((s, _)) if *s <= severity => {}
+            Some((s, _)) if *s >= severity => {}
             _ => self.worst = Some((severity, msg)),
         }
     }
@@ -1563,7 +1563,7 @@ fn element(base: &BaseType, nums: &[f32], ints: &[i32]) -> Option<Value> {
 }
 
 /// Parses a `default` attribute for `ty` (formats.md §2.5). `text` is `None` when absent.
-pub fn parse_default(ty: &Type, text: Option<&str>) -> ParsedDefault {
+pub(crate) fn parse_default(ty: &Type, text: Option<&str>) -> ParsedDefault {
     let mut issues = Issues::default();
     let value = default_value(ty, text, &mut issues);
     ParsedDefault {

@@ -30,7 +30,7 @@
 //!   (`label:value` pairs or plain values).
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-use crate::registry::{
+use crate::model::{
     CondSource, Definition, Direction, MemberDecl, Metadata, Property, SourceKind, meta_key,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};

@@ -51,7 +51,7 @@ fn too_large_message(size: u64, limit: u64, at_least: bool) -> String {
 }
 
 /// `bytes` in the largest binary unit that keeps it at least 1 (`64 MiB`, `1.5 GiB`).
-pub fn human_size(bytes: u64) -> String {
+pub(crate) fn human_size(bytes: u64) -> String {
     const UNITS: [&str; 4] = ["KiB", "MiB", "GiB", "TiB"];
     if bytes < 1024 {
         return format!("{bytes} B");
@@ -70,7 +70,7 @@ pub fn human_size(bytes: u64) -> String {
 }
 
 /// What a file type is, with an article, for messages.
-pub fn kind_name(t: FileType) -> &'static str {
+pub(crate) fn kind_name(t: FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;
@@ -114,7 +114,7 @@ fn open_nonblocking(path: &Path) -> io::Result<File> {
 
 /// Open `path` (symlinks followed) for reading if it is a regular file; returns the file and
 /// its size. Never waits: a FIFO is refused, not opened for a writer to come.
-pub fn open_regular(path: &Path) -> Result<(File, u64), ReadError> {
+pub(crate) fn open_regular(path: &Path) -> Result<(File, u64), ReadError> {
     let file = open_nonblocking(path)?;
     let meta = file.metadata()?;
     if !meta.is_file() {

@@ -14,7 +14,7 @@ pub const EON_C1: f32 = 0.5 - 2.0 / (3.0 * PI);
 /// `c2 = 2/3 − 28/(15π)` of EON.
 pub const EON_C2: f32 = 2.0 / 3.0 - 28.0 / (15.0 * PI);
 /// Below this σ, EON is evaluated as Lambert (its `f_ms` is 0/0 at σ = 0).
-pub const EON_SIGMA_MIN: f32 = 1e-4;
+pub(crate) const EON_SIGMA_MIN: f32 = 1e-4;
 
 /// Cosine-samples a reflection lobe given its `f·μ_i` (weight = `f_cos/pdf`).
 #[inline]
@@ -469,7 +469,7 @@ pub struct PreparedBurley {
 }
 
 /// Hill's albedo fit of Burley diffuse (loose; for selection only).
-pub fn burley_albedo_fit(mu: f32, sigma: f32) -> f32 {
+pub(crate) fn burley_albedo_fit(mu: f32, sigma: f32) -> f32 {
     let a = 0.97619 - 0.488095 * pow5(1.0 - mu);
     let b = 1.55754 + (-2.02221 + (2.56283 - 1.06244 * mu) * mu) * mu;
     a + (b - a) * sigma

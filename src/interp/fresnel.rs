@@ -9,7 +9,7 @@ use glam::{Vec3, Vec3A};
 use std::ops::{Add, Div, Mul, Sub};
 
 /// `μ̄ = 1/7`, the angle (cosine) at which F82 forms are pinned.
-pub const MU_BAR: f32 = 1.0 / 7.0;
+pub(crate) const MU_BAR: f32 = 1.0 / 7.0;
 
 /// Normal-incidence reflectance of a dielectric interface: `((η − 1)/(η + 1))²`.
 #[inline]
@@ -26,7 +26,7 @@ pub fn schlick(f0: Rgb, mu: f32) -> Rgb {
 
 /// Generalized Schlick: `F0 + (F90 − F0)(1 − μ)^q`.
 #[inline]
-pub fn generalized_schlick(f0: Rgb, f90: Rgb, q: f32, mu: f32) -> Rgb {
+pub(crate) fn generalized_schlick(f0: Rgb, f90: Rgb, q: f32, mu: f32) -> Rgb {
     f0 + (f90 - f0) * pow_q((1.0 - mu).clamp(0.0, 1.0), q)
 }
 
@@ -40,7 +40,7 @@ pub fn f82_coefficient(f0: Rgb, f90: Rgb, q: f32, t: Rgb) -> Rgb {
 /// Hoffman F82 with precomputed coefficient `a` ([`f82_coefficient`]):
 /// `F0 + (F90 − F0)(1 − μ)^q − a μ(1 − μ)⁶`.
 #[inline]
-pub fn hoffman_f82(f0: Rgb, f90: Rgb, q: f32, a: Rgb, mu: f32) -> Rgb {
+pub(crate) fn hoffman_f82(f0: Rgb, f90: Rgb, q: f32, a: Rgb, mu: f32) -> Rgb {
     let om = (1.0 - mu).clamp(0.0, 1.0);
     let om3 = om * om * om;
     generalized_schlick(f0, f90, q, mu) - a * (mu * om3 * om3)
@@ -224,7 +224,7 @@ pub fn generalized_schlick_avg(f0: Rgb, f90: Rgb, q: f32) -> Rgb {
 }
 
 /// Hemispherical average of Hoffman F82 (`2∫ μ·μ(1 − μ)⁶ dμ = 1/126`).
-pub fn f82_avg(f0: Rgb, f90: Rgb, q: f32, a: Rgb) -> Rgb {
+pub(crate) fn f82_avg(f0: Rgb, f90: Rgb, q: f32, a: Rgb) -> Rgb {
     generalized_schlick_avg(f0, f90, q) - a / 126.0
 }
 
@@ -246,7 +246,7 @@ pub fn dielectric_avg(eta: f32) -> f32 {
 
 /// Fit of a conductor to Hoffman F82 (spec §3.9): `F0 = F(1)`, `t = F(1/7)/F_Schlick(1/7)`,
 /// `F90 = 1`, `q = 5`. Returns `(F0, t)`.
-pub fn conductor_to_f82(eta: Rgb, kappa: Rgb) -> (Rgb, Rgb) {
+pub(crate) fn conductor_to_f82(eta: Rgb, kappa: Rgb) -> (Rgb, Rgb) {
     let f0 = conductor(1.0, eta, kappa);
     let s = schlick(f0, MU_BAR).max(Vec3::splat(1e-6));
     (f0, conductor(MU_BAR, eta, kappa) / s)

@@ -5,7 +5,7 @@ use glam::Vec3;
 use std::f32::consts::PI;
 
 /// Below this `max(α_x, α_y)` a GGX lobe is a specular delta (pbrt-v4's rule).
-pub const DELTA_ALPHA: f32 = 1e-3;
+pub(crate) const DELTA_ALPHA: f32 = 1e-3;
 /// Smallest width used by a non-delta lobe on either axis (keeps `D` finite in f32).
 pub const MIN_ALPHA: f32 = 1e-4;
 

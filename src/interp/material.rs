@@ -73,7 +73,7 @@ mod uniform;
 pub const TRANSPARENCY_LOBE: u8 = u8::MAX;
 
 /// Default of [`PrepareOptions::drop_threshold`] (§1.4 step 6).
-pub const DEFAULT_DROP_THRESHOLD: f32 = 1e-6;
+pub(crate) const DEFAULT_DROP_THRESHOLD: f32 = 1e-6;
 
 /// One shading point as the interpreter sees it (§1.4). Directions are world-space unit
 /// vectors.
@@ -1197,7 +1197,7 @@ fn clean(v: Vec3) -> Vec3 {
 
 /// The concrete lobe of an IR leaf with its parameter registers evaluated (`regs` is the
 /// program's register file; missing registers read 0). Scalars read the first channel.
-pub fn leaf_lobe(kind: &LeafKind, regs: &[Vec3]) -> Lobe {
+pub(crate) fn leaf_lobe(kind: &LeafKind, regs: &[Vec3]) -> Lobe {
     let r = |reg: Reg| regs.get(reg.index()).copied().unwrap_or(Vec3::ZERO);
     let x = |reg: Reg| r(reg).x;
     let masking = |m: Masking| match m {

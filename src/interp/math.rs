@@ -7,7 +7,7 @@ use std::f32::consts::{FRAC_1_PI, PI};
 pub type Rgb = Vec3;
 
 /// Smallest |μ| used in denominators (spec closures.md §0).
-pub const MU_EPS: f32 = 1e-7;
+pub(crate) const MU_EPS: f32 = 1e-7;
 
 /// Rec.709 luminance `0.2126 r + 0.7152 g + 0.0722 b`.
 #[inline]
@@ -23,20 +23,20 @@ pub fn mean(c: Rgb) -> f32 {
 
 /// `max(|μ|, 1e-7)`, the guarded denominator of the spec.
 #[inline]
-pub fn safe_mu(mu: f32) -> f32 {
+pub(crate) fn safe_mu(mu: f32) -> f32 {
     mu.abs().max(MU_EPS)
 }
 
 /// `x⁵` by multiplications.
 #[inline]
-pub fn pow5(x: f32) -> f32 {
+pub(crate) fn pow5(x: f32) -> f32 {
     let x2 = x * x;
     x2 * x2 * x
 }
 
 /// `x^q`, with a multiplication-only path for the common `q = 5`.
 #[inline]
-pub fn pow_q(x: f32, q: f32) -> f32 {
+pub(crate) fn pow_q(x: f32, q: f32) -> f32 {
     if q == 5.0 {
         pow5(x)
     } else {
@@ -85,13 +85,13 @@ pub fn sample_cosine(u1: f32, u2: f32) -> Option<Vec3> {
 
 /// Density of [`sample_cosine`] (per solid angle) at a direction with `z = mu`.
 #[inline]
-pub fn pdf_cosine(mu: f32) -> f32 {
+pub(crate) fn pdf_cosine(mu: f32) -> f32 {
     mu.max(0.0) * FRAC_1_PI
 }
 
 /// Uniform direction on the upper hemisphere from `(u1, u2)`.
 #[inline]
-pub fn sample_uniform_hemisphere(u1: f32, u2: f32) -> Vec3 {
+pub(crate) fn sample_uniform_hemisphere(u1: f32, u2: f32) -> Vec3 {
     let z = 1.0 - u1.clamp(0.0, 1.0);
     let r = (1.0 - z * z).max(0.0).sqrt();
     let (s, c) = (2.0 * PI * u2).sin_cos();

@@ -273,7 +273,7 @@ impl RatioGrid {
 }
 
 /// `E_avg = 2∫E1 μ dμ` for a masking variant.
-pub fn e1_avg(masking: Masking, alpha: f32) -> f32 {
+pub(crate) fn e1_avg(masking: Masking, alpha: f32) -> f32 {
     let t = match masking {
         Masking::HeightCorrelated => TableId::EavgE1Hc,
         Masking::Separable => TableId::EavgE1Sep,
@@ -318,7 +318,7 @@ pub fn dielectric_albedos(masking: Masking, mu: f32, alpha: f32, eta: f32) -> [f
 }
 
 /// As [`dielectric_albedos`], looking up only the entries selected by `want` (others 0).
-pub fn dielectric_albedos_masked(
+pub(crate) fn dielectric_albedos_masked(
     masking: Masking,
     mu: f32,
     alpha: f32,

@@ -36,7 +36,10 @@ use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
 use crate::limits::{Limit, LimitExceeded, Limits};
 use glam::{Vec2, Vec3};
+#[cfg(feature = "parallel")]
 use rayon::prelude::*;
+
+pub use crate::raster::{Image, RowOrder};
 use std::f32::consts::{PI, TAU};
 
 /// Lanes of the batched preview path.
@@ -87,33 +90,6 @@ pub enum PreviewError {
     },
 }
 
-/// A linear RGB image, rows top to bottom.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Image {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// `width × height` pixels, row-major, top row first.
-    pub pixels: Vec<Rgb>,
-}
-
-impl Image {
-    /// An image filled with one colour.
-    pub fn filled(width: usize, height: usize, c: Rgb) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![c; width * height],
-        }
-    }
-
-    /// The pixel at column `x`, row `y` (row 0 at the top).
-    pub fn at(&self, x: usize, y: usize) -> Rgb {
-        self.pixels[y * self.width + x]
-    }
-}
-
 /// What the preview shows.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PreviewOptions {
@@ -137,7 +113,8 @@ pub struct PreviewOptions {
     /// prepare ([`Material::prepares_lanes`]), which the scalar path otherwise uses at
     /// one lane. For comparisons; the two agree to relative 1e-5.
     pub general_prepare: bool,
-    /// Shade rows in parallel (rayon's global pool).
+    /// Shade rows in parallel (rayon's global pool); ignored without the `parallel`
+    /// feature.
     pub parallel: bool,
     /// Bounds; a ball has at most [`Limits::preview_pixels`] pixels.
     pub limits: Limits,
@@ -292,18 +269,19 @@ pub fn render_ball(
         st.shade(material, opts, j, out);
         progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
     };
+    #[cfg(feature = "parallel")]
     if opts.parallel {
         img.pixels
             .par_chunks_mut(size)
             .enumerate()
             .for_each_init(RowState::default, row);
-    } else {
-        let mut st = RowState::default();
-        img.pixels
-            .chunks_mut(size)
-            .enumerate()
-            .for_each(|r| row(&mut st, r));
+        return Ok(img);
     }
+    let mut st = RowState::default();
+    img.pixels
+        .chunks_mut(size)
+        .enumerate()
+        .for_each(|r| row(&mut st, r));
     Ok(img)
 }
 
@@ -483,15 +461,6 @@ pub struct Ball<'m> {
     pub options: PreviewOptions,
 }
 
-/// The order in which [`ContactSheet::render_rows`] hands out pixel rows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RowOrder {
-    /// Top row first (PNG).
-    TopDown,
-    /// Bottom row first (PFM).
-    BottomUp,
-}
-
 /// Balls of equal size in a grid of `⌈√n⌉` columns, row-major in the given order, empty
 /// cells in a background colour; rendered a band of pixel rows at a time, so its memory is
 /// at most [`BAND_PIXELS`] pixels (and at least one pixel row) whatever the number of balls.
@@ -616,16 +585,17 @@ impl<'m> ContactSheet<'m> {
                 st.shade(ball.material, &ball.options, j, out);
             }
         };
+        #[cfg(feature = "parallel")]
         if self.balls[0].options.parallel {
             band.par_chunks_mut(self.size)
                 .enumerate()
                 .for_each_init(RowState::default, cell);
-        } else {
-            let mut st = RowState::default();
-            band.chunks_mut(self.size)
-                .enumerate()
-                .for_each(|x| cell(&mut st, x));
+            return;
         }
+        let mut st = RowState::default();
+        band.chunks_mut(self.size)
+            .enumerate()
+            .for_each(|x| cell(&mut st, x));
     }
 }
 

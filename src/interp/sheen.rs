@@ -20,7 +20,7 @@ pub enum SheenMasking {
 }
 
 /// Smallest Conty–Kulla roughness.
-pub const SHEEN_CK_MIN_R: f32 = 0.005;
+pub(crate) const SHEEN_CK_MIN_R: f32 = 0.005;
 
 /// Conty–Kulla sheen (layerable).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -272,7 +272,7 @@ impl SheenLTCBound {
 
 /// The LTC coefficients `(a, b)` at `(μ_o, r)`.
 #[inline(always)]
-pub fn sheen_ltc_coefficients(x: f32, y: f32) -> (f32, f32) {
+pub(crate) fn sheen_ltc_coefficients(x: f32, y: f32) -> (f32, f32) {
     let a = (2.58126 * x + 0.813703 * y) * y / (1.0 + 0.310327 * x * x + 2.60994 * x * y);
     let b = (1.0 - x).max(0.0).sqrt() * (y - 1.0) * y * y * y
         / (0.0000254053 + 1.71228 * x - 1.71506 * x * y + 1.34174 * y * y);

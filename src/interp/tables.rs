@@ -1,7 +1,7 @@
 //! Albedo tables (spec closures.md §3.17): identities, on-disk format, loading and lookups.
 //!
 //! Every table is a committed little-endian f32 blob under `src/interp/tables/`, written by
-//! `vstructc-lutgen` (see [`crate::interp::lutgen`]) and embedded with `include_bytes!`. A blob
+//! the `lutgen` example (module `interp::lutgen`, feature `testkit`) and embedded with `include_bytes!`. A blob
 //! starts with a 96-byte header recording the generator version and parameters:
 //!
 //! | offset | size | content |
@@ -30,9 +30,9 @@ use std::sync::OnceLock;
 /// Number of nodes per axis (endpoints included).
 pub const N: usize = 32;
 /// Size in bytes of a table blob's header.
-pub const HEADER_BYTES: usize = 96;
+pub(crate) const HEADER_BYTES: usize = 96;
 /// Magic bytes opening a table blob.
-pub const MAGIC: [u8; 8] = *b"VSLUT\0\0\x01";
+pub(crate) const MAGIC: [u8; 8] = *b"VSLUT\0\0\x01";
 
 /// Identity of one albedo table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -348,7 +348,7 @@ pub enum LutError {
 }
 
 /// FNV-1a 32-bit hash (payload checksum of table blobs).
-pub fn fnv1a(bytes: &[u8]) -> u32 {
+pub(crate) fn fnv1a(bytes: &[u8]) -> u32 {
     let mut h: u32 = 0x811c_9dc5;
     for &b in bytes {
         h ^= u32::from(b);
@@ -491,7 +491,9 @@ pub fn lut(id: TableId) -> &'static Lut {
     static CELLS: [OnceLock<Lut>; 40] = [const { OnceLock::new() }; 40];
     CELLS[id.index()].get_or_init(|| match decode(id, blob(id)) {
         Ok(l) => l,
-        Err(e) => panic!("{e}: regenerate it with `cargo run --release --bin vstructc-lutgen`"),
+        Err(e) => panic!(
+            "{e}: regenerate it with `cargo run --release --features testkit --example lutgen`"
+        ),
     })
 }
 
@@ -517,13 +519,13 @@ pub fn axis_coord(x: f32) -> (usize, f32) {
 
 /// Normalised axis coordinate of `√α` for GGX tables.
 #[inline]
-pub fn ggx_axis(alpha: f32) -> f32 {
+pub(crate) fn ggx_axis(alpha: f32) -> f32 {
     alpha.max(0.0).sqrt()
 }
 
 /// Normalised axis coordinate of `√α` for Ward tables (α ∈ [0.01, 1]).
 #[inline]
-pub fn ward_axis(alpha: f32) -> f32 {
+pub(crate) fn ward_axis(alpha: f32) -> f32 {
     (alpha.max(0.0).sqrt() - 0.1) / 0.9
 }
 
@@ -535,13 +537,13 @@ pub fn sheen_axis(r: f32) -> f32 {
 
 /// Normalised axis coordinate of q ∈ [1, 16] for `S_q`.
 #[inline]
-pub fn q_axis(q: f32) -> f32 {
+pub(crate) fn q_axis(q: f32) -> f32 {
     q.max(1.0).log2() / 4.0
 }
 
 /// Which dielectric table pair an η selects, and its normalised coordinate.
 #[inline]
-pub fn eta_axis(eta: f32) -> (bool, f32) {
+pub(crate) fn eta_axis(eta: f32) -> (bool, f32) {
     if eta >= 1.0 {
         (false, (eta - 1.0) / 2.0)
     } else {
@@ -550,7 +552,7 @@ pub fn eta_axis(eta: f32) -> (bool, f32) {
 }
 
 /// Linear lookup in a 1-D table (`Eavg`), `x` normalised.
-pub fn lookup1(id: TableId, x: f32) -> f32 {
+pub(crate) fn lookup1(id: TableId, x: f32) -> f32 {
     let d = &lut(id).data;
     let (i, w) = axis_coord(x);
     d[i] + (d[i + 1] - d[i]) * w
@@ -665,7 +667,7 @@ pub fn lookup3(id: TableId, mu: f32, y: f32, z: f32) -> f32 {
 /// `cos²φ_o = v_x²/(v_x² + v_y²)` of the local view `v` (½ at normal incidence, where the
 /// azimuth is undefined and an anisotropic albedo does not depend on it).
 #[inline(always)]
-pub fn aniso_weight(v: glam::Vec3) -> f32 {
+pub(crate) fn aniso_weight(v: glam::Vec3) -> f32 {
     let r2 = v.x * v.x + v.y * v.y;
     if r2 > 1e-12 { v.x * v.x / r2 } else { 0.5 }
 }

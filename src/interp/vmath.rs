@@ -22,7 +22,7 @@ pub fn select(c: bool, a: f32, b: f32) -> f32 {
 
 /// [`select`] per component of a vector.
 #[inline(always)]
-pub fn select3(c: bool, a: glam::Vec3, b: glam::Vec3) -> glam::Vec3 {
+pub(crate) fn select3(c: bool, a: glam::Vec3, b: glam::Vec3) -> glam::Vec3 {
     glam::Vec3::new(
         select(c, a.x, b.x),
         select(c, a.y, b.y),
@@ -116,7 +116,7 @@ pub fn log2(x: f32) -> f32 {
 
 /// `xʸ` for x ≥ 0 and y > 0 (0 for x below the normal range).
 #[inline(always)]
-pub fn pow_pos(x: f32, y: f32) -> f32 {
+pub(crate) fn pow_pos(x: f32, y: f32) -> f32 {
     let r = exp2(y * log2(x.max(f32::MIN_POSITIVE)));
     select(x < f32::MIN_POSITIVE, 0.0, r)
 }

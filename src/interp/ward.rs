@@ -22,7 +22,7 @@ pub enum WardVariant {
 }
 
 /// Smallest Ward width.
-pub const WARD_MIN_ALPHA: f32 = 1e-3;
+pub(crate) const WARD_MIN_ALPHA: f32 = 1e-3;
 
 fn clamp_alpha(a: f32) -> f32 {
     if a.is_nan() {
@@ -33,7 +33,7 @@ fn clamp_alpha(a: f32) -> f32 {
 }
 
 /// Albedo (ρ = 1) of a Ward lobe from the tables, `α = √(α_x α_y)`.
-pub fn ward_albedo(variant: WardVariant, mu: f32, ax: f32, ay: f32) -> f32 {
+pub(crate) fn ward_albedo(variant: WardVariant, mu: f32, ax: f32, ay: f32) -> f32 {
     let t = match variant {
         WardVariant::Classic => TableId::WardClassic,
         WardVariant::Gm => TableId::WardGm,
@@ -58,7 +58,7 @@ fn aniso_tables(variant: WardVariant) -> [TableId; 3] {
 
 /// Albedo (ρ = 1) of a Ward lobe with (clamped) widths `ax`, `ay` at local view `v`: the
 /// isotropic table when `α_x = α_y`, else [`tables::aniso_albedo`] (spec §3.17).
-pub fn ward_albedo_at(variant: WardVariant, v: Vec3, ax: f32, ay: f32) -> f32 {
+pub(crate) fn ward_albedo_at(variant: WardVariant, v: Vec3, ax: f32, ay: f32) -> f32 {
     if ax == ay {
         ward_albedo(variant, v.z, ax, ay)
     } else {
@@ -292,7 +292,7 @@ impl PreparedWard {
 }
 
 /// Sub-lobe weights of mia's highlight (exponents `n, n/2, n/4`).
-pub const MIA_WEIGHTS: [f32; 3] = [1.0 / 6.0, 1.0 / 3.0, 0.5];
+pub(crate) const MIA_WEIGHTS: [f32; 3] = [1.0 / 6.0, 1.0 / 3.0, 0.5];
 
 /// mia_material's highlight: three Ward lobes, one instruction (spec §3.12).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -136,7 +136,7 @@ pub fn leaf_throughput(mode: TintMode, tint: Vec3, ttint: Vec3, e: Vec3) -> Vec3
 
 /// Throughput of `mix(a, b, m)` (§2.4) from its children's, `m` already saturated.
 #[inline(always)]
-pub fn mix_throughput(ta: Vec3, tb: Vec3, m: Vec3) -> Vec3 {
+pub(crate) fn mix_throughput(ta: Vec3, tb: Vec3, m: Vec3) -> Vec3 {
     (Vec3::ONE - m) * ta + m * tb
 }
 
@@ -263,7 +263,7 @@ pub fn flatten(ir: &MaterialIr, regs: &[Vec3], mu_o: &[f32], albedo: &dyn Albedo
 /// Symbolic weight of every leaf: for each path from the root, the product of its factors
 /// (`(1 − m)`, `m`, `c`, `T[mode](#top)` for the throughput of a layer's top), as text.
 /// Paths are listed in depth-first order; a leaf reached on several paths shows a sum.
-pub fn symbolic_weights(
+pub(crate) fn symbolic_weights(
     ir: &MaterialIr,
     operand: &dyn Fn(super::Reg) -> String,
 ) -> Vec<(NodeId, String)> {

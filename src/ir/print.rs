@@ -11,12 +11,12 @@ use glam::Vec3;
 use std::fmt::Write;
 
 /// Format a float stably: the shortest text that reads back to the same `f32`, `0` for ±0.
-pub fn fmt_f32(x: f32) -> String {
+pub(crate) fn fmt_f32(x: f32) -> String {
     if x == 0.0 { "0".into() } else { format!("{x}") }
 }
 
 /// Format a register value: a scalar when all lanes are equal.
-pub fn fmt_vec3(v: Vec3) -> String {
+pub(crate) fn fmt_vec3(v: Vec3) -> String {
     if v.x == v.y && v.y == v.z {
         fmt_f32(v.x)
     } else {
@@ -46,7 +46,7 @@ fn global_name(i: u32) -> &'static str {
 }
 
 /// The text of one op (without the destination).
-pub fn op_text(ir: &MaterialIr, i: usize) -> String {
+pub(crate) fn op_text(ir: &MaterialIr, i: usize) -> String {
     let p = &ir.program;
     let op = &p.ops[i];
     let args: Vec<String> = op.operands().map(|r| operand(p, r)).collect();
@@ -124,7 +124,7 @@ fn leaf_text(ir: &MaterialIr, leaf: &Leaf) -> String {
 }
 
 /// One line describing node `id`.
-pub fn node_text(ir: &MaterialIr, id: NodeId) -> String {
+pub(crate) fn node_text(ir: &MaterialIr, id: NodeId) -> String {
     let p = &ir.program;
     match &ir.nodes[id.index()] {
         Node::Leaf(l) => format!("leaf {}", leaf_text(ir, l)),

@@ -713,7 +713,7 @@ pub fn fresnel_conductor(mu: f32, eta: f32, kappa: f32) -> f32 {
 
 /// d'Eon's fit of the hemispherical dielectric Fresnel average (§3.7), with the exact
 /// identity for η < 1.
-pub fn fresnel_avg_dielectric(eta: f32) -> f32 {
+pub(crate) fn fresnel_avg_dielectric(eta: f32) -> f32 {
     fn fit(eta: f32) -> f32 {
         let eta = eta.clamp(1.0, 3.0);
         ((10893.0 * eta - 1438.2) / (-774.4 * eta * eta + 10212.0 * eta + 1.0))
@@ -742,7 +742,7 @@ fn hash3(x: i32, y: i32, z: i32) -> f32 {
 
 /// Value noise in [0, 1]: trilinear interpolation of hashed lattice values with a smoothstep
 /// fade.
-pub fn value_noise(p: Vec3) -> f32 {
+pub(crate) fn value_noise(p: Vec3) -> f32 {
     let f = p.floor();
     let t = p - f;
     let t = t * t * (Vec3::splat(3.0) - 2.0 * t);

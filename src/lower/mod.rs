@@ -18,6 +18,7 @@ pub mod network;
 pub mod patterns;
 pub mod physical;
 pub mod pxr;
+#[cfg(feature = "testkit")]
 pub mod scene;
 pub mod vray;
 
@@ -170,7 +171,7 @@ impl Graph for SimpleGraph {
 }
 
 /// Which recipe lowers a terminal of this shader type, if any.
-pub fn recipe_for(shader: &str) -> Option<crate::ir::RecipeId> {
+pub(crate) fn recipe_for(shader: &str) -> Option<crate::ir::RecipeId> {
     use crate::ir::RecipeId::*;
     Some(match shader {
         "PxrSurface" | "PxrLayerSurface" => PxrSurface,
@@ -223,7 +224,7 @@ impl DefinitionCache {
 }
 
 /// [`lower_node`] with a definition cache shared across calls (see [`lower_many`]).
-pub fn lower_node_cached<G: Graph>(
+pub(crate) fn lower_node_cached<G: Graph>(
     graph: &G,
     defs: &dyn Definitions,
     cache: &mut DefinitionCache,
@@ -244,7 +245,7 @@ pub fn lower_node_cached<G: Graph>(
         if let Some(l) = graph.location(node) {
             d = d.at(l);
         }
-        return Err(d.into());
+        return Err(d.with_node(graph.handle(node)).into());
     };
     let mut cx = Lower::new(graph, defs, cache, diags);
     let root = match recipe {
@@ -308,7 +309,7 @@ pub struct Lower<'a, G: Graph> {
 impl<'a, G: Graph> Lower<'a, G> {
     /// A fresh context that looks definitions up through `cache` (which may outlive it and
     /// serve many materials).
-    pub fn new(
+    pub(crate) fn new(
         graph: &'a G,
         defs: &'a dyn Definitions,
         cache: &'a mut DefinitionCache,
@@ -329,7 +330,7 @@ impl<'a, G: Graph> Lower<'a, G> {
     }
 
     /// The definition of a node's shader, with its inputs indexed by name (cached).
-    pub fn definition(&mut self, n: G::Id) -> Option<&IndexedDefinition> {
+    pub(crate) fn definition(&mut self, n: G::Id) -> Option<&IndexedDefinition> {
         if self.last_definition.as_ref().is_none_or(|(id, _)| *id != n) {
             let d = self.cache.get(self.defs, self.graph.shader(n));
             self.last_definition = Some((n, d));
@@ -340,16 +341,16 @@ impl<'a, G: Graph> Lower<'a, G> {
     }
 
     /// Emit a diagnostic located at node `n`.
-    pub fn diag(&mut self, n: G::Id, d: Diagnostic) {
+    pub(crate) fn diag(&mut self, n: G::Id, d: Diagnostic) {
         let d = match self.graph.location(n) {
             Some(l) => d.at(l),
             None => d,
         };
-        self.diags.push(d);
+        self.diags.push(d.with_node(self.graph.handle(n)));
     }
 
     /// Bind parameter `param` of node `n` (§4.0) with `builtin` as the recipe's default.
-    pub fn param(&mut self, n: G::Id, param: &str, builtin: Value) -> Result<Reg, Error> {
+    pub(crate) fn param(&mut self, n: G::Id, param: &str, builtin: Value) -> Result<Reg, Error> {
         let graph = self.graph;
         let input = graph.input(n, param);
         if let Some((up, output)) = input.connection {
@@ -450,25 +451,25 @@ impl<'a, G: Graph> Lower<'a, G> {
     }
 
     /// A float parameter.
-    pub fn pf(&mut self, n: G::Id, param: &str, builtin: f32) -> Result<Reg, Error> {
+    pub(crate) fn pf(&mut self, n: G::Id, param: &str, builtin: f32) -> Result<Reg, Error> {
         self.param(n, param, Value::Float(builtin))
     }
     /// An int parameter.
-    pub fn pi(&mut self, n: G::Id, param: &str, builtin: i32) -> Result<Reg, Error> {
+    pub(crate) fn pi(&mut self, n: G::Id, param: &str, builtin: i32) -> Result<Reg, Error> {
         self.param(n, param, Value::Int(builtin))
     }
     /// A colour parameter.
-    pub fn pc(&mut self, n: G::Id, param: &str, builtin: [f32; 3]) -> Result<Reg, Error> {
+    pub(crate) fn pc(&mut self, n: G::Id, param: &str, builtin: [f32; 3]) -> Result<Reg, Error> {
         self.param(n, param, Value::Triple(BaseType::Color, builtin))
     }
     /// A normal/vector parameter.
-    pub fn pv(&mut self, n: G::Id, param: &str, builtin: [f32; 3]) -> Result<Reg, Error> {
+    pub(crate) fn pv(&mut self, n: G::Id, param: &str, builtin: [f32; 3]) -> Result<Reg, Error> {
         self.param(n, param, Value::Triple(BaseType::Vector, builtin))
     }
 
     /// The constant scalar value of a parameter when it is not connected (authored,
     /// definition default or built-in), for structural choices such as Fresnel modes.
-    pub fn static_scalar(&mut self, n: G::Id, param: &str, builtin: f32) -> Option<f32> {
+    pub(crate) fn static_scalar(&mut self, n: G::Id, param: &str, builtin: f32) -> Option<f32> {
         let graph = self.graph;
         let input = graph.input(n, param);
         if input.connection.is_some() {
@@ -479,16 +480,8 @@ impl<'a, G: Graph> Lower<'a, G> {
     }
 
     /// True when the parameter is connected to anything.
-    pub fn is_connected(&self, n: G::Id, param: &str) -> bool {
+    pub(crate) fn is_connected(&self, n: G::Id, param: &str) -> bool {
         self.graph.connection(n, param).is_some()
-    }
-
-    /// Authored value, else definition default, else `builtin` (LW003 once per shader type
-    /// when the registry has no definition).
-    pub fn static_value(&mut self, n: G::Id, param: &str, builtin: &Value) -> Value {
-        let graph = self.graph;
-        self.static_binding(n, param, graph.value(n, param), builtin)
-            .0
     }
 
     /// LW003, once per shader type: the registry has no definition of `n`'s type.
@@ -510,7 +503,7 @@ impl<'a, G: Graph> Lower<'a, G> {
 
     /// The program expression of `up.output` when `up` is a pattern the lowering interprets
     /// (memoised); `None` when it is not interpreted. LW011 on a cycle.
-    pub fn pattern_output(&mut self, up: G::Id, output: &str) -> Result<Option<Reg>, Error> {
+    pub(crate) fn pattern_output(&mut self, up: G::Id, output: &str) -> Result<Option<Reg>, Error> {
         let graph = self.graph;
         let shader = graph.shader(up);
         if !is_interpreted(shader) {
@@ -541,7 +534,7 @@ impl<'a, G: Graph> Lower<'a, G> {
             if let Some(l) = self.graph.location(up) {
                 d = d.at(l);
             }
-            return Err(d.into());
+            return Err(d.with_node(self.graph.handle(up)).into());
         }
         self.visiting.push(up);
         let r = match shader {
@@ -561,7 +554,7 @@ impl<'a, G: Graph> Lower<'a, G> {
     /// every recipe uses it: `R` mode for a coat (with `ttint` filtering what lies below) and
     /// `T` mode without the `(1 − F)` factor, for refraction under a separate reflection layer
     /// that already removes the reflected energy.
-    pub fn dielectric(
+    pub(crate) fn dielectric(
         &mut self,
         mode: crate::ir::closure::DielectricMode,
         alpha: Reg,
@@ -591,25 +584,20 @@ impl<'a, G: Graph> Lower<'a, G> {
     }
 
     /// A constant register.
-    pub fn constf(&mut self, x: f32) -> Reg {
+    pub(crate) fn constf(&mut self, x: f32) -> Reg {
         self.b.prog.constf(x)
-    }
-
-    /// A constant colour register.
-    pub fn const3(&mut self, v: [f32; 3]) -> Reg {
-        self.b.prog.constant3(Vec3::from_array(v))
     }
 }
 
 /// True for the pattern types the lowering turns into program expressions.
-pub fn is_interpreted(shader: &str) -> bool {
+pub(crate) fn is_interpreted(shader: &str) -> bool {
     matches!(shader, "PxrLayer" | "PxrLayerMixer") || patterns::is_pattern(shader)
 }
 
 /// Anisotropic widths from roughness `r` and anisotropy `a ∈ [−1, 1]` (§0):
 /// `α = clamp(r², 1e-6, 1)`, `s = √(1 − min(|a|, 0.98))`, `α_x = min(α/s, 1)`, `α_y = α s`,
 /// roles swapped for `a < 0`.
-pub fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
+pub(crate) fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
     let p = &mut b.prog;
     let r2 = p.mul(r, r);
     let alpha = p.clamp(r2, 1e-6, 1.0);
@@ -649,17 +637,19 @@ where
         let r = lower_node_cached(graph, defs, cache, *id, name, &mut d);
         (r, d)
     };
+    #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
-        terminals
+        return terminals
             .par_iter()
             // Each rayon job builds its own cache; jobs of at least 128 materials keep
             // that one-time indexing small next to the lowering itself.
             .with_min_len(128)
             .map_init(DefinitionCache::default, one)
-            .collect()
-    } else {
-        let mut cache = DefinitionCache::default();
-        terminals.iter().map(|t| one(&mut cache, t)).collect()
+            .collect();
     }
+    #[cfg(not(feature = "parallel"))]
+    let _ = parallel;
+    let mut cache = DefinitionCache::default();
+    terminals.iter().map(|t| one(&mut cache, t)).collect()
 }

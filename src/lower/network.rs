@@ -92,7 +92,7 @@ pub fn lower_terminal(
 }
 
 /// LW030 for every placeholder (a connection into a head) that survived resolution.
-pub fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagnostics) {
+pub(crate) fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagnostics) {
     for id in net.nodes_sorted() {
         let Some(tables) = registry.tables(net[id].shader()) else {
             continue;
@@ -109,7 +109,7 @@ pub fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagn
                 if let Some(l) = net[id].location() {
                     d = d.at(l.clone());
                 }
-                diags.push(d);
+                diags.push(d.with_node(net[id].handle()).with_param(input.as_str()));
             }
         }
     }

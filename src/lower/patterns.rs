@@ -11,7 +11,7 @@ use crate::diag::Error;
 use crate::ir::{Global, OpCode, Reg};
 
 /// The shader names of the fused patterns.
-pub const PATTERNS: [&str; 7] = [
+pub(crate) const PATTERNS: [&str; 7] = [
     "vsConstant",
     "vsMix",
     "vsRemap",
@@ -22,7 +22,7 @@ pub const PATTERNS: [&str; 7] = [
 ];
 
 /// True for a fused pattern type.
-pub fn is_pattern(shader: &str) -> bool {
+pub(crate) fn is_pattern(shader: &str) -> bool {
     PATTERNS.contains(&shader)
 }
 

@@ -93,7 +93,7 @@ pub fn builtin_default(param: &str) -> Value {
 
 /// The lobe group (`X` of `enableX`) a PxrLayer member belongs to (§4.2); `None` for the
 /// global `bumpNormal`.
-pub fn member_lobe(member: &str) -> Option<&'static str> {
+pub(crate) fn member_lobe(member: &str) -> Option<&'static str> {
     const GROUPS: [(&str, &str); 14] = [
         ("roughSpecular", "RoughSpecular"),
         ("specular", "Specular"),
@@ -126,7 +126,7 @@ fn is_normal_member(member: &str) -> bool {
 
 /// PxrLayer output `pxrMaterialOut_<m>` (§4.2): the layer's input of the same name, with
 /// the five RR renames and the gains folded into the Fresnel colours.
-pub fn layer_output<G: Graph>(
+pub(crate) fn layer_output<G: Graph>(
     cx: &mut Lower<'_, G>,
     n: G::Id,
     output: &str,
@@ -157,7 +157,7 @@ const MIXER_PREFIXES: [&str; 5] = ["baselayer", "layer1", "layer2", "layer3", "l
 
 /// PxrLayerMixer output `pxrMaterialOut_<m>` (§4.2): per member, each participating layer
 /// composited over the accumulated value by its mask, in order; enable flags OR-ed.
-pub fn mixer_output<G: Graph>(
+pub(crate) fn mixer_output<G: Graph>(
     cx: &mut Lower<'_, G>,
     n: G::Id,
     output: &str,
@@ -377,7 +377,7 @@ fn back_side_colour<G: Graph>(
 }
 
 /// The PxrSurface / PxrLayerSurface recipe (§4.1).
-pub fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
+pub(crate) fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let one = cx.constf(1.0);
     let zero = cx.constf(0.0);
 

@@ -42,7 +42,7 @@
 
 mod limits;
 mod param_types;
-#[doc(hidden)]
+#[cfg(feature = "testkit")]
 pub mod testgen;
 
 pub(crate) use param_types::Memo;

@@ -37,11 +37,10 @@
 //!   [`RegistryOptions::limits`]); a larger one is LM001 (error naming the limit and the
 //!   file's size) when its id is loaded, and the id has no definition.
 
-pub mod model;
 mod param_types;
 pub mod tables;
 
-pub use model::{
+pub use crate::model::{
     CondSource, Definition, Direction, IndexedDefinition, MemberDecl, MetaKey, Metadata,
     NumericRange, Property, SourceKind, meta_key,
 };
@@ -81,15 +80,6 @@ pub enum Prefer {
     Oso,
     /// `.args` first.
     Args,
-}
-
-impl From<crate::cli::Prefer> for Prefer {
-    fn from(p: crate::cli::Prefer) -> Self {
-        match p {
-            crate::cli::Prefer::Oso => Prefer::Oso,
-            crate::cli::Prefer::Args => Prefer::Args,
-        }
-    }
 }
 
 /// How a [`Registry`] finds its definitions.

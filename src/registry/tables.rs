@@ -13,10 +13,10 @@
 //! * VS001's position is the value start plus the decoded offset (formats.md §2.6 allows it).
 //! * VS003 points at the property (the readers keep no position per attribute).
 
-use super::model::{CondSource, Definition, Direction, Property};
 use crate::cond::{self, ParseError, Statement};
 use crate::diag::{Diagnostic, Location};
 use crate::limits::Limits;
+use crate::model::{CondSource, Definition, Direction, Property};
 use crate::types::BaseType;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
@@ -200,7 +200,7 @@ fn head_names(props: &[Property]) -> Vec<&str> {
 
 /// Registry normalisation (vstruct.md §2.5): a property named like a head of its own direction
 /// gets type `Vstruct` (array shape and declared type kept) and loses its default.
-pub fn normalize_heads(def: &mut Definition) {
+pub(crate) fn normalize_heads(def: &mut Definition) {
     fn normalize(props: &mut [Property]) {
         let heads: HashSet<String> = head_names(props).into_iter().map(String::from).collect();
         for p in props.iter_mut().filter(|p| heads.contains(&p.name)) {
@@ -339,8 +339,8 @@ impl Builder<'_, '_> {
         for p in &def.outputs {
             let Some(m) = &p.vstruct else { continue };
             let cond = m.cond.as_ref().map(|src| self.parse_cond(p, src));
-            if let Some(stmt) = cond.as_ref().and_then(CondEntry::statement) {
-                self.check_cond_names(p, cond.as_ref().map(|c| &c.source), stmt);
+            if let Some((c, stmt)) = cond.as_ref().and_then(|c| Some((c, c.statement()?))) {
+                self.check_cond_names(p, &c.source, stmt);
             }
             let idx = match position.get(m.head.as_str()) {
                 Some(&i) => i,
@@ -384,23 +384,36 @@ impl Builder<'_, '_> {
         heads
     }
 
-    /// VS009: names read by an output member's conditional that are not inputs of the type.
-    fn check_cond_names(&mut self, p: &Property, src: Option<&CondSource>, stmt: &Statement) {
+    /// VS009: names read by an output member's conditional (predicates and `copy`) that are
+    /// not inputs of the type, one warning per distinct name at its first occurrence (position,
+    /// span and a caret note). Outputs do not count; a name with `[n]` is looked up literally.
+    fn check_cond_names(&mut self, p: &Property, src: &CondSource, stmt: &Statement) {
         let mut reported = HashSet::default();
-        for name in stmt.param_names() {
-            if !self.input_names.contains(name) && reported.insert(name.to_string()) {
-                let loc = src.map_or_else(|| p.location.clone(), |s| s.location.clone());
-                self.diags.push(
-                    Diagnostic::warning(
-                        "VS009",
-                        format!(
-                            "conditional of `{}` reads `{name}`, which is not an input of `{}`",
-                            p.name, self.def.id
-                        ),
-                    )
-                    .at(loc),
-                );
+        for param in stmt.params() {
+            let name = param.name.as_str();
+            if self.input_names.contains(name) || !reported.insert(name) {
+                continue;
             }
+            let mut d = Diagnostic::warning(
+                "VS009",
+                format!(
+                    "conditional of `{}` reads `{name}`, which is not an input of `{}`",
+                    p.name, self.def.id
+                ),
+            )
+            .at(position_in(src, param.span.start))
+            .with_span(param.span.clone())
+            .with_note(cond::render_caret(&src.text, param.span.clone()));
+            if self.def.output(name).is_some() {
+                d = d.with_note(format!(
+                    "`{name}` is an output of `{}`; conditionals read inputs only",
+                    self.def.id
+                ));
+            }
+            self.diags.push(d.with_note(
+                "the predicate always sees no operand / not connected / not set, and `copy` \
+                 of it always fails",
+            ));
         }
     }
 
@@ -495,14 +508,7 @@ fn vs001(p: &Property, src: &CondSource, e: &ParseError) -> Diagnostic {
     let start = floor_boundary(text, e.span.start);
     let end = floor_boundary(text, e.span.end.max(e.span.start));
     let before = &text[..start];
-    let mut loc = src.location.clone();
-    match before.rfind('\n') {
-        Some(nl) => {
-            loc.line += before.matches('\n').count() as u32;
-            loc.column = before[nl + 1..].chars().count() as u32 + 1;
-        }
-        None => loc.column += before.chars().count() as u32,
-    }
+    let loc = position_in(src, start);
     let caret_pad = before.chars().count();
     let caret_len = text[start..end].chars().count().max(1);
     Diagnostic::warning(
@@ -516,6 +522,20 @@ fn vs001(p: &Property, src: &CondSource, e: &ParseError) -> Diagnostic {
         " ".repeat(caret_pad),
         "^".repeat(caret_len)
     ))
+}
+
+/// Where byte `offset` of a conditional's text is: the value start plus the decoded offset.
+fn position_in(src: &CondSource, offset: usize) -> Location {
+    let before = &src.text[..floor_boundary(&src.text, offset)];
+    let mut loc = src.location.clone();
+    match before.rfind('\n') {
+        Some(nl) => {
+            loc.line += before.matches('\n').count() as u32;
+            loc.column = before[nl + 1..].chars().count() as u32 + 1;
+        }
+        None => loc.column += before.chars().count() as u32,
+    }
+    loc
 }
 
 fn floor_boundary(text: &str, i: usize) -> usize {

@@ -1054,10 +1054,14 @@ impl Resolver<'_> {
             .and_then(|p| n.param(p))
             .and_then(|p| p.location().cloned())
             .or_else(|| n.location().cloned());
-        let d = match loc {
+        let mut d = match loc {
             Some(l) => d.at(l),
             None => d,
-        };
+        }
+        .with_node(n.handle());
+        if let Some(p) = param {
+            d = d.with_param(p);
+        }
         self.out.diagnostics.push(d);
     }
 

@@ -44,7 +44,7 @@ pub fn value_text(v: &Value) -> String {
 
 /// Codes of all diagnostics, in order.
 pub fn codes(d: &Diagnostics) -> Vec<&'static str> {
-    d.iter().map(|x| x.code).collect()
+    d.iter().map(|x| x.code.as_str()).collect()
 }
 
 /// Named, typed properties in declaration order.

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 use vstructc::cond::{self, Extension, Extensions, MapUpstream};
-use vstructc::registry::{Definition, Direction, Property, SourceKind};
+use vstructc::registry::{
+    CondSource, Definition, Direction, MemberDecl, Property, SourceKind, VstructTables,
+};
 use vstructc::types::{ArraySpec, BaseType, Type, Value};
 use vstructc::{Location, Severity};
 
@@ -39,70 +41,79 @@ fn definition() -> Definition {
     }
 }
 
-fn check(text: &str, ext: &Extensions) -> Vec<vstructc::Diagnostic> {
-    let stmt = cond::parse_with(text, ext).unwrap();
-    cond::check_params(&stmt, text, &definition(), "pxrMaterialOut.x", ext)
+/// Where the conditional's value starts in `PxrTest.args`.
+const COND_AT: (u32, u32) = (7, 20);
+
+/// `def` with one more output, `outX`, member `x` of head `pxrMaterialOut` carrying the
+/// conditional `text`.
+fn with_member(mut def: Definition, text: &str) -> Definition {
+    let mut out = prop("outX", Direction::Out, Type::scalar(BaseType::Float));
+    out.vstruct = Some(MemberDecl {
+        head: "pxrMaterialOut".into(),
+        member: "x".into(),
+        alias: None,
+        cond: Some(CondSource {
+            text: text.into(),
+            location: Location::new("PxrTest.args", COND_AT.0, COND_AT.1),
+        }),
+    });
+    def.outputs.push(out);
+    def
+}
+
+/// The VS009 warnings the registry's tables report for `def`.
+fn vs009(def: &Definition) -> Vec<vstructc::Diagnostic> {
+    let mut diags = Vec::new();
+    VstructTables::build(def, &mut diags);
+    diags.retain(|d| d.code == "VS009");
+    diags
+}
+
+fn check(text: &str) -> Vec<vstructc::Diagnostic> {
+    vs009(&with_member(definition(), text))
 }
 
 #[test]
 fn declared_inputs_pass() {
-    let none = Extensions::none();
-    assert!(
-        check(
-            "connect if enableDiffuse == 1 and bumpNormal is connected",
-            &none
-        )
-        .is_empty()
-    );
-    assert!(
-        check("set is set", &none).is_empty(),
-        "keyword-named input `set`"
-    );
-    assert!(check("set 1 if enableDiffuse == 1 else set 0", &none).is_empty());
+    assert!(check("connect if enableDiffuse == 1 and bumpNormal is connected").is_empty());
+    assert!(check("set is set").is_empty(), "keyword-named input `set`");
+    assert!(check("set 1 if enableDiffuse == 1 else set 0").is_empty());
 }
 
 #[test]
-fn undeclared_names_warn_once_each_with_shader_member_and_param() {
+fn undeclared_names_warn_once_each_with_member_param_and_position() {
     let text = "copy gain if enableDiffuse == 1 or missing == 1 and missing is set else ignore";
-    let d = check(text, &Extensions::none());
+    let d = check(text);
     assert_eq!(d.len(), 2, "{d:#?}");
-    assert!(
-        d.iter()
-            .all(|x| x.code == "VS009" && x.severity == Severity::Warning)
-    );
+    assert!(d.iter().all(|x| x.severity == Severity::Warning));
     // Source order: the copy first, then the predicate.
     assert_eq!(
         d[0].message,
-        "conditional of `PxrTest` member `pxrMaterialOut.x` names `gain`, which is not an input of `PxrTest`"
+        "conditional of `outX` reads `gain`, which is not an input of `PxrTest`"
     );
     assert_eq!(d[0].span, Some(5..9));
-    assert!(d[1].message.contains("names `missing`"));
+    let at = |d: &vstructc::Diagnostic| d.location.as_ref().map(|l| (l.line, l.column));
+    assert_eq!(at(&d[0]), Some((COND_AT.0, COND_AT.1 + 5)));
+    assert!(d[1].message.contains("reads `missing`"));
     assert_eq!(d[1].span, Some(35..42), "first occurrence");
+    assert_eq!(at(&d[1]), Some((COND_AT.0, COND_AT.1 + 35)));
     assert!(d[1].notes[0].contains("^~~~~~~"), "{:?}", d[1].notes);
 }
 
 #[test]
 fn e4_vs009_at_definition_time() {
-    // §11.2 E4: the upstream type lacks the input; the definition check warns.
+    // E4: the upstream type lacks the input; the definition check warns.
     let mut def = definition();
     def.inputs.retain(|p| p.name != "enableDiffuse");
-    let text = "connect if enableDiffuse == 1";
-    let stmt = cond::parse(text).unwrap();
-    let d = cond::check_params(
-        &stmt,
-        text,
-        &def,
-        "pxrMaterialOut.diffuseGain",
-        &Extensions::none(),
-    );
+    let d = vs009(&with_member(def, "connect if enableDiffuse == 1"));
     assert_eq!(d.len(), 1);
     assert!(d[0].message.contains("`enableDiffuse`"));
-    assert!(d[0].message.contains("member `pxrMaterialOut.diffuseGain`"));
+    assert!(d[0].message.contains("conditional of `outX`"));
 }
 
 #[test]
 fn outputs_do_not_count() {
-    let d = check("connect if resultF == 1", &Extensions::none());
+    let d = check("connect if resultF == 1");
     assert_eq!(d.len(), 1);
     assert!(
         d[0].notes
@@ -112,18 +123,13 @@ fn outputs_do_not_count() {
     );
 }
 
+/// Definitions are read without extensions, so an index suffix is part of the name looked up.
 #[test]
-fn array_suffix_is_literal_unless_array_index() {
-    let d = check("connect if arr[1] == 1", &Extensions::none());
+fn array_suffix_is_literal() {
+    let d = check("connect if arr[1] == 1");
     assert_eq!(d.len(), 1);
-    assert!(d[0].message.contains("names `arr[1]`"));
-    assert!(
-        d[0].notes.iter().any(|n| n.contains("--ext array-index")),
-        "{d:#?}"
-    );
-    let ai = Extensions::none().with(Extension::ArrayIndex);
-    assert!(check("connect if arr[1] == 1", &ai).is_empty());
-    assert_eq!(check("connect if nope[1] == 1", &ai).len(), 1);
+    assert!(d[0].message.contains("reads `arr[1]`"), "{d:#?}");
+    assert_eq!(check("connect if arr is connected").len(), 0);
 }
 
 #[test]
@@ -146,7 +152,7 @@ fn vs015_report_names_the_reason_and_the_predicate() {
     );
     let d = r.to_diagnostic(text);
     assert_eq!(
-        (d.code, d.severity, d.span.clone()),
+        (d.code.as_str(), d.severity, d.span.clone()),
         ("VS015", Severity::Warning, Some(34..40))
     );
     assert!(d.notes[0].ends_with("^~~~~~"), "{:?}", d.notes);

@@ -35,7 +35,7 @@ fn accepted(name: &str) -> Diagnostics {
 }
 
 fn assert_at(d: &Diagnostic, code: &str, severity: Severity, line: u32, column: u32) {
-    assert_eq!(d.code, code, "{}", d.render_human());
+    assert_eq!(d.code.as_str(), code, "{}", d.render_human());
     assert_eq!(d.severity, severity, "{}", d.render_human());
     let loc = d.location.as_ref().expect("located");
     assert!(loc.file.starts_with(DIR), "{loc}");

@@ -314,7 +314,11 @@ fn every_js_error_with_pointer() {
         let (r, _) = read_with(&text, &NoDefinitions);
         let e = r.err().unwrap_or_else(|| panic!("no error for {text}"));
         let d = e.diagnostic().unwrap();
-        assert_eq!((d.code, d.severity), (code, Severity::Error), "{text}: {d}");
+        assert_eq!(
+            (d.code.as_str(), d.severity),
+            (code, Severity::Error),
+            "{text}: {d}"
+        );
         let loc = d.location.as_ref().unwrap();
         assert_eq!(&*loc.file, "n.json");
         if code == "JS001" {
@@ -349,7 +353,7 @@ fn warnings_js010_js011() {
         .iter()
         .map(|x| {
             (
-                x.code,
+                x.code.as_str(),
                 x.location.as_ref().and_then(|l| l.pointer.as_deref()),
             )
         })

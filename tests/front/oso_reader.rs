@@ -29,7 +29,7 @@ fn reject(text: &str) -> (&'static str, u32, u32) {
     assert_eq!(d.severity, Severity::Error);
     let loc = d.location.as_ref().expect("a location");
     assert_eq!(&*loc.file, "t.oso");
-    (d.code, loc.line, loc.column)
+    (d.code.as_str(), loc.line, loc.column)
 }
 
 fn floats(xs: &[f32]) -> Value {

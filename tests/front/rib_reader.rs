@@ -153,7 +153,7 @@ fn every_rb_code_with_position() {
                 .unwrap_or_else(|| panic!("{file}: no {code} in {:?}", codes(&d)))
                 .clone(),
         };
-        assert_eq!(diag.code, code, "{file}");
+        assert_eq!(diag.code.as_str(), code, "{file}");
         assert_eq!(diag.severity, severity, "{file}");
         let loc = diag.location.as_ref().unwrap();
         assert_eq!(

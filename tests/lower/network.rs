@@ -48,7 +48,7 @@ fn example(name: &str) -> String {
     let net = load(&bytes, name, &reg);
     let (out, diags) = compile_all(&net, &reg);
     assert_eq!(diags.count("LW003"), 0, "embedded definitions are used");
-    let codes: Vec<&str> = diags.iter().map(|d| d.code).collect();
+    let codes: Vec<&str> = diags.iter().map(|d| d.code.as_str()).collect();
     format!("{out}\ndiagnostics: {codes:?}\n")
 }
 

@@ -12,7 +12,11 @@ fn snap(name: &str, g: &SimpleGraph, n: usize) {
     let mut text = print::ir_text(&ir);
     text.push('\n');
     text.push_str(&print::lobes_text(&ir, &SimpleAlbedo));
-    let codes: Vec<&str> = d.iter().map(|d| d.code).filter(|c| *c != "LW003").collect();
+    let codes: Vec<&str> = d
+        .iter()
+        .map(|d| d.code.as_str())
+        .filter(|c| *c != "LW003")
+        .collect();
     text.push_str(&format!("\ndiagnostics: {codes:?}\n"));
     insta::assert_snapshot!(name, text);
 }

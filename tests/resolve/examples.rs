@@ -19,7 +19,7 @@ fn resolve_example(name: &str) -> String {
     let res = resolve(&mut net, &reg, &ResolveOptions::default());
     diags.extend(res.diagnostics);
     assert!(
-        !diags.iter().any(|d| d.severity <= Severity::Warning),
+        !diags.iter().any(|d| d.severity >= Severity::Warning),
         "{name}: {diags:#?}"
     );
     let notes: Vec<String> = diags

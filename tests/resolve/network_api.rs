@@ -48,7 +48,7 @@ fn build_write_and_read_back() {
     )
     .unwrap();
     assert!(d.is_empty());
-    let json = write_json(&net);
+    let json = write_json(&net).unwrap();
     let from_json = parse_json(json.as_bytes(), "bridge.json", &NoDefinitions, &mut d).unwrap();
     assert!(d.is_empty());
     // RIB adds the material name as __materialid on the Bxdf; otherwise identical.

@@ -188,10 +188,15 @@ fn pipeline(scene: &ShapeScene) {
     let res = resolve(&mut net, &registry, &ResolveOptions::default());
     std::hint::black_box(&res);
     let written = write_rib_to_vec(rib, &net, &registry).expect("RIB written");
-    let json = write_json(&net);
-    let from_json =
-        parse_json(json.as_bytes(), "scene.json", &registry, &mut diags).expect("JSON reads");
-    let rewritten = write_rib_to_vec(b"", &from_json, &registry).expect("RIB written");
+    // A scene without material has no JSON form (the writer says so): nothing to read back.
+    let rewritten = match write_json(&net) {
+        Ok(json) => {
+            let from_json = parse_json(json.as_bytes(), "scene.json", &registry, &mut diags)
+                .expect("JSON reads");
+            write_rib_to_vec(b"", &from_json, &registry).expect("RIB written")
+        }
+        Err(_) => Vec::new(),
+    };
     std::hint::black_box((written, rewritten, diags));
 }
 

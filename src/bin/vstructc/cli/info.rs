@@ -5,11 +5,11 @@
 //! Exit status: 0 on success, 1 when an input error was reported (a rejected definition file,
 //! a missing `--args` path), 2 when the shader id is unknown.
 
+use super::input::registry_for;
 use super::{CommonOptions, report};
-use crate::front::args::ArgsOptions;
-use crate::registry::{Definition, Property, Registry, RegistryOptions, VstructTables};
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use vstructc::registry::{Definition, Property, Registry, VstructTables};
 
 /// Arguments of `vstructc info`.
 #[derive(Debug, clap::Args)]
@@ -20,25 +20,6 @@ pub struct InfoArgs {
     /// Print a JSON document instead of the readable summary.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Registry options implied by the common command-line options (`--args`, `--prefer`,
-/// `--ext args-child-meta`); the environment and the embedded definitions are searched too.
-pub fn registry_options(common: &CommonOptions) -> RegistryOptions {
-    let ext = |name: &str| common.ext.iter().any(|e| e == name || e == "all");
-    RegistryOptions {
-        paths: common.args.clone(),
-        prefer: common.prefer.into(),
-        args: ArgsOptions {
-            child_meta: ext("args-child-meta"),
-        },
-        ..RegistryOptions::default()
-    }
-}
-
-/// The registry for a command line (see [`registry_options`]).
-pub fn registry_for(common: &CommonOptions) -> Registry {
-    Registry::new(registry_options(common))
 }
 
 /// Run `vstructc info`.
@@ -81,8 +62,8 @@ pub fn render_human(
     let mut out = String::new();
     let _ = writeln!(out, "{}: {}", def.id, def.kind);
     let source = match def.source {
-        crate::registry::SourceKind::Args => ".args",
-        crate::registry::SourceKind::Oso => ".oso",
+        vstructc::registry::SourceKind::Args => ".args",
+        vstructc::registry::SourceKind::Oso => ".oso",
     };
     let _ = writeln!(out, "  defined in {} ({source})", def.path);
     for (_, other) in registry.sources(&def.id) {

@@ -1,4 +1,5 @@
-//! The definition model that the `.args` and `.oso` readers produce (spec formats.md §1.3).
+//! The definition model: what the `.args` and `.oso` readers ([`crate::front`]) produce and
+//! the [`crate::registry::Registry`] holds (spec formats.md §1.3).
 
 use crate::diag::Location;
 use crate::types::{Type, Value};

@@ -2,7 +2,7 @@
 //! [--input NAME=VALUE]... [--material HANDLE]`: the material-ball preview (docs/preview.md).
 //!
 //! The input is read, resolved and lowered as by `compile`; each material is compiled for
-//! the interpreter and rendered ([`crate::interp::preview`]). With several materials and no
+//! the interpreter and rendered ([`vstructc::interp::preview`]). With several materials and no
 //! `--material`, the balls are arranged in a contact sheet (a grid, `⌈√n⌉` columns, row-major
 //! in material order).
 //!
@@ -12,8 +12,8 @@
 //!
 //! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
 //! rows at a time and each row is encoded into the output as it is finished
-//! ([`crate::interp::preview::ContactSheet`]). `--size` is checked by the library
-//! ([`PreviewOptions::validate`], at most [`crate::limits::Limits::preview_pixels`] pixels); a
+//! ([`vstructc::interp::preview::ContactSheet`]). `--size` is checked by the library
+//! ([`PreviewOptions::validate`], at most [`vstructc::limits::Limits::preview_pixels`] pixels); a
 //! size outside it is a usage error.
 //!
 //! `--input NAME=VALUE` sets an external input slot (its name as `compile --emit ir` lists
@@ -24,38 +24,16 @@
 //! Exit status: 0, 1 on input errors (positioned diagnostics), 2 on usage errors.
 
 use super::CommonOptions;
-use super::input::{Prepared as Loaded, prepare, report_error, stream_output};
-use crate::back::png::{ImageFormat, write_rows};
-use crate::diag::{Diagnostics, Error};
-use crate::interp::Material;
-use crate::interp::preview::{Ball, ContactSheet, PreviewOptions};
-use crate::ir::MaterialIr;
-use crate::lower::network::{lower_terminal, report_placeholders, terminals};
-use crate::resolve::resolve;
+use super::input::{report_error, stream_output};
+use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// Options shared by `render` and `eval`: which input and material, and external inputs.
-#[derive(Debug, Clone, clap::Args)]
-pub struct MaterialArgs {
-    /// The network: a RIB or JSON file, or `-` for standard input.
-    pub input: PathBuf,
-    /// Only this material (material name or terminal node handle).
-    #[arg(long, value_name = "HANDLE")]
-    pub material: Option<String>,
-    /// Set an external input slot: `NAME=VALUE` (VALUE: `x` or `r,g,b`); repeatable.
-    #[arg(long = "input", value_name = "NAME=VALUE")]
-    pub inputs: Vec<String>,
-    /// Resolve without evaluating conditionals.
-    #[arg(long)]
-    pub no_conditions: bool,
-    /// Single-quoted RIB strings are an error instead of an info (RB011).
-    #[arg(long)]
-    pub strict_rib: bool,
-}
+use vstructc::back::png::{ImageFormat, write_rows};
+use vstructc::interp::Material;
+use vstructc::interp::preview::{Ball, ContactSheet, PreviewOptions};
 
 /// Arguments of `vstructc render`.
 #[derive(Debug, clap::Args)]
@@ -81,131 +59,6 @@ pub struct RenderArgs {
     /// Use the batched (16-lane) interpreter.
     #[arg(long)]
     pub batched: bool,
-}
-
-/// A lowered, compiled material.
-pub struct Compiled {
-    /// Material name.
-    pub name: String,
-    /// Its interpreter form.
-    pub material: Material,
-}
-
-/// Read, resolve and lower the input; compile every selected material. On failure the
-/// diagnostics are printed and the exit status is returned. Diagnostics of a successful
-/// load are returned for the caller to report.
-pub fn load_materials(
-    args: &MaterialArgs,
-    common: &CommonOptions,
-) -> Result<(Vec<Compiled>, Diagnostics), ExitCode> {
-    let Loaded {
-        options,
-        registry,
-        mut loaded,
-        mut diags,
-    } = prepare(&args.input, args.no_conditions, args.strict_rib, common)?;
-    let res = resolve(&mut loaded.network, &registry, &options);
-    diags.extend(registry.diagnostics());
-    diags.extend(res.diagnostics);
-    report_placeholders(&loaded.network, &registry, &mut diags);
-    let net = &loaded.network;
-    let list = match terminals(net, args.material.as_deref()) {
-        Ok(l) => l,
-        Err(Error::Usage(msg)) => {
-            super::report(&diags, common);
-            eprintln_quiet!("error: {msg}");
-            return Err(ExitCode::from(2));
-        }
-        Err(e) => return Err(report_error(&e, common)),
-    };
-    let mut irs: Vec<MaterialIr> = Vec::new();
-    for (name, node) in list {
-        match lower_terminal(net, &registry, node, &name, &mut diags) {
-            Ok(ir) => irs.push(ir),
-            Err(Error::Input(d)) => diags.push(*d),
-            Err(e) => return Err(report_error(&e, common)),
-        }
-    }
-    let mut out = Vec::new();
-    for ir in &irs {
-        match Material::new(ir) {
-            Ok(material) => out.push(Compiled {
-                name: ir.name.clone(),
-                material,
-            }),
-            Err(Error::Input(d)) => diags.push(*d),
-            Err(e) => return Err(report_error(&e, common)),
-        }
-    }
-    diags.sort();
-    if diags.has_errors() {
-        super::report(&diags, common);
-        return Err(ExitCode::from(1));
-    }
-    if out.is_empty() {
-        super::report(&diags, common);
-        eprintln_quiet!("error: the input has no material with a lowering recipe");
-        return Err(ExitCode::from(1));
-    }
-    Ok((out, diags))
-}
-
-/// Parse `--input NAME=VALUE` settings into packed inputs for `m` (fallbacks elsewhere).
-/// Unknown names and malformed values are usage errors.
-pub fn packed_inputs(m: &Material, settings: &[String]) -> Result<Vec<f32>, String> {
-    let mut packed = m.fallback_inputs();
-    for s in settings {
-        let (name, value) = s
-            .split_once('=')
-            .ok_or_else(|| format!("--input `{s}`: expected NAME=VALUE"))?;
-        let nums: Vec<f32> = value
-            .split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|t| !t.is_empty())
-            .map(|t| t.parse::<f32>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| format!("--input `{s}`: `{value}` is not one or three numbers"))?;
-        let Some(slot) = m.ir().input_index(name) else {
-            // A setting for another material of the input is not an error.
-            continue;
-        };
-        let (o, w) = m.input_layout()[slot];
-        match (nums.len(), w) {
-            (1, _) => packed[o..o + w].fill(nums[0]),
-            (3, 3) => packed[o..o + 3].copy_from_slice(&nums),
-            _ => {
-                return Err(format!(
-                    "--input `{s}`: slot `{name}` takes {w} number(s), got {}",
-                    nums.len()
-                ));
-            }
-        }
-    }
-    Ok(packed)
-}
-
-/// Check that every `--input` name exists in some material.
-pub fn check_input_names(materials: &[Compiled], settings: &[String]) -> Result<(), String> {
-    for s in settings {
-        let name = s.split_once('=').map_or(s.as_str(), |(n, _)| n);
-        if !materials
-            .iter()
-            .any(|c| c.material.ir().input_index(name).is_some())
-        {
-            let known: Vec<&str> = materials
-                .iter()
-                .flat_map(|c| c.material.ir().inputs.iter().map(|i| i.name.as_str()))
-                .collect();
-            return Err(format!(
-                "--input `{name}`: no such external input (known: {})",
-                if known.is_empty() {
-                    "none".to_string()
-                } else {
-                    known.join(", ")
-                }
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// The leaf a `lobe:NAME` AOV designates in `m`: by label, then kind name, then `#node`.

@@ -1,12 +1,12 @@
 //! `vstructc explain HANDLE.INPUT INPUT`: the story of one member input's value.
 
 use super::CommonOptions;
-use super::input::{Prepared, prepare, print_stdout};
-use crate::network::Network;
-use crate::resolve::{MemberEvent, Outcome, ReadSource, resolve};
+use super::input::{ReadInput, print_stdout, read};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vstructc::network::Network;
+use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
 
 /// Arguments of `vstructc explain`.
 #[derive(Debug, clap::Args)]
@@ -27,21 +27,21 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         eprintln_quiet!("error: expected HANDLE.INPUT, got `{}`", args.target);
         return ExitCode::from(2);
     };
-    let Prepared {
+    let ReadInput {
         mut options,
         registry,
-        mut loaded,
-        ..
-    } = match prepare(&args.input, args.no_conditions, false, common) {
+        name,
+        mut network,
+    } = match read(&args.input, args.no_conditions, common) {
         Ok(p) => p,
         Err(status) => return status,
     };
     options.record_events = true;
-    let Some(node) = loaded.network.find(handle) else {
-        eprintln_quiet!("error: no node `{handle}` in {}", loaded.name);
+    let Some(node) = network.find(handle) else {
+        eprintln_quiet!("error: no node `{handle}` in {}", name);
         return ExitCode::from(2);
     };
-    let res = resolve(&mut loaded.network, &registry, &options);
+    let res = resolve(&mut network, &registry, &options);
     let events: Vec<&MemberEvent> = res
         .events
         .iter()
@@ -51,13 +51,10 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         format!(
             "{handle}.{input} was not expanded from any vstruct connection: it is not a member \
              of a connected input head of `{}`.\n",
-            loaded.network[node].shader()
+            network[node].shader()
         )
     } else {
-        events
-            .iter()
-            .map(|e| render_event(&loaded.network, e))
-            .collect()
+        events.iter().map(|e| render_event(&network, e)).collect()
     };
     match print_stdout(&text, common) {
         Ok(()) => ExitCode::SUCCESS,

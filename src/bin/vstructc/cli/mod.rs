@@ -1,14 +1,17 @@
-//! The `vstructc` command line. The binary in `src/bin/vstructc.rs` only calls [`main`];
+//! The `vstructc` command line. The binary's `main` only calls [`main`];
 //! each subcommand lives in its own module and returns an exit status.
 //!
 //! Exit status: 0 success (warnings on stderr), 1 input errors (or warnings under
 //! `--deny-warnings`), 2 usage errors.
 
-use crate::diag::{DEFAULT_MAX_PER_CODE, Diagnostics, MAX_HUMAN_LINE, Severity, Shown, bound_line};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vstructc::diag::{
+    DEFAULT_MAX_PER_CODE, Diagnostics, MAX_HUMAN_LINE, Severity, Shown, bound_line,
+};
+use vstructc::registry::Prefer;
 
 /// `eprintln!` that ignores a failing standard error (`2>/dev/full`): the exit status still
 /// says what happened, and there is nowhere left to say more. `eprintln!` would panic.
@@ -25,6 +28,7 @@ pub mod explain;
 pub mod expr;
 pub mod info;
 pub mod input;
+pub mod material;
 pub mod render;
 pub mod resolve;
 
@@ -52,7 +56,7 @@ pub struct CommonOptions {
     #[arg(long = "args", value_name = "PATH", global = true)]
     pub args: Vec<PathBuf>,
     /// Which definition wins when a shader exists as both `.oso` and `.args`.
-    #[arg(long, value_enum, global = true, default_value_t = Prefer::Oso)]
+    #[arg(long, global = true, default_value = "oso", value_parser = prefer_parser())]
     pub prefer: Prefer,
     /// Enable an opt-in extension by name (repeatable), or `all`.
     #[arg(long = "ext", value_name = "NAME", global = true)]
@@ -73,14 +77,17 @@ pub struct CommonOptions {
     pub max_diagnostics: Option<usize>,
 }
 
-/// Definition priority when a shader id has both an `.oso` and an `.args` definition.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
-pub enum Prefer {
-    /// Compiled OSL first (the reference's order).
-    #[default]
-    Oso,
-    /// `.args` first.
-    Args,
+/// `--prefer`'s values, mapped onto the library's [`Prefer`].
+fn prefer_parser() -> impl clap::builder::TypedValueParser<Value = Prefer> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new([
+        PossibleValue::new("oso").help("Compiled OSL first (the reference's order)"),
+        PossibleValue::new("args").help("`.args` first"),
+    ])
+    .map(|s| match s.as_str() {
+        "args" => Prefer::Args,
+        _ => Prefer::Oso,
+    })
 }
 
 /// How diagnostics are printed.

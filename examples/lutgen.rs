@@ -1,6 +1,6 @@
-//! `vstructc-lutgen`: generates the interpreter's albedo tables (see docs/albedo-tables.md).
+//! `lutgen`: generates the interpreter's albedo tables (see docs/albedo-tables.md).
 //!
-//! Usage: `vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]` (default: all groups, into
+//! Usage: `cargo run --release --features testkit --example lutgen -- [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]` (default: all groups, into
 //! `src/interp/tables/` of this crate). Run it in release mode; the 3-D dielectric tables
 //! take several CPU-minutes. Each group's tables (and the `Eavg` tables derived from them)
 //! are written as soon as the group is done. `--entry NAME I J K` prints one entry.
@@ -25,7 +25,7 @@ fn main() {
             ("--only", Some(v)) => only = v,
             _ => {
                 eprintln!(
-                    "usage: vstructc-lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]"
+                    "usage: lutgen [--out DIR] [--only 2d|ggx|diel|diel-fwd|diel-inv|aniso|aniso-az|all]"
                 );
                 std::process::exit(2);
             }
@@ -73,7 +73,7 @@ fn print_entry(args: &[String]) {
     match (id, idx.as_slice()) {
         (Some(id), [i, j, k]) => println!("{:.8}", lutgen::compute_entry(*id, [*i, *j, *k])),
         _ => {
-            eprintln!("usage: vstructc-lutgen --entry NAME I J K");
+            eprintln!("usage: lutgen --entry NAME I J K");
             std::process::exit(2);
         }
     }

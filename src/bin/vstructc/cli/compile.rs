@@ -7,15 +7,13 @@
 //! so that their numbers can be checked by hand.
 
 use super::CommonOptions;
-use super::input::{Prepared, prepare, report_error};
-use crate::diag::Error;
-use crate::interp::TableAlbedo;
-use crate::ir::{MaterialIr, print};
-use crate::lower::network::{lower_terminal, report_placeholders, terminals};
-use crate::resolve::resolve;
+use super::input::{print_stdout, run_pipeline};
 use clap::ValueEnum;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vstructc::interp::TableAlbedo;
+use vstructc::ir::{MaterialIr, print};
+use vstructc::pipeline::Lowering;
 
 /// What `compile` prints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
@@ -53,50 +51,36 @@ pub fn render(ir: &MaterialIr, emit: Emit) -> String {
     match emit {
         Emit::Ir => print::ir_text(ir),
         Emit::Lobes => print::lobes_text(ir, &TableAlbedo),
-        Emit::Dot => crate::back::dot::to_dot(ir),
+        Emit::Dot => vstructc::back::dot::to_dot(ir),
     }
 }
 
 /// Run `vstructc compile`.
 pub fn run(args: &CompileArgs, common: &CommonOptions) -> ExitCode {
-    let Prepared {
-        options,
-        registry,
-        mut loaded,
-        mut diags,
-    } = match prepare(&args.input, args.no_conditions, args.strict_rib, common) {
-        Ok(p) => p,
+    let lowering = match &args.material {
+        Some(name) => Lowering::Only(name.clone()),
+        None => Lowering::All,
+    };
+    let ran = match run_pipeline(
+        &args.input,
+        args.no_conditions,
+        args.strict_rib,
+        false,
+        lowering,
+        common,
+    ) {
+        Ok(ran) => ran,
         Err(status) => return status,
     };
-    let res = resolve(&mut loaded.network, &registry, &options);
-    diags.extend(registry.diagnostics());
-    diags.extend(res.diagnostics);
-    report_placeholders(&loaded.network, &registry, &mut diags);
-    let net = &loaded.network;
-    let list = match terminals(net, args.material.as_deref()) {
-        Ok(l) => l,
-        Err(Error::Usage(msg)) => {
-            super::report(&diags, common);
-            eprintln_quiet!("error: {msg}");
-            return ExitCode::from(2);
-        }
-        Err(e) => return report_error(&e, common),
-    };
-    let mut out = String::new();
-    for (name, node) in list {
-        match lower_terminal(net, &registry, node, &name, &mut diags) {
-            Ok(ir) => {
-                out.push_str(&render(&ir, args.emit));
-                out.push('\n');
-            }
-            Err(Error::Input(d)) => diags.push(*d),
-            Err(e) => return report_error(&e, common),
-        }
-    }
-    diags.sort();
-    if let Err(failed) = super::input::print_stdout(&out, common) {
-        super::report(&diags, common);
+    let out: String = ran
+        .output
+        .materials
+        .iter()
+        .map(|ir| render(ir, args.emit) + "\n")
+        .collect();
+    if let Err(failed) = print_stdout(&out, common) {
+        super::report(&ran.diags, common);
         return failed;
     }
-    super::report(&diags, common)
+    super::report(&ran.diags, common)
 }

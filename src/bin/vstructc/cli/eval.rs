@@ -12,12 +12,12 @@
 //! transparency. `--json` prints the same as one JSON object.
 
 use super::CommonOptions;
-use super::render::{MaterialArgs, check_input_names, load_materials, packed_inputs};
-use crate::interp::{Prepared, ShadingPoint};
+use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
 use glam::{Vec2, Vec3};
 use serde_json::{Value as Json, json};
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use vstructc::interp::{Prepared, ShadingPoint};
 
 /// Arguments of `vstructc eval`.
 #[derive(Debug, clap::Args)]

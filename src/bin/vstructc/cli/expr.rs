@@ -7,9 +7,9 @@
 
 use super::CommonOptions;
 use super::input::print_stdout;
-use crate::cond::{self, Extensions};
-use crate::diag::{Diagnostics, Location, Severity};
 use std::process::ExitCode;
+use vstructc::cond::{self, Extensions};
+use vstructc::diag::{Diagnostics, Location, Severity};
 
 /// Arguments of `vstructc expr`.
 #[derive(Debug, clap::Args)]

@@ -1,4 +1,7 @@
-//! The `vstructc` command-line program: a thin wrapper over [`vstructc::cli`].
+//! The `vstructc` command-line program. The command line ([`cli`]) belongs to this binary,
+//! not to the library: a crate embedding vstructc builds none of it (feature `cli`).
+
+mod cli;
 
 // Reading definitions and networks allocates many small strings; mimalloc makes that about
 // 15 % faster end to end than the system allocator. The library itself
@@ -8,7 +11,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> std::process::ExitCode {
     restore_default_sigpipe();
-    vstructc::cli::main()
+    cli::main()
 }
 
 /// Lets a closed output pipe end the program quietly, as it ends `cat` or `grep`

@@ -1,0 +1,71 @@
+//! `vstructc resolve`: expand the vstruct connections of a network and write it back.
+
+use super::CommonOptions;
+use super::input::{format_parser, report_error, run_pipeline, stream_output};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use vstructc::back::json::write_json_to;
+use vstructc::back::rib::write_rib;
+use vstructc::front::NetFormat;
+use vstructc::pipeline::Lowering;
+
+/// Arguments of `vstructc resolve`.
+#[derive(Debug, clap::Args)]
+pub struct ResolveArgs {
+    /// The network to resolve: a RIB or JSON file, or `-` for standard input.
+    pub input: PathBuf,
+    /// Connect every matched member without evaluating conditionals (the reference's
+    /// `enableConditions = false`).
+    #[arg(long)]
+    pub no_conditions: bool,
+    /// Output format (default: the input's).
+    #[arg(long, value_parser = format_parser())]
+    pub format: Option<NetFormat>,
+    /// Write to FILE (atomically) instead of standard output.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Single-quoted RIB strings are an error instead of an info (RB011).
+    #[arg(long)]
+    pub strict_rib: bool,
+    /// Delete placeholder connections that could not be resolved (VS010) instead of writing
+    /// them unchanged.
+    #[arg(long)]
+    pub drop_unresolved: bool,
+}
+
+/// Run `vstructc resolve`.
+pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
+    let ran = match run_pipeline(
+        &args.input,
+        args.no_conditions,
+        args.strict_rib,
+        args.drop_unresolved,
+        Lowering::None,
+        common,
+    ) {
+        Ok(ran) => ran,
+        Err(status) => return status,
+    };
+    let status = super::report(&ran.diags, common);
+    if status != ExitCode::SUCCESS {
+        return status;
+    }
+    let (loaded, network) = (&ran.loaded, &ran.output.network);
+    let output = args.output.as_deref();
+    let written = match args.format.unwrap_or(loaded.format) {
+        NetFormat::Json => stream_output(output, |out| write_json_to(network, out)),
+        NetFormat::Rib => {
+            // Streamed: the untouched parts of a large scene are copied from the source
+            // straight into the output file.
+            let source = match loaded.format {
+                NetFormat::Rib => loaded.bytes.as_slice(),
+                NetFormat::Json => &[],
+            };
+            stream_output(output, |out| write_rib(source, network, &ran.registry, out))
+        }
+    };
+    match written {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => report_error(&e, common),
+    }
+}
