@@ -1,5 +1,5 @@
 //! The definition model: what the `.args` and `.oso` readers ([`crate::front`]) produce and
-//! the [`crate::registry::Registry`] holds (spec formats.md §1.3).
+//! the [`crate::registry::Registry`] holds.
 
 use crate::diag::Location;
 use crate::types::{Type, Value};
@@ -15,7 +15,7 @@ pub enum SourceKind {
     Oso,
 }
 
-/// A metadata key. Keys of the attribute vocabulary (formats.md §2.3) are static strings, so
+/// A metadata key. Keys of the attribute vocabulary are static strings, so
 /// reading a definition does not allocate one string per attribute; any other key is owned.
 pub type MetaKey = std::borrow::Cow<'static, str>;
 
@@ -164,7 +164,7 @@ pub struct CondSource {
     pub location: Location,
 }
 
-/// A property's vstruct member declaration (spec vstruct.md §2.2–§2.4).
+/// A property's vstruct member declaration.
 ///
 /// Readers fill this only when `vstructmember` splits into a non-empty head and member;
 /// otherwise the raw attributes stay in [`Property::metadata`] and the registry reports VS003.

@@ -1,4 +1,4 @@
-//! The value model shared by definitions and networks (spec formats.md §1.1–§1.2).
+//! The value model shared by definitions and networks.
 //!
 //! Floats are `f32` everywhere in networks and definitions (RIB's precision); the conditional
 //! evaluator widens them to `f64`.
@@ -199,7 +199,7 @@ impl fmt::Display for Type {
     }
 }
 
-/// A typed value (spec formats.md §1.2).
+/// A typed value.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Value {
     /// `int`.

@@ -1,4 +1,4 @@
-//! JSON network writer (spec formats.md §5.4).
+//! JSON network writer.
 //!
 //! [`write_json`] writes every material of a network in the form [`crate::front::json`] reads:
 //! object keys sorted byte-wise, arrays in model order (connections in connection order,
@@ -22,7 +22,7 @@
 //! * A connection to a node outside the material, or a dangling one, names the handle.
 //! * Two materials with the same name: the later ones get `#1`, `#2`, … suffixes.
 //! * A parameter with both a value and connections is written in both `parameters` and
-//!   `inputConnections` (formats.md §5.3).
+//!   `inputConnections`.
 //! * An array whose elements are not of its declared type (a RIB value kept as written after
 //!   RB014, such as `"color c" [0]`) is written with its elements' type (`float[1]`): the
 //!   reader would reject `color[1]` holding a number.

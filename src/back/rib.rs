@@ -1,4 +1,4 @@
-//! RIB writer (spec formats.md §3.7).
+//! RIB writer.
 //!
 //! [`write_rib`] writes a network back over the RIB source it was read from:
 //!
@@ -257,7 +257,7 @@ impl Writer<'_> {
         push_quoted(h, node.handle());
     }
 
-    /// Re-serialise a modified node read from the source (formats.md §3.7 item 3).
+    /// Re-serialise a modified node read from the source (item 3 of the module docs).
     fn reserialise(&self, out: &mut dyn Write, id: NodeId, indent: &[u8]) -> io::Result<()> {
         let node = &self.net[id];
         let Some(src) = node.source() else {
@@ -633,7 +633,7 @@ fn push_elements(v: &Value, out: &mut String) {
 }
 
 /// A RIB string literal: double quotes, `\"`, `\\`, `\n`, `\t` escaped, other control
-/// characters as `\ddd` (formats.md §3.7 item 4).
+/// characters as `\ddd`.
 ///
 /// ```
 /// use vstructc::back::rib::quote;

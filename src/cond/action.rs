@@ -1,6 +1,6 @@
-//! Typing of the `set` and `copy` actions (spec vstruct.md §4.3, extensions `set-tuples` and
-//! `copy-convert` of §9). Pure functions over [`Type`] and [`Value`]; the resolver looks up
-//! the declared types and writes the result.
+//! Typing of the `set` and `copy` actions (with the extensions `set-tuples` and
+//! `copy-convert`; see `docs/conditional-language.md`). Pure functions over [`Type`] and
+//! [`Value`]; the resolver looks up the declared types and writes the result.
 
 use super::ast::{Literal, LiteralKind};
 use super::ext::{Extension, Extensions};

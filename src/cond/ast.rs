@@ -1,4 +1,4 @@
-//! The AST of a desugared statement (spec vstruct.md §3.3–§3.4).
+//! The AST of a desugared statement.
 //!
 //! Every node carries its byte span in the expression text. Actions that the desugaring table
 //! supplies without them being written (the `ignore` of `connect if C`, the `connect` of
@@ -127,7 +127,7 @@ impl Literal {
         }
     }
 
-    /// The §3.1 token name: `NUMBER` or `STRING`.
+    /// The token name used in messages: `NUMBER` or `STRING`.
     pub fn token_name(&self) -> &'static str {
         match self.kind {
             LiteralKind::Number { .. } => "NUMBER",
@@ -457,7 +457,7 @@ pub struct ElseIf {
     pub condition: Expr,
 }
 
-/// A desugared statement `(action, condition?, fallback)` (spec §3.4).
+/// A desugared statement `(action, condition?, fallback)`.
 ///
 /// Invariant: `fallback` is `Some` exactly when `condition` is `Some`; `else_ifs` is empty
 /// unless the statement was parsed with the `else-if` extension, and then `condition` is

@@ -1,4 +1,4 @@
-//! Parse errors (VS001) and caret rendering (spec vstruct.md §3.5).
+//! Parse errors (VS001) and caret rendering.
 
 use crate::diag::{Diagnostic, Location, Severity};
 use std::fmt;
@@ -6,7 +6,7 @@ use std::ops::Range;
 
 /// A syntax error in a conditional expression (VS001).
 ///
-/// The message names the expected set and the offending token with the §3.1 token names, in
+/// The message names the expected set and the offending token with the token names, in
 /// the form `expected NUMBER or STRING, found PARAM "y"` (for a predicate's operator slot the
 /// expected set is summarised as `a comparison operator (==, !=, <, >, <=, >=)`; the full set,
 /// which also holds `IS` and `IS_NOT`, is in [`ParseError::expected`]).
@@ -16,7 +16,7 @@ pub struct ParseError {
     pub span: Range<usize>,
     /// Message naming the expected set and the unexpected token.
     pub message: String,
-    /// Every token that would have been accepted at this point (§3.1 names, operators as
+    /// Every token that would have been accepted at this point (token names, operators as
     /// spelled, `end of input`).
     pub expected: Vec<String>,
     /// The offending token as described in the message (`'='`, `PARAM "y"`, `end of input`).
@@ -216,7 +216,7 @@ fn walk_forward(text: &str, at: usize, max: usize) -> usize {
 /// The source location of byte `offset` of an expression whose first character is at
 /// `start` (the position the definition readers record for a `vstructConditionalExpr` value).
 /// Walks the decoded text: a newline advances the line, any other character one column. This
-/// is the "value start plus decoded offset" mapping that formats.md §2.6 allows.
+/// is the "value start plus decoded offset" mapping.
 pub fn location_in(start: &Location, text: &str, offset: usize) -> Location {
     let (dl, dc) = crate::diag::line_column(text, offset);
     let mut loc = start.clone();

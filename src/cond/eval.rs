@@ -1,9 +1,9 @@
-//! Evaluation of a statement against the upstream node U (spec vstruct.md §4.1–§4.2, §9).
+//! Evaluation of a statement against the upstream node U.
 //!
 //! The evaluator only *decides*: it returns the chosen [`Action`] and the VS015 reports of
 //! the comparisons that were false for a reason other than a genuine value mismatch. Writing
 //! the result to D.M is the resolver's job (with [`super::action::set_value`] and
-//! [`super::action::copy_value`] for the typing rules of §4.3).
+//! [`super::action::copy_value`] for the typing rules).
 
 use super::ast::{
     Action, ActionKind, Expr, ExprKind, IsTest, Literal, LiteralKind, Param, Span, Statement,
@@ -32,7 +32,7 @@ pub trait Upstream {
     /// True if U's input `param` has at least one incoming connection now.
     fn is_connected(&self, param: &str) -> bool;
 
-    /// The comparison operand of §4.2: the authored value, else the default of a declared
+    /// The comparison operand: the authored value, else the default of a declared
     /// input, else `None`. The default implementation combines [`Upstream::authored`],
     /// [`Upstream::declares_input`] and [`Upstream::default_value`]; implementations that can
     /// answer with fewer look-ups should override it.
@@ -109,7 +109,7 @@ pub enum FalseReason {
     StringOrdering,
 }
 
-/// One VS015 report: a comparison decided by a "false" rule of §4.2.
+/// One VS015 report: a comparison decided by a "false" rule of the comparison table.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ComparisonReport {
     /// Span of the predicate in the expression.
@@ -189,7 +189,7 @@ pub struct Evaluation<'s> {
     pub reports: Vec<ComparisonReport>,
 }
 
-/// Evaluate `stmt` against `upstream` (§4.1 steps 3–4): the statement's action if there is
+/// Evaluate `stmt` against `upstream`: the statement's action if there is
 /// no condition or it is true; with `else-if`, the action of the first true link; otherwise
 /// the fallback.
 pub fn evaluate<'s, U: Upstream + ?Sized>(
@@ -225,8 +225,7 @@ pub(crate) fn chosen_action(stmt: &Statement, choice: Choice) -> &Action {
         Choice::ElseIf(i) => stmt.else_ifs.get(i).map_or(&stmt.action, |l| &l.action),
         Choice::Fallback => match &stmt.fallback {
             Some(fb) => fb,
-            // Not produced by the parser (hand-built AST): apply the desugaring of `A if C`
-            // (§3.4).
+            // Not produced by the parser (hand-built AST): apply the desugaring of `A if C`.
             None => implied_fallback(&stmt.action),
         },
     }
@@ -241,7 +240,7 @@ static IMPLIED_CONNECT: Action = Action {
     span: 0..0,
 };
 
-/// The fallback §3.4 implies for `A if C`: `connect` for `ignore if C`, else `ignore`.
+/// The fallback the desugaring implies for `A if C`: `connect` for `ignore if C`, else `ignore`.
 fn implied_fallback(action: &Action) -> &'static Action {
     match action.kind {
         ActionKind::Ignore => &IMPLIED_CONNECT,
@@ -387,9 +386,9 @@ fn apply(op: CmpOp, ord: Option<Ordering>) -> bool {
     }
 }
 
-/// The comparison table of §4.2: `Ok(result)` for a genuine comparison, `Err(reason)` when a
-/// "false" rule decides. Numbers compare exactly in f64 (*operand OP literal*); strings
-/// compare by verbatim content, and only for `==`/`!=`.
+/// The comparison table (see `docs/conditional-language.md`): `Ok(result)` for a genuine
+/// comparison, `Err(reason)` when a "false" rule decides. Numbers compare exactly in f64 (*operand
+/// OP literal*); strings compare by verbatim content, and only for `==`/`!=`.
 pub fn compare(
     operand: &Value,
     op: CmpOp,

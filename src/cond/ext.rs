@@ -1,9 +1,10 @@
-//! Opt-in extensions (spec vstruct.md §9): a small set type parsed from names.
+//! Opt-in extensions: a small set type parsed from names.
 //!
 //! Every extension is off by default; without it behaviour is exactly the reference's. The set
-//! holds all names of §9 (language, evaluation, registry and resolver extensions alike, so that
-//! `--ext NAME` is validated in one place) plus the `.args` reader's `args-child-meta`
-//! (formats.md §2.6), which is the only extension named outside §9.
+//! holds every extension name (language, evaluation, registry and resolver extensions alike,
+//! so that `--ext NAME` is validated in one place), the `.args` reader's `args-child-meta`
+//! included. The extensions are described in `docs/conditional-language.md` and
+//! `docs/resolution.md`.
 
 use std::fmt;
 use std::str::FromStr;
@@ -29,7 +30,7 @@ pub enum Extension {
     Nested,
     /// `array-index`: a predicate on `name[i]` reads element `i` of array `name`.
     ArrayIndex,
-    /// `args-child-meta`: vstruct metadata as child elements in `.args` (formats.md §2.6).
+    /// `args-child-meta`: vstruct metadata as child elements in `.args`.
     ArgsChildMeta,
 }
 

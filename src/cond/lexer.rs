@@ -1,16 +1,17 @@
-//! The lexer of the conditional language (spec vstruct.md §3.1), built on nom.
+//! The lexer of the conditional language, built on nom.
 //!
-//! Tokens are recognised by longest match, ties going to the rule listed first in §3.1. The
+//! Tokens (listed for users in `docs/conditional-language.md`) are recognised by longest
+//! match; when a keyword and an identifier match the same text, the keyword wins. The
 //! recognisers for the multi-character forms (numbers, strings, identifiers) are nom parsers;
 //! [`next_token`] dispatches on the first character and applies the longest-match and tie
 //! rules by hand, which for this token set comes down to a few local decisions:
 //!
 //! * an identifier `L(L|D)*` is extended by a glued array suffix `[D+]` when one follows
-//!   (rule 14 beats rule 15 by length);
-//! * `is` followed by exactly one U+0020 and `not` is the six-character `IS_NOT` (rule 7),
+//!   (the longer match);
+//! * `is` followed by exactly one U+0020 and `not` is the six-character `IS_NOT`,
 //!   even when more identifier characters follow (`is notable` → `IS_NOT`, `PARAM able`);
-//! * otherwise an identifier spelled exactly like a keyword is that keyword (tie, keyword
-//!   rules come first), and anything longer is a `PARAM` (`connectif`, `island`);
+//! * otherwise an identifier spelled exactly like a keyword is that keyword (the tie goes to
+//!   the keyword), and anything longer is a `PARAM` (`connectif`, `island`);
 //! * any character that starts no token is one `UNRECOGNIZED` token. The specification says
 //!   "byte"; vstructc spans the whole UTF-8 character so that spans stay on character
 //!   boundaries (the start offset, which is what positions report, is the same).
@@ -108,7 +109,7 @@ pub enum Keyword {
 }
 
 impl Keyword {
-    /// All keywords, in the order of §3.1.
+    /// All keywords, in a fixed order.
     pub const ALL: [Keyword; 10] = [
         Keyword::Is,
         Keyword::And,
@@ -138,7 +139,7 @@ impl Keyword {
         }
     }
 
-    /// The token name used in messages (§3.1): `IS`, `AND`, ….
+    /// The token name used in messages: `IS`, `AND`, ….
     pub fn token_name(self) -> &'static str {
         match self {
             Keyword::Is => "IS",
@@ -191,7 +192,8 @@ pub enum TokenKind<'a> {
 }
 
 impl TokenKind<'_> {
-    /// The §3.1 token name (`PARAM`, `IF`, `(`, …); `end of input` for [`TokenKind::Eof`].
+    /// The token name used in messages (`PARAM`, `IF`, `(`, …); `end of input` for
+    /// [`TokenKind::Eof`].
     pub fn name(&self) -> &'static str {
         match self {
             TokenKind::Kw(k) => k.token_name(),
@@ -260,7 +262,7 @@ impl Token<'_> {
     }
 }
 
-/// The §3.1 whitespace set: space, `\t`, `\v`, `\n`, `\f` — **not** `\r`.
+/// The language's whitespace set: space, `\t`, `\v`, `\n`, `\f` — **not** `\r`.
 pub(crate) fn is_space(c: char) -> bool {
     matches!(c, ' ' | '\t' | '\u{0b}' | '\n' | '\u{0c}')
 }

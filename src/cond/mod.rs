@@ -1,4 +1,4 @@
-//! The `vstructConditionalExpr` language (spec vstruct.md §3–§4.3, §5.6, §9): lexer, parser,
+//! The `vstructConditionalExpr` language: lexer, parser,
 //! AST, evaluator, `set`/`copy` typing and the opt-in extensions (the definition-time VS009
 //! check of the names a conditional reads is the registry's, `registry::VstructTables`).
 //!

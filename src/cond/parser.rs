@@ -1,14 +1,14 @@
-//! Recursive-descent parser over tokens lexed on demand (spec vstruct.md §3.2, §3.4, §3.5, §9).
+//! Recursive-descent parser over tokens lexed on demand.
 //!
 //! The grammar is LR; this parser decides every choice with at most two tokens of
-//! look-ahead using the deterministic rule of §3.2:
+//! look-ahead using this deterministic rule:
 //!
 //! > At a position where a predicate may begin (start of statement, after `IF`, after `(`,
 //! > after `AND`/`OR`), a keyword token is a parameter name if and only if the next token is
 //! > a comparison operator, or the next token is `IS`/`IS_NOT` and the token after that is
 //! > `CONNECTED` or `SET`. Otherwise it keeps its keyword role.
 //!
-//! Statements are desugared while parsing (§3.4). The first offending token produces a
+//! Statements are desugared while parsing. The first offending token produces a
 //! [`ParseError`] naming it and the set of tokens that were expected there.
 
 use super::ast::{Action, ActionKind, ElseIf, Expr, IsTest, Literal, Param, Span, Statement};
@@ -104,7 +104,7 @@ pub fn parse_statement_limited(
     p.statement()
 }
 
-/// Tokens of look-ahead the parser keeps (the current one and two more, §3.2).
+/// Tokens of look-ahead the parser keeps (the current one and two more).
 const LOOKAHEAD: usize = 3;
 
 /// Tokens are lexed on demand into a window of [`LOOKAHEAD`] tokens rather than into a list
@@ -171,7 +171,7 @@ impl<'a> Parser<'a> {
         self.peek().kind == TokenKind::Kw(k)
     }
 
-    /// The deterministic rule of §3.2: does a predicate start at the current token?
+    /// The deterministic rule of the module docs: does a predicate start at the current token?
     /// `PARAM` always names a parameter; a keyword does only when followed by a comparison
     /// operator, or by `IS`/`IS_NOT` and then `CONNECTED`/`SET`.
     fn name_here(&self) -> bool {
@@ -319,7 +319,7 @@ impl<'a> Parser<'a> {
     }
 
     /// After `ELSE`. Compat: `action` then end of input. With `else-if`:
-    /// `tail := action | action 'IF' expr 'ELSE' tail | action 'IF' expr` (§9); links are
+    /// `tail := action | action 'IF' expr 'ELSE' tail | action 'IF' expr`; links are
     /// appended to `links` and the final fallback returned (`ignore` when the chain ends in
     /// `… if C`).
     fn tail(&mut self, links: &mut Vec<ElseIf>) -> Result<Action, ParseError> {

@@ -1,10 +1,11 @@
-//! RenderMan `.args` reader (spec formats.md §2).
+//! RenderMan `.args` reader.
 //!
 //! [`parse_args`] reads one file's bytes into a [`Definition`] whose id is given by the caller
 //! (the file stem). Warnings and infos go to `diags`; a condition that rejects the file is
 //! returned as `Err` (with code, file, line and column). The XML is tokenised with
 //! `quick-xml`; everything above the token level (pages, tags, hints, types, defaults, vstruct
-//! metadata, the error policy of §2.7) is interpreted here.
+//! metadata, the error policy) is interpreted here. `docs/file-formats.md` describes the
+//! format as read.
 //!
 //! Choices where the spec is silent (documented here so users can rely on them):
 //!
@@ -41,7 +42,7 @@ use std::sync::Arc;
 /// Options of the `.args` reader.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ArgsOptions {
-    /// Extension `args-child-meta` (formats.md §2.6): accept `<string name="vstructmember"
+    /// Extension `args-child-meta`: accept `<string name="vstructmember"
     /// value="…"/>` (and the two other vstruct keys) as child elements of a property.
     pub child_meta: bool,
 }
@@ -229,7 +230,7 @@ struct PropertyChildren {
     child_meta: Vec<ChildMeta>,
 }
 
-/// Shader kinds the spec lists as known (formats.md §2.2).
+/// Shader kinds the spec lists as known.
 /// Largest fixed `arraySize` accepted (robustness limit; the reference has none). A larger
 /// size would make the zero-padded default allocate gigabytes, so it is reported (AR013) and
 /// the property becomes a dynamic array, keeping whatever default values were written.
@@ -252,7 +253,7 @@ const KNOWN_KINDS: &[&str] = &[
     "displaydriver",
 ];
 
-/// Node-level elements stored verbatim in node metadata (formats.md §2.2).
+/// Node-level elements stored verbatim in node metadata.
 const RAW_NODE_ELEMENTS: &[&str] = &[
     "primvars",
     "departments",
@@ -1083,7 +1084,7 @@ impl<'a> ArgsParser<'a> {
 
     // ---- interpretation of attributes ----------------------------------------------------
 
-    /// Type per formats.md §2.4.
+    /// The property's type, from its `type` attribute or tag.
     fn resolve_type(
         &mut self,
         prop: &mut Property,
@@ -1213,7 +1214,7 @@ impl<'a> ArgsParser<'a> {
         prop.connectable = attr(attrs, "connectable").is_none_or(|a| args_bool(&a.value, true));
     }
 
-    /// Default value per formats.md §2.5; reports AR012.
+    /// The property's default value; reports AR012.
     fn resolve_default(&mut self, ty: &Type, a: Option<&Attr>, pos: usize) -> Option<Value> {
         let (text, offset) = match a {
             Some(a) => (Some(a.value.as_ref()), a.offset),
@@ -1226,7 +1227,8 @@ impl<'a> ArgsParser<'a> {
         parsed.value
     }
 
-    /// vstruct member declaration per vstruct.md §2.2–§2.4 (and the child-meta extension).
+    /// The property's vstruct member declaration (attributes, or child elements with the
+    /// `args-child-meta` extension).
     fn resolve_vstruct(
         &mut self,
         prop: &mut Property,
@@ -1330,13 +1332,13 @@ fn attr_error_position(e: &quick_xml::events::attributes::AttrError) -> usize {
 }
 
 /// Splits `vstructmember` at the first `.`; `None` when head or member would be empty or there
-/// is no dot (vstruct.md §2.2). Nothing is trimmed.
+/// is no dot. Nothing is trimmed.
 pub(crate) fn split_member(value: &str) -> Option<(String, String)> {
     let (head, member) = value.split_once('.')?;
     (!head.is_empty() && !member.is_empty()).then(|| (head.to_string(), member.to_string()))
 }
 
-/// `.args` booleans (formats.md §2.3, §2.5): `0`, `false`, `f` (any case) are false; empty is
+/// `.args` booleans: `0`, `false`, `f` (any case) are false; empty is
 /// `empty_is`; anything else is true.
 fn args_bool(value: &str, empty_is: bool) -> bool {
     let v = value.trim();
@@ -1358,7 +1360,7 @@ fn parse_options_attr(value: &str) -> Vec<(String, String)> {
         .collect()
 }
 
-/// A type word of a `type` attribute or a tag (formats.md §2.4); `None` if unknown.
+/// A type word of a `type` attribute or a tag; `None` if unknown.
 pub(crate) fn args_type(word: &str) -> Option<Type> {
     if let Some(rest) = word.strip_prefix("struct")
         && rest.starts_with(char::is_whitespace)
@@ -1387,7 +1389,7 @@ pub(crate) fn args_type(word: &str) -> Option<Type> {
     Some(Type::scalar(base))
 }
 
-// ---- defaults (formats.md §2.5) -------------------------------------------------------------
+// ---- defaults -------------------------------------------------------------
 
 /// A parsed default and the most severe problem found.
 #[derive(Debug, Clone, PartialEq)]
@@ -1453,7 +1455,7 @@ fn float_prefix_len(s: &str) -> usize {
     end
 }
 
-/// One float token like C `atof` with the reporting rules of §2.5 step 3.
+/// One float token like C `atof` with the reporting rules for float defaults.
 fn parse_float_token(tok: &str, issues: &mut Issues) -> f32 {
     let x = parse_float_prefix(tok, issues);
     if !x.is_finite() {
@@ -1497,7 +1499,7 @@ fn parse_float_prefix(tok: &str, issues: &mut Issues) -> f32 {
     v
 }
 
-/// One int token like C `atoi` with the reporting rule of §2.5 step 2.
+/// One int token like C `atoi` with the reporting rule for int defaults.
 fn parse_int_token(tok: &str, issues: &mut Issues) -> i32 {
     let b = tok.as_bytes();
     let mut i = 0;
@@ -1562,7 +1564,7 @@ fn element(base: &BaseType, nums: &[f32], ints: &[i32]) -> Option<Value> {
     })
 }
 
-/// Parses a `default` attribute for `ty` (formats.md §2.5). `text` is `None` when absent.
+/// Parses a `default` attribute for `ty`. `text` is `None` when absent.
 pub(crate) fn parse_default(ty: &Type, text: Option<&str>) -> ParsedDefault {
     let mut issues = Issues::default();
     let value = default_value(ty, text, &mut issues);

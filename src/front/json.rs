@@ -1,4 +1,4 @@
-//! JSON network reader (spec formats.md §5.1–§5.3, error policy §5.5).
+//! JSON network reader (see `docs/file-formats.md`).
 //!
 //! The JSON form mirrors Hydra's `HdMaterialNetwork2`: materials, each with nodes (shader id,
 //! parameter values, per-input connection lists), terminals and primvars. [`parse_json`]

@@ -1,4 +1,4 @@
-//! Compiled OSL `.oso` reader (spec formats.md §4).
+//! Compiled OSL `.oso` reader.
 //!
 //! [`parse_oso`] reads one file's bytes into a [`Definition`] whose id is the shader name.
 //! Only the header, the shader line and the `param`/`oparam` lines are read; the property
@@ -52,7 +52,7 @@ const SHADER_TYPES: [(&str, &str); 5] = [
 /// Symbol types that end the property section.
 const NON_PROPERTY_SYMTYPES: [&str; 5] = ["local", "temp", "global", "const", "code"];
 
-/// The three `%meta` keys that carry vstruct metadata (vstruct.md §2.1).
+/// The three `%meta` keys that carry vstruct metadata.
 const VSTRUCT_KEYS: [&str; 3] = [
     "vstructmember",
     "vstructConditionalExpr",
@@ -955,7 +955,7 @@ impl Reader<'_> {
     }
 
     /// The vstruct member declaration, if `vstructmember` splits into a non-empty head and
-    /// member (vstruct.md §2.2); otherwise the raw entries stay only in the metadata.
+    /// member; otherwise the raw entries stay only in the metadata.
     fn member_decl(&self, keys: &HashMap<&'static str, (String, Pos)>) -> Option<MemberDecl> {
         let (value, _) = keys.get("vstructmember")?;
         let (head, member) = value.split_once('.')?;
@@ -1142,7 +1142,7 @@ fn meta_value(base: &BaseType, item: &Item) -> Option<(Value, String)> {
     }
 }
 
-/// Store a `%meta` entry and fill the typed fields it drives (formats.md §4.2).
+/// Store a `%meta` entry and fill the typed fields it drives.
 fn apply_meta(prop: &mut Property, meta: Meta) {
     match meta.name.as_str() {
         "tag" => prop.connection_types.extend(string_values(&meta.value)),

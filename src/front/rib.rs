@@ -1,4 +1,4 @@
-//! RIB shading-network reader (spec formats.md §3.1–§3.6, error policy §3.8).
+//! RIB shading-network reader (see `docs/file-formats.md`).
 //!
 //! [`parse_rib`] reads ASCII RIB bytes into a [`Network`]. Only the shading-node requests
 //! `Pattern`, `Bxdf`, `Displace`, `Light` and `LightFilter` are interpreted; every other
@@ -79,7 +79,7 @@ const CLASSES: &[&str] = &[
 /// `path` names the input in diagnostics. `types` supplies declared types for decls without
 /// an inline type (RB012/RB006), the RB016 type check and the RB019 unknown-shader check.
 /// Warnings and infos go to `diags`; the first error stops reading and is returned (nothing is
-/// written for a file with errors, §3.8).
+/// written for a file with errors).
 ///
 /// Materials: one per `Bxdf` (named by its `__materialid`, else its handle), `Displace`,
 /// `Light` and `LightFilter` node version (named by handle), with the matching terminal and the
@@ -411,7 +411,7 @@ fn split_decl(text: &str) -> Option<DeclWords<'_>> {
     Some(d)
 }
 
-/// The RIB type words of formats.md §3.4 (plus `integrator`); anything else is `Unknown`.
+/// The RIB type words of parameter declarations (plus `integrator`); anything else is `Unknown`.
 fn rib_base_type(word: &str) -> Option<Type> {
     match word {
         "float" | "int" | "string" | "color" | "point" | "vector" | "normal" | "matrix"
@@ -639,7 +639,7 @@ impl<'a> Assembler<'a, '_> {
     }
 
     /// A request whose handle is defined, for the same shader, with no parameters other than
-    /// `string __materialid` re-uses the earlier node (formats.md §3.6).
+    /// `string __materialid` re-uses the earlier node.
     fn is_reuse(&self, handle: &str, shader: &str, read: &[ReadParam]) -> bool {
         let Some(prev) = self.net.find(handle) else {
             return false;
@@ -1243,7 +1243,7 @@ fn flat(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Va
     Value::Array(base.clone(), items)
 }
 
-/// One material per terminal node version, in file order (formats.md §3.6, §5.4).
+/// One material per terminal node version, in file order.
 fn add_materials(net: &mut Network) {
     let mut taken: HashSet<String> = HashSet::new();
     let mut suffixes: HashMap<String, usize> = HashMap::new();

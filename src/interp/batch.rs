@@ -1,4 +1,4 @@
-//! Batched evaluation over `W` shading points (spec closures.md §1.5).
+//! Batched evaluation over `W` shading points.
 //!
 //! A material's IR fixes the lobe structure; only parameter values differ between points. A
 //! [`PreparedBatch`] therefore has one *slot* per leaf that is live in at least one lane,
@@ -22,7 +22,7 @@ use super::soa::{Acc, Kernel, LaneWeights, Vec3x};
 use crate::ir::MAX_LOBES;
 use glam::{Vec2, Vec3};
 
-/// `W` shading points (§1.5). Every lane is a real point; pad a partial batch by repeating a
+/// `W` shading points. Every lane is a real point; pad a partial batch by repeating a
 /// point.
 #[derive(Debug, Clone, Copy)]
 pub struct ShadingBatch<'a, const W: usize> {
@@ -135,7 +135,7 @@ impl<const W: usize> FrameX<W> {
     }
 }
 
-/// A material prepared for `W` points (§1.5).
+/// A material prepared for `W` points.
 #[derive(Debug, Clone)]
 pub struct PreparedBatch<const W: usize> {
     pub(super) slots: [Slot<W>; MAX_LOBES],
@@ -162,7 +162,7 @@ pub struct PreparedBatch<const W: usize> {
 }
 
 impl Material {
-    /// Prepare `W` points at once (§1.5).
+    /// Prepare `W` points at once.
     pub fn prepare_batch<const W: usize>(&self, p: &ShadingBatch<W>) -> PreparedBatch<W> {
         let mut s = Scratch::default();
         let lanes: [Prepared; W] = std::array::from_fn(|k| self.prepare_with(&p.lane(k), &mut s));

@@ -1,4 +1,4 @@
-//! Diffuse leaves (spec closures.md §3.1–§3.5, §3.16): Lambert, Translucent, Oren–Nayar
+//! Diffuse leaves: Lambert, Translucent, Oren–Nayar
 //! (QON, FON, EON), MiaDiffuse and Burley. All are cosine-sampled.
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.

@@ -1,4 +1,4 @@
-//! Pass-through leaves (spec closures.md §3.15): emission and straight transparency.
+//! Pass-through leaves: emission and straight transparency.
 
 use super::lobe::{LobeAlbedo, LobeSample};
 use super::math::Rgb;

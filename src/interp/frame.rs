@@ -1,4 +1,4 @@
-//! Local shading frames (spec closures.md §0): tangent `x`, bitangent `y`, normal `z`.
+//! Local shading frames: tangent `x`, bitangent `y`, normal `z`.
 
 use super::vmath::select3;
 use glam::Vec3;

@@ -1,4 +1,4 @@
-//! Fresnel forms (spec closures.md §3.7).
+//! Fresnel forms.
 //!
 //! Every function takes `μ`, the cosine between the relevant direction and the microfacet
 //! normal (`V·h` inside microfacet lobes, `μ_o` for view-dependent weights).
@@ -244,7 +244,7 @@ pub fn dielectric_avg(eta: f32) -> f32 {
     }
 }
 
-/// Fit of a conductor to Hoffman F82 (spec §3.9): `F0 = F(1)`, `t = F(1/7)/F_Schlick(1/7)`,
+/// Fit of a conductor to Hoffman F82: `F0 = F(1)`, `t = F(1/7)/F_Schlick(1/7)`,
 /// `F90 = 1`, `q = 5`. Returns `(F0, t)`.
 pub(crate) fn conductor_to_f82(eta: Rgb, kappa: Rgb) -> (Rgb, Rgb) {
     let f0 = conductor(1.0, eta, kappa);

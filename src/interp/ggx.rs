@@ -1,5 +1,5 @@
-//! The GGX microfacet distribution (spec closures.md §3.6): NDF, Smith masking per variant,
-//! visible-normal sampling, the delta cut-off, and the roughness/anisotropy mapping (§0).
+//! The GGX microfacet distribution: NDF, Smith masking per variant,
+//! visible-normal sampling, the delta cut-off, and the roughness/anisotropy mapping.
 
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -262,7 +262,7 @@ pub fn g2(masking: Masking, lambda_v: f32, lambda_l: f32) -> f32 {
     }
 }
 
-/// The shared roughness/anisotropy mapping of spec §0 (MaterialX `roughness_anisotropy`):
+/// The shared roughness/anisotropy mapping (MaterialX `roughness_anisotropy`):
 /// `α = clamp(r², 1e-6, 1)`, `s = √(1 − min(|a|, 0.98))`, `α_x = min(α/s, 1)`, `α_y = α s`;
 /// negative `a` swaps the axes. Returns `(α_x, α_y)`.
 pub fn roughness_to_alpha(r: f32, a: f32) -> (f32, f32) {

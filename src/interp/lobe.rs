@@ -1,7 +1,7 @@
 //! The leaf instruction set: [`Lobe`] (parameters inline, one enum variant per leaf family)
 //! and [`PreparedLobe`] (the same with every view-only term precomputed).
 //!
-//! Everything here works in the lobe's local frame (normal `+z`, spec closures.md §0):
+//! Everything here works in the lobe's local frame (normal `+z`):
 //! callers transform V and L with a [`super::Frame`]. The interpreter calls
 //! [`Lobe::prepare`] once per (point, V) and then [`PreparedLobe::eval`],
 //! [`PreparedLobe::sample`], [`PreparedLobe::pdf`] and [`PreparedLobe::albedo`] as often as
@@ -81,7 +81,7 @@ impl LobeAlbedo {
     }
 }
 
-/// Layering class of a leaf (spec §2.4).
+/// Layering class of a leaf.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LobeClass {
     /// Throughput 0.
@@ -92,7 +92,7 @@ pub enum LobeClass {
     PassThrough,
 }
 
-/// Reciprocity of a leaf (spec §3 summary, §5.2).
+/// Reciprocity of a leaf.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reciprocity {
     /// `f(V, L) = f(L, V)`.
@@ -261,7 +261,7 @@ impl Lobe {
         }
     }
 
-    /// Layering class (spec §2.4).
+    /// Layering class.
     pub fn class(&self) -> LobeClass {
         match self {
             Lobe::MicrofacetR(m) if m.fresnel.is_conductor() => LobeClass::Opaque,
@@ -277,11 +277,11 @@ impl Lobe {
         }
     }
 
-    /// Reciprocity (spec §3 summary).
+    /// Reciprocity.
     pub fn reciprocity(&self) -> Reciprocity {
         let turquin = |k: f32| k > 0.0;
         match self {
-            // mia's highlight is divided by its directional albedo at μ_o (§3.12).
+            // mia's highlight is divided by its directional albedo at μ_o.
             Lobe::MiaDiffuse(_) | Lobe::SheenLTC(_) | Lobe::MiaHighlight3(_) => {
                 Reciprocity::NonReciprocal
             }
@@ -670,7 +670,7 @@ impl PreparedLobe {
         })
     }
 
-    /// Directional albedo at the prepared view (tables or closed forms, §3.17).
+    /// Directional albedo at the prepared view (tables or closed forms).
     pub fn albedo(&self) -> LobeAlbedo {
         match &self.state {
             State::Inactive | State::Emission(_) => LobeAlbedo::default(),

@@ -1,4 +1,4 @@
-//! The interpreter API over a whole material (spec closures.md §1.4): compile a
+//! The interpreter API over a whole material: compile a
 //! [`MaterialIr`] once into a [`Material`], then [`Material::prepare`] per (point, view) and
 //! [`Prepared::eval`] / [`Prepared::sample`] / [`Prepared::albedo`] per light direction.
 //!
@@ -11,14 +11,16 @@
 //! point is decided there, once.
 //!
 //! # Prepare, without heap allocation
-//! `prepare` follows the seven steps of §1.4 in order. The register file and the per-node
-//! throughput and weight arrays have the IR's (unbounded) sizes, so they live in a reusable
-//! [`Scratch`]: [`Material::prepare_with`] takes one from the caller, [`Material::prepare`]
-//! uses a per-thread scratch (allocated on a thread's first call, reused afterwards). The
-//! result, [`Prepared`], is a fixed array of `MAX_LOBES` [`ActiveLobe`]s and never allocates;
-//! `eval` and `sample` neither. A uniform material seen from above its surface is prepared by
-//! a fused form of the same steps over fixed arrays (`material/uniform.rs`), with the same
-//! results as the general form, [`Material::prepare_general_into`].
+//! `prepare` follows seven steps in order: (1) run the program, (2) build the frames and
+//! `μ_o`, (3) throughput bottom-up, (4) weights top-down, (5) view-only terms and albedos of
+//! the weighted lobes, (6) drop negligible lobes, (7) selection probabilities. The register file
+//! and the per-node throughput and weight arrays have the IR's (unbounded) sizes, so they live in a
+//! reusable [`Scratch`]: [`Material::prepare_with`] takes one from the caller,
+//! [`Material::prepare`] uses a per-thread scratch (allocated on a thread's first call, reused
+//! afterwards). The result, [`Prepared`], is a fixed array of `MAX_LOBES` [`ActiveLobe`]s and never
+//! allocates; `eval` and `sample` neither. A uniform material seen from above its surface is
+//! prepared by a fused form of the same steps over fixed arrays (`material/uniform.rs`), with the
+//! same results as the general form, [`Material::prepare_general_into`].
 //!
 //! # Choices where the spec is silent
 //! * Frames whose normal comes from a register: the program runs once with every frame's
@@ -34,7 +36,7 @@
 //!   what the lobe's sample weights average to, so it is the choice with the least variance.
 //! * `Transparent` leaves are not lobes (they do not count toward `MAX_LOBES`, and are not in
 //!   [`Prepared::lobes`] or [`Prepared::albedo`]), but `sample` does choose straight
-//!   transmission (§3.15: `L = −V`, weight `τ/p`) with probability `lum(τ)/Σ`, reported with
+//!   transmission (`L = −V`, weight `τ/p`) with probability `lum(τ)/Σ`, reported with
 //!   lobe index [`TRANSPARENCY_LOBE`]. The mean of sample weights is therefore
 //!   `albedo().reflect + albedo().transmit_radiance + transparency()`.
 //! * External inputs are packed 3 floats per colour/vector slot and 1 per scalar slot, in
@@ -72,10 +74,10 @@ mod uniform;
 /// leaves.
 pub const TRANSPARENCY_LOBE: u8 = u8::MAX;
 
-/// Default of [`PrepareOptions::drop_threshold`] (§1.4 step 6).
+/// Default of [`PrepareOptions::drop_threshold`].
 pub(crate) const DEFAULT_DROP_THRESHOLD: f32 = 1e-6;
 
-/// One shading point as the interpreter sees it (§1.4). Directions are world-space unit
+/// One shading point as the interpreter sees it. Directions are world-space unit
 /// vectors.
 #[derive(Debug, Clone, Copy)]
 pub struct ShadingPoint<'a> {
@@ -160,7 +162,7 @@ pub struct Sample {
 pub struct Albedo {
     /// Reflected part.
     pub reflect: Rgb,
-    /// Transmitted part as energy (`η'² E_T`, §1.4): a lossless interface reports
+    /// Transmitted part as energy (`η'² E_T`): a lossless interface reports
     /// `reflect + transmit = 1`.
     pub transmit: Rgb,
     /// Transmitted part in the radiance convention (what sample weights average to).
@@ -191,7 +193,7 @@ impl Albedo {
 /// Options of [`Material`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PrepareOptions {
-    /// Drop lobes with `maxc(A_k)` at or below this (§1.4 step 6); 0 disables dropping.
+    /// Drop lobes with `maxc(A_k)` at or below this; 0 disables dropping.
     pub drop_threshold: f32,
     /// Whether reflection lobes also respond when seen from below (transmission lobes are
     /// always two-sided).
@@ -213,7 +215,7 @@ impl Default for PrepareOptions {
 }
 
 /// A lobe of a prepared material: the leaf's prepared state with its weight, albedo and
-/// selection probability (the spec's `PreparedLobe` of §1.4; the leaf-level
+/// selection probability (the leaf-level
 /// [`PreparedLobe`] is the `lobe` field).
 #[derive(Debug, Clone, Copy)]
 pub struct ActiveLobe {
@@ -240,7 +242,7 @@ pub struct LeafInfo {
     pub leaf: Leaf,
     /// Compact frame slot (index into the prepared frames).
     frame_slot: u8,
-    /// Layerable (§2.4).
+    /// Layerable.
     layerable: bool,
     /// The lobe, when every parameter register is a constant (built and bound once at
     /// compile time).
@@ -541,7 +543,7 @@ impl Material {
         })
     }
 
-    /// Prepare for one point and view (§1.4 steps 1–7) with caller-supplied scratch memory.
+    /// Prepare for one point and view (all seven steps) with caller-supplied scratch memory.
     pub fn prepare_with(&self, p: &ShadingPoint, s: &mut Scratch) -> Prepared {
         let mut out = Prepared::empty(Vec3::Z);
         self.prepare_into(p, s, &mut out);
@@ -618,7 +620,7 @@ impl Material {
         }
     }
 
-    /// Steps 1–7 of §1.4 into `out`: [`Material::prepare_into`] without planning `eval`'s
+    /// All seven prepare steps into `out`: [`Material::prepare_into`] without planning `eval`'s
     /// lobe packs, whatever [`PrepareOptions::pack_lobes`] says, so every lobe is evaluated
     /// alone. For callers that evaluate once per prepare (the material preview), where
     /// filling the packs costs more than it saves, and for the batched path, which reads
@@ -928,7 +930,7 @@ impl Material {
     }
 }
 
-/// The weight pass of a material with constant registers (§1.4 step 4), compiled: every
+/// The weight pass of a material with constant registers, compiled: every
 /// root-to-target path of the closure DAG is one term `c ⊙ Π thr[j]`, where `c` is the
 /// product of the path's constant `mix` and `mul` factors and the `thr[j]` are the
 /// throughputs of the layer tops the path passes under (the only view-dependent part).
@@ -1317,7 +1319,7 @@ pub(crate) fn leaf_lobe(kind: &LeafKind, regs: &[Vec3]) -> Lobe {
     }
 }
 
-/// An [`AlbedoSource`] backed by the interpreter's leaves and tables (§3.17): the leaf's
+/// An [`AlbedoSource`] backed by the interpreter's leaves and tables: the leaf's
 /// prepared albedo at a view with cosine `μ_o` (reflection plus transmission as energy),
 /// without its tint. Use it wherever the closure algebra needs real `E_k(μ_o)`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -1337,7 +1339,7 @@ impl AlbedoSource for TableAlbedo {
     }
 }
 
-/// A material prepared for one point and view (§1.4): at most `MAX_LOBES` weighted lobes,
+/// A material prepared for one point and view: at most `MAX_LOBES` weighted lobes,
 /// their frames, emission and transparency. Plain data; `eval` and `sample` do not allocate.
 #[derive(Debug, Clone, Copy)]
 pub struct Prepared {
@@ -1599,7 +1601,7 @@ impl Prepared {
         }
     }
 
-    /// One-sample MIS over the lobes (§1.4): `u[0]` chooses a lobe and is rescaled to drive
+    /// One-sample MIS over the lobes: `u[0]` chooses a lobe and is rescaled to drive
     /// the lobe's own sampling with `u[1]`, `u[2]`. `None` when the material is absorbing or
     /// the sample carries no energy.
     pub fn sample(&self, u: [f32; 3]) -> Option<Sample> {

@@ -6,7 +6,7 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// Linear RGB colour (Rec.709 primaries).
 pub type Rgb = Vec3;
 
-/// Smallest |μ| used in denominators (spec closures.md §0).
+/// Smallest |μ| used in denominators.
 pub(crate) const MU_EPS: f32 = 1e-7;
 
 /// Rec.709 luminance `0.2126 r + 0.7152 g + 0.0722 b`.

@@ -1,4 +1,4 @@
-//! GGX microfacet leaves (spec closures.md §3.8–§3.10, §3.14): reflection with any Fresnel
+//! GGX microfacet leaves: reflection with any Fresnel
 //! form (generalized Schlick, Hoffman F82, exact dielectric, conductor) with optional Turquin
 //! or Kulla–Conty energy compensation, and the dielectric with reflection and/or refraction.
 //!
@@ -12,7 +12,7 @@ use super::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
-/// Multiple-scattering energy compensation of a microfacet lobe (spec §3.14).
+/// Multiple-scattering energy compensation of a microfacet lobe.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Compensation {
     /// Single scattering only.
@@ -52,7 +52,7 @@ fn aniso_tables(masking: Masking) -> [TableId; 3] {
     }
 }
 
-/// The F = 1 reflection albedo of an anisotropic GGX lobe at local view `v` (spec §3.17):
+/// The F = 1 reflection albedo of an anisotropic GGX lobe at local view `v`:
 /// the anisotropic `E1` table at the view's azimuth ([`tables::aniso_albedo`]).
 #[inline]
 pub fn ggx_aniso_e1(ggx: &Ggx, masking: Masking, v: Vec3) -> f32 {
@@ -281,8 +281,8 @@ pub(crate) fn e1_avg(masking: Masking, alpha: f32) -> f32 {
     tables::lookup1(t, tables::ggx_axis(alpha))
 }
 
-/// Single-scattering directional albedo of GGX reflection with Fresnel `f` (tables, §3.10):
-/// `F0 E1 + (F90 − F0) S_q − a H82`; conductors through their F82 fit (§3.9); exact
+/// Single-scattering directional albedo of GGX reflection with Fresnel `f` (from the tables):
+/// `F0 E1 + (F90 − F0) S_q − a H82`; conductors through their F82 fit; exact
 /// dielectric Fresnel through the dielectric `E_R` table (height-correlated; separable
 /// masking rescales it by `E1_sep/E1_hc`, an approximation).
 pub fn reflection_albedo(f: &Fresnel, masking: Masking, mu: f32, alpha: f32) -> Rgb {
@@ -476,7 +476,7 @@ impl MicrofacetR {
         e1v * ratio
     }
 
-    /// The Fresnel form the albedo tables read: a conductor through its F82 fit (§3.9),
+    /// The Fresnel form the albedo tables read: a conductor through its F82 fit,
     /// any other form as it is. The fit costs two complex Fresnel evaluations, so a compiled
     /// material computes it once per constant leaf ([`MicrofacetR::prepare_bound`]).
     pub fn albedo_fresnel(&self) -> Fresnel {
@@ -736,19 +736,19 @@ pub enum DielectricMode {
     RT,
 }
 
-/// GGX dielectric interface with exact Fresnel (spec §3.8). Transmission uses the radiance
+/// GGX dielectric interface with exact Fresnel. Transmission uses the radiance
 /// convention of Walter et al. 2007.
 ///
 /// Choices where the spec is silent or slips:
 /// * The refraction density includes the Jacobian factor `η'²`:
 ///   `pdf_T = (1 − P_R) D_V(h) η'² |L·h| / (V·h + η' L·h)²` (Walter 2007 eq. 17; pbrt-v4).
-///   The spec's §3.8 formula omits `η'²`; without it the density does not integrate to one
-///   and the χ² test fails. Sample weights then average to the radiance-convention `E_T`.
+///   Without `η'²` the density does not integrate to one and the χ² test fails. Sample
+///   weights then average to the radiance-convention `E_T`.
 /// * With `t_fresnel = false` the reflection probability uses the transmission factor 1
 ///   instead of `1 − F`: `P_R = F lum(T_r) / (F lum(T_r) + lum(T_t))`.
 /// * Seen from below, a mode `T` lobe with `t_fresnel = false` is the whole interface: it
 ///   evaluates as `RT` with `t_fresnel` on (the reflection layer the recipe puts above it is
-///   one-sided; spec §4.5), so glass seen from inside reflects with the inverted index and
+///   one-sided), so glass seen from inside reflects with the inverted index and
 ///   conserves energy.
 /// * Delta refraction (α below the cut-off) has weight `T_t (1 − F)/η'²` (radiance
 ///   convention, consistent with `E_T`), not `1 − F`.
@@ -886,7 +886,7 @@ impl Dielectric {
     /// transmission lobe without its `(1 − F)` factor leaves the reflection to a separate
     /// layer above it, and that layer is one-sided, so from inside the lobe reflects (Fresnel
     /// with the inverted index, total internal reflection beyond the critical angle) and
-    /// keeps `(1 − F)` on its transmission, as an `RT` lobe does (spec §4.5).
+    /// keeps `(1 − F)` on its transmission, as an `RT` lobe does.
     #[inline(always)]
     fn whole_interface(&self, flipped: bool) -> bool {
         flipped && self.mode == DielectricMode::T && !self.t_fresnel

@@ -1,4 +1,4 @@
-//! The embedded CPU interpreter (spec closures.md §1, §3): BSDF leaves, eval, sample, albedo.
+//! The embedded CPU interpreter: BSDF leaves, eval, sample, albedo.
 //!
 //! This module holds the leaf instruction set: each leaf family in its own file, all in f32
 //! with glam, in a local frame ([`Frame`]). [`Lobe`] is one leaf with its parameters inline;
@@ -11,7 +11,7 @@
 //! the run-time choice of the vector extension they, and the scalar prepare and eval, are
 //! compiled for.
 //!
-//! Over whole materials (§1.4–§1.6): [`Material`] compiles a [`crate::ir::MaterialIr`] once;
+//! Over whole materials: [`Material`] compiles a [`crate::ir::MaterialIr`] once;
 //! [`Material::prepare`] runs its program and the closure algebra for one point and view and
 //! returns a [`Prepared`] (at most `MAX_LOBES` weighted lobes, no heap allocation) with
 //! `eval`, `sample`, `albedo`, `emission` and `transparency`; [`batch`] prepares and evaluates

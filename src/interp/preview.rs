@@ -1,4 +1,4 @@
-//! Material preview images (spec closures.md §1.6): a deterministic, sampling-free render of
+//! Material preview images: a deterministic, sampling-free render of
 //! a unit sphere under one directional light and a uniform environment.
 //!
 //! * Pixels: an `N × N` image covers `[−1.1, 1.1]²`; pixel `(i, j)` (row 0 at the top) is
@@ -322,7 +322,7 @@ impl RowState {
     }
 }
 
-/// A sphere pixel's radiance (§1.6): the light through `direct` (`eval(L_light).f_cos`), the
+/// A sphere pixel's radiance: the light through `direct` (`eval(L_light).f_cos`), the
 /// uniform environment through the albedo, emission, and the environment seen through
 /// transparency.
 #[inline(always)]

@@ -1,5 +1,5 @@
 //! Reference materials built with the IR builder: the spec's 10-lobe performance material
-//! `ref10` (closures.md §6.2) and a few small configurations used by tests, benches and
+//! `ref10` and a few small configurations used by tests, benches and
 //! examples.
 
 use crate::ir::{
@@ -95,7 +95,7 @@ fn ward_gm(b: &mut IrBuilder, alpha: f32, label: &str) -> Cl {
     )
 }
 
-/// The reference 10-lobe material of closures.md §6.2:
+/// The reference 10-lobe material:
 ///
 /// ```text
 /// ref10 = layer[Rgb](mul(sheenLTC(r: 0.5), 0.5),

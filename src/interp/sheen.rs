@@ -1,4 +1,4 @@
-//! Sheen leaves (spec closures.md §3.13): Conty–Kulla "Charlie" sheen with MaterialX or
+//! Sheen leaves: Conty–Kulla "Charlie" sheen with MaterialX or
 //! original masking, and Zeltner, Burley & Chiang's LTC sheen.
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.

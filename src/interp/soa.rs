@@ -1,4 +1,4 @@
-//! Batched structure-of-arrays evaluation (spec closures.md §1.5, §6.1): `W` lanes, each a
+//! Batched structure-of-arrays evaluation: `W` lanes, each a
 //! different (point, V, L), one lobe kind. Every lane runs the same straight-line arithmetic
 //! (branches become selects), so the compiler autovectorises the loops.
 //!
@@ -77,7 +77,7 @@ impl<const W: usize> Vec3x<W> {
 /// `W` GGX dielectric reflection lobes (mode R, height-correlated masking, exact Fresnel),
 /// parameters per lane.
 ///
-/// A standalone kernel tuned for throughput (spec §6.4's single-lobe budget): it does not
+/// A standalone kernel tuned for throughput (for the single-lobe throughput budget): it does not
 /// rescale the half vector as [`GgxView::core`] does, so when V and L are nearly opposite
 /// within about 1e-6 of the horizon (`|V + L|²` below about 1e-12) its powers of `|H|`
 /// underflow and the lane is NaN. Rescaling costs about 10 % here; the
@@ -102,7 +102,7 @@ impl<const W: usize> DielectricRBatch<W> {
         self.view(v).eval(l)
     }
 
-    /// The view-only terms for local views `v` (unit), computed once (spec §6.1).
+    /// The view-only terms for local views `v` (unit), computed once.
     #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
     pub fn view(&self, v: &Vec3x<W>) -> DielectricRView<W> {
         let mut out = DielectricRView {

@@ -1,4 +1,4 @@
-//! Albedo tables (spec closures.md §3.17): identities, on-disk format, loading and lookups.
+//! Albedo tables: identities, on-disk format, loading and lookups.
 //!
 //! Every table is a committed little-endian f32 blob under `src/interp/tables/`, written by
 //! the `lutgen` example (module `interp::lutgen`, feature `testkit`) and embedded with `include_bytes!`. A blob
@@ -672,7 +672,7 @@ pub(crate) fn aniso_weight(v: glam::Vec3) -> f32 {
     if r2 > 1e-12 { v.x * v.x / r2 } else { 0.5 }
 }
 
-/// Albedo of an anisotropic lobe's tabulated quantity (spec §3.17: GGX with F = 1, Ward with
+/// Albedo of an anisotropic lobe's tabulated quantity (GGX with F = 1, Ward with
 /// ρ = 1) from its anisotropic tables `ids` (the view at azimuths 0, 22.5° and 45°; axes μ_o,
 /// `y(α_x)`, `y(α_y)`; `axis` maps a width to its coordinate), at local view `v`.
 ///

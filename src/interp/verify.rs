@@ -1,4 +1,4 @@
-//! The statistical harness of the verification matrix (spec closures.md §5.5): a χ²
+//! The statistical harness of the verification matrix: a χ²
 //! goodness-of-fit test of a sampling routine against its pdf (after pbrt-v4's
 //! `bsdfs_test.cpp` and Mitsuba 3's `chi2.py`), the χ² distribution function (regularised
 //! incomplete gamma, implemented here: series for `x < a + 1`, Lentz continued fraction

@@ -1,4 +1,4 @@
-//! The closure algebra (spec closures.md §2.2–§2.4): bottom-up throughput with tint modes and
+//! The closure algebra: bottom-up throughput with tint modes and
 //! top-down weights, producing the flat form — every lobe with its RGB weight.
 
 use super::closure::{Leaf, LeafKind, Node, NodeId, TintMode};
@@ -6,7 +6,7 @@ use super::program::{fresnel_dielectric, lum};
 use super::{Fresnel, MaterialIr};
 use glam::Vec3;
 
-/// Supplies a leaf's directional albedo `E(μ_o)` (§3.17), without the leaf's `tint` (the
+/// Supplies a leaf's directional albedo `E(μ_o)`, without the leaf's `tint` (the
 /// tint modes apply it) but with everything inside the lobe kind (Fresnel colours, ρ,
 /// dielectric tints). The interpreter plugs in its tables; tests use constants.
 pub trait AlbedoSource {
@@ -24,7 +24,7 @@ impl<F: Fn(&Leaf, &[Vec3], f32) -> Vec3> AlbedoSource for F {
 /// interpreter's tables are plugged in: diffuse kinds return their albedo ρ; microfacet
 /// reflection its Fresnel term evaluated at `μ_o` (the smooth-surface limit); a dielectric
 /// in `R` mode `F(μ_o, η) · T_r`; Ward its ρ_s; sheens 0.1·(1 − μ_o) + 0.05 (a rough
-/// stand-in of the tabulated values of §5.4). Exact for smooth dielectrics and Lambert.
+/// stand-in of the interpreter's tabulated values). Exact for smooth dielectrics and Lambert.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SimpleAlbedo;
 
@@ -90,7 +90,7 @@ impl AlbedoSource for ConstAlbedo {
 pub struct FlatLobe {
     /// The leaf node.
     pub node: NodeId,
-    /// Its weight `w_k` (includes the leaf's tint), summed over all paths (§2.3).
+    /// Its weight `w_k` (includes the leaf's tint), summed over all paths.
     pub weight: Vec3,
 }
 
@@ -121,7 +121,7 @@ fn sat(v: Vec3) -> Vec3 {
     v.clamp(Vec3::ZERO, Vec3::ONE)
 }
 
-/// Throughput of a layerable leaf in `mode` (§2.4), given `E` untinted.
+/// Throughput of a layerable leaf in `mode`, given `E` untinted.
 #[inline(always)]
 pub fn leaf_throughput(mode: TintMode, tint: Vec3, ttint: Vec3, e: Vec3) -> Vec3 {
     let tr_e = tint * e;
@@ -134,19 +134,19 @@ pub fn leaf_throughput(mode: TintMode, tint: Vec3, ttint: Vec3, e: Vec3) -> Vec3
     sat(t)
 }
 
-/// Throughput of `mix(a, b, m)` (§2.4) from its children's, `m` already saturated.
+/// Throughput of `mix(a, b, m)` from its children's, `m` already saturated.
 #[inline(always)]
 pub(crate) fn mix_throughput(ta: Vec3, tb: Vec3, m: Vec3) -> Vec3 {
     (Vec3::ONE - m) * ta + m * tb
 }
 
-/// Throughput of `add(a, b)` (§2.4) from its children's.
+/// Throughput of `add(a, b)` from its children's.
 #[inline(always)]
 pub fn add_throughput(ta: Vec3, tb: Vec3) -> Vec3 {
     (ta + tb - Vec3::ONE).max(Vec3::ZERO)
 }
 
-/// Throughput of `mul(f, c)` (§2.4) from its child's, `c` already clamped at 0.
+/// Throughput of `mul(f, c)` from its child's, `c` already clamped at 0.
 #[inline(always)]
 pub fn mul_throughput(tf: Vec3, c: Vec3) -> Vec3 {
     sat(Vec3::ONE - c * (Vec3::ONE - tf))

@@ -1,4 +1,4 @@
-//! The closure IR (spec closures.md §1.2, §1.3, §2): a parameter program (straight-line SSA
+//! The closure IR: a parameter program (straight-line SSA
 //! over `f32x3` registers, [`program`]) and a closure DAG ([`closure`]) whose leaves are BSDF
 //! lobes. [`algebra`] computes the flat form (lobes with weights) for one point and view;
 //! [`passes`] optimises; [`print`](mod@print) renders the stable text forms.
@@ -24,20 +24,20 @@ use crate::types::{Type, Value};
 use glam::Vec3;
 use rustc_hash::FxHashMap as HashMap;
 
-/// Maximum number of BSDF lobes of one material (§1.2). `Emission` and `Transparent` leaves
+/// Maximum number of BSDF lobes of one material. `Emission` and `Transparent` leaves
 /// do not count; the mia three-Ward highlight counts as one.
 pub const MAX_LOBES: usize = 16;
 
-/// Which lowering recipe produced an IR (§4).
+/// Which lowering recipe produced an IR.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum RecipeId {
-    /// PxrSurface / PxrLayerSurface (§4.1).
+    /// PxrSurface / PxrLayerSurface.
     PxrSurface,
-    /// VRayMtl (§4.3).
+    /// VRayMtl.
     VRayMtl,
-    /// 3ds Max Physical Material (§4.4).
+    /// 3ds Max Physical Material.
     PhysicalMaterial,
-    /// mia_material (§4.5).
+    /// mia_material.
     MiaMaterial,
     /// Built by hand (tests, API users).
     Custom,
@@ -56,7 +56,7 @@ impl RecipeId {
     }
 }
 
-/// An external per-point value (§1.2): the output of a pattern the lowering does not
+/// An external per-point value: the output of a pattern the lowering does not
 /// interpret.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputSlot {
@@ -95,7 +95,7 @@ pub fn value_to_vec3(v: &Value) -> Vec3 {
     }
 }
 
-/// A shading frame used by lobes (§1.3).
+/// A shading frame used by lobes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct FrameSlot {
     /// Normal register; `None` (or a zero value) means the shading normal.
@@ -106,7 +106,7 @@ pub struct FrameSlot {
     pub rotation: Option<Reg>,
 }
 
-/// A material lowered to the closure IR (§1.2).
+/// A material lowered to the closure IR.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaterialIr {
     /// Material (or terminal node) name.
@@ -157,7 +157,7 @@ impl MaterialIr {
     }
 
     /// Weights of the flat form for one point: run the program, then the throughput and
-    /// weight passes of §2.2–§2.3 with `albedo` supplying each layered leaf's `E(μ_o)`.
+    /// weight passes with `albedo` supplying each layered leaf's `E(μ_o)`.
     pub fn weights(&self, inputs: Option<&[Vec3]>, mu_o: f32, albedo: &dyn AlbedoSource) -> Flat {
         let regs = self.run_program(inputs, mu_o);
         let mu = vec![mu_o; self.frames.len().max(1)];

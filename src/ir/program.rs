@@ -1,4 +1,4 @@
-//! The parameter program (spec closures.md §1.3): straight-line SSA over `f32x3` registers.
+//! The parameter program: straight-line SSA over `f32x3` registers.
 //!
 //! Op `i` of a [`Program`] defines register `i`. Scalars are broadcast to all three lanes.
 //! Programs are built with [`ProgramBuilder`], which folds constants and shares identical
@@ -172,9 +172,9 @@ pub enum OpCode {
     Normalize3,
     /// a if a ≠ 0, else the shading normal.
     NormalOrDefault,
-    /// Exact dielectric Fresnel F(μ, η) (§3.7), per lane.
+    /// Exact dielectric Fresnel F(μ, η), per lane.
     FresnelDielectric,
-    /// Conductor Fresnel F(μ, η, κ) (§3.7), per lane.
+    /// Conductor Fresnel F(μ, η, κ), per lane.
     FresnelConductor,
     /// Generalized Schlick F0 + (F90 − F0)(1 − μ)^q.
     SchlickCurve,
@@ -672,12 +672,12 @@ fn b2f(b: bool) -> f32 {
     if b { 1.0 } else { 0.0 }
 }
 
-/// Luminance with the Rec.709 weights of §0.
+/// Luminance with the Rec.709 weights.
 pub fn lum(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
-/// Exact unpolarised dielectric Fresnel (§3.7); 1 under total internal reflection.
+/// Exact unpolarised dielectric Fresnel; 1 under total internal reflection.
 pub fn fresnel_dielectric(mu: f32, eta: f32) -> f32 {
     let mu = mu.abs().min(1.0);
     let g2 = eta * eta + mu * mu - 1.0;
@@ -692,7 +692,7 @@ pub fn fresnel_dielectric(mu: f32, eta: f32) -> f32 {
     (0.5 * a * a * (1.0 + b * b)).clamp(0.0, 1.0)
 }
 
-/// Conductor Fresnel for complex index η + iκ (§3.7).
+/// Conductor Fresnel for complex index η + iκ.
 pub fn fresnel_conductor(mu: f32, eta: f32, kappa: f32) -> f32 {
     let c = mu.abs().min(1.0);
     let c2 = c * c;
@@ -711,7 +711,7 @@ pub fn fresnel_conductor(mu: f32, eta: f32, kappa: f32) -> f32 {
     (0.5 * (rs + rp)).clamp(0.0, 1.0)
 }
 
-/// d'Eon's fit of the hemispherical dielectric Fresnel average (§3.7), with the exact
+/// d'Eon's fit of the hemispherical dielectric Fresnel average, with the exact
 /// identity for η < 1.
 pub(crate) fn fresnel_avg_dielectric(eta: f32) -> f32 {
     fn fit(eta: f32) -> f32 {

@@ -1,7 +1,7 @@
-//! mia_material (spec closures.md §4.5, seed 003).
+//! mia_material (described for users in `docs/materials.md`).
 //!
 //! The energy rule is entirely in the weights, computed by the program per point and `μ_o`
-//! (the seed's luminance-weighted pseudocode); the tree has no `Layer` nodes:
+//! (mia_material's luminance-weighted energy split); the tree has no `Layer` nodes:
 //!
 //! ```text
 //! mia  = mix(transparent(1), body, cutout_opacity)
@@ -10,15 +10,15 @@
 //! ```
 //!
 //! Choices: `refl_hl_only` is recorded as LW020 (the `albedo()` exclusion it asks for is an
-//! interpreter concern); the features without BSDF effect listed in §4.5 report LW020 when
-//! they differ from their defaults.
+//! interpreter concern); the features without BSDF effect (listed in `docs/materials.md`)
+//! report LW020 when they differ from their defaults.
 
 use super::{Graph, Lower};
 use crate::diag::{Diagnostic, Error};
 use crate::ir::{Cl, DielectricMode, FrameSlot, Leaf, LeafKind, OpCode, Reg, WardVariant};
 use crate::types::{BaseType, Value};
 
-/// Built-in defaults (§4.5 table).
+/// Built-in defaults, used only for a parameter whose definition gives no default (LW003).
 pub fn builtin_default(param: &str) -> Value {
     let c = |v: f32| Value::Triple(BaseType::Color, [v, v, v]);
     let f = Value::Float;
@@ -55,7 +55,7 @@ fn p<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id, name: &str) -> Result<Reg, Error
     cx.param(n, name, builtin_default(name))
 }
 
-/// The four weights of §4.5 as registers: `(R, diffuse, refract, transl)`.
+/// The four energy-split weights as registers: `(R, diffuse, refract, transl)`.
 pub struct MiaWeights {
     /// Highlight/reflection weight (metal-tinted).
     pub reflect: Reg,
@@ -67,7 +67,7 @@ pub struct MiaWeights {
     pub transl: Reg,
 }
 
-/// The weights program of §4.5 (a restatement of the seed's pseudocode).
+/// The weights program: mia_material's luminance-weighted energy split, per point and `μ_o`.
 pub fn weights<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<MiaWeights, Error> {
     let mu = cx.b.prog.view_mu(0);
     let fresnel_mode = p(cx, n, "brdf_fresnel")?;
@@ -94,7 +94,7 @@ pub fn weights<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<MiaWeights, 
     let c = pr.select(fresnel_mode, exact, schlick);
     // Seen from inside a solid (μ_o < 0, not thin-walled) the one-sided highlight returns
     // nothing and the refraction lobe is the whole interface (Fresnel reflection with the
-    // inverted index and transmission, §4.5), so the reflection takes no energy there.
+    // inverted index and transmission), so the reflection takes no energy there.
     let c = if thin {
         c
     } else {
@@ -137,7 +137,7 @@ pub fn weights<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<MiaWeights, 
     })
 }
 
-/// The mia_material recipe (§4.5).
+/// The mia_material recipe.
 pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let w = weights(cx, n)?;
     let one = cx.constf(1.0);
@@ -236,7 +236,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     Ok(root)
 }
 
-/// `α = √(2/(2^(8g) + 2))`; a delta (α ≈ 0) at g = 1 (§4.5, REFR).
+/// `α = √(2/(2^(8g) + 2))`; a delta (α ≈ 0) at g = 1 (refraction glossiness).
 fn gloss_to_alpha<G: Graph>(cx: &mut Lower<'_, G>, g: Reg) -> Reg {
     let pr = &mut cx.b.prog;
     let eight = pr.constf(8.0);
@@ -246,7 +246,7 @@ fn gloss_to_alpha<G: Graph>(cx: &mut Lower<'_, G>, g: Reg) -> Reg {
     let den = pr.add(n, two);
     let q = pr.div(two, den);
     let a = pr.un(OpCode::Sqrt, q);
-    // Glossiness 1 is a perfect refraction: map it below the delta cut-off of §3.6.
+    // Glossiness 1 is a perfect refraction: map it below the GGX delta cut-off.
     let one = pr.constf(1.0);
     let full = pr.bin(OpCode::CmpGe, g, one);
     let zero = pr.constf(0.0);

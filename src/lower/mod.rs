@@ -1,4 +1,4 @@
-//! Lowering of resolved shader networks to the closure IR (spec closures.md §4), one module
+//! Lowering of resolved shader networks to the closure IR, one module
 //! per material model: [`pxr`] (PxrSurface / PxrLayerSurface, with PxrLayer and
 //! PxrLayerMixer interpreted as program expressions), [`vray`], [`physical`], [`mia`], and
 //! the small fused pattern set [`patterns`].
@@ -7,7 +7,7 @@
 //! [`Definitions`], so that it works on the crate's network model and on hand-built graphs
 //! ([`SimpleGraph`]) alike.
 //!
-//! Parameter binding (§4.0), in order of preference: a connection from an interpreted
+//! Parameter binding, in order of preference: a connection from an interpreted
 //! pattern → program expression; a connection from any other node → external input slot
 //! (LW002, info) whose fallback is the downstream parameter's value; an authored value; the
 //! definition default; the recipe's built-in default (LW003, warning, once per node type
@@ -349,7 +349,7 @@ impl<'a, G: Graph> Lower<'a, G> {
         self.diags.push(d.with_node(self.graph.handle(n)));
     }
 
-    /// Bind parameter `param` of node `n` (§4.0) with `builtin` as the recipe's default.
+    /// Bind parameter `param` of node `n` with `builtin` as the recipe's default.
     pub(crate) fn param(&mut self, n: G::Id, param: &str, builtin: Value) -> Result<Reg, Error> {
         let graph = self.graph;
         let input = graph.input(n, param);
@@ -414,7 +414,7 @@ impl<'a, G: Graph> Lower<'a, G> {
         undeclared()
     }
 
-    /// §4.0: a constant outside the parameter's documented range (the definition's `min` /
+    /// A constant outside the parameter's documented range (the definition's `min` /
     /// `max` metadata) is clamped to it (LW022, info). Connected values are not clamped: they
     /// are only known per shading point.
     fn clamp_to_range(&mut self, n: G::Id, param: &str, v: Value, range: NumericRange) -> Value {
@@ -594,7 +594,7 @@ pub(crate) fn is_interpreted(shader: &str) -> bool {
     matches!(shader, "PxrLayer" | "PxrLayerMixer") || patterns::is_pattern(shader)
 }
 
-/// Anisotropic widths from roughness `r` and anisotropy `a ∈ [−1, 1]` (§0):
+/// Anisotropic widths from roughness `r` and anisotropy `a ∈ [−1, 1]`:
 /// `α = clamp(r², 1e-6, 1)`, `s = √(1 − min(|a|, 0.98))`, `α_x = min(α/s, 1)`, `α_y = α s`,
 /// roles swapped for `a < 0`.
 pub(crate) fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {

@@ -1,4 +1,4 @@
-//! 3ds Max Physical Material (spec closures.md §4.4, seed 001).
+//! 3ds Max Physical Material (described for users in `docs/materials.md`).
 //!
 //! ```text
 //! physical  = mix(transparent(1), add(emission(emission · emit_color), coated), cutout)
@@ -8,9 +8,9 @@
 //! under     = mix(mix(mul(DIFF, w_b), subsurfaceProxy(sss_color), w_s), TRANS, w_t)
 //! ```
 //!
-//! Under §2's algebra this tree yields exactly the seed's scalar weights (colours ignored by
-//! `Gray`, except the coat colour as transmission tint). Roughness maps to `α = r²`;
-//! `anisotropy` 1 is isotropic and maps to `a = 1 − anisotropy` (§0).
+//! Under the closure algebra this tree yields exactly the material's scalar weights (colours
+//! ignored by `Gray`, except the coat colour as transmission tint). Roughness maps to `α = r²`;
+//! `anisotropy` 1 is isotropic and maps to `a = 1 − anisotropy`.
 
 use super::{Graph, Lower, aniso_alpha};
 use crate::diag::{Diagnostic, Error};
@@ -19,7 +19,7 @@ use crate::ir::{
 };
 use crate::types::{BaseType, Value};
 
-/// Built-in defaults (§4.4 table).
+/// Built-in defaults, used only for a parameter whose definition gives no default (LW003).
 pub fn builtin_default(param: &str) -> Value {
     let c = |v: f32| Value::Triple(BaseType::Color, [v, v, v]);
     let f = Value::Float;
@@ -70,7 +70,7 @@ fn w<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id, name: &str) -> Result<Reg, Error
     Ok(cx.b.prog.saturate(r))
 }
 
-/// The PhysicalMaterial recipe (§4.4).
+/// The PhysicalMaterial recipe.
 pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let one = cx.constf(1.0);
     let zero = cx.constf(0.0);
@@ -81,7 +81,7 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let m = w(cx, n, "metalness")?;
     let w_c = w(cx, n, "coating")?;
 
-    // Coat side effects (as Standard Surface, §4.6).
+    // Coat side effects (as Standard Surface).
     let coat_affect_color = p(cx, n, "coat_affect_color")?;
     let coat_affect_rough = p(cx, n, "coat_affect_roughness")?;
     let coat_rough = p(cx, n, "coat_roughness")?;

@@ -1,9 +1,9 @@
-//! PxrSurface / PxrLayerSurface (spec closures.md §4.1) and the interpretation of PxrLayer
-//! and PxrLayerMixer as program expressions (§4.2).
+//! PxrSurface / PxrLayerSurface and the interpretation of PxrLayer
+//! and PxrLayerMixer as program expressions.
 //!
 //! Choices the spec leaves open, made here:
 //! * a diffuse roughness that is connected (not a constant) selects EON, which evaluates as
-//!   Lambert below σ = 1e-4 (§3.3), so the choice never changes a constant-0 result;
+//!   Lambert below σ = 1e-4, so the choice never changes a constant-0 result;
 //! * a Fresnel mode that is connected is lowered as artistic (LW020);
 //! * `*DoubleSided`: the lobes are two-sided when the interpreter is asked for both sides
 //!   (`PrepareOptions::sides`); the diffuse back colour (`diffuseBackColor` /
@@ -20,7 +20,7 @@ use crate::ir::{
 };
 use crate::types::{BaseType, Value};
 
-/// Built-in defaults of PxrSurface / PxrLayerSurface parameters (§4.1), used only without a
+/// Built-in defaults of PxrSurface / PxrLayerSurface parameters, used only without a
 /// definition. Values are `Value`s of the parameter's type.
 pub fn builtin_default(param: &str) -> Value {
     let c = |v: f32| Value::Triple(BaseType::Color, [v, v, v]);
@@ -91,7 +91,7 @@ pub fn builtin_default(param: &str) -> Value {
     }
 }
 
-/// The lobe group (`X` of `enableX`) a PxrLayer member belongs to (§4.2); `None` for the
+/// The lobe group (`X` of `enableX`) a PxrLayer member belongs to; `None` for the
 /// global `bumpNormal`.
 pub(crate) fn member_lobe(member: &str) -> Option<&'static str> {
     const GROUPS: [(&str, &str); 14] = [
@@ -124,7 +124,7 @@ fn is_normal_member(member: &str) -> bool {
     member == "bumpNormal" || member.ends_with("BumpNormal")
 }
 
-/// PxrLayer output `pxrMaterialOut_<m>` (§4.2): the layer's input of the same name, with
+/// PxrLayer output `pxrMaterialOut_<m>`: the layer's input of the same name, with
 /// the five RR renames and the gains folded into the Fresnel colours.
 pub(crate) fn layer_output<G: Graph>(
     cx: &mut Lower<'_, G>,
@@ -155,7 +155,7 @@ pub(crate) fn layer_output<G: Graph>(
 
 const MIXER_PREFIXES: [&str; 5] = ["baselayer", "layer1", "layer2", "layer3", "layer4"];
 
-/// PxrLayerMixer output `pxrMaterialOut_<m>` (§4.2): per member, each participating layer
+/// PxrLayerMixer output `pxrMaterialOut_<m>`: per member, each participating layer
 /// composited over the accumulated value by its mask, in order; enable flags OR-ed.
 pub(crate) fn mixer_output<G: Graph>(
     cx: &mut Lower<'_, G>,
@@ -249,7 +249,7 @@ fn mixer_gates<G: Graph>(
 }
 
 fn mixer_member_default(m: &str) -> Value {
-    // The mixer's layer members default to 0 (§6.1 of vstruct.md), colours included.
+    // The mixer's layer members default to 0, colours included (as in the reference).
     match builtin_default(m) {
         Value::Triple(b, _) => Value::Triple(b, [0.0; 3]),
         Value::Int(_) => Value::Int(0),
@@ -353,7 +353,7 @@ fn specular_lobe<G: Graph>(
     Ok((leaf, frame, fresnel))
 }
 
-/// §4.1: a double-sided diffuse seen from below (`μ_o < 0` in its frame) has the albedo
+/// A double-sided diffuse seen from below (`μ_o < 0` in its frame) has the albedo
 /// `diffuseColor` when `diffuseBackUseDiffuseColor` is set, else `diffuseBackColor`. Nothing
 /// changes (and the program stays constant) when `diffuseDoubleSided` is a constant 0.
 fn back_side_colour<G: Graph>(
@@ -376,7 +376,7 @@ fn back_side_colour<G: Graph>(
     Ok(cx.b.prog.select(front, front_colour, back))
 }
 
-/// The PxrSurface / PxrLayerSurface recipe (§4.1).
+/// The PxrSurface / PxrLayerSurface recipe.
 pub(crate) fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let one = cx.constf(1.0);
     let zero = cx.constf(0.0);

@@ -1,4 +1,4 @@
-//! VRayMtl (spec closures.md §4.3, seed 000).
+//! VRayMtl (described for users in `docs/materials.md`).
 //!
 //! ```text
 //! vray      = mix(transparent(1), body, opacity)
@@ -11,9 +11,9 @@
 //! metal     = microfacetR(generalized Schlick(F0: diffuse, F90: reflect, q: 5))
 //! ```
 //!
-//! The sheen-over-diffuse layer in `Rgb` mode with the sheen colour as tint is exactly the
-//! seed's `sheenBRDF·sheen_color + (1 − sheen_color·reflectance(sheenBRDF))·diffuse·diffuseBRDF`.
-//! Roughness from glossiness: `r = 1 − glossiness`, `α = r²` (§0). A connected
+//! The sheen-over-diffuse layer in `Rgb` mode with the sheen colour as tint is exactly VRayMtl's
+//! `sheenBRDF·sheen_color + (1 − sheen_color·reflectance(sheenBRDF))·diffuse·diffuseBRDF`.
+//! Roughness from glossiness: `r = 1 − glossiness`, `α = r²`. A connected
 //! `translucency` mode is lowered as `none` (LW020).
 
 use super::{Graph, Lower, aniso_alpha};
@@ -23,7 +23,7 @@ use crate::ir::{
 };
 use crate::types::{BaseType, Value};
 
-/// Built-in defaults (§4.3 table).
+/// Built-in defaults, used only for a parameter whose definition gives no default (LW003).
 pub fn builtin_default(param: &str) -> Value {
     let c = |v: f32| Value::Triple(BaseType::Color, [v, v, v]);
     let f = Value::Float;
@@ -70,7 +70,7 @@ fn gloss_alpha<G: Graph>(cx: &mut Lower<'_, G>, g: Reg) -> Reg {
     cx.b.prog.mul(r, r)
 }
 
-/// The VRayMtl recipe (§4.3).
+/// The VRayMtl recipe.
 pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let one = cx.constf(1.0);
     let diffuse = p(cx, n, "diffuse")?;

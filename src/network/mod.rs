@@ -1,5 +1,5 @@
 //! The shader-network model: nodes, authored values and connections on a petgraph
-//! [`StableDiGraph`] (spec README "Pipeline", formats.md §3.6, §5).
+//! [`StableDiGraph`].
 //!
 //! * A [`Node`] is one shader instance: a handle, a shader id, the request kind that created it
 //!   ([`RequestKind`]), and its [`Param`]s in source order. RIB handles may be defined several
@@ -17,7 +17,7 @@
 //! Every edit is cheap (parameter lookup is a binary search, connection edits touch only the
 //! edited input), and every edit is tracked: [`Param::change`] tells the RIB writer whether a
 //! parameter read from a file is unchanged, got a new value, became connected, was removed, or
-//! was added (formats.md §3.7).
+//! was added.
 //!
 //! # Building a network in code
 //!
@@ -120,7 +120,7 @@ impl RequestKind {
     }
 
     /// The terminal name of a node of this kind (`surface`, `displacement`, `light`,
-    /// `lightFilter`); `None` for patterns (formats.md §3.6).
+    /// `lightFilter`); `None` for patterns.
     ///
     /// ```
     /// use vstructc::network::RequestKind;
@@ -278,7 +278,7 @@ pub struct Edge {
     pub index: usize,
 }
 
-/// How a parameter differs from what was read from the RIB source (formats.md §3.7).
+/// How a parameter differs from what was read from the RIB source.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ParamChange {
     /// Read from the source and written back exactly as it was.
@@ -387,8 +387,8 @@ impl Param {
         &self.name
     }
 
-    /// The authored value, if any. A connected parameter may still hold a value (vstruct.md
-    /// §4.3: `connect` keeps the old value); the connection takes precedence.
+    /// The authored value, if any. A connected parameter may still hold a value (a `connect`
+    /// action keeps the old value); the connection takes precedence.
     pub fn value(&self) -> Option<&Value> {
         self.value.as_deref()
     }
@@ -984,7 +984,7 @@ impl Network {
     }
 
     /// All node ids sorted by name: by handle (byte-wise), then version. This is the
-    /// deterministic visiting order of resolution (vstruct.md §4.4, D1).
+    /// deterministic visiting order of resolution.
     ///
     /// ```
     /// use vstructc::network::Network;
@@ -1637,7 +1637,7 @@ mod tests {
         net.set_param(n, "d", Value::Str("x".into()));
         assert_eq!(net.param_change(n, "d"), ParamChange::Added);
         assert!(net.is_modified(n));
-        // Connected parameter keeps its old value (vstruct.md §4.3).
+        // Connected parameter keeps its old value.
         assert_eq!(net.value(n, "a"), Some(&Value::Float(0.5)));
     }
 

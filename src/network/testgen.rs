@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 /// A RIB scene of `materials` layered materials. Each material is three `PxrLayer`s wired by
-/// placeholder connections (formats.md §3.5) into a `PxrLayerMixer` (`baselayer`, `layer1`,
+/// placeholder connections into a `PxrLayerMixer` (`baselayer`, `layer1`,
 /// `layer2`), which feeds a `PxrLayerSurface` through `inputMaterial`; each material is
 /// wrapped in `AttributeBegin`/`AttributeEnd` with a few pass-through requests and a sphere.
 /// Values vary with the material index so no two materials are identical.

@@ -1,12 +1,12 @@
 //! The shader registry: definitions from `.args` and `.oso`, lookup by shader id, and the
-//! per-type vstruct tables (spec formats.md §1, vstruct.md §2).
+//! per-type vstruct tables.
 //!
-//! A [`Registry`] is a plain value (D3: no process-wide cache). Building one only lists the
+//! A [`Registry`] is a plain value (no process-wide cache). Building one only lists the
 //! search path; each shader id is parsed the first time it is looked up and cached, and its
 //! [`VstructTables`] are built the first time they are asked for. Lookups take `&self` and are
 //! thread-safe (the registry is `Send + Sync`).
 //!
-//! Search order (formats.md §1.4): the explicit paths of [`RegistryOptions::paths`] in the
+//! Search order: the explicit paths of [`RegistryOptions::paths`] in the
 //! order given (directories scanned recursively, files in byte-wise sorted path order), then
 //! the colon-separated entries of `VSTRUCTC_ARGS_PATH`, then the crate's own `args/` folder
 //! compiled into the binary (named `<embedded>/X.args`). Definitions added in memory

@@ -1,7 +1,7 @@
-//! Per-type vstruct tables (spec vstruct.md §2.5–§2.7) and head normalisation.
+//! Per-type vstruct tables and head normalisation.
 //!
 //! Heads are recognised only by back-reference: the heads of a node type are exactly the
-//! distinct head names of its members, per direction (D2). Tags and declared types play no
+//! distinct head names of its members, per direction. Tags and declared types play no
 //! part.
 //!
 //! Choices where the spec is silent:
@@ -10,7 +10,7 @@
 //!   direction as the head's members (inputs and outputs are separate namespaces).
 //! * VS001 is reported once per member carrying an unparsable conditional (each has its own
 //!   location); the expression itself is parsed once per distinct text per type.
-//! * VS001's position is the value start plus the decoded offset (formats.md §2.6 allows it).
+//! * VS001's position is the value start plus the decoded offset.
 //! * VS003 points at the property (the readers keep no position per attribute).
 
 use crate::cond::{self, ParseError, Statement};
@@ -198,7 +198,7 @@ fn head_names(props: &[Property]) -> Vec<&str> {
         .collect()
 }
 
-/// Registry normalisation (vstruct.md §2.5): a property named like a head of its own direction
+/// Registry normalisation: a property named like a head of its own direction
 /// gets type `Vstruct` (array shape and declared type kept) and loses its default.
 pub(crate) fn normalize_heads(def: &mut Definition) {
     fn normalize(props: &mut [Property]) {

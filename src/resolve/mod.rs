@@ -1,6 +1,7 @@
-//! vstruct resolution (spec vstruct.md §4): expand every placeholder connection between an
+//! vstruct resolution: expand every placeholder connection between an
 //! output head and an input head into member connections and values, upstream first, exactly
-//! as OpenUSD hdPrman does, and report what the reference does silently (§8).
+//! as OpenUSD hdPrman does, and report what the reference does silently. The user-facing
+//! description of the algorithm and of the VS codes is `docs/resolution.md`.
 //!
 //! The reference recurses; this implementation runs the same algorithm on an explicit work
 //! stack, so that a chain of 100,000 nodes cannot overflow the thread's stack. Each stack frame
@@ -27,9 +28,9 @@ use plan::{Decision, DecisionCache, Plan, Verdict};
 #[derive(Debug, Clone)]
 pub struct ResolveOptions {
     /// Evaluate conditionals (the default). `false` is the reference's
-    /// `enableConditions = false`: every matched member connects (§4.6).
+    /// `enableConditions = false`: every matched member connects.
     pub conditions: bool,
-    /// Opt-in extensions (§9). Without them, results are exactly the reference's.
+    /// Opt-in extensions. Without them, results are exactly the reference's.
     pub extensions: Extensions,
     /// Also report `note` diagnostics (VS021: a downstream member without counterpart).
     pub verbose: bool,
@@ -133,11 +134,11 @@ pub struct MemberEvent {
     pub outcome: Outcome,
 }
 
-/// Resolve every vstruct connection of `net` against `registry` (vstruct.md §4.4).
+/// Resolve every vstruct connection of `net` against `registry`.
 ///
-/// Nodes are visited in sorted order (D1); each node's input heads are expanded after the
+/// Nodes are visited in sorted order; each node's input heads are expanded after the
 /// upstream node has been resolved completely. Afterwards authored values on input heads are
-/// removed (§4.7, VS017).
+/// removed (VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
     if let Err(e) = net.check_limits(&options.limits) {
         let mut out = Resolution::default();
@@ -666,7 +667,7 @@ impl Resolver<'_> {
         }
     }
 
-    /// §4.1 steps 3–5: evaluate the conditional against U and apply the chosen action to D.M.
+    /// Evaluate the conditional against U and apply the chosen action to D.M.
     fn evaluate(
         &mut self,
         ctx: &MemberCtx<'_>,
@@ -818,7 +819,7 @@ impl Resolver<'_> {
         }
     }
 
-    /// §4.7: authored values on input heads are never meaningful; remove them (VS017).
+    /// Authored values on input heads are never meaningful; remove them (VS017).
     fn remove_head_values(&mut self) {
         for node in std::mem::take(&mut self.order) {
             let shader = self.net[node].shader().to_string();

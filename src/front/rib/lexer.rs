@@ -1,4 +1,4 @@
-//! RIB tokenizer (formats.md §3.1–§3.2): byte spans, lines and columns, no copies.
+//! RIB tokenizer: byte spans, lines and columns, no copies.
 //!
 //! Tokens are produced one at a time; the parser keeps only the tokens of the shading request
 //! it is reading, so pass-through requests (geometry with millions of numbers) cost no memory.

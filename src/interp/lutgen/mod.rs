@@ -1,4 +1,4 @@
-//! The albedo-table generator behind `vstructc-lutgen` (spec closures.md §3.17).
+//! The albedo-table generator behind `vstructc-lutgen`.
 //!
 //! Every entry is a deterministic f64 quadrature over a 512 × 512 grid (128 × 128 for the
 //! 3-D anisotropic tables, [`grid`]) of cell midpoints in the unit square: VNDF-stratified for GGX lobes (the estimator averages `f μ_i / pdf`, i.e.

@@ -1,4 +1,4 @@
-//! f64 formulas used by the table generator (spec closures.md §3): GGX, exact dielectric
+//! f64 formulas used by the table generator: GGX, exact dielectric
 //! Fresnel, Ward, Conty–Kulla sheen and Oren–Nayar, all isotropic and in the local frame.
 
 use glam::DVec3;

@@ -1,11 +1,11 @@
-//! The lane-parallel prepare of a uniform material (spec closures.md §1.5 and §6.1:
-//! structure-of-arrays batching for previews).
+//! The lane-parallel prepare of a uniform material (structure-of-arrays batching for
+//! previews).
 //!
 //! [`Material::prepare_batch_into`] runs the scalar prepare once per lane and then
 //! transposes the per-lane records into the batch's kernels. Most of that work is the
 //! general algorithm's bookkeeping, repeated per lane. For a material whose registers are all
 //! constants (no inputs, textures or globals), whose leaves all use the point's own frame
-//! and all have a batched kernel, [`Material::prepare_lanes`] instead runs §1.4's steps
+//! and all have a batched kernel, [`Material::prepare_lanes`] instead runs the prepare steps
 //! once for all lanes, each step a loop over lanes the compiler vectorises:
 //!
 //! 1. frames and V in the frame, per lane (the batch falls back to the scalar path when
@@ -593,7 +593,7 @@ impl Material {
         true
     }
 
-    /// Steps 5–7 of §1.4 per lane, as [`Material::prepare_into`] does them for one point:
+    /// Steps 5–7 of the prepare per lane, as [`Material::prepare_into`] does them for one point:
     /// the weighted albedo `A = w ⊙ E` of each leaf with a non-zero weight, the drop
     /// (`maxc(A) ≤ threshold`), the lanes' total albedo (into `out.albedo`), and the
     /// selection probabilities `lum(A_k)/Σ` (straight transmission taking part; by weight

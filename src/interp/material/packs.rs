@@ -1,14 +1,14 @@
 //! Lobe packs: the scalar [`Prepared::eval`]'s lobes of one family evaluated together, one
 //! lobe per SIMD lane.
 //!
-//! A whole lobe is the interpreter's instruction (spec closures.md §6.1). When several
+//! A whole lobe is the interpreter's instruction. When several
 //! surviving lobes of a prepared point belong to one family that has a batched kernel
-//! ([`Kernel`], the kernels of the batched path, §1.5), the end of `prepare` puts up to
+//! ([`Kernel`], the kernels of the batched path), the end of `prepare` puts up to
 //! [`PACK_LANES`] of them in one kernel with the lane axis running over lobes instead of
 //! points, and `eval` runs that kernel once with the same L in every lane: ref10's three
 //! Ward lobes become one instruction, its two GGX dielectrics another. The kernels compute
 //! the scalar leaf's formula per lane with polynomial transcendentals, so a pack's sum
-//! equals the lobes' own evaluations to relative 1e-5 (the batched path's tolerance, §1.5;
+//! equals the lobes' own evaluations to relative 1e-5 (the batched path's tolerance;
 //! `tests/interp/packs.rs`). [`super::PrepareOptions::pack_lobes`] turns packing off.
 //!
 //! Four lanes are one SSE register, the baseline x86-64 width; a family with more than four

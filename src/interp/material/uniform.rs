@@ -1,4 +1,4 @@
-//! The scalar prepare of a uniform material: §1.4's seven steps for one point, fused into
+//! The scalar prepare of a uniform material: the seven prepare steps for one point, fused into
 //! one pass over fixed arrays.
 //!
 //! [`Material::prepare_general_into`] runs the steps for any material: the program, frames
@@ -272,7 +272,7 @@ fn single_terms(w_plan: &super::WeightPlan) -> Option<Vec<TreeTerm>> {
 }
 
 impl Material {
-    /// Steps 1–7 of §1.4 for a material with a [`UniformPlan`], into `out`. Returns false,
+    /// Steps 1–7 of the prepare for a material with a [`UniformPlan`], into `out`. Returns false,
     /// having reset `out` and written only its frame, when the view is at or below the
     /// horizon of the point's frame or not finite: the general path then prepares the
     /// point.
