@@ -1,13 +1,16 @@
 //! Resolution throughput on a generated scene of layered materials (issue 4 targets: resolve
 //! 10,000 materials ≤ 300 ms single-threaded; doubling the scene ≤ 2.2× the time).
 //!
-//! `scene/*` is wall-clock time; `scene/parse_json` reads the same network from its JSON form
+//! `scene/*` is wall-clock time (`parse`, `parse_json` and `write` also as MB/s of the text read
+//! or written); `scene/parse_json` reads the same network from its JSON form
 //! (issue 33: ≤ 1.5× `scene/parse`). `scene_cpu/resolve` is the same resolution measured as the
 //! thread's CPU time (ns): resolution is single-threaded, and on the shared development
 //! machine wall-clock time mostly measures the other processes.
 
 use criterion::measurement::Measurement;
-use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::{
+    BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
+};
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -15,7 +18,7 @@ use cpu_time::CpuTime;
 use std::hint::black_box;
 use vstructc::Diagnostics;
 use vstructc::back::json::write_json;
-use vstructc::back::rib::write_rib_to_vec;
+use vstructc::back::rib::{write_rib, write_rib_to_vec};
 use vstructc::front::json::parse_json;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::network::Network;
@@ -61,10 +64,12 @@ fn bench(c: &mut Criterion) {
             parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap()
         };
         let parsed = parse();
+        group.throughput(Throughput::Bytes(rib.len() as u64));
         group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
             b.iter(|| black_box(parse()))
         });
         let json = write_json(&parsed).unwrap().into_bytes();
+        group.throughput(Throughput::Bytes(json.len() as u64));
         group.bench_with_input(
             BenchmarkId::new("parse_json", materials),
             &materials,
@@ -76,11 +81,22 @@ fn bench(c: &mut Criterion) {
             },
         );
         drop(json);
+        group.throughput(Throughput::Elements(materials as u64));
         bench_resolve(&mut group, &reg, &parsed, materials);
         let mut resolved = parsed.clone();
         resolve(&mut resolved, &reg, &ResolveOptions::default());
+        // Bytes written per second.
+        let written = write_rib_to_vec(&rib, &resolved, &reg).unwrap().len();
+        group.throughput(Throughput::Bytes(written as u64));
+        // Into one buffer kept across iterations, as the CLI streams into a buffered file: the
+        // row measures the writer, not the growth of a 74 MB vector.
+        let mut out = Vec::with_capacity(written);
         group.bench_with_input(BenchmarkId::new("write", materials), &materials, |b, _| {
-            b.iter(|| black_box(write_rib_to_vec(&rib, &resolved, &reg).unwrap()))
+            b.iter(|| {
+                out.clear();
+                write_rib(&rib, &resolved, &reg, &mut out).unwrap();
+                black_box(out.len())
+            })
         });
     }
     group.finish();

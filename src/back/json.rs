@@ -31,7 +31,9 @@
 //!   takes finite numbers only, and what this writer writes must read back.
 
 use crate::network::{Link, Network, NodeId, Upstream};
-use crate::types::{BaseType, Value, format_f32, saturate_f32};
+#[cfg(test)]
+use crate::types::format_f32;
+use crate::types::{BaseType, Value, saturate_f32};
 #[cfg(test)]
 use std::collections::BTreeMap;
 use std::collections::{HashMap, HashSet};
@@ -241,6 +243,15 @@ impl Stream {
 
     /// A JSON string, escaped as serde_json escapes it.
     fn string(&mut self, s: &str) {
+        // serde_json escapes quotes, backslashes and control characters only; a string without them
+        // (nearly every name and value) is copied as it is.
+        if !needs_escape(s.as_bytes()) {
+            self.out.reserve(s.len() + 2);
+            self.out.push(b'"');
+            self.out.extend_from_slice(s.as_bytes());
+            self.out.push(b'"');
+            return;
+        }
         let mut ser = serde_json::Serializer::new(&mut self.out);
         // Writing into a Vec cannot fail.
         let _ = serde::Serialize::serialize(s, &mut ser);
@@ -386,13 +397,19 @@ impl Stream {
     }
 
     fn canonical(&mut self, v: &Value, level: usize) {
-        let ty = match v {
-            Value::Array(b, items) => format!("{}[{}]", element_type(b, items).word(), items.len()),
-            other => other.base_type().word().to_string(),
-        };
         let mut first = true;
         self.entry(&mut first, level, "type");
-        self.string(&ty);
+        match v {
+            Value::Array(b, items) => {
+                // Type words need no escaping.
+                self.out.push(b'"');
+                self.out
+                    .extend_from_slice(element_type(b, items).word().as_bytes());
+                // Writing into a Vec cannot fail.
+                let _ = write!(self.out, "[{}]\"", items.len());
+            }
+            other => self.string(other.base_type().word()),
+        }
         self.entry(&mut first, level, "value");
         self.value(v, level + 1);
         self.end(first, level, b'}');
@@ -405,10 +422,15 @@ impl Stream {
         if x == 0.0 && x.is_sign_negative() {
             self.out.extend_from_slice(b"-0.0");
         } else {
-            let plain = format_f32(x);
-            let exp = format!("{x:e}");
-            let shorter = if exp.len() < plain.len() { exp } else { plain };
-            self.out.extend_from_slice(shorter.as_bytes());
+            let mut plain = NumBuf::new();
+            // Writing into a NumBuf cannot fail: an f32's plain form has at most 48 bytes.
+            let _ = write!(plain, "{x}");
+            let plain = plain.as_bytes();
+            let mut exp = NumBuf::new();
+            exponent_form(plain, &mut exp);
+            let exp = exp.as_bytes();
+            self.out
+                .extend_from_slice(if exp.len() < plain.len() { exp } else { plain });
         }
     }
 
@@ -425,7 +447,10 @@ impl Stream {
 
     fn value(&mut self, v: &Value, level: usize) {
         match v {
-            Value::Int(i) => self.out.extend_from_slice(i.to_string().as_bytes()),
+            // Writing into a Vec cannot fail.
+            Value::Int(i) => {
+                let _ = write!(self.out, "{i}");
+            }
             Value::Float(x) => self.num(*x),
             Value::Str(s) | Value::Token(s) | Value::Asset(s) => self.string(s),
             Value::Bool(b) => self
@@ -455,6 +480,117 @@ impl Stream {
             }
         }
     }
+}
+
+/// True when `bytes` holds a quote, a backslash or a control character (below 0x20), the
+/// bytes serde_json escapes; eight bytes at a time.
+fn needs_escape(bytes: &[u8]) -> bool {
+    const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
+    const HIGH: u64 = u64::from_ne_bytes([0x80; 8]);
+    // A byte of `v` below `n` (n ≤ 0x80) sets its high bit in the result; no other does.
+    let below = |v: u64, n: u8| v.wrapping_sub(ONES * u64::from(n)) & !v & HIGH;
+    let mut chunks = bytes.chunks_exact(8);
+    for chunk in &mut chunks {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(chunk);
+        let v = u64::from_ne_bytes(word);
+        let quote = v ^ (ONES * u64::from(b'"'));
+        let backslash = v ^ (ONES * u64::from(b'\\'));
+        if below(v, 0x20) | below(quote, 1) | below(backslash, 1) != 0 {
+            return true;
+        }
+    }
+    chunks
+        .remainder()
+        .iter()
+        .any(|&b| b < 0x20 || b == b'"' || b == b'\\')
+}
+
+/// A fixed buffer a number is formatted into (no allocation per number).
+struct NumBuf {
+    bytes: [u8; 64],
+    len: usize,
+}
+
+impl NumBuf {
+    fn new() -> Self {
+        NumBuf {
+            bytes: [0; 64],
+            len: 0,
+        }
+    }
+
+    fn as_bytes(&self) -> &[u8] {
+        &self.bytes[..self.len]
+    }
+
+    fn push(&mut self, b: u8) {
+        if let Some(slot) = self.bytes.get_mut(self.len) {
+            *slot = b;
+            self.len += 1;
+        }
+    }
+}
+
+impl Write for NumBuf {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let room = self.bytes.len() - self.len;
+        if buf.len() > room {
+            return Err(io::ErrorKind::WriteZero.into());
+        }
+        self.bytes[self.len..self.len + buf.len()].copy_from_slice(buf);
+        self.len += buf.len();
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// The exponent form (`{:e}`: `1.2345679e8`, `1e-7`) of a finite number from its plain
+/// shortest form (`{}`: `123456790`, `0.0000001`); both hold the same shortest digits.
+fn exponent_form(plain: &[u8], out: &mut NumBuf) {
+    let (negative, body) = match plain.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        _ => (false, plain),
+    };
+    let point = body.iter().position(|&b| b == b'.').unwrap_or(body.len());
+    let digits = body.iter().filter(|b| b.is_ascii_digit());
+    // The significant digits: leading and trailing zeros dropped.
+    let mut sig = NumBuf::new();
+    let mut leading = 0usize;
+    for &d in digits {
+        if sig.len == 0 && d == b'0' {
+            leading += 1;
+            continue;
+        }
+        sig.push(d);
+    }
+    while sig.len > 1 && sig.bytes[sig.len - 1] == b'0' {
+        sig.len -= 1;
+    }
+    if negative {
+        out.push(b'-');
+    }
+    if sig.len == 0 {
+        // Zero.
+        out.push(b'0');
+        let _ = write!(out, "e0");
+        return;
+    }
+    // The first significant digit sits `leading` digits into the number, whose integer part
+    // has `point` digits.
+    let exponent = point as isize - leading as isize - 1;
+    let sig = sig.as_bytes();
+    out.push(sig[0]);
+    if sig.len() > 1 {
+        out.push(b'.');
+        for &d in &sig[1..] {
+            out.push(d);
+        }
+    }
+    let _ = write!(out, "e{exponent}");
 }
 
 /// True for values written as JSON arrays (which put the array holding them on several
@@ -708,6 +844,63 @@ mod tests {
         assert_eq!(write_json(&net).unwrap(), write_json_tree(&net));
         resolve(&mut net, &reg, &ResolveOptions::default());
         assert_eq!(write_json(&net).unwrap(), write_json_tree(&net));
+    }
+
+    #[test]
+    fn exponent_form_is_rusts() {
+        let check = |x: f32| {
+            let x = saturate_f32(x);
+            let mut exp = NumBuf::new();
+            exponent_form(format!("{x}").as_bytes(), &mut exp);
+            assert_eq!(exp.as_bytes(), format!("{x:e}").as_bytes(), "{x:?}");
+        };
+        for x in [
+            0.0,
+            1.0,
+            -1.0,
+            0.1,
+            1e-7,
+            123456789.0,
+            100.0,
+            1e-45,
+            f32::MAX,
+            -0.5,
+        ] {
+            check(x);
+        }
+        // A spread of bit patterns over every exponent.
+        let mut bits = 0x9e37_79b9u32;
+        for _ in 0..200_000 {
+            bits ^= bits << 13;
+            bits ^= bits >> 17;
+            bits ^= bits << 5;
+            check(f32::from_bits(bits));
+        }
+    }
+
+    #[test]
+    fn unescaped_strings_are_serdes() {
+        let mut cases: Vec<String> = ["", "plain", "é ü", "a\"b", "a\\b", "x\ny", "\u{7f}", "~ "]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        // Each escaped byte and its neighbours at every position of a long string (the
+        // scan reads eight bytes at a time).
+        for special in [
+            '"', '\\', '\0', '\n', '\u{1f}', ' ', '!', '#', '[', ']', '\u{80}', 'ÿ',
+        ] {
+            for at in 0..20 {
+                let mut s: String = "abcdefghijklmnopqrst".chars().take(at).collect();
+                s.push(special);
+                s.push_str(&"0123456789abcdefgh"[..(at % 9)]);
+                cases.push(s);
+            }
+        }
+        for s in &cases {
+            let mut w = Stream { out: Vec::new() };
+            w.string(s);
+            assert_eq!(w.out, serde_json::to_vec(s).unwrap(), "{s:?}");
+        }
     }
 
     #[test]
