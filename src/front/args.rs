@@ -4,7 +4,7 @@
 //! (the file stem). Warnings and infos go to `diags`; a condition that rejects the file is
 //! returned as `Err` (with code, file, line and column). The XML is tokenised with
 //! `quick-xml`; everything above the token level (pages, tags, hints, types, defaults, vstruct
-//! metadata, the error policy) is interpreted here. `docs/file-formats.md` describes the
+//! metadata, the error policy) is interpreted here. `docs/inputs-and-outputs.md` describes the
 //! format as read.
 //!
 //! Choices where the spec is silent (documented here so users can rely on them):

@@ -1,4 +1,4 @@
-//! JSON network reader (see `docs/file-formats.md`).
+//! JSON network reader (see `docs/inputs-and-outputs.md`).
 //!
 //! The JSON form mirrors Hydra's `HdMaterialNetwork2`: materials, each with nodes (shader id,
 //! parameter values, per-input connection lists), terminals and primvars. [`parse_json`]

@@ -1,4 +1,4 @@
-//! RIB shading-network reader (see `docs/file-formats.md`).
+//! RIB shading-network reader (see `docs/inputs-and-outputs.md`).
 //!
 //! [`parse_rib`] reads ASCII RIB bytes into a [`Network`]. Only the shading-node requests
 //! `Pattern`, `Bxdf`, `Displace`, `Light` and `LightFilter` are interpreted; every other

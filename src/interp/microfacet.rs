@@ -197,33 +197,52 @@ pub(in crate::interp) struct RatioGrid {
 
 impl RatioGrid {
     /// The grid of `ratios(v)` at its nodes.
-    #[allow(clippy::needless_range_loop)] // the nodes are stored channel-major
     fn new(ratios: impl Fn(Vec3) -> [f32; 3]) -> RatioGrid {
+        RatioGrid::build(false, ratios)
+    }
+
+    /// The grid of `f` at its nodes; an isotropic lobe's `f` is evaluated once per view
+    /// cosine (at azimuth 0) and stored at every azimuth node.
+    #[allow(clippy::needless_range_loop)] // the nodes are stored channel-major
+    fn build(isotropic: bool, f: impl Fn(Vec3) -> [f32; 3]) -> RatioGrid {
         let mut nodes = [[[0.0; 5]; RATIO_MU]; 3];
         for i in 0..RATIO_MU {
             let mu = (i as f32 / (RATIO_MU - 1) as f32).max(1e-4);
             let s = (1.0 - mu * mu).max(0.0).sqrt();
-            for k in 0..5 {
+            let at_azimuth = |k: usize| {
                 let (sin, cos) = (k as f32 * std::f32::consts::FRAC_PI_8).sin_cos();
-                let r = ratios(Vec3::new(s * cos, s * sin, mu));
+                f(Vec3::new(s * cos, s * sin, mu))
+            };
+            if isotropic {
+                let r = at_azimuth(0);
                 for c in 0..3 {
-                    nodes[c][i][k] = r[c];
+                    nodes[c][i] = [r[c]; 5];
+                }
+            } else {
+                for k in 0..5 {
+                    let r = at_azimuth(k);
+                    for c in 0..3 {
+                        nodes[c][i][k] = r[c];
+                    }
                 }
             }
         }
-        RatioGrid {
-            nodes,
-            isotropic: false,
-        }
+        RatioGrid { nodes, isotropic }
+    }
+
+    /// The μ node below `mu` and the blend weight towards the next one.
+    #[inline(always)]
+    fn mu_coord(mu: f32) -> (usize, f32) {
+        #[allow(clippy::manual_clamp)] // NaN → 0, as `tables::axis_coord`
+        let t = mu.max(0.0).min(1.0) * (RATIO_MU - 1) as f32;
+        let i = (t as usize).min(RATIO_MU - 2);
+        (i, t - i as f32)
     }
 
     /// The ratios at local view `v`.
     #[inline]
     fn at(&self, v: Vec3) -> [f32; 3] {
-        #[allow(clippy::manual_clamp)] // NaN → 0, as `tables::axis_coord`
-        let t = v.z.max(0.0).min(1.0) * (RATIO_MU - 1) as f32;
-        let i = (t as usize).min(RATIO_MU - 2);
-        let w = t - i as f32;
+        let (i, w) = RatioGrid::mu_coord(v.z);
         let x = 2.0 * tables::aniso_weight(v) - 1.0;
         self.nodes.map(|c| {
             let (lo, hi) = (
@@ -233,43 +252,25 @@ impl RatioGrid {
             lo + (hi - lo) * w
         })
     }
+
+    /// The grid of an isotropic lobe's albedo `albedo(μ)`, read back by
+    /// [`RatioGrid::at_mu`].
+    fn isotropic(albedo: impl Fn(Vec3) -> [f32; 3]) -> RatioGrid {
+        RatioGrid::build(true, albedo)
+    }
+
+    /// An isotropic grid's values at view cosine `mu`, linearly between the μ nodes.
+    #[inline]
+    fn at_mu(&self, mu: f32) -> [f32; 3] {
+        let (i, w) = RatioGrid::mu_coord(mu);
+        self.nodes.map(|c| c[i][0] + (c[i + 1][0] - c[i][0]) * w)
+    }
 }
 
 /// True when a GGX lobe needs the anisotropic albedo ([`ggx_aniso_e1`] and a Fresnel ratio).
 #[inline(always)]
 fn is_aniso(ggx: &Ggx) -> bool {
     ggx.ax != ggx.ay && !ggx.is_delta()
-}
-
-impl RatioGrid {
-    /// The grid of an isotropic lobe's albedo `albedo(μ)`: one evaluation per view cosine,
-    /// the same at every azimuth node (a fifth of [`RatioGrid::new`]'s work), read back by
-    /// [`RatioGrid::at_mu`].
-    #[allow(clippy::needless_range_loop)] // the nodes are stored channel-major
-    fn isotropic(albedo: impl Fn(Vec3) -> [f32; 3]) -> RatioGrid {
-        let mut nodes = [[[0.0; 5]; RATIO_MU]; 3];
-        for i in 0..RATIO_MU {
-            let mu = (i as f32 / (RATIO_MU - 1) as f32).max(1e-4);
-            let r = albedo(Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu));
-            for c in 0..3 {
-                nodes[c][i] = [r[c]; 5];
-            }
-        }
-        RatioGrid {
-            nodes,
-            isotropic: true,
-        }
-    }
-
-    /// An isotropic grid's values at view cosine `mu`, linearly between the μ nodes.
-    #[inline]
-    fn at_mu(&self, mu: f32) -> [f32; 3] {
-        #[allow(clippy::manual_clamp)] // NaN → 0, as `tables::axis_coord`
-        let t = mu.max(0.0).min(1.0) * (RATIO_MU - 1) as f32;
-        let i = (t as usize).min(RATIO_MU - 2);
-        let w = t - i as f32;
-        self.nodes.map(|c| c[i][0] + (c[i + 1][0] - c[i][0]) * w)
-    }
 }
 
 /// `E_avg = 2∫E1 μ dμ` for a masking variant.
@@ -411,7 +412,7 @@ pub struct MicrofacetBound {
     pub(super) delta: bool,
     /// The Fresnel ratio per channel of a lobe that [`MicrofacetR::uses_ratio`] (`None`
     /// for other lobes, and in the one-off bound of [`MicrofacetR::prepare`]).
-    pub(super) aniso: Option<RatioGrid>,
+    pub(super) ratios: Option<RatioGrid>,
 }
 
 /// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
@@ -504,7 +505,7 @@ impl MicrofacetR {
             curves: None,
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
-            aniso: None,
+            ratios: None,
         };
         self.prepare_bound(v, &bound)
     }
@@ -539,7 +540,7 @@ impl MicrofacetR {
             }),
             alpha: self.ggx.lookup_alpha(),
             delta: self.ggx.is_delta(),
-            aniso: (self.uses_ratio() && self.fresnel != Fresnel::One).then(|| {
+            ratios: (self.uses_ratio() && self.fresnel != Fresnel::One).then(|| {
                 let ratio =
                     |v| aniso_fresnel_ratio(&self.fresnel, &self.ggx, self.masking, v).to_array();
                 if is_aniso(&self.ggx) {
@@ -607,7 +608,7 @@ impl MicrofacetR {
         // μ do not see, and a conductor's exact Fresnel is not a form the curves hold: both
         // are E1 times a Fresnel ratio.
         let ess = clamp1(match &bound.curves {
-            _ if self.uses_ratio() => self.ratio_albedo(bound.aniso.as_ref(), v),
+            _ if self.uses_ratio() => self.ratio_albedo(bound.ratios.as_ref(), v),
             Some(c) => c.albedo(albedo_fresnel, v.z),
             None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
         });

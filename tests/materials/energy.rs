@@ -921,7 +921,10 @@ fn conductor(k: usize, r: &mut Rng) -> Fresnel {
             kappa: Vec3::new(3.424, 2.346, 1.770),
         };
     }
-    let mut channel = |lo: f32, hi: f32| Vec3::new(0.0, 0.0, 0.0).map(|_| lo + (hi - lo) * r.f32());
+    let mut channel = |lo: f32, hi: f32| {
+        let mut draw = || lo + (hi - lo) * r.f32();
+        Vec3::new(draw(), draw(), draw())
+    };
     Fresnel::Conductor {
         eta: channel(0.1, 3.0),
         kappa: channel(0.0, 6.0),

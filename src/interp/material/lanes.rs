@@ -58,8 +58,9 @@ pub(super) enum LeafLanes {
     Conductor {
         lobe: MicrofacetR,
         ggx_view: GgxView,
-        /// The lobe's Fresnel ratios (`MicrofacetBound::aniso`).
-        aniso: Option<RatioGrid>,
+        /// The lobe's baked albedo or Fresnel ratios (`MicrofacetBound::ratios`; every rough
+        /// conductor has them).
+        ratios: RatioGrid,
     },
     /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
     DielectricR {
@@ -127,7 +128,7 @@ impl LeafLanes {
                 LeafLanes::Conductor {
                     lobe: *m,
                     ggx_view: bound.ggx_view,
-                    aniso: Some(bound.aniso?),
+                    ratios: bound.ratios?,
                 }
             }
             // Turquin's factor makes the tint view-dependent; the scalar prepare applies it
@@ -221,9 +222,9 @@ impl LeafLanes {
                     }
                 }
             }
-            LeafLanes::Conductor { lobe, aniso, .. } => {
+            LeafLanes::Conductor { lobe, ratios, .. } => {
                 for k in 0..W {
-                    out.set(k, lobe.ratio_albedo(aniso.as_ref(), view(k)).min(Vec3::ONE));
+                    out.set(k, lobe.ratio_albedo(Some(ratios), view(k)).min(Vec3::ONE));
                 }
             }
             LeafLanes::DielectricR {

@@ -24,7 +24,7 @@ pub fn format_parser() -> impl clap::builder::TypedValueParser<Value = NetFormat
     use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
     PossibleValuesParser::new([
         PossibleValue::new("rib").help("RenderMan RIB"),
-        PossibleValue::new("json").help("The JSON network form (see docs/file-formats.md)"),
+        PossibleValue::new("json").help("The JSON network form (see docs/inputs-and-outputs.md)"),
     ])
     .map(|s| match s.as_str() {
         "json" => NetFormat::Json,
