@@ -49,7 +49,7 @@ pub struct Limits {
 
 /// The default of [`Limits::expr_depth`]: the deepest parenthesis nesting of a conditional
 /// (real expressions use 1–3 levels; the parser recurses once per level).
-pub const DEFAULT_EXPR_DEPTH: u64 = 64;
+pub(crate) const DEFAULT_EXPR_DEPTH: u64 = 64;
 
 impl Default for Limits {
     fn default() -> Self {

@@ -17,7 +17,7 @@ pub enum SourceKind {
 
 /// A metadata key. Keys of the attribute vocabulary are static strings, so
 /// reading a definition does not allocate one string per attribute; any other key is owned.
-pub type MetaKey = std::borrow::Cow<'static, str>;
+pub(crate) type MetaKey = std::borrow::Cow<'static, str>;
 
 /// Metadata keys that occur on most properties of real `.args` / `.oso` files.
 const KNOWN_META_KEYS: &[&str] = &[
@@ -55,7 +55,7 @@ const KNOWN_META_KEYS: &[&str] = &[
 ];
 
 /// The [`MetaKey`] for `key`: static when it is a known vocabulary word, owned otherwise.
-pub fn meta_key(key: &str) -> MetaKey {
+pub(crate) fn meta_key(key: &str) -> MetaKey {
     match KNOWN_META_KEYS.iter().find(|k| **k == key) {
         Some(k) => MetaKey::Borrowed(k),
         None => MetaKey::Owned(key.to_string()),
@@ -309,7 +309,7 @@ pub struct IndexedDefinition {
 
 /// A parameter's documented numeric range (`min` / `max` metadata); either end may be open.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct NumericRange {
+pub(crate) struct NumericRange {
     /// Lower bound, if documented.
     pub min: Option<f32>,
     /// Upper bound, if documented.
@@ -367,7 +367,7 @@ impl IndexedDefinition {
     }
 
     /// The input named `name` with its documented range.
-    pub fn input_with_range(&self, name: &str) -> Option<(&Property, NumericRange)> {
+    pub(crate) fn input_with_range(&self, name: &str) -> Option<(&Property, NumericRange)> {
         self.inputs
             .get(name)
             .map(|&i| (&self.def.inputs[i], self.ranges[i]))

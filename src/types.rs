@@ -283,7 +283,7 @@ impl Value {
 /// `x` if it is finite; otherwise the largest finite `f32` of its sign (`f32::MAX` for +∞,
 /// `f32::MIN` for −∞) and 0 for NaN, which has no sign to keep. What the writers can emit
 /// and the readers accept is finite floats only; this is how a value that is not gets there.
-pub fn saturate_f32(x: f32) -> f32 {
+pub(crate) fn saturate_f32(x: f32) -> f32 {
     if x.is_finite() {
         x
     } else if x.is_nan() {
@@ -297,7 +297,7 @@ pub fn saturate_f32(x: f32) -> f32 {
 
 impl Value {
     /// Replace every non-finite float in the value (components and array elements included)
-    /// by [`saturate_f32`]; true if any was replaced.
+    /// by the largest finite `f32` of their sign (NaN by 0); true if any was replaced.
     pub fn saturate_floats(&mut self) -> bool {
         fn fix(xs: &mut [f32]) -> bool {
             let mut changed = false;

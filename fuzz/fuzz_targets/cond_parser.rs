@@ -3,7 +3,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use vstructc::cond::Extensions;
-use vstructc::cond::parser::parse_statement;
+use vstructc::cond::internals::parse_statement;
 
 fuzz_target!(|text: &str| {
     let _ = parse_statement(text, &Extensions::default());

@@ -27,7 +27,7 @@
 //!   RB014, such as `"color c" [0]`) is written with its elements' type (`float[1]`): the
 //!   reader would reject `color[1]` holding a number.
 //! * Non-finite floats (only possible in networks built in code) are written saturated to the
-//!   largest finite `f32` of their sign, NaN as 0 ([`crate::types::saturate_f32`]): the reader
+//!   largest finite `f32` of their sign, NaN as 0: the reader
 //!   takes finite numbers only, and what this writer writes must read back.
 
 use crate::network::{Link, Network, NodeId, Upstream};

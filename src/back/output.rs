@@ -51,7 +51,7 @@ use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// The name used for standard output in errors.
-pub const STDOUT_NAME: &str = "<stdout>";
+pub(crate) const STDOUT_NAME: &str = "<stdout>";
 
 /// The longest symlink chain followed to find the file to replace (Linux's own limit).
 pub(crate) const MAX_SYMLINK_CHAIN: usize = 40;
@@ -75,13 +75,14 @@ pub fn write_file(
     })
 }
 
-/// [`write_file`] for bytes already in memory.
-pub fn write_bytes(path: &Path, data: &[u8]) -> Result<(), Error> {
+/// [`write_file`] for bytes already in memory (the unit tests' shorthand).
+#[cfg(test)]
+fn write_bytes(path: &Path, data: &[u8]) -> Result<(), Error> {
     write_file(path, |out| out.write_all(data))
 }
 
 /// Write the output of `produce` to standard output (buffered, flushed at the end). Write
-/// errors are [`Error::Io`] naming [`STDOUT_NAME`].
+/// errors are [`Error::Io`] naming `<stdout>`.
 pub fn write_stdout(produce: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<(), Error> {
     let mut out = BufWriter::with_capacity(BUFFER, io::stdout().lock());
     produce(&mut out)

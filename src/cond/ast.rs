@@ -179,12 +179,12 @@ pub enum ActionKind {
     Connect,
     /// Leave D.M alone.
     Ignore,
-    /// Write a literal to D.M (typed by D.M's declared type, see [`super::action::set_value`]).
+    /// Write a literal to D.M (typed by D.M's declared type, the same rules as `set` in the language reference).
     Set {
         /// The literal (number with its text, or verbatim string).
         literal: Literal,
     },
-    /// Copy U's input `param` to D.M (see [`super::action::copy_value`]).
+    /// Copy U's input `param` to D.M (typed as the language reference's `copy` rules say).
     Copy {
         /// The parameter of U to copy.
         param: Param,

@@ -1,6 +1,6 @@
 //! Parse errors (VS001) and caret rendering.
 
-use crate::diag::{Diagnostic, Location, Severity};
+use crate::diag::{Diagnostic, Severity};
 use std::fmt;
 use std::ops::Range;
 
@@ -62,7 +62,7 @@ impl ParseError {
     }
 
     /// A VS001 diagnostic (warning, as in definitions) with the span, the caret rendering,
-    /// the expected set and the notes. The caller adds the location (see [`location_in`]).
+    /// the expected set and the notes. The caller adds the location.
     pub fn to_diagnostic(&self, text: &str) -> Diagnostic {
         self.to_diagnostic_with(text, Severity::Warning)
     }
@@ -146,9 +146,11 @@ const CARET_SPAN: usize = 200;
 /// after it) is cut to that window, with `…` where it was cut: the rendering costs the same
 /// for a one-line expression of 10 MB, which may report a diagnostic per predicate.
 ///
-/// ```
-/// let r = vstructc::cond::render_caret("connect if x = 1", 13..14);
-/// assert_eq!(r, "connect if x = 1\n             ^");
+/// For `connect if x = 1` and the span `13..14`:
+///
+/// ```text
+/// connect if x = 1
+///              ^
 /// ```
 pub fn render_caret(text: &str, span: Range<usize>) -> String {
     let mut start = span.start.min(text.len());
@@ -217,7 +219,12 @@ fn walk_forward(text: &str, at: usize, max: usize) -> usize {
 /// `start` (the position the definition readers record for a `vstructConditionalExpr` value).
 /// Walks the decoded text: a newline advances the line, any other character one column. This
 /// is the "value start plus decoded offset" mapping.
-pub fn location_in(start: &Location, text: &str, offset: usize) -> Location {
+#[cfg(any(test, feature = "testkit"))]
+pub fn location_in(
+    start: &crate::diag::Location,
+    text: &str,
+    offset: usize,
+) -> crate::diag::Location {
     let (dl, dc) = crate::diag::line_column(text, offset);
     let mut loc = start.clone();
     if start.line == 0 {
@@ -235,6 +242,7 @@ pub fn location_in(start: &Location, text: &str, offset: usize) -> Location {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diag::Location;
 
     #[test]
     fn caret_under_the_offending_column() {

@@ -250,6 +250,7 @@ fn implied_fallback(action: &Action) -> &'static Action {
 
 /// Evaluate only an expression (useful to explain a decision); reports are appended to
 /// `reports`.
+#[cfg(any(test, feature = "testkit"))]
 pub fn evaluate_expr<U: Upstream + ?Sized>(
     expr: &Expr,
     upstream: &U,

@@ -192,23 +192,6 @@ pub enum TokenKind<'a> {
 }
 
 impl TokenKind<'_> {
-    /// The token name used in messages (`PARAM`, `IF`, `(`, …); `end of input` for
-    /// [`TokenKind::Eof`].
-    pub fn name(&self) -> &'static str {
-        match self {
-            TokenKind::Kw(k) => k.token_name(),
-            TokenKind::IsNot => "IS_NOT",
-            TokenKind::Number(_) => "NUMBER",
-            TokenKind::Str { .. } => "STRING",
-            TokenKind::Param(_) => "PARAM",
-            TokenKind::LParen => "(",
-            TokenKind::RParen => ")",
-            TokenKind::Cmp(op) => op.as_str(),
-            TokenKind::Unrecognized(_) => "UNRECOGNIZED",
-            TokenKind::Eof => "end of input",
-        }
-    }
-
     /// A description for "found …" in messages: the token name plus its text where that
     /// helps (`PARAM "y"`, `NUMBER 007`, `STRING 'x'`), quoted punctuation (`'('`, `'=='`),
     /// and unrecognised characters quoted and escaped (`'='`, `'\r'`).
@@ -399,7 +382,8 @@ pub fn next_token(text: &str, pos: usize) -> Token<'_> {
 }
 
 /// Split `text` into tokens; the last token is always [`TokenKind::Eof`]. Never fails.
-pub fn tokenize(text: &str) -> Vec<Token<'_>> {
+#[cfg(test)]
+pub(crate) fn tokenize(text: &str) -> Vec<Token<'_>> {
     let mut tokens = Vec::with_capacity(text.len() / 3 + 2);
     let mut pos = 0;
     loop {

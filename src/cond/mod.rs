@@ -26,27 +26,44 @@
 //! with the byte span of the offending token; [`Statement::param_names`] lists every
 //! parameter name the statement reads (predicates and `copy`).
 
-pub mod action;
-pub mod ast;
-pub mod error;
-pub mod eval;
-pub mod ext;
-pub mod lexer;
-pub mod parser;
+mod action;
+mod ast;
+mod error;
+mod eval;
+mod ext;
+mod lexer;
+mod parser;
 
-pub use action::{
-    CopyOutcome, CopyPlan, CopyRejection, SetRejection, SetValue, copy_plan, copy_value, set_value,
-};
+pub(crate) use action::{CopyOutcome, CopyRejection, SetRejection, copy_value, set_value};
+pub use ast::dump;
 pub use ast::{
     Action, ActionKind, ElseIf, Expr, ExprKind, IsTest, Literal, LiteralKind, Param, Span,
-    Statement, dump,
+    Statement,
 };
-pub use error::{ParseError, location_in, render_caret};
+pub use error::ParseError;
+pub(crate) use error::render_caret;
+pub(crate) use eval::chosen_action;
 pub use eval::{
     Choice, ComparisonReport, Evaluation, FalseReason, MapUpstream, Upstream, evaluate,
 };
 pub use ext::{Extension, Extensions, UnknownExtension};
 pub use lexer::CmpOp;
+
+/// The language's internals that the crate's own tests and fuzz targets check directly
+/// (feature `testkit`; not a stable API): the lexer, the parser entry with its limits, the
+/// `set`/`copy` typing rules, the AST dump and expression evaluation.
+#[cfg(feature = "testkit")]
+pub mod internals {
+    pub use super::action::{
+        CopyOutcome, CopyPlan, CopyRejection, SetRejection, SetValue, copy_plan, copy_value,
+        set_value,
+    };
+    pub use super::ast::{dump, quote_for};
+    pub use super::error::{location_in, render_caret};
+    pub use super::eval::evaluate_expr;
+    pub use super::lexer::{Keyword, Token, TokenKind, next_token};
+    pub use super::parser::{MAX_PAREN_DEPTH, parse_statement, parse_statement_limited};
+}
 
 /// Parse one conditional expression in compat mode (no extension).
 pub fn parse(text: &str) -> Result<Statement, ParseError> {
@@ -59,8 +76,7 @@ pub fn parse_with(text: &str, ext: &Extensions) -> Result<Statement, ParseError>
     parser::parse_statement(text, ext)
 }
 
-/// [`parse_with`] within `limits` (expression terms and parenthesis depth; see
-/// [`parser::parse_statement_limited`]).
+/// [`parse_with`] within `limits` (expression terms and parenthesis depth).
 pub fn parse_limited(
     text: &str,
     ext: &Extensions,

@@ -128,6 +128,7 @@ struct Parser<'a> {
 /// once per level, while `and`/`or` chains of any length are loops over n-ary nodes; real
 /// expressions use 1–3 levels). Deeper nesting is a syntax error (VS001) at the parenthesis
 /// that exceeds it.
+#[cfg(any(test, feature = "testkit"))]
 pub const MAX_PAREN_DEPTH: usize = crate::limits::DEFAULT_EXPR_DEPTH as usize;
 
 impl<'a> Parser<'a> {

@@ -1,9 +1,9 @@
 //! The closure algebra: bottom-up throughput with tint modes and
 //! top-down weights, producing the flat form — every lobe with its RGB weight.
 
-use super::closure::{Leaf, LeafKind, Node, NodeId, TintMode};
-use super::program::{fresnel_dielectric, lum};
-use super::{Fresnel, MaterialIr};
+use super::MaterialIr;
+use super::closure::{Leaf, Node, NodeId, TintMode};
+use super::program::lum;
 use glam::Vec3;
 
 /// Supplies a leaf's directional albedo `E(μ_o)`, without the leaf's `tint` (the
@@ -20,16 +20,20 @@ impl<F: Fn(&Leaf, &[Vec3], f32) -> Vec3> AlbedoSource for F {
     }
 }
 
-/// A table-free albedo estimate used by `vstructc compile --emit lobes` until the
-/// interpreter's tables are plugged in: diffuse kinds return their albedo ρ; microfacet
+/// A table-free albedo estimate for tests of the algebra: diffuse kinds return their albedo ρ; microfacet
 /// reflection its Fresnel term evaluated at `μ_o` (the smooth-surface limit); a dielectric
 /// in `R` mode `F(μ_o, η) · T_r`; Ward its ρ_s; sheens 0.1·(1 − μ_o) + 0.05 (a rough
 /// stand-in of the interpreter's tabulated values). Exact for smooth dielectrics and Lambert.
 #[derive(Debug, Clone, Copy, Default)]
+#[cfg(any(test, feature = "testkit"))]
 pub struct SimpleAlbedo;
 
+#[cfg(any(test, feature = "testkit"))]
 impl AlbedoSource for SimpleAlbedo {
     fn albedo(&self, leaf: &Leaf, regs: &[Vec3], mu_o: f32) -> Vec3 {
+        use super::Fresnel;
+        use super::closure::LeafKind;
+        use super::program::{fresnel_conductor, fresnel_dielectric};
         let r = |reg: super::Reg| regs.get(reg.index()).copied().unwrap_or(Vec3::ZERO);
         let mu = mu_o.clamp(0.0, 1.0);
         match leaf.kind {
@@ -57,9 +61,9 @@ impl AlbedoSource for SimpleAlbedo {
                 Fresnel::Conductor { eta, kappa } => {
                     let (e, k) = (r(eta), r(kappa));
                     Vec3::new(
-                        super::program::fresnel_conductor(mu, e.x, k.x),
-                        super::program::fresnel_conductor(mu, e.y, k.y),
-                        super::program::fresnel_conductor(mu, e.z, k.z),
+                        fresnel_conductor(mu, e.x, k.x),
+                        fresnel_conductor(mu, e.y, k.y),
+                        fresnel_conductor(mu, e.z, k.z),
                     )
                 }
             },
@@ -77,8 +81,10 @@ impl AlbedoSource for SimpleAlbedo {
 
 /// A constant albedo for every leaf (tests).
 #[derive(Debug, Clone, Copy)]
+#[cfg(any(test, feature = "testkit"))]
 pub struct ConstAlbedo(pub Vec3);
 
+#[cfg(any(test, feature = "testkit"))]
 impl AlbedoSource for ConstAlbedo {
     fn albedo(&self, _leaf: &Leaf, _regs: &[Vec3], _mu_o: f32) -> Vec3 {
         self.0

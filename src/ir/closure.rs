@@ -453,7 +453,7 @@ pub struct Leaf {
     pub tint: Reg,
     /// Transmission tint: a colour filter on everything below a layerable leaf.
     pub ttint: Reg,
-    /// Index into [`super::MaterialIr::frames`].
+    /// Index into the IR's frame slots.
     pub frame: u32,
     /// What the lobe is in the source material (`diffuse`, `specular`, ...), for printers.
     pub label: String,

@@ -1,24 +1,42 @@
 //! The closure IR: a parameter program (straight-line SSA
-//! over `f32x3` registers, [`program`]) and a closure DAG ([`closure`]) whose leaves are BSDF
-//! lobes. [`algebra`] computes the flat form (lobes with weights) for one point and view;
-//! [`passes`] optimises; [`print`](mod@print) renders the stable text forms.
+//! over `f32x3` registers) and a closure DAG ([`closure`]) whose leaves are BSDF
+//! lobes. Internally, the closure algebra computes the flat form (lobes with weights) for one
+//! point and view and passes optimise; [`print`](mod@print) renders the stable text forms.
 //!
-//! IRs are built with [`IrBuilder`], which folds constants, shares identical ops and nodes,
+//! Lowering builds IRs with a builder that folds constants, shares identical ops and nodes,
 //! and drops closures that are statically zero while it builds (so lowering code can build
 //! the full tree of a recipe and let disabled parts vanish).
 
-pub mod algebra;
 pub mod closure;
-pub mod passes;
 pub mod print;
-pub mod program;
 
+// The parameter program, the flat form and the passes are internals: public only to the
+// crate's own tests and benches (feature `testkit`).
+#[cfg(feature = "testkit")]
+pub mod algebra;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod algebra;
+#[cfg(feature = "testkit")]
+pub mod passes;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod passes;
+#[cfg(feature = "testkit")]
+pub mod program;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod program;
+
+#[cfg(not(feature = "testkit"))]
+pub(crate) use algebra::{AlbedoSource, Flat};
+#[cfg(feature = "testkit")]
 pub use algebra::{AlbedoSource, Flat, FlatLobe, SimpleAlbedo};
 pub use closure::{
     DielectricMode, Fresnel, Leaf, LeafKind, Masking, Node, NodeId, SheenMasking, TintMode,
     WardVariant,
 };
+#[cfg(feature = "testkit")]
 pub use program::{Global, Globals, Op, OpCode, Program, ProgramBuilder, Reg, RunContext};
+#[cfg(not(feature = "testkit"))]
+pub(crate) use program::{Global, Globals, OpCode, Program, ProgramBuilder, Reg, RunContext};
 
 use crate::types::{Type, Value};
 use glam::Vec3;
@@ -78,7 +96,8 @@ impl InputSlot {
 }
 
 /// A value as a register: scalars broadcast, triples as they are, anything else 0.
-pub fn value_to_vec3(v: &Value) -> Vec3 {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn value_to_vec3(v: &Value) -> Vec3 {
     // The common scalar and triple cases without collecting the numbers.
     match v {
         Value::Int(i) => return Vec3::splat(*i as f32),
@@ -97,7 +116,8 @@ pub fn value_to_vec3(v: &Value) -> Vec3 {
 
 /// A shading frame used by lobes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct FrameSlot {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) struct FrameSlot {
     /// Normal register; `None` (or a zero value) means the shading normal.
     pub normal: Option<Reg>,
     /// Tangent register; `None` (or a zero value) means the surface tangent.
@@ -116,12 +136,18 @@ pub struct MaterialIr {
     /// External per-point inputs.
     pub inputs: Vec<InputSlot>,
     /// The parameter program.
+    #[cfg(feature = "testkit")]
     pub program: Program,
+    #[cfg(not(feature = "testkit"))]
+    pub(crate) program: Program,
     /// The closure DAG; node 0 is the root and every child has a larger index than its
     /// parents. Empty when the material has no closure at all (black).
     pub nodes: Vec<Node>,
     /// Frames used by lobes.
+    #[cfg(feature = "testkit")]
     pub frames: Vec<FrameSlot>,
+    #[cfg(not(feature = "testkit"))]
+    pub(crate) frames: Vec<FrameSlot>,
     /// Number of BSDF lobes (≤ [`MAX_LOBES`]).
     pub max_static_lobes: u8,
 }
@@ -179,11 +205,13 @@ impl MaterialIr {
 }
 
 /// A closure under construction: `None` is the empty closure (no response, throughput 1).
-pub type Cl = Option<NodeId>;
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) type Cl = Option<NodeId>;
 
 /// Builds a [`MaterialIr`]: program, input slots, frames and the closure DAG.
 #[derive(Debug, Default)]
-pub struct IrBuilder {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) struct IrBuilder {
     /// The program builder (folding, CSE).
     pub prog: ProgramBuilder,
     nodes: Vec<Node>,

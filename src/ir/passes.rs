@@ -7,6 +7,7 @@ use super::closure::{Node, NodeId};
 use super::program::{OpCode, ProgramBuilder, Reg};
 use super::{Cl, FrameSlot, IrBuilder, MAX_LOBES, MaterialIr};
 use crate::diag::Diagnostic;
+#[cfg(any(test, feature = "testkit"))]
 use glam::Vec3;
 use rustc_hash::FxHashMap as HashMap;
 
@@ -137,6 +138,7 @@ fn replay(
 
 /// Fold constants, share subexpressions, drop dead lobes, unused ops and unused input slots,
 /// order the nodes root-first, and check `MAX_LOBES` (LW010, error).
+#[cfg(any(test, feature = "testkit"))]
 pub fn optimize(ir: MaterialIr) -> Result<MaterialIr, Box<Diagnostic>> {
     optimize_with(ir, None)
 }
@@ -279,6 +281,7 @@ pub(super) fn optimize_with(
 
 /// Replace input slot `slot` by a constant and re-optimise (used to specialise a material
 /// for a known input value).
+#[cfg(any(test, feature = "testkit"))]
 pub fn specialize(
     ir: &MaterialIr,
     slot: usize,

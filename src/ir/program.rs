@@ -430,11 +430,13 @@ impl ProgramBuilder {
     }
 
     /// Number of ops so far.
+    #[cfg(any(test, feature = "testkit"))]
     pub fn len(&self) -> usize {
         self.ops.len()
     }
 
     /// True when nothing was emitted yet.
+    #[cfg(any(test, feature = "testkit"))]
     pub fn is_empty(&self) -> bool {
         self.ops.is_empty()
     }

@@ -1,7 +1,7 @@
 //! Lowering of resolved shader networks to the closure IR, one module
-//! per material model: [`pxr`] (PxrSurface / PxrLayerSurface, with PxrLayer and
-//! PxrLayerMixer interpreted as program expressions), [`vray`], [`physical`], [`mia`], and
-//! the small fused pattern set [`patterns`].
+//! per material model: `pxr` (PxrSurface / PxrLayerSurface, with PxrLayer and
+//! PxrLayerMixer interpreted as program expressions), `vray`, `physical`, `mia`, and
+//! the small fused pattern set `patterns` (internal modules).
 //!
 //! The lowering reads the network through the small [`Graph`] trait and definitions through
 //! [`Definitions`], so that it works on the crate's network model and on hand-built graphs
@@ -13,14 +13,32 @@
 //! definition default; the recipe's built-in default (LW003, warning, once per node type
 //! without definition).
 
-pub mod mia;
 pub mod network;
-pub mod patterns;
-pub mod physical;
-pub mod pxr;
 #[cfg(feature = "testkit")]
 pub mod scene;
+
+// One module per material model. The recipes are internals: public only to the crate's own
+// tests (feature `testkit`), which check their built-in defaults against the shipped `.args`.
+#[cfg(feature = "testkit")]
+pub mod mia;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod mia;
+#[cfg(feature = "testkit")]
+pub mod patterns;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod patterns;
+#[cfg(feature = "testkit")]
+pub mod physical;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod physical;
+#[cfg(feature = "testkit")]
+pub mod pxr;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod pxr;
+#[cfg(feature = "testkit")]
 pub mod vray;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod vray;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::ir::{IrBuilder, MaterialIr, Reg, value_to_vec3};
@@ -205,7 +223,8 @@ pub fn lower_node<G: Graph>(
 /// a definition such as PxrLayerMixer (hundreds of inputs) costs more than lowering a
 /// material, and a per-thread cache keeps threads off each other's reference counts.
 #[derive(Debug, Default)]
-pub struct DefinitionCache {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) struct DefinitionCache {
     by_shader: FxHashMap<String, Option<Arc<IndexedDefinition>>>,
 }
 
@@ -223,7 +242,7 @@ impl DefinitionCache {
     }
 }
 
-/// [`lower_node`] with a definition cache shared across calls (see [`lower_many`]).
+/// [`lower_node`] with a definition cache shared across calls (as `lower_many` does).
 pub(crate) fn lower_node_cached<G: Graph>(
     graph: &G,
     defs: &dyn Definitions,
@@ -286,7 +305,8 @@ impl NameBuf {
 pub(crate) type MixerGates = [(Reg, Reg); 4];
 
 /// The lowering context: the graph, definitions, the IR builder and diagnostics.
-pub struct Lower<'a, G: Graph> {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) struct Lower<'a, G: Graph> {
     /// The network.
     pub graph: &'a G,
     /// Definitions.
@@ -623,6 +643,8 @@ pub(crate) fn aniso_alpha(b: &mut IrBuilder, r: Reg, a: Reg) -> (Reg, Reg) {
 
 /// Lower every terminal of a [`SimpleGraph`]-like graph given as `(name, node)` pairs,
 /// optionally in parallel (rayon) — materials are independent.
+/// (Test and bench support: the pipeline lowers through `pipeline::lower`.)
+#[cfg(any(test, feature = "testkit"))]
 pub fn lower_many<G: Graph + Sync>(
     graph: &G,
     defs: &(dyn Definitions + Sync),

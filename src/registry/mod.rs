@@ -40,9 +40,10 @@
 mod param_types;
 pub mod tables;
 
+pub(crate) use crate::model::NumericRange;
 pub use crate::model::{
-    CondSource, Definition, Direction, IndexedDefinition, MemberDecl, MetaKey, Metadata,
-    NumericRange, Property, SourceKind, meta_key,
+    CondSource, Definition, Direction, IndexedDefinition, MemberDecl, Metadata, Property,
+    SourceKind,
 };
 pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, VstructTables};
 
@@ -58,10 +59,10 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Environment variable with extra definition folders (colon-separated).
-pub const ARGS_PATH_ENV: &str = "VSTRUCTC_ARGS_PATH";
+pub(crate) const ARGS_PATH_ENV: &str = "VSTRUCTC_ARGS_PATH";
 
 /// Pseudo-directory naming embedded definitions in paths and diagnostics.
-pub const EMBEDDED_PREFIX: &str = "<embedded>";
+pub(crate) const EMBEDDED_PREFIX: &str = "<embedded>";
 
 /// How much of an `.oso` file is read to find its shader name while listing.
 const OSO_PEEK_BYTES: u64 = 64 << 10;

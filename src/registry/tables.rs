@@ -282,7 +282,7 @@ impl Builder<'_, '_> {
             .parsed
             .entry(src.text.clone())
             .or_insert_with(|| {
-                let ext = cond::ext::Extensions::none();
+                let ext = cond::Extensions::none();
                 Arc::new(cond::parse_limited(&src.text, &ext, self.limits))
             })
             .clone();

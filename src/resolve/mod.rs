@@ -546,7 +546,7 @@ impl Resolver<'_> {
                             let choice =
                                 self.memo_choice(entry, stmt, upstream, up_def, &mut decision);
                             known = Some(choice);
-                            let kind = &cond::eval::chosen_action(stmt, choice.0).kind;
+                            let kind = &cond::chosen_action(stmt, choice.0).kind;
                             let verdict = match (kind, choice.1) {
                                 (ActionKind::Ignore, false) => Verdict::Ignore,
                                 (ActionKind::Connect, false) => Verdict::Connect,
@@ -697,7 +697,7 @@ impl Resolver<'_> {
                 (evaluation.choice, evaluation.reports)
             }
         };
-        let action = cond::eval::chosen_action(stmt, choice);
+        let action = cond::chosen_action(stmt, choice);
         if let Some(event) = event {
             event.reads = stmt
                 .param_names()
@@ -730,7 +730,7 @@ impl Resolver<'_> {
                     }
                     Err(why) => {
                         let msg = why.to_string();
-                        self.not_applied(ctx, "VS013", &msg, action);
+                        self.not_applied(ctx, cond::SetRejection::CODE, &msg, action);
                         Outcome::NotApplied(msg)
                     }
                 }
@@ -771,7 +771,7 @@ impl Resolver<'_> {
                         "`copy {param}` copies between an array and a non-array (or arrays of \
                          different sizes), as the reference does"
                     );
-                    self.not_applied(ctx, "VS014", &msg, action);
+                    self.not_applied(ctx, cond::CopyRejection::CODE, &msg, action);
                 }
                 self.write(ctx, value.clone(), action);
                 Outcome::Written(value)
@@ -779,7 +779,7 @@ impl Resolver<'_> {
             Ok(CopyOutcome::NoValue) => Outcome::Ignored,
             Err(why) => {
                 let msg = why.to_string();
-                self.not_applied(ctx, "VS014", &msg, action);
+                self.not_applied(ctx, cond::CopyRejection::CODE, &msg, action);
                 Outcome::NotApplied(msg)
             }
         }

@@ -4,6 +4,7 @@
 pub mod leaves_ref;
 pub mod network;
 pub mod pfm;
+pub mod png_decode;
 
 use std::path::PathBuf;
 

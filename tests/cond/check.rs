@@ -204,22 +204,22 @@ fn evaluation_reads_only_the_upstream_trait() {
 fn set_and_copy_rejections_explain_themselves() {
     let color = Type::scalar(BaseType::Color);
     let lit = cond::Literal::number("1.7", 0..3).unwrap();
-    let r = cond::set_value(&lit, Some(&color), &Extensions::none()).unwrap_err();
-    assert_eq!(cond::SetRejection::CODE, "VS013");
+    let r = cond::internals::set_value(&lit, Some(&color), &Extensions::none()).unwrap_err();
+    assert_eq!(cond::internals::SetRejection::CODE, "VS013");
     assert!(r.to_string().contains("see --ext set-tuples"), "{r}");
     let f = Type::scalar(BaseType::Float);
     let i = Type::scalar(BaseType::Int);
-    let r = cond::copy_value(
+    let r = cond::internals::copy_value(
         Some(&Value::Float(1.0)),
         Some(&f),
         Some(&i),
         &Extensions::none(),
     )
     .unwrap_err();
-    assert_eq!(cond::CopyRejection::CODE, "VS014");
+    assert_eq!(cond::internals::CopyRejection::CODE, "VS014");
     assert!(r.to_string().contains("see --ext copy-convert"), "{r}");
     let s = Type::scalar(BaseType::String);
-    let r = cond::copy_value(
+    let r = cond::internals::copy_value(
         Some(&Value::Str("a".into())),
         Some(&s),
         Some(&i),
@@ -235,31 +235,31 @@ fn copy_plans() {
     let none = Extensions::none();
     let cc = Extensions::none().with(Extension::CopyConvert);
     assert_eq!(
-        cond::copy_plan(&t(BaseType::Color), &t(BaseType::Color), &none),
-        Ok(cond::CopyPlan::Same)
+        cond::internals::copy_plan(&t(BaseType::Color), &t(BaseType::Color), &none),
+        Ok(cond::internals::CopyPlan::Same)
     );
-    assert!(cond::copy_plan(&t(BaseType::Int), &t(BaseType::Float), &none).is_err());
+    assert!(cond::internals::copy_plan(&t(BaseType::Int), &t(BaseType::Float), &none).is_err());
     assert_eq!(
-        cond::copy_plan(&t(BaseType::Int), &t(BaseType::Float), &cc),
-        Ok(cond::CopyPlan::IntToFloat)
-    );
-    assert_eq!(
-        cond::copy_plan(&t(BaseType::Float), &t(BaseType::Int), &cc),
-        Ok(cond::CopyPlan::FloatToInt)
+        cond::internals::copy_plan(&t(BaseType::Int), &t(BaseType::Float), &cc),
+        Ok(cond::internals::CopyPlan::IntToFloat)
     );
     assert_eq!(
-        cond::copy_plan(&t(BaseType::Int), &t(BaseType::Vector), &cc),
-        Ok(cond::CopyPlan::Broadcast)
+        cond::internals::copy_plan(&t(BaseType::Float), &t(BaseType::Int), &cc),
+        Ok(cond::internals::CopyPlan::FloatToInt)
     );
-    assert!(cond::copy_plan(&t(BaseType::Color), &t(BaseType::Float), &cc).is_err());
-    assert!(cond::copy_plan(&t(BaseType::Float), &t(BaseType::Matrix), &cc).is_err());
+    assert_eq!(
+        cond::internals::copy_plan(&t(BaseType::Int), &t(BaseType::Vector), &cc),
+        Ok(cond::internals::CopyPlan::Broadcast)
+    );
+    assert!(cond::internals::copy_plan(&t(BaseType::Color), &t(BaseType::Float), &cc).is_err());
+    assert!(cond::internals::copy_plan(&t(BaseType::Float), &t(BaseType::Matrix), &cc).is_err());
     // Arrays of the same base type: the reference ignores array-ness.
     let arr = Type {
         base: BaseType::Float,
         array: ArraySpec::Fixed(3),
     };
     assert_eq!(
-        cond::copy_plan(&arr, &t(BaseType::Float), &none),
-        Ok(cond::CopyPlan::Same)
+        cond::internals::copy_plan(&arr, &t(BaseType::Float), &none),
+        Ok(cond::internals::CopyPlan::Same)
     );
 }

@@ -3,7 +3,7 @@
 use proptest::prelude::*;
 use vstructc::cond::{
     self, Action, ActionKind, CmpOp, ComparisonReport, ElseIf, Expr, Extension, Extensions, IsTest,
-    Literal, MapUpstream, Param, Statement, ast::quote_for,
+    Literal, MapUpstream, Param, Statement, internals::quote_for,
 };
 use vstructc::types::Value;
 
@@ -249,7 +249,7 @@ impl Tree {
         reports: &mut Vec<ComparisonReport>,
     ) -> bool {
         match self {
-            Tree::Pred(e) => cond::eval::evaluate_expr(e, up, ext, reports),
+            Tree::Pred(e) => cond::internals::evaluate_expr(e, up, ext, reports),
             Tree::And(l, r) => l.eval(up, ext, reports) && r.eval(up, ext, reports),
             Tree::Or(l, r) => l.eval(up, ext, reports) || r.eval(up, ext, reports),
         }
@@ -372,7 +372,7 @@ proptest! {
         prop_assert!(chains_are_flat(&built));
         prop_assert_eq!(built.to_string(), text.clone());
         let mut got_reports = Vec::new();
-        prop_assert_eq!(cond::eval::evaluate_expr(&built, &up, &ext, &mut got_reports), want);
+        prop_assert_eq!(cond::internals::evaluate_expr(&built, &up, &ext, &mut got_reports), want);
         prop_assert_eq!(&got_reports, &want_reports);
 
         // The parsed text: the same tree (modulo spans), the same decision and reports

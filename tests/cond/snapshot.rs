@@ -173,7 +173,7 @@ fn diagnostic_rendering_of_a_definition_error() {
     let start = vstructc::Location::new("PxrLayer.args", 120, 41);
     let d = err
         .to_diagnostic(text)
-        .at(cond::location_in(&start, text, err.span.start));
+        .at(cond::internals::location_in(&start, text, err.span.start));
     insta::assert_snapshot!("diag_vs001_in_definition", d.render_human());
 }
 

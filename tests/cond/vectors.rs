@@ -6,8 +6,8 @@
 
 use serde_json::Value as Json;
 use vstructc::cond::{
-    self, Action, ActionKind, CopyOutcome, Expr, ExprKind, Extensions, IsTest, Literal,
-    LiteralKind, MapUpstream, Statement,
+    self, Action, ActionKind, Expr, ExprKind, Extensions, IsTest, Literal, LiteralKind,
+    MapUpstream, Statement, internals::CopyOutcome,
 };
 use vstructc::types::{ArraySpec, BaseType, Type, Value};
 
@@ -243,10 +243,17 @@ fn check_effect(id: &str, action: &Action, up: &Upstream, v: &Json, ext: &Extens
     let dest = (dest_word != "none").then(|| type_of(dest_word));
     let effect = &v["effect"];
     let (written, saturated, shape, rejected) = match &action.kind {
-        ActionKind::Set { literal } => match cond::set_value(literal, dest.as_ref(), ext) {
-            Ok(sv) => (Some(sv.value), sv.saturated, false, None),
-            Err(_) => (None, false, false, Some(cond::SetRejection::CODE)),
-        },
+        ActionKind::Set { literal } => {
+            match cond::internals::set_value(literal, dest.as_ref(), ext) {
+                Ok(sv) => (Some(sv.value), sv.saturated, false, None),
+                Err(_) => (
+                    None,
+                    false,
+                    false,
+                    Some(cond::internals::SetRejection::CODE),
+                ),
+            }
+        }
         ActionKind::Copy { param } => {
             let value = up
                 .map
@@ -254,14 +261,19 @@ fn check_effect(id: &str, action: &Action, up: &Upstream, v: &Json, ext: &Extens
                 .get(&param.name)
                 .or_else(|| up.map.inputs.get(&param.name).and_then(Option::as_ref));
             let source = up.types.get(&param.name);
-            match cond::copy_value(value, source, dest.as_ref(), ext) {
+            match cond::internals::copy_value(value, source, dest.as_ref(), ext) {
                 Ok(CopyOutcome::Write {
                     value,
                     shape_mismatch,
                     ..
                 }) => (Some(value), false, shape_mismatch, None),
                 Ok(CopyOutcome::NoValue) => (None, false, false, None),
-                Err(_) => (None, false, false, Some(cond::CopyRejection::CODE)),
+                Err(_) => (
+                    None,
+                    false,
+                    false,
+                    Some(cond::internals::CopyRejection::CODE),
+                ),
             }
         }
         _ => panic!("{id}: 'dest' given but the action is {}", action.name()),

@@ -4,7 +4,7 @@
 //! and the maximum, at a position when the input has one.
 
 use std::fmt::Write as _;
-use vstructc::cond::ext::Extensions;
+use vstructc::cond::Extensions;
 use vstructc::front::json::parse_json_limited;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::limits::{Limit, LimitExceeded, Limits};
