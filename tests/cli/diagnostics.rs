@@ -1,0 +1,95 @@
+//! Diagnostics a user reads: typos named with the declared name, unknown shaders with the
+//! known one, and no flood for what the user asked for or did not set.
+
+use std::process::{Command, Output};
+
+fn vstructc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vstructc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("VSTRUCTC_ARGS_PATH")
+        .output()
+        .unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn no_conditions_on_the_layered_example_is_reported_in_one_diagnostic() {
+    let out = vstructc(&[
+        "resolve",
+        "--no-conditions",
+        "examples/layered.rib",
+        "-o",
+        "/dev/null",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let err = stderr(&out);
+    assert!(err.lines().count() <= 3, "{err}");
+    assert!(
+        err.contains("info[VS022]: --no-conditions: 227 members"),
+        "{err}"
+    );
+}
+
+#[test]
+fn compiling_the_bench_scene_prints_at_most_20_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.rib");
+    std::fs::write(&scene, vstructc::network::testgen::layered_scene(10_000)).unwrap();
+    let out = vstructc(&["compile", "--emit", "lobes", scene.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.lines().count() <= 20, "{err}");
+}
+
+#[test]
+fn a_typo_is_a_warning_that_names_the_parameter_meant() {
+    let dir = tempfile::tempdir().unwrap();
+    let rib = dir.path().join("typo.rib");
+    std::fs::write(
+        &rib,
+        "Bxdf \"PxrSurface\" \"ball\" \"color diffuseColour\" [0.8 0.2 0.2]\n",
+    )
+    .unwrap();
+    let out = vstructc(&["compile", rib.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    let err = stderr(&out);
+    assert!(
+        err.starts_with(
+            "warning[VS024]: ball sets `diffuseColour`, which `PxrSurface` does not declare \
+             as an input; did you mean `diffuseColor`?"
+        ),
+        "{err}"
+    );
+    let denied = vstructc(&["--deny-warnings", "compile", rib.to_str().unwrap()]);
+    assert_eq!(denied.status.code(), Some(1));
+}
+
+#[test]
+fn unknown_shader_and_material_names_get_suggestions() {
+    let out = vstructc(&["info", "pxrlayer"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).starts_with("error: unknown shader `pxrlayer`; did you mean `PxrLayer`?"),
+        "{}",
+        stderr(&out)
+    );
+    let out = vstructc(&[
+        "compile",
+        "--material",
+        "layeredMaterail",
+        "examples/layered.rib",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains(
+            "error: no material or terminal named `layeredMaterail`; did you mean \
+             `layeredMaterial`?"
+        ),
+        "{}",
+        stderr(&out)
+    );
+}
