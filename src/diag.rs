@@ -4,7 +4,8 @@
 //! [`Diagnostics`] list that is returned to the caller (never only printed). Codes are the
 //! stable identifiers of the specification (`AR…` args, `OS…` oso, `RG…` registry, `RB…` RIB,
 //! `JS…` JSON, `VS…` vstruct, `LW…` lowering), plus `IO…` for files and streams (IO001: the
-//! system refused a read or write; IO002: the PNG encoder failed), `LM001` for a bound of
+//! system refused a read or write; IO002: the PNG encoder failed; IO003: a recognised input
+//! format that is not read, USD or MaterialX), `LM001` for a bound of
 //! [`crate::limits::Limits`] exceeded (file sizes, nodes, fan-in, parameters, expression
 //! terms and depth, preview pixels), and the registry's own RG003 (symlink loop in a
 //! definitions folder) and RG004 (not a regular file). Conditions that stop processing are returned as

@@ -56,6 +56,10 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ),
     ("IO002", "the PNG encoder failed"),
     (
+        "IO003",
+        "the input is in a format vstructc recognises but does not read: USD (`.usda`, `.usdc`, `.usdz`, or their signatures) or MaterialX (`.mtlx`, or XML with a `<materialx>` root); the message names it",
+    ),
+    (
         "IR001",
         "a closure tree built in code is malformed (the message says what is wrong)",
     ),

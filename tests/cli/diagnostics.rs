@@ -93,3 +93,114 @@ fn unknown_shader_and_material_names_get_suggestions() {
         stderr(&out)
     );
 }
+
+/// A scratch folder holding `files`.
+fn files(files: &[(&str, &[u8])]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in files {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    dir
+}
+
+#[test]
+fn usd_and_materialx_inputs_are_named_not_misread() {
+    let dir = files(&[
+        ("look.usda", b"#usda 1.0\n(\n)\ndef Material \"red\" {}\n"),
+        ("look.usdc", b"PXR-USDC\0\0\0\0"),
+        (
+            "red.mtlx",
+            b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\"/>\n",
+        ),
+        (
+            "red.xml",
+            b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\"/>\n",
+        ),
+    ]);
+    let mut shown = Vec::new();
+    for name in ["look.usda", "look.usdc", "red.mtlx", "red.xml"] {
+        let path = dir.path().join(name);
+        for format in ["human", "json"] {
+            let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
+                .args(["--diag-format", format, "resolve", name])
+                .current_dir(dir.path())
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(1), "{name}: {}", stderr(&out));
+            let err = stderr(&out);
+            assert!(!err.contains("RB004"), "{err}");
+            shown.push(err);
+        }
+        assert!(path.exists());
+    }
+    let text = shown.concat();
+    assert_eq!(
+        text.matches("USD input is not supported yet").count(),
+        4,
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("MaterialX input is not supported").count(),
+        4,
+        "{text}"
+    );
+    insta::assert_snapshot!(text);
+}
+
+#[test]
+fn the_output_extension_picks_the_output_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("out.json");
+    let out = vstructc(&[
+        "resolve",
+        "examples/chain.rib",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&json).unwrap();
+    serde_json::from_str::<serde_json::Value>(&text).expect("JSON was written");
+    let rib = dir.path().join("back.rib");
+    let out = vstructc(&[
+        "resolve",
+        json.to_str().unwrap(),
+        "-o",
+        rib.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        std::fs::read_to_string(&rib)
+            .unwrap()
+            .contains("Bxdf \"PxrLayerSurface\"")
+    );
+    // A contradiction, or a format that cannot be written, is a usage error before any work.
+    let conflict = dir.path().join("conflict.json");
+    let out = vstructc(&[
+        "resolve",
+        "--format",
+        "rib",
+        "examples/chain.rib",
+        "-o",
+        conflict.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("--format rib conflicts"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!conflict.exists());
+    let usd = dir.path().join("out.usda");
+    let out = vstructc(&["resolve", "examples/chain.rib", "-o", usd.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!usd.exists());
+    let exr = dir.path().join("ball.exr");
+    let out = vstructc(&["render", "examples/chain.rib", "-o", exr.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("`.exr` output is not supported"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!exr.exists());
+}

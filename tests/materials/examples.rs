@@ -52,7 +52,10 @@ fn the_chain_example_shows_paint_dust_and_lacquer() {
     // Chroma relative to brightness: the paint is blue (0.2 0.3 0.7) under 30 % of a
     // beige dust; a grey ball has a ratio near 0.
     let chroma = (r.max(g).max(b) - r.min(g).min(b)) / ((r + g + b) / 3.0);
-    assert!(chroma > 0.25, "mean colour {r} {g} {b}: chroma ratio {chroma}");
+    assert!(
+        chroma > 0.25,
+        "mean colour {r} {g} {b}: chroma ratio {chroma}"
+    );
     assert!(b > g && g > r, "the paint's blue dominates: {r} {g} {b}");
     // The lacquer's coat is there, and the dust's roughness reaches the diffuse lobe.
     let labels: Vec<&str> = ir.leaves().map(|(_, l)| l.label.as_str()).collect();
