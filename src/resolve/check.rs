@@ -113,6 +113,11 @@ struct Checker<'a> {
 /// assert!(d.message.contains("did you mean `inputMaterial`?"), "{}", d.message);
 /// ```
 pub fn check_definitions(net: &Network, registry: &Registry) -> Diagnostics {
+    check_in_order(net, registry, &net.nodes_sorted())
+}
+
+/// [`check_definitions`] over `order`, the network's nodes in sorted order.
+pub(super) fn check_in_order(net: &Network, registry: &Registry, order: &[NodeId]) -> Diagnostics {
     let mut c = Checker {
         net,
         registry,
@@ -122,7 +127,7 @@ pub fn check_definitions(net: &Network, registry: &Registry) -> Diagnostics {
         suggested: HashMap::default(),
         out: Diagnostics::new(),
     };
-    for node in net.nodes_sorted() {
+    for &node in order {
         c.check_node(node);
     }
     c.report_unknown();

@@ -138,8 +138,10 @@ pub struct MemberEvent {
 
 /// Resolve every vstruct connection of `net` against `registry`.
 ///
-/// Nodes are visited in sorted order; each node's input heads are expanded after the
-/// upstream node has been resolved completely. Afterwards authored values on input heads are
+/// The network is first checked against its definitions ([`check_definitions`]: undeclared
+/// parameters and outputs, VS024; unknown node types, VS020). Nodes are visited in sorted
+/// order; each node's input heads are expanded after the upstream node has been resolved
+/// completely. Afterwards authored values on input heads are
 /// removed (VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
     if let Err(e) = net.check_limits(&options.limits) {
@@ -149,12 +151,12 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         return out;
     }
     let order = net.nodes_sorted();
+    let checked = check::check_in_order(net, registry, &order);
     // Resolution edits connections only; the graph's edges are rebuilt once at the end
     // (removing them one by one is quadratic for nodes with many connections).
     net.suspend_edges();
     // Resolution adds no nodes, so every node index stays below this bound.
     let bound = petgraph::visit::NodeIndexable::node_bound(net.graph());
-    let checked = check_definitions(net, registry);
     let mut r = Resolver {
         net,
         registry,
