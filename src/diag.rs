@@ -4,7 +4,8 @@
 //! [`Diagnostics`] list that is returned to the caller (never only printed). Codes are the
 //! stable identifiers of the specification (`AR…` args, `OS…` oso, `RG…` registry, `RB…` RIB,
 //! `JS…` JSON, `VS…` vstruct, `LW…` lowering), plus `IO…` for files and streams (IO001: the
-//! system refused a read or write; IO002: the PNG encoder failed), `LM001` for a bound of
+//! system refused a read or write; IO002: the PNG encoder failed; IO003: a recognised input
+//! format that is not read, USD or MaterialX), `LM001` for a bound of
 //! [`crate::limits::Limits`] exceeded (file sizes, nodes, fan-in, parameters, expression
 //! terms and depth, preview pixels), and the registry's own RG003 (symlink loop in a
 //! definitions folder) and RG004 (not a regular file). Conditions that stop processing are returned as
@@ -403,6 +404,128 @@ impl Diagnostics {
     /// Consume into the underlying vector.
     pub fn into_vec(self) -> Vec<Diagnostic> {
         self.items
+    }
+    /// Keep one of each set of identical diagnostics (same severity, code, location,
+    /// message, node and parameter; notes and related locations are not compared): the
+    /// first, in place. Linear in the number of diagnostics.
+    ///
+    /// ```
+    /// use vstructc::{Diagnostic, Diagnostics};
+    /// let mut d = Diagnostics::new();
+    /// for _ in 0..3 {
+    ///     d.push(Diagnostic::info("LW020", "`specularModelType` is 0").with_node("ball"));
+    /// }
+    /// d.push(Diagnostic::info("LW020", "`specularModelType` is 0").with_node("other"));
+    /// d.dedup();
+    /// assert_eq!(d.len(), 2);
+    /// ```
+    pub fn dedup(&mut self) {
+        type Key<'k> = (
+            Severity,
+            &'k str,
+            Option<&'k Location>,
+            &'k str,
+            Option<&'k str>,
+            Option<&'k str>,
+        );
+        let keep: Vec<bool> = {
+            let mut seen: std::collections::HashSet<Key<'_>> = std::collections::HashSet::new();
+            self.items
+                .iter()
+                .map(|d| {
+                    seen.insert((
+                        d.severity,
+                        d.code.as_str(),
+                        d.location.as_ref(),
+                        d.message.as_str(),
+                        d.node.as_deref(),
+                        d.param.as_deref(),
+                    ))
+                })
+                .collect()
+        };
+        let mut keep = keep.into_iter();
+        self.items.retain(|_| keep.next().unwrap_or(true));
+    }
+}
+
+/// The names among `candidates` that `name` is most likely a misspelling of, best first, at
+/// most three of them, all of the best kind found: names equal but for letter
+/// case, else names within an edit
+/// distance (insertions, deletions, substitutions and swaps of neighbours, ignoring case) of
+/// a quarter of `name`'s length (at least 1, at most 3), else names that begin with `name`
+/// when it has at least 3 characters. Ties keep the candidates' order.
+///
+/// ```
+/// use vstructc::diag::closest_names;
+/// let names = ["diffuseColor", "diffuseGain", "specularColor"];
+/// assert_eq!(closest_names("diffuseColour", names), ["diffuseColor"]);
+/// assert_eq!(closest_names("DIFFUSEGAIN", names), ["diffuseGain"]);
+/// assert_eq!(closest_names("pxrlayer", ["PxrLayerMixer", "PxrLayer"]), ["PxrLayer"]);
+/// assert_eq!(closest_names("diffuse", names), ["diffuseGain", "diffuseColor"]);
+/// assert!(closest_names("roughness", names).is_empty());
+/// ```
+pub fn closest_names<'a>(
+    name: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Vec<&'a str> {
+    let lower = name.to_lowercase();
+    let len = lower.chars().count();
+    let max = (len / 4).clamp(1, 3);
+    // (rank, distance, order): rank 0 equal but for case, 1 within the distance, 2 a prefix.
+    let mut found: Vec<(u8, usize, usize, &'a str)> = Vec::new();
+    for (i, c) in candidates.into_iter().enumerate() {
+        if c == name {
+            continue;
+        }
+        let cl = c.to_lowercase();
+        if cl == lower {
+            found.push((0, 0, i, c));
+            continue;
+        }
+        // Lengths differing by more than the bound cannot be within it.
+        let clen = cl.chars().count();
+        if clen.abs_diff(len) <= max {
+            let d = strsim::osa_distance(&lower, &cl);
+            if d <= max {
+                found.push((1, d, i, c));
+                continue;
+            }
+        }
+        if len >= 3 && cl.starts_with(&lower) {
+            found.push((2, clen - len, i, c));
+        }
+    }
+    found.sort_unstable();
+    // Only the best kind of match: a name equal but for case hides near ones, a near one
+    // hides longer names it begins.
+    if let Some(&(best, ..)) = found.first() {
+        found.retain(|f| f.0 == best);
+    }
+    found.truncate(SUGGESTIONS);
+    found.into_iter().map(|(.., c)| c).collect()
+}
+
+/// How many names [`closest_names`] suggests at most.
+const SUGGESTIONS: usize = 3;
+
+/// `names` as the end of a message: `"; did you mean `a`?"`, `"; did you mean `a` or `b`?"`,
+/// or nothing for no names.
+///
+/// ```
+/// use vstructc::diag::did_you_mean;
+/// assert_eq!(did_you_mean(&["coating"]), "; did you mean `coating`?");
+/// assert_eq!(did_you_mean(&["a", "b", "c"]), "; did you mean `a`, `b` or `c`?");
+/// assert_eq!(did_you_mean(&[]), "");
+/// ```
+pub fn did_you_mean(names: &[&str]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => format!("; did you mean `{one}`?"),
+        [init @ .., last] => {
+            let init: Vec<String> = init.iter().map(|n| format!("`{n}`")).collect();
+            format!("; did you mean {} or `{last}`?", init.join(", "))
+        }
     }
 }
 

@@ -76,7 +76,9 @@ pub struct PipelineOutput {
 
 /// Read `bytes` (named `name` in diagnostics) as a network in `format`, resolve it against
 /// `registry` and lower the materials `options` asks for. Diagnostics of every stage
-/// (the reader's, the registry's, resolution's and lowering's) go to `diags`, sorted; a
+/// (the reader's, the registry's, resolution's and lowering's) go to `diags`, sorted, each
+/// identical one once ([`Diagnostics::dedup`]; the reader's RB019 is left out: resolution's
+/// VS020 reports unknown node types for every format); a
 /// material that cannot be lowered is an error diagnostic there, not a failure. Fails when
 /// the input cannot be read ([`Error::Input`], [`Error::Limit`]) or
 /// [`Lowering::Only`] names no material ([`Error::Usage`]).
@@ -92,7 +94,12 @@ pub fn run(
         strict_rib: options.strict_rib,
         limits: options.resolve.limits,
     };
-    let mut network = read_network(name, bytes, format, registry, &read, diags)?;
+    let mut read_diags = Diagnostics::new();
+    let network = read_network(name, bytes, format, registry, &read, &mut read_diags);
+    // The RIB reader's RB019 (a shader not in the registry) says what resolution's definition
+    // check says for every input format (VS020, once per type, with suggestions).
+    diags.extend(read_diags.into_iter().filter(|d| d.code != "RB019"));
+    let mut network = network?;
     let res = resolve(&mut network, registry, &options.resolve);
     if options.drop_unresolved {
         drop_unresolved(&mut network, registry);
@@ -107,6 +114,7 @@ pub fn run(
         }
     };
     diags.sort();
+    diags.dedup();
     Ok(PipelineOutput { network, materials })
 }
 

@@ -56,6 +56,10 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ),
     ("IO002", "the PNG encoder failed"),
     (
+        "IO003",
+        "the input is in a format vstructc recognises but does not read: USD (`.usda`, `.usdc`, `.usdz`, or their signatures) or MaterialX (`.mtlx`, or XML with a `<materialx>` root); the message names it",
+    ),
+    (
         "IR001",
         "a closure tree built in code is malformed (the message says what is wrong)",
     ),
@@ -98,7 +102,7 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ("LW011", "a cycle among interpreted patterns"),
     (
         "LW020",
-        "a parameter is approximated or ignored although it has a visible effect (the message says how)",
+        "a parameter the network sets (or a vstruct wrote) or connects is approximated or ignored although it has a visible effect (the message says how); once per material, node and parameter",
     ),
     (
         "LW021",
@@ -196,7 +200,7 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ),
     (
         "RB019",
-        "the node's shader is not in the registry; its parameters are kept verbatim",
+        "the node's shader is not in the registry; its parameters are kept verbatim (reported by the RIB reader alone; `pipeline::run` and the commands report VS020 instead)",
     ),
     (
         "RB020",
@@ -296,7 +300,7 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ),
     (
         "VS020",
-        "a node's type is unknown to the registry: a warning when the node takes part in a head connection, an info otherwise",
+        "a node type is not in the registry (once per type, naming its nodes and the closest known ids): a warning when one of its nodes feeds an input head or the id looks like a misspelling of a known one, an info otherwise; its nodes' parameters are kept verbatim and not checked",
     ),
     (
         "VS021",
@@ -304,10 +308,14 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ),
     (
         "VS022",
-        "`--no-conditions` connected a member whose conditional is `set`, `copy`, `ignore` or unparsable",
+        "`--no-conditions` connected members whose conditional is `set`, `copy`, `ignore` or unparsable: one info with their number and the first (with `--verbose`, a note for each)",
     ),
     (
         "VS023",
         "a `set` of a number outside the 32-bit integer range into an `int` member; the value was saturated",
+    ),
+    (
+        "VS024",
+        "an authored parameter is not an input (or input head) of its node's definition, or a connection names an output the upstream definition does not declare; the message gives the closest declared names (`__` names are the renderer's and not checked)",
     ),
 ];

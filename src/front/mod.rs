@@ -46,6 +46,63 @@ impl NetFormat {
     }
 }
 
+/// [`NetFormat::detect`], but a format that vstructc recognises and does not read is an
+/// error (IO003) that names it: USD (`.usda`, `.usdc`, `.usdz`, or their `#usda`,
+/// `PXR-USDC` and zip signatures) and MaterialX (`.mtlx`, or XML whose root is
+/// `<materialx>`), instead of the RIB reader's complaint about its first character.
+///
+/// ```
+/// use vstructc::front::{NetFormat, detect_format};
+/// assert_eq!(detect_format("a.rib", b"Bxdf").unwrap(), NetFormat::Rib);
+/// let e = detect_format("look.usda", b"#usda 1.0\n").unwrap_err();
+/// assert_eq!(e.code(), Some("IO003"));
+/// assert!(e.to_string().contains("USD input is not supported yet"), "{e}");
+/// assert!(detect_format("<stdin>", b"  #usda 1.0").is_err());
+/// assert!(detect_format("<stdin>", b"PXR-USDC").is_err());
+/// let e = detect_format("<stdin>", b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\">").unwrap_err();
+/// assert!(e.to_string().contains("MaterialX"), "{e}");
+/// ```
+pub fn detect_format(name: &str, bytes: &[u8]) -> Result<NetFormat, Error> {
+    let ext = std::path::Path::new(name)
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let head = &bytes[..bytes.len().min(1024)];
+    let text = head.trim_ascii_start();
+    let usd = match ext.as_deref() {
+        Some(e @ ("usda" | "usdc" | "usdz" | "usd")) => Some(format!("`.{e}`")),
+        _ if text.starts_with(b"#usda") => Some("USD text (`#usda`)".to_string()),
+        _ if bytes.starts_with(b"PXR-USDC") => Some("binary USD (`PXR-USDC`)".to_string()),
+        _ if bytes.starts_with(b"PK\x03\x04") => Some("a zip archive, as USDZ is".to_string()),
+        _ => None,
+    };
+    let unsupported = |message: String| -> Result<NetFormat, Error> {
+        Err(crate::diag::Diagnostic::error("IO003", message)
+            .at(crate::diag::Location::file(name))
+            .into())
+    };
+    if let Some(what) = usd {
+        return unsupported(format!(
+            "USD input is not supported yet ({what}); vstructc reads RIB and the JSON network \
+             form"
+        ));
+    }
+    let materialx = if ext.as_deref() == Some("mtlx") {
+        Some("`.mtlx`")
+    } else if text.starts_with(b"<") && memchr::memmem::find(head, b"<materialx").is_some() {
+        Some("XML with a `<materialx>` root")
+    } else {
+        None
+    };
+    if let Some(what) = materialx {
+        return unsupported(format!(
+            "MaterialX input is not supported ({what}); vstructc reads RIB and the JSON \
+             network form"
+        ));
+    }
+    Ok(NetFormat::detect(name, bytes))
+}
+
 /// How [`read_network`] reads.
 #[derive(Debug, Clone, Default)]
 pub struct ReadOptions {

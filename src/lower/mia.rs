@@ -14,7 +14,7 @@
 //! report LW020 when they differ from their defaults.
 
 use super::{Graph, Lower};
-use crate::diag::{Diagnostic, Error};
+use crate::diag::Error;
 use crate::ir::{Cl, DielectricMode, FrameSlot, Leaf, LeafKind, OpCode, Reg, WardVariant};
 use crate::types::{BaseType, Value};
 
@@ -201,13 +201,8 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let root = cx.b.mix(clear, body, cut);
 
     if cx.static_scalar(n, "refl_hl_only", 0.0) != Some(0.0) {
-        cx.diag(
-            n,
-            Diagnostic::info(
-                "LW020",
-                "`refl_hl_only`: the reflection lobe stays in the BSDF; excluding it from environment albedo is left to the renderer",
-            ),
-        );
+        let message = "`refl_hl_only`: the reflection lobe stays in the BSDF; excluding it from environment albedo is left to the renderer";
+        cx.approximated(n, "refl_hl_only", message);
     }
     for (name, dflt) in [
         ("hl_vs_refl_balance", 1.0),
@@ -224,13 +219,8 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
             .value(n, name)
             .is_some_and(|v| crate::ir::value_to_vec3(v).x != dflt)
         {
-            cx.diag(
-                n,
-                Diagnostic::info(
-                    "LW020",
-                    format!("`{name}` has no BSDF effect and is ignored"),
-                ),
-            );
+            let message = format!("`{name}` has no BSDF effect and is ignored");
+            cx.approximated(n, name, message);
         }
     }
     Ok(root)

@@ -324,6 +324,8 @@ pub(crate) struct Lower<'a, G: Graph> {
     pub(crate) mixer_gates: FxHashMap<(G::Id, &'static str), MixerGates>,
     visiting: Vec<G::Id>,
     warned_no_def: FxHashSet<String>,
+    /// LW020 already reported in this material: (node, parameter).
+    noted: FxHashSet<(G::Id, String)>,
 }
 
 impl<'a, G: Graph> Lower<'a, G> {
@@ -346,6 +348,7 @@ impl<'a, G: Graph> Lower<'a, G> {
             mixer_gates: FxHashMap::default(),
             visiting: Vec::new(),
             warned_no_def: FxHashSet::default(),
+            noted: FxHashSet::default(),
         }
     }
 
@@ -358,6 +361,20 @@ impl<'a, G: Graph> Lower<'a, G> {
         self.last_definition
             .as_ref()
             .and_then(|(_, d)| d.as_deref())
+    }
+
+    /// LW020 (an info): parameter `param` of node `n` is approximated or ignored, as
+    /// `message` says. Reported only when the parameter is authored (a value, which
+    /// resolution may have written, or a connection), once per material, node and parameter:
+    /// a default is the recipe's to document, not a finding about the network.
+    pub(crate) fn approximated(&mut self, n: G::Id, param: &str, message: impl Into<String>) {
+        let input = self.graph.input(n, param);
+        if input.value.is_none() && input.connection.is_none() {
+            return;
+        }
+        if self.noted.insert((n, param.to_string())) {
+            self.diag(n, Diagnostic::info("LW020", message).with_param(param));
+        }
     }
 
     /// Emit a diagnostic located at node `n`.

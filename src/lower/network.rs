@@ -72,10 +72,33 @@ pub fn terminals(net: &Network, only: Option<&str>) -> Result<Vec<(String, NodeI
             }
         }
     }
-    if out.is_empty() {
-        if let Some(o) = only {
-            return Err(Error::Usage(format!("no material or terminal named `{o}`")));
+    if out.is_empty()
+        && let Some(o) = only
+    {
+        // The names `only` could have meant: material names and terminal handles.
+        let mut names: Vec<&str> = Vec::new();
+        for m in net.materials() {
+            names.push(&m.name);
+            names.extend(
+                m.terminals
+                    .iter()
+                    .filter_map(|t| t.link.upstream_node())
+                    .map(|n| net[n].handle()),
+            );
         }
+        if net.materials().is_empty() {
+            names.extend(
+                net.node_ids()
+                    .filter(|&id| super::recipe_for(net[id].shader()).is_some())
+                    .map(|id| net[id].handle()),
+            );
+        }
+        names.sort_unstable();
+        names.dedup();
+        let hint = crate::diag::did_you_mean(&crate::diag::closest_names(o, names));
+        return Err(Error::Usage(format!(
+            "no material or terminal named `{o}`{hint}"
+        )));
     }
     Ok(out)
 }

@@ -13,7 +13,7 @@
 //! `anisotropy` 1 is isotropic and maps to `a = 1 − anisotropy`.
 
 use super::{Graph, Lower, aniso_alpha};
-use crate::diag::{Diagnostic, Error};
+use crate::diag::Error;
 use crate::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, Leaf, LeafKind, Masking, OpCode, Reg, TintMode,
 };
@@ -192,10 +192,8 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         )
     };
     if cx.static_scalar(n, "trans_depth", 0.0) != Some(0.0) {
-        cx.diag(
-            n,
-            Diagnostic::info("LW020", "`trans_depth` (volume absorption) is ignored"),
-        );
+        let message = "`trans_depth` (volume absorption) is ignored";
+        cx.approximated(n, "trans_depth", message);
     }
     let ds = cx.b.mix(diff, sss, w_s);
     let under = cx.b.mix(ds, trans, w_t);

@@ -302,13 +302,9 @@ fn specular_lobe<G: Graph>(
     let (ax, ay) = aniso_alpha(&mut cx.b, rough, aniso);
     let mode = cx.static_scalar(n, &format!("{prefix}FresnelMode"), 0.0);
     if mode.is_none() {
-        cx.diag(
-            n,
-            Diagnostic::info(
-                "LW020",
-                format!("`{prefix}FresnelMode` is connected; lowered as artistic (0)"),
-            ),
-        );
+        let param = format!("{prefix}FresnelMode");
+        let message = format!("`{param}` is connected; lowered as artistic (0)");
+        cx.approximated(n, &param, message);
     }
     let fresnel = if mode == Some(1.0) {
         Fresnel::Conductor {
@@ -341,13 +337,9 @@ fn specular_lobe<G: Graph>(
     if leaf.is_some() {
         let model = cx.static_scalar(n, &format!("{prefix}ModelType"), 0.0);
         if model != Some(1.0) {
-            cx.diag(
-                n,
-                Diagnostic::info(
-                    "LW020",
-                    format!("`{prefix}ModelType` is not 1 (GGX); approximated by GGX"),
-                ),
-            );
+            let param = format!("{prefix}ModelType");
+            let message = format!("`{param}` is not 1 (GGX); approximated by GGX");
+            cx.approximated(n, &param, message);
         }
     }
     Ok((leaf, frame, fresnel))
@@ -403,10 +395,8 @@ pub(crate) fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result
         label: "diffuse".into(),
     });
     if df.is_some() && cx.static_scalar(n, "diffuseExponent", 1.0) != Some(1.0) {
-        cx.diag(
-            n,
-            Diagnostic::info("LW020", "`diffuseExponent` ≠ 1 is ignored (Lambert/EON)"),
-        );
+        let message = "`diffuseExponent` ≠ 1 is ignored (Lambert/EON)";
+        cx.approximated(n, "diffuseExponent", message);
     }
     let double = p(cx, n, "diffuseDoubleSided")?;
     let tgain = p(cx, n, "diffuseTransmitGain")?;
@@ -444,13 +434,8 @@ pub(crate) fn lower_surface<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result
     if cx.b.prog.constant(ssgain) != Some(glam::Vec3::ZERO)
         && cx.static_scalar(n, "subsurfaceType", 0.0) != Some(0.0)
     {
-        cx.diag(
-            n,
-            Diagnostic::info(
-                "LW020",
-                "`subsurfaceType` ≠ 0 is approximated by the diffuse subsurface proxy",
-            ),
-        );
+        let message = "`subsurfaceType` ≠ 0 is approximated by the diffuse subsurface proxy";
+        cx.approximated(n, "subsurfaceType", message);
     }
 
     // Glass.
@@ -585,7 +570,7 @@ fn glass_lobe<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         label: "glass".into(),
     });
     if leaf.is_some() && cx.static_scalar(n, "ignoreFresnel", 0.0).unwrap_or(0.0) != 0.0 {
-        cx.diag(n, Diagnostic::info("LW020", "`ignoreFresnel` is ignored"));
+        cx.approximated(n, "ignoreFresnel", "`ignoreFresnel` is ignored");
     }
     if !thin {
         return Ok(leaf);

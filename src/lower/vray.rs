@@ -17,7 +17,7 @@
 //! `translucency` mode is lowered as `none` (LW020).
 
 use super::{Graph, Lower, aniso_alpha};
-use crate::diag::{Diagnostic, Error};
+use crate::diag::Error;
 use crate::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, Leaf, LeafKind, Masking, Reg, SheenMasking, TintMode,
 };
@@ -108,10 +108,8 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
         }
         Some(_) => sheen_over_diffuse,
         None => {
-            cx.diag(
-                n,
-                Diagnostic::info("LW020", "`translucency` is connected; lowered as none (0)"),
-            );
+            let message = "`translucency` is connected; lowered as none (0)";
+            cx.approximated(n, "translucency", message);
             sheen_over_diffuse
         }
     };
@@ -201,22 +199,12 @@ pub fn lower<G: Graph>(cx: &mut Lower<'_, G>, n: G::Id) -> Result<Cl, Error> {
     let root = cx.b.mix(clear, body, opacity);
 
     if cx.static_scalar(n, "brdf_type", 4.0) != Some(4.0) {
-        cx.diag(
-            n,
-            Diagnostic::info(
-                "LW020",
-                "`brdf_type` other than GGX (4) is approximated by GGX",
-            ),
-        );
+        let message = "`brdf_type` other than GGX (4) is approximated by GGX";
+        cx.approximated(n, "brdf_type", message);
     }
     if cx.static_scalar(n, "hilight_glossiness_lock", 1.0) == Some(0.0) {
-        cx.diag(
-            n,
-            Diagnostic::info(
-                "LW020",
-                "unlocked `hilight_glossiness` is ignored; the reflection glossiness is used",
-            ),
-        );
+        let message = "unlocked `hilight_glossiness` is ignored; the reflection glossiness is used";
+        cx.approximated(n, "hilight_glossiness_lock", message);
     }
     Ok(root)
 }

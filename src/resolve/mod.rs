@@ -21,7 +21,9 @@ use crate::types::Value;
 use rustc_hash::FxHashMap as HashMap;
 use std::sync::Arc;
 
+mod check;
 mod plan;
+pub use check::check_definitions;
 use plan::{Decision, DecisionCache, Plan, Verdict};
 
 /// Options of one resolution run.
@@ -136,8 +138,10 @@ pub struct MemberEvent {
 
 /// Resolve every vstruct connection of `net` against `registry`.
 ///
-/// Nodes are visited in sorted order; each node's input heads are expanded after the
-/// upstream node has been resolved completely. Afterwards authored values on input heads are
+/// The network is first checked against its definitions ([`check_definitions`]: undeclared
+/// parameters and outputs, VS024; unknown node types, VS020). Nodes are visited in sorted
+/// order; each node's input heads are expanded after the upstream node has been resolved
+/// completely. Afterwards authored values on input heads are
 /// removed (VS017).
 pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions) -> Resolution {
     if let Err(e) = net.check_limits(&options.limits) {
@@ -147,6 +151,7 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         return out;
     }
     let order = net.nodes_sorted();
+    let checked = check::check_in_order(net, registry, &order);
     // Resolution edits connections only; the graph's edges are rebuilt once at the end
     // (removing them one by one is quadratic for nodes with many connections).
     net.suspend_edges();
@@ -156,10 +161,14 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         net,
         registry,
         options,
-        out: Resolution::default(),
+        out: Resolution {
+            diagnostics: checked,
+            ..Resolution::default()
+        },
         visited: NodeSet::new(bound),
         on_stack: NodeSet::new(bound),
         types: HashMap::default(),
+        unconditioned: None,
         memo: HashMap::default(),
         plans: HashMap::default(),
         decisions: DecisionCache::default(),
@@ -168,6 +177,7 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
         slots: Vec::new(),
     };
     r.run();
+    r.report_unconditioned();
     r.remove_head_values();
     let out = r.out;
     net.restore_edges();
@@ -201,6 +211,9 @@ struct Resolver<'a> {
     on_stack: NodeSet,
     /// Per shader id: its definition and tables, looked up in the registry once per run.
     types: HashMap<String, TypeInfo>,
+    /// `--no-conditions`: how many members were connected without evaluating a conditional
+    /// that does not always connect, and the first one (VS022 reports them once).
+    unconditioned: Option<(usize, String, Option<Location>)>,
     /// Scratch while a [`Decision`] is computed: the choice of each conditional evaluated so
     /// far, keyed by the shared parse result, so members with the same expression text share
     /// one evaluation (exact because expanding D never changes U; when D is U nothing is
@@ -308,12 +321,8 @@ impl Resolver<'_> {
             return None;
         }
         let shader = self.net[node].shader().to_string();
-        let Some(tables) = self.tables(&shader) else {
-            if self.definition(&shader).is_none() {
-                self.unknown_type_info(node, &shader);
-            }
-            return None;
-        };
+        // An unknown type was reported by the definition check (VS020).
+        let tables = self.tables(&shader)?;
         // The connected input heads in byte-wise order. A type has a few heads and a node
         // many parameters, so the heads are checked rather than the parameters scanned.
         let mut heads: Vec<String> = tables
@@ -383,9 +392,6 @@ impl Resolver<'_> {
                 let shader = self.net[*up].shader().to_string();
                 match self.tables(&shader) {
                     None => {
-                        if report {
-                            self.unknown_type_warning(*up, &shader, node, head);
-                        }
                         format!("the type `{shader}` of `{}` is unknown", self.name(*up))
                     }
                     Some(t) if !t.is_output_head(out) => {
@@ -901,17 +907,57 @@ impl Resolver<'_> {
         self.push(d, ctx.node, Some(ctx.member));
     }
 
+    /// VS022: a note per member with `--verbose`, and one info for the whole run
+    /// ([`Resolver::report_unconditioned`]).
     fn no_conditions_info(&mut self, ctx: &MemberCtx<'_>, output: &str, entry: &CondEntry) {
-        let d = Diagnostic::info(
+        if let Some((count, ..)) = self.unconditioned.as_mut() {
+            *count += 1;
+            if !self.options.verbose {
+                return;
+            }
+        }
+        let hop = format!(
+            "{} ← {}",
+            self.plug(ctx.node, ctx.member),
+            self.plug(ctx.source.upstream, output)
+        );
+        let d = Diagnostic::note(
             "VS022",
             format!(
-                "{} ← {} connected without evaluating its conditional {:?} (--no-conditions)",
-                self.plug(ctx.node, ctx.member),
-                self.plug(ctx.source.upstream, output),
+                "{hop} connected without evaluating its conditional {:?} (--no-conditions)",
                 entry.source.text
             ),
         );
-        self.push(d, ctx.node, Some(ctx.member));
+        let d = self.located(d, ctx.node, Some(ctx.member));
+        if self.unconditioned.is_none() {
+            self.unconditioned = Some((1, hop, d.location.clone()));
+        }
+        if self.options.verbose {
+            self.out.diagnostics.push(d);
+        }
+    }
+
+    /// VS022 once: how many members `--no-conditions` connected without evaluating their
+    /// conditional, at the first of them.
+    fn report_unconditioned(&mut self) {
+        let Some((count, first, location)) = self.unconditioned.take() else {
+            return;
+        };
+        let mut d = Diagnostic::info(
+            "VS022",
+            format!(
+                "--no-conditions: {count} member{} connected without evaluating a conditional \
+                 that does not always connect (the first: {first}){}",
+                if count == 1 { " was" } else { "s were" },
+                if self.options.verbose {
+                    ""
+                } else {
+                    "; --verbose lists them"
+                }
+            ),
+        );
+        d.location = location;
+        self.out.diagnostics.push(d);
     }
 
     fn comparison_warning(
@@ -1004,29 +1050,6 @@ impl Resolver<'_> {
         self.push(d, last.node, Some(head));
     }
 
-    fn unknown_type_info(&mut self, node: NodeId, shader: &str) {
-        let d = Diagnostic::info(
-            "VS020",
-            format!(
-                "node type `{shader}` of {} is unknown to the registry",
-                self.name(node)
-            ),
-        );
-        self.push(d, node, None);
-    }
-
-    fn unknown_type_warning(&mut self, up: NodeId, shader: &str, node: NodeId, head: &str) {
-        let d = Diagnostic::warning(
-            "VS020",
-            format!(
-                "node type `{shader}` of {} is unknown to the registry, but it feeds the head {}",
-                self.name(up),
-                self.plug(node, head)
-            ),
-        );
-        self.push(d, up, None);
-    }
-
     // ----- helpers -------------------------------------------------------------------------
 
     fn name(&self, node: NodeId) -> String {
@@ -1048,8 +1071,15 @@ impl Resolver<'_> {
         }
     }
 
-    /// Attach the most precise location known: the parameter's, else the node's.
+    /// Attach the most precise location known (the parameter's, else the node's) and push.
     fn push(&mut self, d: Diagnostic, node: NodeId, param: Option<&str>) {
+        let d = self.located(d, node, param);
+        self.out.diagnostics.push(d);
+    }
+
+    /// `d` with the most precise location known (the parameter's, else the node's), the
+    /// node and the parameter.
+    fn located(&self, d: Diagnostic, node: NodeId, param: Option<&str>) -> Diagnostic {
         let n = &self.net[node];
         let loc: Option<Location> = param
             .and_then(|p| n.param(p))
@@ -1063,7 +1093,7 @@ impl Resolver<'_> {
         if let Some(p) = param {
             d = d.with_param(p);
         }
-        self.out.diagnostics.push(d);
+        d
     }
 
     fn event(&self, ctx: &MemberCtx<'_>, matched: Option<(String, String)>) -> MemberEvent {

@@ -6,6 +6,7 @@ mod common;
 
 mod cond;
 mod determinism;
+mod diagnostics;
 mod eval;
 mod info;
 mod render;

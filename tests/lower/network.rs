@@ -213,3 +213,43 @@ fn out_of_range_constants_are_clamped_with_lw022() {
     let plain = vstructc(&["compile", "examples/override.rib"]);
     assert!(!String::from_utf8_lossy(&plain.stderr).contains("LW022"));
 }
+
+/// LW020 is about what the network says: a parameter left at its default is the recipe's
+/// documented choice (docs/materials.md), not a finding; a value the network sets is
+/// reported once per material, node and parameter.
+#[test]
+fn lw020_only_for_values_the_network_sets() {
+    use vstructc::front::NetFormat;
+    use vstructc::pipeline::{Lowering, PipelineOptions, run};
+    let reg = Registry::embedded();
+    let lw020 = |rib: &str| {
+        let mut diags = Diagnostics::new();
+        let options = PipelineOptions {
+            lowering: Lowering::All,
+            ..Default::default()
+        };
+        let out = run(
+            "m.rib",
+            rib.as_bytes(),
+            NetFormat::Rib,
+            &reg,
+            &options,
+            &mut diags,
+        );
+        assert_eq!(out.unwrap().materials.len(), 2);
+        diags
+            .with_code("LW020")
+            .map(|d| {
+                let node = d.node.clone().unwrap_or_default();
+                (node, d.param.clone().unwrap_or_default())
+            })
+            .collect::<Vec<_>>()
+    };
+    let unset = r#"Bxdf "PxrSurface" "a" "color specularFaceColor" [0.5 0.5 0.5]
+Bxdf "PxrSurface" "b" "color specularFaceColor" [0.5 0.5 0.5]
+"#;
+    assert_eq!(lw020(unset), []);
+    let set = unset.replace("0.5]", "0.5] \"int specularModelType\" [0]");
+    let pairs = |n: &str| (n.to_string(), "specularModelType".to_string());
+    assert_eq!(lw020(&set), [pairs("a"), pairs("b")]);
+}

@@ -6,6 +6,7 @@
 mod common;
 
 mod energy;
+mod examples;
 mod leaves_chi2;
 mod leaves_furnace;
 mod material_chi2;

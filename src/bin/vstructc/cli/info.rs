@@ -9,6 +9,7 @@ use super::input::registry_for;
 use super::{CommonOptions, report};
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use vstructc::diag::{closest_names, did_you_mean};
 use vstructc::registry::{Definition, Property, Registry, VstructTables};
 
 /// Arguments of `vstructc info`.
@@ -33,8 +34,9 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
         return status;
     }
     let Some(def) = def else {
-        eprintln_quiet!("error: unknown shader `{}`", args.shader);
         let ids = registry.ids();
+        let hint = did_you_mean(&closest_names(&args.shader, ids.iter().copied()));
+        eprintln_quiet!("error: unknown shader `{}`{hint}", args.shader);
         if !ids.is_empty() && ids.len() <= 50 {
             eprintln_quiet!("  known shaders: {}", ids.join(", "));
         }

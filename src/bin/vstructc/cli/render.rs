@@ -8,7 +8,10 @@
 //!
 //! Output: `-o PATH` (`-` for standard output); without `-o`, `<input stem>.png` (`.pfm`
 //! with `--pfm`) in the current directory, `preview.png` for standard input. A path ending
-//! in `.pfm` selects PFM. The file is written atomically (temporary file, then rename).
+//! in `.pfm` selects PFM, and so does `--pfm` whatever the extension; another extension than
+//! `.png` or `.pfm` without `--pfm` (`.exr`, …), or `--pfm` with `.png`, is a usage error
+//! found before any work. The file is written atomically
+//! (temporary file, then rename).
 //!
 //! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
 //! rows at a time and each row is encoded into the output as it is finished
@@ -112,8 +115,49 @@ fn write_sheet(
     result
 }
 
+/// The image format of the output file `out`: `.pfm` or `--pfm` is PFM (`--pfm` whatever
+/// the extension, but `.png`), `.png` or no extension PNG; another extension without `--pfm`
+/// (`.exr`, …), or `--pfm` with `.png`, is a usage error.
+fn image_format(out: &Path, pfm: bool) -> Result<ImageFormat, String> {
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match (ext.as_deref(), pfm) {
+        (Some("png"), true) => {
+            Err("--pfm conflicts with the output file's extension `.png`".into())
+        }
+        (Some("pfm"), _) | (_, true) => Ok(ImageFormat::Pfm),
+        (Some("png") | None, false) => Ok(ImageFormat::Png),
+        (Some(e), false) => Err(format!(
+            "`.{e}` output is not supported: `render` writes PNG (`.png`) or linear PFM (`.pfm`, \
+             or any name with `--pfm`)"
+        )),
+    }
+}
+
 /// Run `vstructc render`.
 pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
+    let out = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(&args.source.input, args.pfm));
+    let format = if out.as_os_str() == "-" {
+        Ok(if args.pfm {
+            ImageFormat::Pfm
+        } else {
+            ImageFormat::Png
+        })
+    } else {
+        image_format(&out, args.pfm)
+    };
+    let format = match format {
+        Ok(f) => f,
+        Err(msg) => {
+            eprintln_quiet!("error: {msg}");
+            return ExitCode::from(2);
+        }
+    };
     let (materials, diags) = match load_materials(&args.source, common) {
         Ok(x) => x,
         Err(status) => return status,
@@ -180,19 +224,6 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
     let sheet = match ContactSheet::new(balls, base.env) {
         Ok(s) => s,
         Err(e) => return usage(e.to_string()),
-    };
-    let out = args
-        .output
-        .clone()
-        .unwrap_or_else(|| default_output(&args.source.input, args.pfm));
-    let pfm = args.pfm
-        || out
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("pfm"));
-    let format = if pfm {
-        ImageFormat::Pfm
-    } else {
-        ImageFormat::Png
     };
     let show = std::io::stderr().is_terminal();
     if let Err(e) = stream_output(Some(&out), |w| write_sheet(&sheet, format, w, show)) {

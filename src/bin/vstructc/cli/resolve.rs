@@ -18,7 +18,8 @@ pub struct ResolveArgs {
     /// `enableConditions = false`).
     #[arg(long)]
     pub no_conditions: bool,
-    /// Output format (default: the input's).
+    /// Output format (default: the extension of `-o` when it is `.rib` or `.json`, else the
+    /// input's). A `-o` extension naming the other format is a usage error.
     #[arg(long, value_parser = format_parser())]
     pub format: Option<NetFormat>,
     /// Write to FILE (atomically) instead of standard output.
@@ -33,8 +34,55 @@ pub struct ResolveArgs {
     pub drop_unresolved: bool,
 }
 
+/// The output format `--format` and the extension of `-o` ask for (`None`: the input's), or
+/// why they cannot be honoured.
+pub fn output_format(
+    format: Option<NetFormat>,
+    output: Option<&std::path::Path>,
+) -> Result<Option<NetFormat>, String> {
+    let ext = output
+        .and_then(|p| p.extension())
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let by_ext = match ext.as_deref() {
+        Some("rib") => Some(NetFormat::Rib),
+        Some("json") => Some(NetFormat::Json),
+        Some(e @ ("usda" | "usdc" | "usdz" | "usd")) => {
+            return Err(format!(
+                "`.{e}` output: USD output is not supported yet (use .rib or .json)"
+            ));
+        }
+        Some("mtlx") => {
+            return Err(
+                "`.mtlx` output: MaterialX output is not supported (use .rib or .json)".into(),
+            );
+        }
+        _ => None,
+    };
+    let name = |f: NetFormat| match f {
+        NetFormat::Rib => "rib",
+        NetFormat::Json => "json",
+    };
+    match (format, by_ext) {
+        (Some(f), Some(e)) if f != e => Err(format!(
+            "--format {} conflicts with the output file's extension `.{}`",
+            name(f),
+            name(e)
+        )),
+        (Some(f), _) => Ok(Some(f)),
+        (None, e) => Ok(e),
+    }
+}
+
 /// Run `vstructc resolve`.
 pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
+    let format = match output_format(args.format, args.output.as_deref()) {
+        Ok(f) => f,
+        Err(msg) => {
+            eprintln_quiet!("error: {msg}");
+            return ExitCode::from(2);
+        }
+    };
     let ran = match run_pipeline(
         &args.input,
         args.no_conditions,
@@ -52,7 +100,7 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     }
     let (loaded, network) = (&ran.loaded, &ran.output.network);
     let output = args.output.as_deref();
-    let written = match args.format.unwrap_or(loaded.format) {
+    let written = match format.unwrap_or(loaded.format) {
         NetFormat::Json => stream_output(output, |out| write_json_to(network, out)),
         NetFormat::Rib => {
             // Streamed: the untouched parts of a large scene are copied from the source

@@ -1,0 +1,206 @@
+//! Diagnostics a user reads: typos named with the declared name, unknown shaders with the
+//! known one, and no flood for what the user asked for or did not set.
+
+use std::process::{Command, Output};
+
+fn vstructc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vstructc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("VSTRUCTC_ARGS_PATH")
+        .output()
+        .unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn no_conditions_on_the_layered_example_is_reported_in_one_diagnostic() {
+    let out = vstructc(&[
+        "resolve",
+        "--no-conditions",
+        "examples/layered.rib",
+        "-o",
+        "/dev/null",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let err = stderr(&out);
+    assert!(err.lines().count() <= 3, "{err}");
+    assert!(
+        err.contains("info[VS022]: --no-conditions: 227 members"),
+        "{err}"
+    );
+}
+
+#[test]
+fn compiling_the_bench_scene_prints_at_most_20_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.rib");
+    std::fs::write(&scene, vstructc::network::testgen::layered_scene(10_000)).unwrap();
+    let out = vstructc(&["compile", "--emit", "lobes", scene.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.lines().count() <= 20, "{err}");
+}
+
+#[test]
+fn a_typo_is_a_warning_that_names_the_parameter_meant() {
+    let dir = tempfile::tempdir().unwrap();
+    let rib = dir.path().join("typo.rib");
+    std::fs::write(
+        &rib,
+        "Bxdf \"PxrSurface\" \"ball\" \"color diffuseColour\" [0.8 0.2 0.2]\n",
+    )
+    .unwrap();
+    let out = vstructc(&["compile", rib.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    let err = stderr(&out);
+    assert!(
+        err.starts_with(
+            "warning[VS024]: ball sets `diffuseColour`, which `PxrSurface` does not declare \
+             as an input; did you mean `diffuseColor`?"
+        ),
+        "{err}"
+    );
+    let denied = vstructc(&["--deny-warnings", "compile", rib.to_str().unwrap()]);
+    assert_eq!(denied.status.code(), Some(1));
+}
+
+#[test]
+fn unknown_shader_and_material_names_get_suggestions() {
+    let out = vstructc(&["info", "pxrlayer"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).starts_with("error: unknown shader `pxrlayer`; did you mean `PxrLayer`?"),
+        "{}",
+        stderr(&out)
+    );
+    let out = vstructc(&[
+        "compile",
+        "--material",
+        "layeredMaterail",
+        "examples/layered.rib",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains(
+            "error: no material or terminal named `layeredMaterail`; did you mean \
+             `layeredMaterial`?"
+        ),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// A scratch folder holding `files`.
+fn files(files: &[(&str, &[u8])]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in files {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    dir
+}
+
+#[test]
+fn usd_and_materialx_inputs_are_named_not_misread() {
+    let dir = files(&[
+        ("look.usda", b"#usda 1.0\n(\n)\ndef Material \"red\" {}\n"),
+        ("look.usdc", b"PXR-USDC\0\0\0\0"),
+        (
+            "red.mtlx",
+            b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\"/>\n",
+        ),
+        (
+            "red.xml",
+            b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\"/>\n",
+        ),
+    ]);
+    let mut shown = Vec::new();
+    for name in ["look.usda", "look.usdc", "red.mtlx", "red.xml"] {
+        let path = dir.path().join(name);
+        for format in ["human", "json"] {
+            let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
+                .args(["--diag-format", format, "resolve", name])
+                .current_dir(dir.path())
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(1), "{name}: {}", stderr(&out));
+            let err = stderr(&out);
+            assert!(!err.contains("RB004"), "{err}");
+            shown.push(err);
+        }
+        assert!(path.exists());
+    }
+    let text = shown.concat();
+    assert_eq!(
+        text.matches("USD input is not supported yet").count(),
+        4,
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("MaterialX input is not supported").count(),
+        4,
+        "{text}"
+    );
+    insta::assert_snapshot!(text);
+}
+
+#[test]
+fn the_output_extension_picks_the_output_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("out.json");
+    let out = vstructc(&[
+        "resolve",
+        "examples/chain.rib",
+        "-o",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&json).unwrap();
+    serde_json::from_str::<serde_json::Value>(&text).expect("JSON was written");
+    let rib = dir.path().join("back.rib");
+    let out = vstructc(&[
+        "resolve",
+        json.to_str().unwrap(),
+        "-o",
+        rib.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        std::fs::read_to_string(&rib)
+            .unwrap()
+            .contains("Bxdf \"PxrLayerSurface\"")
+    );
+    // A contradiction, or a format that cannot be written, is a usage error before any work.
+    let conflict = dir.path().join("conflict.json");
+    let out = vstructc(&[
+        "resolve",
+        "--format",
+        "rib",
+        "examples/chain.rib",
+        "-o",
+        conflict.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("--format rib conflicts"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!conflict.exists());
+    let usd = dir.path().join("out.usda");
+    let out = vstructc(&["resolve", "examples/chain.rib", "-o", usd.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!usd.exists());
+    let exr = dir.path().join("ball.exr");
+    let out = vstructc(&["render", "examples/chain.rib", "-o", exr.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("`.exr` output is not supported"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!exr.exists());
+}
