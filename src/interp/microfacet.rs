@@ -725,17 +725,7 @@ impl PreparedMicrofacetR {
     }
 }
 
-/// Which hemispheres a dielectric lobe covers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum DielectricMode {
-    /// Reflection only (layerable).
-    R,
-    /// Transmission only.
-    T,
-    /// Both (Fresnel-weighted choice when sampling).
-    #[default]
-    RT,
-}
+pub use crate::ir::closure::DielectricMode;
 
 /// GGX dielectric interface with exact Fresnel. Transmission uses the radiance
 /// convention of Walter et al. 2007.

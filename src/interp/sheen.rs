@@ -9,15 +9,7 @@ use super::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
-/// Masking of the Conty–Kulla sheen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SheenMasking {
-    /// `f = D / (4(μ_i + μ_o − μ_i μ_o))` (MaterialX, OSL BSDL; reciprocal).
-    #[default]
-    MaterialX,
-    /// The paper's fitted Λ with light-side terminator softening (non-reciprocal).
-    Original,
-}
+pub use crate::ir::closure::SheenMasking;
 
 /// Smallest Conty–Kulla roughness.
 pub(crate) const SHEEN_CK_MIN_R: f32 = 0.005;
