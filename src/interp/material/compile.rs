@@ -246,26 +246,30 @@ impl Material {
 
     /// True when the program reads no input, global or view: every point and view gets
     /// the same parameters (the program ran once, at compile time), so callers may leave
-    /// [`ShadingPoint`]'s inputs, position and `uv` unset.
+    /// [`ShadingPoint`](super::ShadingPoint)'s inputs, position and `uv` unset.
     pub fn is_uniform(&self) -> bool {
         self.const_regs.is_some()
     }
 
-    /// True when the material qualifies for the uniform-material prepare that
-    /// [`Material::prepare_batch_eval_into`] runs lane-parallel: constant registers, one
-    /// frame (the point's), a batched kernel for every leaf. (A batch with a view at or
-    /// below some lane's horizon still takes the general path.)
-    pub fn prepares_lanes(&self) -> bool {
-        self.lanes.is_some()
+    testkit_pub! {
+        /// True when the material qualifies for the uniform-material prepare that
+        /// [`Material::prepare_batch_eval_into`] runs lane-parallel: constant registers, one
+        /// frame (the point's), a batched kernel for every leaf. (A batch with a view at or
+        /// below some lane's horizon still takes the general path.)
+        fn prepares_lanes(&self) -> bool {
+            self.lanes.is_some()
+        }
     }
 
-    /// True when [`Material::prepare`] and its variants prepare a point seen from above its
-    /// surface by the fused form of the steps for uniform materials (every material that
-    /// [`Material::prepares_lanes`], unless its closure DAG needs more working slots than
-    /// the fused form keeps on the stack). The results are those of
-    /// [`Material::prepare_general_into`], bit for bit.
-    pub fn prepares_uniform(&self) -> bool {
-        self.uniform.is_some()
+    testkit_pub! {
+        /// True when [`Material::prepare`] and its variants prepare a point seen from above its
+        /// surface by the fused form of the steps for uniform materials (every material that
+        /// [`Material::prepares_lanes`], unless its closure DAG needs more working slots than
+        /// the fused form keeps on the stack). The results are those of
+        /// [`Material::prepare_general_into`], bit for bit.
+        fn prepares_uniform(&self) -> bool {
+            self.uniform.is_some()
+        }
     }
 
     /// The options.
@@ -273,7 +277,7 @@ impl Material {
         self.options
     }
 
-    /// The BSDF leaves in node order ([`ActiveLobe::leaf`] indexes this).
+    /// The BSDF leaves in node order ([`ActiveLobe::leaf`](super::ActiveLobe::leaf) indexes this).
     pub fn leaves(&self) -> &[LeafInfo] {
         &self.leaves
     }

@@ -51,22 +51,24 @@ impl Material {
     /// As [`Material::prepare_with`], overwriting `out` (whatever it held): the cheapest
     /// form when many points are prepared in a row, since a [`Prepared`] is a few KB.
     ///
-    /// Runs the version compiled for [`SCALAR_LEVEL`] when the CPU has it (see
-    /// [`super::simd`]); every version computes the same bits.
+    /// Runs the version compiled for `SCALAR_LEVEL` when the CPU has it (see
+    /// module `simd`); every version computes the same bits.
     pub fn prepare_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
         self.prepare_into_at(SCALAR_LEVEL, p, s, out);
     }
 
-    /// [`Material::prepare_into`] compiled for at most `level` (for tests and benchmarks:
-    /// every level gives the same bits).
-    pub fn prepare_into_at(
-        &self,
-        level: Level,
-        p: &ShadingPoint,
-        s: &mut Scratch,
-        out: &mut Prepared,
-    ) {
-        self.prepare_at(level, true, p, s, out);
+    testkit_pub! {
+        /// [`Material::prepare_into`] compiled for at most `level` (for tests and benchmarks:
+        /// every level gives the same bits).
+        fn prepare_into_at(
+            &self,
+            level: Level,
+            p: &ShadingPoint,
+            s: &mut Scratch,
+            out: &mut Prepared,
+        ) {
+            self.prepare_at(level, true, p, s, out);
+        }
     }
 
     /// The steps into `out`, then `eval`'s lobe packs when `packs` (and the options ask
@@ -124,29 +126,35 @@ impl Material {
         }
     }
 
-    /// All seven prepare steps into `out`: [`Material::prepare_into`] without planning `eval`'s
-    /// lobe packs, whatever [`PrepareOptions::pack_lobes`] says, so every lobe is evaluated
-    /// alone. For callers that evaluate once per prepare (the material preview), where
-    /// filling the packs costs more than it saves, and for the batched path, which reads
-    /// the lobes and never a lane's own `eval`; the results are the same to relative 1e-5.
-    ///
-    /// A uniform material ([`Material::prepares_uniform`]) seen from above its surface is
-    /// prepared by a fused form of the steps, over fixed arrays with its constants folded
-    /// in; it computes the same bits as [`Material::prepare_general_into`].
-    pub fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
-        self.prepare_unpacked_into_at(SCALAR_LEVEL, p, s, out);
+    testkit_pub! {
+        /// All seven prepare steps into `out`: [`Material::prepare_into`] without planning
+        /// `eval`'s lobe packs, whatever
+        /// [`PrepareOptions::pack_lobes`](super::PrepareOptions::pack_lobes) says, so every
+        /// lobe is evaluated alone. For callers that evaluate once per prepare (the material
+        /// preview), where filling the packs costs more than it saves, and for the batched
+        /// path, which reads the lobes and never a lane's own `eval`; the results are the same
+        /// to relative 1e-5.
+        ///
+        /// A uniform material ([`Material::prepares_uniform`]) seen from above its surface is
+        /// prepared by a fused form of the steps, over fixed arrays with its constants folded
+        /// in; it computes the same bits as [`Material::prepare_general_into`].
+        fn prepare_unpacked_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+            self.prepare_unpacked_into_at(SCALAR_LEVEL, p, s, out);
+        }
     }
 
-    /// [`Material::prepare_unpacked_into`] compiled for at most `level` (every level gives
-    /// the same bits).
-    pub fn prepare_unpacked_into_at(
-        &self,
-        level: Level,
-        p: &ShadingPoint,
-        s: &mut Scratch,
-        out: &mut Prepared,
-    ) {
-        self.prepare_at(level, false, p, s, out);
+    testkit_pub! {
+        /// [`Material::prepare_unpacked_into`] compiled for at most `level` (every level gives
+        /// the same bits).
+        fn prepare_unpacked_into_at(
+            &self,
+            level: Level,
+            p: &ShadingPoint,
+            s: &mut Scratch,
+            out: &mut Prepared,
+        ) {
+            self.prepare_at(level, false, p, s, out);
+        }
     }
 
     /// [`Material::prepare_unpacked_into`], returning the uniform plan's stamp when the
@@ -167,100 +175,102 @@ impl Material {
         None
     }
 
-    /// [`Material::prepare_unpacked_into`] by the general algorithm, whatever the material:
-    /// the program, frames from registers, and the throughput and weight passes over
-    /// [`Scratch`]'s per-node arrays. For comparisons and tests; the results are the same.
-    pub fn prepare_general_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
-        let v = p.v.normalize_or(Vec3::Z);
-        out.reset(v);
-        // The records are about to hold this algorithm's (possibly flipped) lobes.
-        out.stamp = 0;
-        // Step 1: the program, with the point's inputs (fallbacks where missing). A program
-        // of constants was run once at compile time.
-        let run = self.const_regs.is_none();
-        if run {
-            self.unpack_inputs(p.inputs, &mut s.slots);
-            let n_frames = self.ir.frames.len().max(1);
-            let mu0 = p.n.normalize_or(Vec3::Z).dot(v);
-            s.mu.clear();
-            s.mu.resize(n_frames, mu0);
-            self.run(s, self.globals(p, v));
-        }
-        // Step 2: frames and μ_o.
-        self.build_frames(p, self.regs(s), out);
-        if run && self.rerun_for_mu {
-            let mut changed = false;
-            for (k, &fi) in self.frame_ids.iter().enumerate() {
-                let fi = fi as usize;
-                let mu = out.frames[k].z.dot(v);
-                if s.mu[fi] != mu {
-                    s.mu[fi] = mu;
-                    changed = true;
+    testkit_pub! {
+        /// [`Material::prepare_unpacked_into`] by the general algorithm, whatever the material:
+        /// the program, frames from registers, and the throughput and weight passes over
+        /// [`Scratch`]'s per-node arrays. For comparisons and tests; the results are the same.
+        fn prepare_general_into(&self, p: &ShadingPoint, s: &mut Scratch, out: &mut Prepared) {
+            let v = p.v.normalize_or(Vec3::Z);
+            out.reset(v);
+            // The records are about to hold this algorithm's (possibly flipped) lobes.
+            out.stamp = 0;
+            // Step 1: the program, with the point's inputs (fallbacks where missing). A program
+            // of constants was run once at compile time.
+            let run = self.const_regs.is_none();
+            if run {
+                self.unpack_inputs(p.inputs, &mut s.slots);
+                let n_frames = self.ir.frames.len().max(1);
+                let mu0 = p.n.normalize_or(Vec3::Z).dot(v);
+                s.mu.clear();
+                s.mu.resize(n_frames, mu0);
+                self.run(s, self.globals(p, v));
+            }
+            // Step 2: frames and μ_o.
+            self.build_frames(p, self.regs(s), out);
+            if run && self.rerun_for_mu {
+                let mut changed = false;
+                for (k, &fi) in self.frame_ids.iter().enumerate() {
+                    let fi = fi as usize;
+                    let mu = out.frames[k].z.dot(v);
+                    if s.mu[fi] != mu {
+                        s.mu[fi] = mu;
+                        changed = true;
+                    }
+                }
+                if changed {
+                    self.run(s, self.globals(p, v));
+                    self.build_frames(p, &s.regs, out);
                 }
             }
-            if changed {
-                self.run(s, self.globals(p, v));
-                self.build_frames(p, &s.regs, out);
+            if self.nodes.is_empty() {
+                return;
             }
-        }
-        if self.nodes.is_empty() {
-            return;
-        }
-        // V in each frame, once (every leaf of a frame reads it).
-        let mut v_local = [Vec3::Z; MAX_LOBES];
-        for (vl, f) in v_local.iter_mut().zip(&out.frames[..out.frame_count]) {
-            *vl = f.to_local(v);
-        }
-        let regs = self.regs(s);
-        // Leaves are prepared in place, at their leaf index, in their frames: those inside
-        // some layer top first (step 3 needs their E_k(μ_o)), the others only when their
-        // weight turns out non-zero. Step 6 then compacts the array.
-        // Each prepared leaf's albedo is read once from its record and kept here for steps 3
-        // and 5.
-        let mut ready = [false; MAX_LOBES];
-        let mut albedos = [LobeAlbedo::default(); MAX_LOBES];
-        for (k, info) in self.leaves.iter().enumerate() {
-            if self.need[info.node.index()] != 0 {
-                let lobe = &mut out.lobes[k].lobe;
-                self.prepare_leaf(info, regs, v_local[info.frame_slot as usize], lobe);
-                albedos[k] = lobe.albedo();
-                ready[k] = true;
+            // V in each frame, once (every leaf of a frame reads it).
+            let mut v_local = [Vec3::Z; MAX_LOBES];
+            for (vl, f) in v_local.iter_mut().zip(&out.frames[..out.frame_count]) {
+                *vl = f.to_local(v);
             }
+            let regs = self.regs(s);
+            // Leaves are prepared in place, at their leaf index, in their frames: those inside
+            // some layer top first (step 3 needs their E_k(μ_o)), the others only when their
+            // weight turns out non-zero. Step 6 then compacts the array.
+            // Each prepared leaf's albedo is read once from its record and kept here for steps 3
+            // and 5.
+            let mut ready = [false; MAX_LOBES];
+            let mut albedos = [LobeAlbedo::default(); MAX_LOBES];
+            for (k, info) in self.leaves.iter().enumerate() {
+                if self.need[info.node.index()] != 0 {
+                    let lobe = &mut out.lobes[k].lobe;
+                    self.prepare_leaf(info, regs, v_local[info.frame_slot as usize], lobe);
+                    albedos[k] = lobe.albedo();
+                    ready[k] = true;
+                }
+            }
+            // Step 3: throughput, bottom-up, only in the modes that are read.
+            self.throughput(s, &albedos, &ready);
+            // Step 4: weights, top-down; emission and transparency accumulate.
+            let mut weights = [Vec3::ZERO; MAX_LOBES];
+            self.weights(s, &mut weights, out);
+            // Step 5: V-only terms and albedos of the weighted lobes; step 6: drop.
+            let regs = self.regs(s);
+            let threshold = self.options.drop_threshold;
+            // Step 7's albedo luminances, kept here rather than read back from the records just
+            // written (a read of fresh, differently sized stores stalls store forwarding).
+            let mut lums = [0.0f32; MAX_LOBES];
+            let mut count = 0;
+            for (k, info) in self.leaves.iter().enumerate() {
+                let w = weights[k];
+                if w == Vec3::ZERO {
+                    continue;
+                }
+                if !ready[k] {
+                    let lobe = &mut out.lobes[k].lobe;
+                    self.prepare_leaf(info, regs, v_local[info.frame_slot as usize], lobe);
+                    albedos[k] = lobe.albedo();
+                }
+                let albedo = Albedo::scaled(&albedos[k], w);
+                let a_max = albedo.reflect + albedo.transmit.max(albedo.transmit_radiance);
+                if threshold > 0.0 && a_max.max_element() <= threshold {
+                    continue;
+                }
+                lums[count] = out.keep(count, k, w, albedo, info.frame_slot);
+                out.flipped_any |= out.lobes[count].lobe.is_flipped();
+                count += 1;
+            }
+            out.count = count;
+            // Step 7: selection probabilities.
+            out.select(&lums);
         }
-        // Step 3: throughput, bottom-up, only in the modes that are read.
-        self.throughput(s, &albedos, &ready);
-        // Step 4: weights, top-down; emission and transparency accumulate.
-        let mut weights = [Vec3::ZERO; MAX_LOBES];
-        self.weights(s, &mut weights, out);
-        // Step 5: V-only terms and albedos of the weighted lobes; step 6: drop.
-        let regs = self.regs(s);
-        let threshold = self.options.drop_threshold;
-        // Step 7's albedo luminances, kept here rather than read back from the records just
-        // written (a read of fresh, differently sized stores stalls store forwarding).
-        let mut lums = [0.0f32; MAX_LOBES];
-        let mut count = 0;
-        for (k, info) in self.leaves.iter().enumerate() {
-            let w = weights[k];
-            if w == Vec3::ZERO {
-                continue;
-            }
-            if !ready[k] {
-                let lobe = &mut out.lobes[k].lobe;
-                self.prepare_leaf(info, regs, v_local[info.frame_slot as usize], lobe);
-                albedos[k] = lobe.albedo();
-            }
-            let albedo = Albedo::scaled(&albedos[k], w);
-            let a_max = albedo.reflect + albedo.transmit.max(albedo.transmit_radiance);
-            if threshold > 0.0 && a_max.max_element() <= threshold {
-                continue;
-            }
-            lums[count] = out.keep(count, k, w, albedo, info.frame_slot);
-            out.flipped_any |= out.lobes[count].lobe.is_flipped();
-            count += 1;
-        }
-        out.count = count;
-        // Step 7: selection probabilities.
-        out.select(&lums);
     }
 
     pub(super) fn regs<'s>(&'s self, s: &'s Scratch) -> &'s [Vec3] {

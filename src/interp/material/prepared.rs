@@ -13,7 +13,7 @@ use glam::Vec3;
 
 /// A lobe of a prepared material: the leaf's prepared state with its weight, albedo and
 /// selection probability (the leaf-level
-/// [`PreparedLobe`] is the `lobe` field).
+/// `PreparedLobe` is the `lobe` field).
 #[derive(Debug, Clone, Copy)]
 pub struct ActiveLobe {
     /// The leaf with its view-only terms, in its own frame.
@@ -26,7 +26,7 @@ pub struct ActiveLobe {
     pub prob: f32,
     /// Index of the frame in the prepared frame list.
     pub frame: u8,
-    /// Index of the leaf in [`Material::leaves`].
+    /// Index of the leaf in [`Material::leaves`](super::Material::leaves).
     pub leaf: u8,
 }
 
@@ -97,7 +97,8 @@ impl Prepared {
         self.plan.clear();
     }
 
-    /// An empty preparation (no lobes), e.g. as the target of [`Material::prepare_into`].
+    /// An empty preparation (no lobes), e.g. as the target of
+    /// [`Material::prepare_into`](super::Material::prepare_into).
     pub fn new() -> Prepared {
         Prepared::empty(Vec3::Z)
     }
@@ -197,27 +198,32 @@ impl Prepared {
         self.v
     }
 
-    /// How many of [`Prepared::lobes`] [`Prepared::eval`] runs in lobe packs (several
-    /// lobes of one family side by side, see [`PrepareOptions::pack_lobes`]); the others
-    /// are evaluated one by one. For inspection and tests.
-    pub fn packed_lobe_count(&self) -> usize {
-        self.count - self.plan.solo(self.count).len()
+    testkit_pub! {
+        /// How many of [`Prepared::lobes`] [`Prepared::eval`] runs in lobe packs (several
+        /// lobes of one family side by side, see
+        /// [`PrepareOptions::pack_lobes`](super::PrepareOptions::pack_lobes)); the others are
+        /// evaluated one by one. For inspection and tests.
+        fn packed_lobe_count(&self) -> usize {
+            self.count - self.plan.solo(self.count).len()
+        }
     }
 
     /// `Σ_k w_k ⊙ f_k(V, L)·|μ_i|` and the mixture pdf at world direction `l`. Delta lobes
     /// contribute nothing.
     ///
-    /// Runs the version compiled for [`SCALAR_LEVEL`] when the CPU has it (see
-    /// [`super::simd`]); every version computes the same bits.
+    /// Runs the version compiled for `SCALAR_LEVEL` when the CPU has it (see
+    /// module `simd`); every version computes the same bits.
     #[inline]
     pub fn eval(&self, l: Vec3) -> Eval {
         self.eval_at(SCALAR_LEVEL, l)
     }
 
-    /// [`Prepared::eval`] compiled for at most `level` (every level gives the same bits).
-    #[inline]
-    pub fn eval_at(&self, level: Level, l: Vec3) -> Eval {
-        call_widest!(level, self.eval_body(l), eval_avx512, eval_avx2)
+    testkit_pub! {
+        /// [`Prepared::eval`] compiled for at most `level` (every level gives the same bits).
+        #[inline]
+        fn eval_at(&self, level: Level, l: Vec3) -> Eval {
+            call_widest!(level, self.eval_body(l), eval_avx512, eval_avx2)
+        }
     }
 
     widest_versions!(eval_body(l: Vec3) -> Eval, eval_avx512, eval_avx2);
@@ -227,24 +233,28 @@ impl Prepared {
         self.eval_with::<true>(l)
     }
 
-    /// [`Prepared::eval`]'s `f_cos` alone, for callers that need no density (the material
-    /// preview): the lobes' pdf arithmetic is left out. Runs at [`SCALAR_LEVEL`] as `eval`
-    /// does.
-    #[inline]
-    pub fn eval_f_cos(&self, l: Vec3) -> Rgb {
-        self.eval_f_cos_at(SCALAR_LEVEL, l)
+    testkit_pub! {
+        /// [`Prepared::eval`]'s `f_cos` alone, for callers that need no density (the material
+        /// preview): the lobes' pdf arithmetic is left out. Runs at `SCALAR_LEVEL` as `eval`
+        /// does.
+        #[inline]
+        fn eval_f_cos(&self, l: Vec3) -> Rgb {
+            self.eval_f_cos_at(SCALAR_LEVEL, l)
+        }
     }
 
-    /// [`Prepared::eval_f_cos`] compiled for at most `level` (every level gives the same
-    /// bits).
-    #[inline]
-    pub fn eval_f_cos_at(&self, level: Level, l: Vec3) -> Rgb {
-        call_widest!(
-            level,
-            self.f_cos_body(l),
-            eval_f_cos_avx512,
-            eval_f_cos_avx2
-        )
+    testkit_pub! {
+        /// [`Prepared::eval_f_cos`] compiled for at most `level` (every level gives the same
+        /// bits).
+        #[inline]
+        fn eval_f_cos_at(&self, level: Level, l: Vec3) -> Rgb {
+            call_widest!(
+                level,
+                self.f_cos_body(l),
+                eval_f_cos_avx512,
+                eval_f_cos_avx2
+            )
+        }
     }
 
     widest_versions!(f_cos_body(l: Vec3) -> Rgb, eval_f_cos_avx512, eval_f_cos_avx2);
