@@ -45,9 +45,14 @@ macro_rules! internal {
 }
 
 internal!(
-    batch, diffuse, emission, frame, fresnel, ggx, lobe, material, math, microfacet, sheen, simd,
-    soa, tables, vmath, ward,
+    batch, frame, fresnel, ggx, leaves, lobe, material, math, simd, soa, tables, vmath,
 );
+
+// The leaf families under their own names (`interp::ward`, ...).
+#[cfg(feature = "testkit")]
+pub use leaves::{diffuse, emission, microfacet, sheen, ward};
+#[cfg(not(feature = "testkit"))]
+use leaves::{diffuse, emission, microfacet, sheen, ward};
 
 #[cfg(feature = "testkit")]
 pub mod lutgen;
