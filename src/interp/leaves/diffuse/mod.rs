@@ -3,7 +3,7 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use crate::interp::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
 use crate::interp::math::{Rgb, pdf_cosine, pow5, sample_cosine};
 use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;

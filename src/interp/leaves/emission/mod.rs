@@ -1,6 +1,6 @@
 //! Pass-through leaves: emission and straight transparency.
 
-use crate::interp::lobe::{LobeAlbedo, LobeSample};
+use crate::interp::leaves::{LobeAlbedo, LobeSample};
 use crate::interp::math::Rgb;
 use glam::Vec3;
 

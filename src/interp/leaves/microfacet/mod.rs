@@ -6,7 +6,7 @@
 
 use crate::interp::fresnel::{self, Fresnel};
 use crate::interp::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
-use crate::interp::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
 use crate::interp::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
 use crate::interp::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;

@@ -3,7 +3,7 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use crate::interp::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
 use crate::interp::math::{sample_cosine, sample_uniform_hemisphere};
 use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;

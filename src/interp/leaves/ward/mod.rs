@@ -5,7 +5,7 @@
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`. Widths are clamped to
 //! [1e-3, 1]; tables cover α ∈ [0.01, 1] (lookups clamp).
 
-use crate::interp::lobe::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
 use crate::interp::math::{Rgb, reflect};
 use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;
