@@ -200,32 +200,36 @@ impl Material {
         self.prepare_batch_eval_at(Level::Avx512, p, scratch, out);
     }
 
-    /// [`Material::prepare_batch_eval_into`] with the lane-parallel steps compiled for at most
-    /// `level` ([`super::simd`]; every level gives the same bits).
-    pub fn prepare_batch_eval_at<const W: usize>(
-        &self,
-        level: Level,
-        p: &ShadingBatch<W>,
-        scratch: &mut Scratch,
-        out: &mut PreparedBatch<W>,
-    ) {
-        if !self.prepare_lanes::<W, true>(level, p, out) {
-            self.prepare_batch_into(p, scratch, out);
+    testkit_pub! {
+        /// [`Material::prepare_batch_eval_into`] with the lane-parallel steps compiled for at most
+        /// `level` (module `simd`; every level gives the same bits).
+        fn prepare_batch_eval_at<const W: usize>(
+            &self,
+            level: Level,
+            p: &ShadingBatch<W>,
+            scratch: &mut Scratch,
+            out: &mut PreparedBatch<W>,
+        ) {
+            if !self.prepare_lanes::<W, true>(level, p, out) {
+                self.prepare_batch_into(p, scratch, out);
+            }
         }
     }
 
-    /// [`Material::prepare_batch_eval_into`] for [`PreparedBatch::eval_f_cos`] and the
-    /// per-lane albedo, emission and transparency alone (the batched material preview): the
-    /// lane-parallel path leaves out step 7's selection probabilities, which only the
-    /// densities read. After that path [`PreparedBatch::eval`]'s pdf is NaN.
-    pub fn prepare_batch_f_cos_into<const W: usize>(
-        &self,
-        p: &ShadingBatch<W>,
-        scratch: &mut Scratch,
-        out: &mut PreparedBatch<W>,
-    ) {
-        if !self.prepare_lanes::<W, false>(Level::Avx512, p, out) {
-            self.prepare_batch_into(p, scratch, out);
+    testkit_pub! {
+        /// [`Material::prepare_batch_eval_into`] for [`PreparedBatch::eval_f_cos`] and the
+        /// per-lane albedo, emission and transparency alone (the batched material preview): the
+        /// lane-parallel path leaves out step 7's selection probabilities, which only the
+        /// densities read. After that path [`PreparedBatch::eval`]'s pdf is NaN.
+        fn prepare_batch_f_cos_into<const W: usize>(
+            &self,
+            p: &ShadingBatch<W>,
+            scratch: &mut Scratch,
+            out: &mut PreparedBatch<W>,
+        ) {
+            if !self.prepare_lanes::<W, false>(Level::Avx512, p, out) {
+                self.prepare_batch_into(p, scratch, out);
+            }
         }
     }
 }
@@ -331,34 +335,40 @@ impl<const W: usize> PreparedBatch<W> {
     }
 
     /// `eval` per lane at world directions `l` (equal to the scalar [`Prepared::eval`] to
-    /// relative 1e-5; the pdf is NaN after [`Material::prepare_batch_f_cos_into`], which
+    /// relative 1e-5; the pdf is NaN after the eval-only prepare of the preview, which
     /// computes no selection probabilities). The kernels run in the widest vector extension
-    /// the CPU has ([`super::simd`]); the results do not depend on which.
+    /// the CPU has (module `simd`); the results do not depend on which.
     pub fn eval(&self, l: &[Vec3; W]) -> [Eval; W] {
         self.eval_at(Level::Avx512, l)
     }
 
-    /// [`PreparedBatch::eval`] with the kernels compiled for at most `level` (for tests and
-    /// benchmarks: every level gives the same bits).
-    pub fn eval_at(&self, level: Level, l: &[Vec3; W]) -> [Eval; W] {
-        call_widest!(level, self.eval_lanes(l), eval_avx512, eval_avx2)
+    testkit_pub! {
+        /// [`PreparedBatch::eval`] with the kernels compiled for at most `level` (for tests and
+        /// benchmarks: every level gives the same bits).
+        fn eval_at(&self, level: Level, l: &[Vec3; W]) -> [Eval; W] {
+            call_widest!(level, self.eval_lanes(l), eval_avx512, eval_avx2)
+        }
     }
 
-    /// [`PreparedBatch::eval`]'s `f_cos` alone, for callers that need no density (the
-    /// batched material preview): the kernels leave their pdf arithmetic out, as
-    /// [`Prepared::eval_f_cos`] does.
-    pub fn eval_f_cos(&self, l: &[Vec3; W]) -> [Rgb; W] {
-        self.eval_f_cos_at(Level::Avx512, l)
+    testkit_pub! {
+        /// [`PreparedBatch::eval`]'s `f_cos` alone, for callers that need no density (the
+        /// batched material preview): the kernels leave their pdf arithmetic out, as
+        /// [`Prepared::eval_f_cos`] does.
+        fn eval_f_cos(&self, l: &[Vec3; W]) -> [Rgb; W] {
+            self.eval_f_cos_at(Level::Avx512, l)
+        }
     }
 
-    /// [`PreparedBatch::eval_f_cos`] with the kernels compiled for at most `level`.
-    pub fn eval_f_cos_at(&self, level: Level, l: &[Vec3; W]) -> [Rgb; W] {
-        call_widest!(
-            level,
-            self.f_cos_lanes(l),
-            eval_f_cos_avx512,
-            eval_f_cos_avx2
-        )
+    testkit_pub! {
+        /// [`PreparedBatch::eval_f_cos`] with the kernels compiled for at most `level`.
+        fn eval_f_cos_at(&self, level: Level, l: &[Vec3; W]) -> [Rgb; W] {
+            call_widest!(
+                level,
+                self.f_cos_lanes(l),
+                eval_f_cos_avx512,
+                eval_f_cos_avx2
+            )
+        }
     }
 
     widest_versions!(eval_lanes(l: &[Vec3; W]) -> [Eval; W], eval_avx512, eval_avx2);
@@ -433,18 +443,20 @@ impl<const W: usize> PreparedBatch<W> {
         }
     }
 
-    /// Number of slots that run a vectorised kernel (the others run the scalar leaf per
-    /// lane).
-    pub fn kernel_count(&self) -> usize {
-        self.slots[..self.count]
-            .iter()
-            .filter(|s| !matches!(s.kernel, Kernel::Scalar))
-            .count()
+    testkit_pub! {
+        /// Number of slots that run a vectorised kernel (the others run the scalar leaf per
+        /// lane).
+        fn kernel_count(&self) -> usize {
+            self.slots[..self.count]
+                .iter()
+                .filter(|s| !matches!(s.kernel, Kernel::Scalar))
+                .count()
+        }
     }
 
     /// The scalar preparation of lane `k` (for `sample` and inspection); `None` when the
     /// batch was prepared lane-parallel by [`Material::prepare_batch_eval_into`] or
-    /// [`Material::prepare_batch_f_cos_into`].
+    /// its preview variant.
     pub fn lane(&self, k: usize) -> Option<&Prepared> {
         self.lanes_valid.then(|| &self.lanes[k])
     }

@@ -9,15 +9,7 @@ pub(crate) const DELTA_ALPHA: f32 = 1e-3;
 /// Smallest width used by a non-delta lobe on either axis (keeps `D` finite in f32).
 pub const MIN_ALPHA: f32 = 1e-4;
 
-/// Smith masking–shadowing variant, named per lobe.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Masking {
-    /// `G2 = 1/(1 + Λ(V) + Λ(L))` (Heitz 2014; MaterialX, pbrt-v4, OSL testrender).
-    #[default]
-    HeightCorrelated,
-    /// `G2 = G1(V)·G1(L)` (Adobe's OpenPBR BSDF and its tables).
-    Separable,
-}
+pub use crate::ir::closure::Masking;
 
 /// A GGX distribution with widths `α_x` (tangent) and `α_y` (bitangent).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -27,59 +27,8 @@ use super::sheen::{
     PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking,
 };
 use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward, WardBound};
+pub use super::leaves::{LobeAlbedo, LobeEval, LobeSample};
 use glam::Vec3;
-
-/// Result of [`PreparedLobe::eval`]: cosine-weighted response and sampling density.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LobeEval {
-    /// `f(V, L)·|μ_i|`, RGB.
-    pub f_cos: Rgb,
-    /// Density of the lobe's sampling routine at L, per unit solid angle.
-    pub pdf: f32,
-}
-
-impl LobeEval {
-    /// No response, zero density.
-    pub const ZERO: LobeEval = LobeEval {
-        f_cos: Vec3::ZERO,
-        pdf: 0.0,
-    };
-}
-
-/// Result of [`PreparedLobe::sample`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LobeSample {
-    /// Sampled direction (local frame, unit).
-    pub l: Vec3,
-    /// `f_cos / pdf` (for delta samples: reflectance or transmittance over the discrete
-    /// probability).
-    pub weight: Rgb,
-    /// Density per solid angle; for delta samples the discrete probability of the choice.
-    pub pdf: f32,
-    /// True for a specular (delta) direction.
-    pub delta: bool,
-}
-
-/// Directional albedo `∫ f |μ_i| dω` at the prepared view, split by hemisphere.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LobeAlbedo {
-    /// Reflected part.
-    pub reflect: Rgb,
-    /// Transmitted part as sampling weights average it (radiance convention).
-    pub transmit: Rgb,
-    /// Transmitted part as energy (`η'² E_T`; equal to `transmit` without an index change).
-    pub transmit_energy: Rgb,
-}
-
-impl LobeAlbedo {
-    /// A reflection-only albedo.
-    pub fn reflect(reflect: Rgb) -> LobeAlbedo {
-        LobeAlbedo {
-            reflect,
-            ..LobeAlbedo::default()
-        }
-    }
-}
 
 /// Layering class of a leaf.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -16,11 +16,11 @@
 //!
 //! Rows are independent; [`render_ball`] shades them in parallel with rayon (or serially),
 //! with the scalar or the batched interpreter. The scalar path shades one pixel at a time;
-//! for a material the uniform-material prepare covers ([`Material::prepares_lanes`]) it
-//! prepares each pixel with it at one lane, which writes the leaves' view terms straight
-//! into their kernels instead of building lobe records (`sample` and `lobes` are not
-//! needed here); other materials, and AOVs, take the prepare that builds lobe records
-//! ([`Material::prepare_unpacked_into`]; [`PreviewOptions::general_prepare`] forces its
+//! for a material the uniform-material prepare covers (constant registers, one frame, a
+//! batched kernel per leaf) it prepares each pixel with it at one lane, which writes the
+//! leaves' view terms straight into their kernels instead of building lobe records
+//! (`sample` and `lobes` are not needed here); other materials, and AOVs, take the prepare that builds lobe records
+//! (one that does not pack lobes; [`PreviewOptions::general_prepare`] forces its
 //! general form).
 //!
 //! Memory is bounded whatever the number of materials: [`ContactSheet`] renders a grid of
@@ -108,10 +108,10 @@ pub struct PreviewOptions {
     pub inputs: Vec<f32>,
     /// Use the batched interpreter ([`PREVIEW_LANES`] points at a time).
     pub batched: bool,
-    /// One point at a time, prepare every pixel with the general prepare (lobe records,
-    /// [`Material::prepare_general_into`]) even when the material qualifies for the uniform-material
-    /// prepare ([`Material::prepares_lanes`]), which the scalar path otherwise uses at
-    /// one lane. For comparisons; the two agree to relative 1e-5.
+    /// One point at a time, prepare every pixel with the general prepare (lobe records)
+    /// even when the material qualifies for the uniform-material prepare (constant
+    /// registers, one frame, a batched kernel per leaf), which the scalar path otherwise
+    /// uses at one lane. For comparisons; the two agree to relative 1e-5.
     pub general_prepare: bool,
     /// Shade rows in parallel (rayon's global pool); ignored without the `parallel`
     /// feature.
@@ -330,12 +330,14 @@ fn radiance(opts: &PreviewOptions, direct: Rgb, albedo: Rgb, emission: Rgb, tau:
     direct * opts.light + opts.env * albedo + emission + tau * opts.env
 }
 
-/// Shade row `j` one point at a time with the prepare that builds lobe records
-/// ([`Material::prepare_unpacked_into`], or its general form with
-/// [`PreviewOptions::general_prepare`]).
-pub fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
-    let (mut scratch, mut prep) = (Scratch::default(), Prepared::new());
-    shade_row_with(material, opts, j, out, &mut scratch, &mut prep);
+testkit_pub! {
+    /// Shade row `j` one point at a time with the prepare that builds lobe records
+    /// ([`Material::prepare_unpacked_into`], or its general form with
+    /// [`PreviewOptions::general_prepare`]).
+    fn shade_row(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+        let (mut scratch, mut prep) = (Scratch::default(), Prepared::new());
+        shade_row_with(material, opts, j, out, &mut scratch, &mut prep);
+    }
 }
 
 /// [`shade_row`] with caller-owned working memory.
@@ -392,11 +394,13 @@ fn shade_row_with(
     }
 }
 
-/// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
-pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
-    let mut scratch = Scratch::default();
-    let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
-    shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
+testkit_pub! {
+    /// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
+    fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+        let mut scratch = Scratch::default();
+        let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
+        shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
+    }
 }
 
 /// Shade row `j` `W` pixels at a time with caller-owned working memory (the batched path

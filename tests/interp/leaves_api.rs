@@ -92,7 +92,7 @@ fn classes_follow_the_spec() {
     );
     assert_eq!(diel(DielectricMode::R).class(), LobeClass::Layerable);
     assert_eq!(diel(DielectricMode::T).class(), LobeClass::Opaque);
-    assert_eq!(diel(DielectricMode::RT).class(), LobeClass::Opaque);
+    assert_eq!(diel(DielectricMode::Rt).class(), LobeClass::Opaque);
     assert_eq!(
         Lobe::SheenCK(SheenCK {
             r: 0.3,
@@ -140,7 +140,7 @@ fn delta_lobes_sample_mirror_and_refraction() {
         Ggx::isotropic(0.0),
         Masking::HeightCorrelated,
         1.5,
-        DielectricMode::RT,
+        DielectricMode::Rt,
     ))
     .prepare(v, Sides::Front);
     let p_r = f / (f + (1.0 - f));

@@ -110,7 +110,7 @@ fn dielectric_energy(alpha: f32, eta: f32, mu: f32) -> (f64, [f32; 3]) {
         Ggx::isotropic(alpha),
         Masking::HeightCorrelated,
         eta,
-        DielectricMode::RT,
+        DielectricMode::Rt,
     ));
     let p = lobe.prepare(view(mu), Sides::Front);
     let a = f64::from(alpha);

@@ -3,21 +3,15 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
-use super::math::{sample_cosine, sample_uniform_hemisphere};
-use super::tables::{self, MuCurve, TableId};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::math::{sample_cosine, sample_uniform_hemisphere};
+use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
 
-/// Masking of the Conty–Kulla sheen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SheenMasking {
-    /// `f = D / (4(μ_i + μ_o − μ_i μ_o))` (MaterialX, OSL BSDL; reciprocal).
-    #[default]
-    MaterialX,
-    /// The paper's fitted Λ with light-side terminator softening (non-reciprocal).
-    Original,
-}
+pub use crate::ir::closure::SheenMasking;
+
+pub(crate) mod soa;
 
 /// Smallest Conty–Kulla roughness.
 pub(crate) const SHEEN_CK_MIN_R: f32 = 0.005;
@@ -53,23 +47,23 @@ fn ck_ln_lambda(c: &[f32; 5], mu: f32) -> f32 {
 /// albedo curve and the terms of its clamped roughness.
 #[derive(Debug, Clone, Copy)]
 pub struct SheenCKBound {
-    pub(super) curve: MuCurve,
-    pub(super) half_inv_r: f32,
-    pub(super) norm: f32,
+    pub(in crate::interp) curve: MuCurve,
+    pub(in crate::interp) half_inv_r: f32,
+    pub(in crate::interp) norm: f32,
     coef: [f32; 5],
 }
 
 /// Prepared [`SheenCK`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedSheenCK {
-    pub(super) v: Vec3,
-    pub(super) half_inv_r: f32,
-    pub(super) norm: f32,
-    pub(super) masking: SheenMasking,
-    pub(super) coef: [f32; 5],
-    pub(super) lambda_o: f32,
-    pub(super) inv_4mu: f32,
-    pub(super) albedo: f32,
+    pub(in crate::interp) v: Vec3,
+    pub(in crate::interp) half_inv_r: f32,
+    pub(in crate::interp) norm: f32,
+    pub(in crate::interp) masking: SheenMasking,
+    pub(in crate::interp) coef: [f32; 5],
+    pub(in crate::interp) lambda_o: f32,
+    pub(in crate::interp) inv_4mu: f32,
+    pub(in crate::interp) albedo: f32,
 }
 
 impl SheenCK {
@@ -134,7 +128,7 @@ impl SheenCK {
     /// The view-dependent fields of `p`, a record [`SheenCK::prepare_bound`] made of this
     /// lobe with `b` (at any view): all that changes from view to view.
     #[inline(always)]
-    pub(super) fn set_view(&self, p: &mut PreparedSheenCK, v: Vec3, b: &SheenCKBound) {
+    pub(in crate::interp) fn set_view(&self, p: &mut PreparedSheenCK, v: Vec3, b: &SheenCKBound) {
         p.v = v;
         p.lambda_o = match self.masking {
             SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
@@ -266,7 +260,7 @@ impl SheenLTCBound {
     #[inline(always)]
     pub fn albedo(&self, x: f32) -> f32 {
         let q = (x - self.m) / self.s;
-        (super::vmath::exp(-0.5 * q * q) / self.s_norm + self.o).max(0.0)
+        (crate::interp::vmath::exp(-0.5 * q * q) / self.s_norm + self.o).max(0.0)
     }
 }
 
@@ -283,11 +277,11 @@ pub(crate) fn sheen_ltc_coefficients(x: f32, y: f32) -> (f32, f32) {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedSheenLTC {
     /// LTC frame axes in the lobe's local frame (`X` toward V's tangential part).
-    pub(super) ax_x: Vec3,
-    pub(super) ax_y: Vec3,
-    pub(super) a: f32,
-    pub(super) b: f32,
-    pub(super) e_hat: f32,
+    pub(in crate::interp) ax_x: Vec3,
+    pub(in crate::interp) ax_y: Vec3,
+    pub(in crate::interp) a: f32,
+    pub(in crate::interp) b: f32,
+    pub(in crate::interp) e_hat: f32,
 }
 
 impl SheenLTC {
@@ -317,7 +311,7 @@ impl SheenLTC {
     /// [`SheenLTC::prepare_bound`] given its albedo `e_hat` (`fit.albedo(μ_o)`, clamped
     /// `μ_o`), for callers that have already computed it.
     #[inline(always)]
-    pub(super) fn prepare_bound_with_albedo(
+    pub(in crate::interp) fn prepare_bound_with_albedo(
         v: Vec3,
         fit: &SheenLTCBound,
         e_hat: f32,
@@ -326,7 +320,7 @@ impl SheenLTC {
         let x = v.z.clamp(0.0, 1.0);
         let t = Vec3::new(v.x, v.y, 0.0);
         // Blended, not branched (see `Frame::new`).
-        let ax_x = super::vmath::select3(t.length_squared() > 1e-14, t.normalize(), Vec3::X);
+        let ax_x = crate::interp::vmath::select3(t.length_squared() > 1e-14, t.normalize(), Vec3::X);
         let (a, b) = sheen_ltc_coefficients(x, y);
         PreparedSheenLTC {
             ax_x,

@@ -3,11 +3,13 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
-use super::math::{Rgb, pdf_cosine, pow5, sample_cosine};
-use super::tables::{self, MuCurve, TableId};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::math::{Rgb, pdf_cosine, pow5, sample_cosine};
+use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, PI};
+
+pub(crate) mod soa;
 
 /// `c1 = 1/2 − 2/(3π)` of EON.
 pub const EON_C1: f32 = 0.5 - 2.0 / (3.0 * PI);
@@ -39,8 +41,8 @@ pub struct Lambert {
 /// Prepared Lambert (and Translucent: same data, other hemisphere).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedLambert {
-    pub(super) rho: Rgb,
-    pub(super) rho_pi: Rgb,
+    pub(in crate::interp) rho: Rgb,
+    pub(in crate::interp) rho_pi: Rgb,
 }
 
 impl Lambert {
@@ -173,7 +175,7 @@ fn eon_g(mu: f32) -> f32 {
     let mu = mu.clamp(0.0, 1.0);
     let s = (1.0 - mu * mu).max(0.0).sqrt();
     // The polynomial `acos` (error < 5e-7, `vmath` tests): no library call per evaluation.
-    let theta = super::vmath::acos(mu);
+    let theta = crate::interp::vmath::acos(mu);
     s * (theta - s * mu) + (2.0 / 3.0) * s * (mu * (1.0 + s + s * s) / (1.0 + s) - 1.0)
 }
 
@@ -185,19 +187,19 @@ pub fn eon_e_avg(sigma: f32) -> f32 {
 /// Prepared Oren–Nayar lobe.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PreparedOrenNayar {
-    pub(super) v: Vec3,
-    pub(super) rho_pi: Rgb,
+    pub(in crate::interp) v: Vec3,
+    pub(in crate::interp) rho_pi: Rgb,
     /// Constant term (A or A_F).
-    pub(super) a: f32,
+    pub(in crate::interp) a: f32,
     /// Coefficient of `s/t` (B or σ A_F).
-    pub(super) b: f32,
+    pub(in crate::interp) b: f32,
     /// FON/EON keep negative `s` (QON drops it).
-    pub(super) keep_negative_s: bool,
+    pub(in crate::interp) keep_negative_s: bool,
     /// EON: `ρ_ms (1 − Ê(μ_o)) / (π (1 − Ē))`; zero otherwise.
-    pub(super) ms: Rgb,
-    pub(super) sigma: f32,
-    pub(super) fast: bool,
-    pub(super) albedo: Rgb,
+    pub(in crate::interp) ms: Rgb,
+    pub(in crate::interp) sigma: f32,
+    pub(in crate::interp) fast: bool,
+    pub(in crate::interp) albedo: Rgb,
 }
 
 impl OrenNayar {
@@ -253,11 +255,11 @@ impl OrenNayar {
 /// and the QON albedo curve.
 #[derive(Debug, Clone, Copy)]
 pub struct OrenNayarBound {
-    pub(super) template: PreparedOrenNayar,
+    pub(in crate::interp) template: PreparedOrenNayar,
     /// EON: `ρ_ms` and `ρ_ms/(π(1 − Ē))` (zero below the σ cut-off and for QON/FON).
-    pub(super) rho_ms: Rgb,
-    pub(super) ms_scale: Rgb,
-    pub(super) qon: Option<MuCurve>,
+    pub(in crate::interp) rho_ms: Rgb,
+    pub(in crate::interp) ms_scale: Rgb,
+    pub(in crate::interp) qon: Option<MuCurve>,
 }
 
 impl OrenNayar {
@@ -296,7 +298,7 @@ impl OrenNayar {
     /// The view-dependent fields of `p`, a record [`OrenNayar::prepare_bound`] made of
     /// this lobe with `b` (at any view): all that changes from view to view.
     #[inline(always)]
-    pub(super) fn set_view(&self, p: &mut PreparedOrenNayar, v: Vec3, b: &OrenNayarBound) {
+    pub(in crate::interp) fn set_view(&self, p: &mut PreparedOrenNayar, v: Vec3, b: &OrenNayarBound) {
         p.v = v;
         match self.variant {
             OrenNayarVariant::Qualitative => {

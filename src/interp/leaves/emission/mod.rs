@@ -1,7 +1,7 @@
 //! Pass-through leaves: emission and straight transparency.
 
-use super::lobe::{LobeAlbedo, LobeSample};
-use super::math::Rgb;
+use crate::interp::leaves::{LobeAlbedo, LobeSample};
+use crate::interp::math::Rgb;
 use glam::Vec3;
 
 /// Uniform emission (an EDF, not part of the BSDF): radiance `tint`.

@@ -4,11 +4,11 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use super::fresnel::{self, Fresnel};
-use super::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
-use super::lobe::{LobeAlbedo, LobeEval, LobeSample};
-use super::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
-use super::tables::{self, MuCurve, Row, TableId};
+use crate::interp::fresnel::{self, Fresnel};
+use crate::interp::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
+use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
+use crate::interp::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -376,48 +376,48 @@ pub struct MicrofacetR {
 /// Prepared [`MicrofacetR`].
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedMicrofacetR {
-    pub(super) ggx: Ggx,
-    pub(super) masking: Masking,
-    pub(super) fresnel: Fresnel,
-    pub(super) v: Vec3,
-    pub(super) lambda_v: f32,
+    pub(in crate::interp) ggx: Ggx,
+    pub(in crate::interp) masking: Masking,
+    pub(in crate::interp) fresnel: Fresnel,
+    pub(in crate::interp) v: Vec3,
+    pub(in crate::interp) lambda_v: f32,
     /// The distribution's constants for `D` and `G2` at this view.
-    pub(super) view: GgxView,
-    pub(super) g1_v: f32,
-    pub(super) inv_4mu: f32,
+    pub(in crate::interp) view: GgxView,
+    pub(in crate::interp) g1_v: f32,
+    pub(in crate::interp) inv_4mu: f32,
     /// Turquin factor (1 when off).
-    pub(super) scale: Rgb,
+    pub(in crate::interp) scale: Rgb,
     /// Kulla–Conty: `F_ms (1 − E(μ_o)) / (π (1 − E_avg))` (0 when off).
-    pub(super) ms: Rgb,
-    pub(super) e_row: Option<Row>,
+    pub(in crate::interp) ms: Rgb,
+    pub(in crate::interp) e_row: Option<Row>,
     /// Probability of sampling the Kulla–Conty part.
-    pub(super) p_ms: f32,
-    pub(super) delta: bool,
-    pub(super) albedo: Rgb,
+    pub(in crate::interp) p_ms: f32,
+    pub(in crate::interp) delta: bool,
+    pub(in crate::interp) albedo: Rgb,
 }
 
 /// The view-independent part of a GGX reflection lobe's `prepare` ([`MicrofacetR::bind`]):
 /// the Fresnel form the tables read and the albedo tables at the lobe's roughness.
 #[derive(Debug, Clone, Copy)]
 pub struct MicrofacetBound {
-    pub(super) albedo_fresnel: Fresnel,
+    pub(in crate::interp) albedo_fresnel: Fresnel,
     /// The distribution's view-independent constants ([`GgxView::constants`]).
-    pub(super) ggx_view: GgxView,
+    pub(in crate::interp) ggx_view: GgxView,
     /// `None` for a dielectric Fresnel (its albedo comes from the dielectric tables), and
     /// in the one-off bound of [`MicrofacetR::prepare`] (direct lookups).
-    pub(super) curves: Option<ReflectionCurves>,
+    pub(in crate::interp) curves: Option<ReflectionCurves>,
     /// [`Ggx::lookup_alpha`], computed once.
-    pub(super) alpha: f32,
+    pub(in crate::interp) alpha: f32,
     /// The distribution is a delta ([`Ggx::is_delta`]).
-    pub(super) delta: bool,
+    pub(in crate::interp) delta: bool,
     /// The Fresnel ratio per channel of a lobe that [`MicrofacetR::uses_ratio`] (`None`
     /// for other lobes, and in the one-off bound of [`MicrofacetR::prepare`]).
-    pub(super) ratios: Option<RatioGrid>,
+    pub(in crate::interp) ratios: Option<RatioGrid>,
 }
 
 /// `E1`, `S_q` and `H82` at a fixed roughness (and exponent).
 #[derive(Debug, Clone, Copy)]
-pub(super) struct ReflectionCurves {
+pub(in crate::interp) struct ReflectionCurves {
     e1: MuCurve,
     sq: Option<MuCurve>,
     h82: Option<MuCurve>,
@@ -426,7 +426,7 @@ pub(super) struct ReflectionCurves {
 impl ReflectionCurves {
     /// [`reflection_albedo`] for the forms the curves were built for (One, Schlick, F82).
     #[inline(always)]
-    pub(super) fn albedo(&self, f: &Fresnel, mu: f32) -> Rgb {
+    pub(in crate::interp) fn albedo(&self, f: &Fresnel, mu: f32) -> Rgb {
         let e1v = self.e1.at(mu);
         let sq = |c: &Option<MuCurve>| c.as_ref().map_or(0.0, |c| c.at(mu));
         let schlick = |f0: Rgb, f90: Rgb| f0 * e1v + (f90 - f0) * sq(&self.sq);
@@ -443,7 +443,7 @@ impl ReflectionCurves {
 /// The F82 albedo of [`ReflectionCurves::albedo`] from the curves' values `E1`, `S_q`, `H82`
 /// at `μ_o` (also used by the lane-parallel prepare).
 #[inline(always)]
-pub(super) fn f82_albedo(f0: Rgb, f90: Rgb, a: Rgb, e1: f32, sq: f32, h82: f32) -> Rgb {
+pub(in crate::interp) fn f82_albedo(f0: Rgb, f90: Rgb, a: Rgb, e1: f32, sq: f32, h82: f32) -> Rgb {
     (f0 * e1 + (f90 - f0) * sq - a * h82).max(Vec3::ZERO)
 }
 
@@ -586,7 +586,7 @@ impl MicrofacetR {
     /// this lobe with `bound` (at any view): all that changes from view to view, so a
     /// record kept from an earlier point is brought to `v` by this alone.
     #[inline(always)]
-    pub(super) fn set_view(&self, p: &mut PreparedMicrofacetR, v: Vec3, bound: &MicrofacetBound) {
+    pub(in crate::interp) fn set_view(&self, p: &mut PreparedMicrofacetR, v: Vec3, bound: &MicrofacetBound) {
         let albedo_fresnel = &bound.albedo_fresnel;
         // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
         let conductor = self.fresnel.is_conductor();
@@ -725,17 +725,9 @@ impl PreparedMicrofacetR {
     }
 }
 
-/// Which hemispheres a dielectric lobe covers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum DielectricMode {
-    /// Reflection only (layerable).
-    R,
-    /// Transmission only.
-    T,
-    /// Both (Fresnel-weighted choice when sampling).
-    #[default]
-    RT,
-}
+pub use crate::ir::closure::DielectricMode;
+
+pub(crate) mod soa;
 
 /// GGX dielectric interface with exact Fresnel. Transmission uses the radiance
 /// convention of Walter et al. 2007.
@@ -797,25 +789,25 @@ impl Dielectric {
 /// Prepared [`Dielectric`].
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedDielectric {
-    pub(super) ggx: Ggx,
-    pub(super) masking: Masking,
+    pub(in crate::interp) ggx: Ggx,
+    pub(in crate::interp) masking: Masking,
     /// Index on L's (transmitted) side over V's side.
-    pub(super) eta: f32,
-    pub(super) v: Vec3,
-    pub(super) lambda_v: f32,
+    pub(in crate::interp) eta: f32,
+    pub(in crate::interp) v: Vec3,
+    pub(in crate::interp) lambda_v: f32,
     /// The distribution's constants for `D` and `G2` at this view.
-    pub(super) view: GgxView,
-    pub(super) g1_v: f32,
-    pub(super) inv_mu: f32,
-    pub(super) refl: bool,
-    pub(super) trans: bool,
-    pub(super) tint_r: Rgb,
-    pub(super) tint_t: Rgb,
-    pub(super) lum_r: f32,
-    pub(super) lum_t: f32,
-    pub(super) t_fresnel: bool,
-    pub(super) delta: bool,
-    pub(super) albedo: LobeAlbedo,
+    pub(in crate::interp) view: GgxView,
+    pub(in crate::interp) g1_v: f32,
+    pub(in crate::interp) inv_mu: f32,
+    pub(in crate::interp) refl: bool,
+    pub(in crate::interp) trans: bool,
+    pub(in crate::interp) tint_r: Rgb,
+    pub(in crate::interp) tint_t: Rgb,
+    pub(in crate::interp) lum_r: f32,
+    pub(in crate::interp) lum_t: f32,
+    pub(in crate::interp) t_fresnel: bool,
+    pub(in crate::interp) delta: bool,
+    pub(in crate::interp) albedo: LobeAlbedo,
 }
 
 /// The view-independent part of a dielectric's `prepare` ([`Dielectric::bind`]): its albedo
@@ -823,21 +815,21 @@ pub struct PreparedDielectric {
 /// below). Only height-correlated, non-delta lobes have them.
 #[derive(Debug, Clone, Copy)]
 pub struct DielectricBound {
-    pub(super) curves: Option<[[MuCurve; 3]; 2]>,
+    pub(in crate::interp) curves: Option<[[MuCurve; 3]; 2]>,
     /// An anisotropic lobe's ratios `[E_R, E_T, E_T without (1 − F)]/E1` at η and at 1/η
     /// ([`Dielectric::aniso_albedos`]; `None` for an isotropic or delta lobe, and in the
     /// one-off bound of [`Dielectric::prepare`]).
-    pub(super) aniso: Option<[Option<RatioGrid>; 2]>,
+    pub(in crate::interp) aniso: Option<[Option<RatioGrid>; 2]>,
     /// The distribution's view-independent constants ([`GgxView::constants`]).
-    pub(super) ggx_view: GgxView,
+    pub(in crate::interp) ggx_view: GgxView,
     /// The lobe's view-independent scalars.
-    pub(super) consts: DielectricConsts,
+    pub(in crate::interp) consts: DielectricConsts,
 }
 
 /// The scalars of a dielectric's `prepare` that do not depend on the view, computed once
 /// per bind rather than per point.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct DielectricConsts {
+pub(in crate::interp) struct DielectricConsts {
     /// [`Dielectric::eta0`].
     eta0: f32,
     /// The distribution is a delta.
@@ -875,7 +867,7 @@ impl Dielectric {
     }
 
     /// η, with invalid values replaced by 1.
-    pub(super) fn eta0(&self) -> f32 {
+    pub(in crate::interp) fn eta0(&self) -> f32 {
         if self.eta.is_finite() && self.eta > 0.0 {
             self.eta
         } else {
@@ -998,7 +990,7 @@ impl Dielectric {
     /// this lobe with `bound` and `flipped` (at any view): all that changes from view to
     /// view, so a record kept from an earlier point is brought to `v` by this alone.
     #[inline(always)]
-    pub(super) fn set_view(
+    pub(in crate::interp) fn set_view(
         &self,
         p: &mut PreparedDielectric,
         v: Vec3,
