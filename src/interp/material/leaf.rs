@@ -119,8 +119,8 @@ pub(crate) fn leaf_lobe(kind: &LeafKind, regs: &[Vec3]) -> Lobe {
     }
 }
 
-/// An [`AlbedoSource`] backed by the interpreter's leaves and tables: the leaf's
-/// prepared albedo at a view with cosine `μ_o` (reflection plus transmission as energy),
+/// The closure algebra's albedo source, backed by the interpreter's leaves and tables: the
+/// leaf's prepared albedo at a view with cosine `μ_o` (reflection plus transmission as energy),
 /// without its tint. Use it wherever the closure algebra needs real `E_k(μ_o)`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct TableAlbedo;
