@@ -40,7 +40,9 @@
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
 use crate::network::{Memo, Param, RequestKind, SourceParam};
 use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
+use rustc_hash::FxHashMap;
 use std::borrow::Cow;
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::io::{self, Write};
 use std::ops::Range;
@@ -96,6 +98,8 @@ pub fn write_rib(
         types: &types,
         surfaces,
         scratch: Default::default(),
+        positions: Default::default(),
+        input_types: Default::default(),
     };
     w.write(out)
 }
@@ -129,7 +133,29 @@ struct Writer<'a> {
     /// The name of the first material whose `surface` terminal is each node.
     surfaces: HashMap<NodeId, &'a str>,
     /// The buffer of the request being written, kept from one request to the next.
-    scratch: std::cell::RefCell<Vec<u8>>,
+    scratch: RefCell<Vec<u8>>,
+    /// Declaration positions of added parameters ([`ParamTypes::input_position`]).
+    positions: ByAddress<Option<usize>>,
+    /// Definition types of connected parameters written anew ([`ParamTypes::input_type`]).
+    input_types: ByAddress<Option<Type>>,
+}
+
+/// Answers about one input of one shader, keyed by where the shader id and the input name
+/// are stored ([`address_key`]). A resolved scene has millions of added parameters whose
+/// names and shader ids are a few shared strings: a key of four numbers is hashed and
+/// compared instead of two names per question.
+type ByAddress<T> = RefCell<FxHashMap<[usize; 4], T>>;
+
+/// The key of `shader` and `name` in a [`ByAddress`] table: address and length of each.
+/// The strings are the network's (a node's shader id, a parameter's name) and the network
+/// outlives the writer, so equal keys mean equal strings.
+fn address_key(shader: &str, name: &str) -> [usize; 4] {
+    [
+        shader.as_ptr() as usize,
+        shader.len(),
+        name.as_ptr() as usize,
+        name.len(),
+    ]
 }
 
 fn invalid(msg: &str) -> io::Error {
@@ -155,13 +181,17 @@ impl Writer<'_> {
         sourced.sort_by_key(|(r, _)| r.start);
         let fresh = self.dependency_order(&fresh);
         let fresh_set: std::collections::HashSet<NodeId> = fresh.iter().copied().collect();
-        // The fresh block goes before the first source request that references a fresh node.
-        let block_before = sourced.iter().position(|(_, id)| {
-            self.net[*id]
-                .params()
-                .flat_map(|p| p.connections())
-                .any(|l| l.upstream_node().is_some_and(|u| fresh_set.contains(&u)))
+        // The fresh block goes before the first source request that references a fresh node
+        // (no search when there is none: a resolved scene has millions of connections).
+        let block_before = (!fresh.is_empty()).then(|| {
+            sourced.iter().position(|(_, id)| {
+                self.net[*id]
+                    .params()
+                    .flat_map(|p| p.connections())
+                    .any(|l| l.upstream_node().is_some_and(|u| fresh_set.contains(&u)))
+            })
         });
+        let block_before = block_before.flatten();
         let mut cursor = 0;
         for (k, (span, id)) in sourced.iter().enumerate() {
             if span.start < cursor {
@@ -312,10 +342,14 @@ impl Writer<'_> {
             .enumerate()
             .filter(|(_, p)| p.change() == ParamChange::Added)
             .map(|(i, p)| {
-                let pos = self
-                    .types
-                    .input_position(node.shader(), p.name())
-                    .unwrap_or(usize::MAX);
+                let key = address_key(node.shader(), p.name());
+                let known = self.positions.borrow().get(&key).copied();
+                let pos = known.unwrap_or_else(|| {
+                    let pos = self.types.input_position(node.shader(), p.name());
+                    self.positions.borrow_mut().insert(key, pos);
+                    pos
+                });
+                let pos = pos.unwrap_or(usize::MAX);
                 (pos, i, p)
             })
             .collect();
@@ -431,12 +465,17 @@ impl Writer<'_> {
             let up = self.net.get(link.upstream_node()?)?;
             self.types.output_type(up.shader(), link.output()?)
         };
-        let ty = self
-            .types
-            .input_type(node.shader(), p.name())
-            .or_else(upstream_type)
-            .or_else(|| p.decl().map(|d| d.ty.clone()))
-            .unwrap_or(Type::scalar(BaseType::Float));
+        let mut known = self.input_types.borrow_mut();
+        let defined = known
+            .entry(address_key(node.shader(), p.name()))
+            .or_insert_with(|| self.types.input_type(node.shader(), p.name()));
+        let ty: Cow<'_, Type> = match defined {
+            Some(ty) => Cow::Borrowed(ty),
+            None => upstream_type()
+                .map(Cow::Owned)
+                .or_else(|| p.decl().map(|d| Cow::Borrowed(&d.ty)))
+                .unwrap_or(Cow::Owned(Type::scalar(BaseType::Float))),
+        };
         t.extend_from_slice(decl_word(&ty.base).as_bytes());
         match ty.array {
             ArraySpec::None if n <= 1 => {}

@@ -30,13 +30,14 @@ mod lexer;
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
-    Decl, Link, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
+    Decl, Link, Links, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
     ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
-use lexer::{Lexer, TokKind, Token, decode_string};
-use rustc_hash::FxHashMap;
-use std::collections::{HashMap, HashSet};
+use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
+use rustc_hash::{FxHashMap, FxHashSet};
+use smallvec::SmallVec;
+use std::borrow::Cow;
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -421,11 +422,15 @@ fn rib_base_type(word: &str) -> Option<Type> {
     }
 }
 
-/// One element of a value: a number (its text) or a decoded string.
+/// One element of a value: a number (its text) or a decoded string (borrowed from the input
+/// unless it has escapes).
 enum Elem<'a> {
     Num(&'a str),
-    Str(String),
+    Str(Cow<'a, str>),
 }
+
+/// The elements of one value: inline up to a matrix's sixteen.
+type Elems<'a> = SmallVec<[Elem<'a>; 16]>;
 
 /// Assembles nodes from shading requests.
 struct Assembler<'a, 't> {
@@ -462,17 +467,8 @@ struct RawParam<'p> {
     value: &'p Piece,
     /// The request's array elements ([`Args::items`]).
     arena: &'p [Token],
-    item: SourceParam,
-}
-
-/// A parameter read from a request, before the node exists.
-struct ReadParam {
-    name: Arc<str>,
-    decl: Arc<Decl>,
-    value: Option<Arc<Value>>,
-    links: Vec<Link>,
-    location: Location,
-    item: SourceParam,
+    /// The index of this occurrence in the request ([`NodeSource::items`]).
+    origin: u32,
 }
 
 impl<'a> Assembler<'a, '_> {
@@ -487,38 +483,45 @@ impl<'a> Assembler<'a, '_> {
         let pieces = &args.pieces[..];
         let mut i = 0;
         let mut header_comments: Vec<Range<usize>> = Vec::new();
-        let mut header_string = |what: &str, i: &mut usize| -> Result<(String, Token), Error> {
-            while let Some(Piece::Comment(c)) = pieces.get(*i) {
-                header_comments.push(c.start..c.end);
-                *i += 1;
-            }
-            match pieces.get(*i) {
-                Some(Piece::Value(t)) if t.kind == TokKind::Str => {
+        let src: &'a [u8] = self.src;
+        let mut header_string =
+            |what: &str, i: &mut usize| -> Result<(Cow<'a, str>, Token), Error> {
+                while let Some(Piece::Comment(c)) = pieces.get(*i) {
+                    header_comments.push(c.start..c.end);
                     *i += 1;
-                    Ok((decode_string(self.src, t), *t))
                 }
-                Some(p) => Err(Diagnostic::error(
-                    "RB004",
-                    format!(
-                        "unexpected {} after `{kind}`: expected the {what} string",
-                        piece_name(p)
-                    ),
-                )
-                .at(lx.tok_loc(p.first()))
-                .into()),
-                None => Err(Diagnostic::error(
-                    "RB004",
-                    format!("`{kind}` request without {what} string"),
-                )
-                .at(lx.tok_loc(kw))
-                .into()),
-            }
-        };
+                match pieces.get(*i) {
+                    Some(Piece::Value(t)) if t.kind == TokKind::Str => {
+                        *i += 1;
+                        Ok((decode_str(src, t), *t))
+                    }
+                    Some(p) => Err(Diagnostic::error(
+                        "RB004",
+                        format!(
+                            "unexpected {} after `{kind}`: expected the {what} string",
+                            piece_name(p)
+                        ),
+                    )
+                    .at(lx.tok_loc(p.first()))
+                    .into()),
+                    None => Err(Diagnostic::error(
+                        "RB004",
+                        format!("`{kind}` request without {what} string"),
+                    )
+                    .at(lx.tok_loc(kw))
+                    .into()),
+                }
+            };
         let (shader, _) = header_string("shader name", &mut i)?;
         let (handle, handle_tok) = header_string("handle", &mut i)?;
         let mut end = handle_tok.end;
 
-        let mut read: Vec<ReadParam> = Vec::with_capacity(pieces.len() / 2);
+        // One parameter per occurrence, built in place; the rare later duplicates are taken
+        // out once the request is read. Exact room unless comments sit between parameters
+        // (a network of a million nodes keeps these tables).
+        let room = (pieces.len() - i) / 2;
+        let mut params: Vec<Param> = Vec::with_capacity(room);
+        let mut items: Vec<SourceParam> = Vec::with_capacity(room);
         let mut pending = header_comments;
         while i < pieces.len() {
             let decl_tok = match &pieces[i] {
@@ -571,31 +574,34 @@ impl<'a> Assembler<'a, '_> {
                     i += 1;
                 }
             }
+            let origin = items.len() as u32;
+            item.param = Some(origin);
+            items.push(item);
             let raw = RawParam {
                 decl_tok,
                 location,
                 value: value_piece,
                 arena: &args.items,
-                item,
+                origin,
             };
-            let param = self.read_param(&shader, raw, diags)?;
-            read.push(param);
+            params.push(self.read_param(&shader, raw, diags)?);
         }
-        let (repeated, shadowed) = duplicates(&read);
-        for (p, _) in read.iter().zip(&repeated).filter(|(_, r)| **r) {
-            diags.push(
-                Diagnostic::warning(
-                    "RB015",
-                    format!(
-                        "duplicate parameter `{}` on `{handle}`; the later one wins",
-                        p.name
-                    ),
-                )
-                .at(p.location.clone()),
+        let (repeated, shadowed) = duplicates(&params);
+        for (p, _) in params.iter().zip(&repeated).filter(|(_, r)| **r) {
+            let mut d = Diagnostic::warning(
+                "RB015",
+                format!(
+                    "duplicate parameter `{}` on `{handle}`; the later one wins",
+                    p.name()
+                ),
             );
+            if let Some(l) = p.location() {
+                d = d.at(l.clone());
+            }
+            diags.push(d);
         }
 
-        if self.is_reuse(&handle, &shader, &read) {
+        if self.is_reuse(&handle, &shader, &params) {
             return Ok(());
         }
         let location = lx.tok_loc(kw);
@@ -631,7 +637,8 @@ impl<'a> Assembler<'a, '_> {
             &shader,
             kw.start..end,
             location,
-            read,
+            params,
+            items,
             &shadowed,
             pending,
         );
@@ -640,15 +647,15 @@ impl<'a> Assembler<'a, '_> {
 
     /// A request whose handle is defined, for the same shader, with no parameters other than
     /// `string __materialid` re-uses the earlier node.
-    fn is_reuse(&self, handle: &str, shader: &str, read: &[ReadParam]) -> bool {
+    fn is_reuse(&self, handle: &str, shader: &str, params: &[Param]) -> bool {
         let Some(prev) = self.net.find(handle) else {
             return false;
         };
         self.net[prev].shader() == shader
-            && read.iter().all(|p| {
-                &*p.name == "__materialid"
-                    && !p.decl.reference
-                    && p.decl.ty == Type::scalar(BaseType::String)
+            && params.iter().all(|p| {
+                p.name() == "__materialid"
+                    && p.decl()
+                        .is_some_and(|d| !d.reference && d.ty == Type::scalar(BaseType::String))
             })
     }
 
@@ -660,34 +667,27 @@ impl<'a> Assembler<'a, '_> {
         shader: &str,
         span: Range<usize>,
         location: Location,
-        read: Vec<ReadParam>,
+        mut params: Vec<Param>,
+        mut items: Vec<SourceParam>,
         shadowed: &[bool],
         end_comments: Vec<Range<usize>>,
     ) {
         // Later duplicates win: earlier occurrences are not parameters, but their source
         // items stay (their comments move to the next written parameter).
-        let mut items: Vec<SourceParam> = Vec::with_capacity(read.len());
-        let mut params: Vec<Param> = Vec::with_capacity(read.len());
-        let mut links: Vec<Vec<Link>> = Vec::with_capacity(read.len());
-        for (rp, &shadow) in read.into_iter().zip(shadowed) {
-            let origin = items.len() as u32;
-            let mut item = rp.item;
-            if shadow {
-                items.push(item);
-                continue;
+        if shadowed.iter().any(|&s| s) {
+            let mut kept = Vec::with_capacity(params.len());
+            for ((p, &shadow), item) in params.into_iter().zip(shadowed).zip(&mut items) {
+                if shadow {
+                    item.param = None;
+                } else {
+                    item.param = Some(kept.len() as u32);
+                    kept.push(p);
+                }
             }
-            item.param = Some(params.len() as u32);
-            items.push(item);
-            params.push(Param::from_shared(
-                rp.name,
-                rp.value,
-                Some(rp.decl),
-                Some(rp.location),
-                Some(origin),
-            ));
-            links.push(rp.links);
+            params = kept;
         }
-        let mut node = Node::new_raw(handle, shader, kind);
+        let shader = self.net.shared_shader(shader);
+        let mut node = Node::new_shared(handle, shader, kind);
         node.set_raw_params(params);
         node.set_origin(
             Some(location),
@@ -698,11 +698,7 @@ impl<'a> Assembler<'a, '_> {
             }),
         );
         let id = self.net.insert_node(node);
-        for (k, l) in links.into_iter().enumerate() {
-            if !l.is_empty() {
-                self.net.push_source_links(id, k, l);
-            }
-        }
+        self.net.add_source_edges(id);
     }
 
     fn read_param(
@@ -710,77 +706,66 @@ impl<'a> Assembler<'a, '_> {
         shader: &str,
         raw: RawParam<'_>,
         diags: &mut Diagnostics,
-    ) -> Result<ReadParam, Error> {
+    ) -> Result<Param, Error> {
         let RawParam {
             decl_tok,
             location,
             value,
             arena,
-            item,
+            origin,
         } = raw;
         let (name, decl, remembered) = self.declaration(shader, &decl_tok, &location, diags)?;
-        let mut param = ReadParam {
-            decl,
-            name,
-            value: None,
-            links: Vec::new(),
-            location,
-            item,
-        };
-        let reference = param.decl.reference;
-        let elems = self.elems(value, arena);
-        if reference && elems.iter().all(|e| matches!(e, Elem::Str(_))) {
-            let ty = param.decl.ty.clone();
-            param.links = self.read_links(&param, &ty, elems, diags)?;
-            return Ok(param);
+        let toks = value_tokens(value, arena);
+        if decl.reference && toks.iter().all(|t| t.kind == TokKind::Str) {
+            let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
+            let param = Param::from_shared(name, None, Some(decl), Some(location), Some(origin));
+            return Ok(param.with_source_links(links));
         }
-        if reference {
+        if decl.reference {
             diags.push(
                 Diagnostic::warning(
                     "RB014",
-                    format!("`reference` parameter `{}` has numbers instead of `handle:output` strings; kept as a value", param.name),
+                    format!("`reference` parameter `{name}` has numbers instead of `handle:output` strings; kept as a value"),
                 )
-                .at(param.location.clone()),
+                .at(location.clone()),
             );
         }
         // Keyed by the declaration's address: only remembered declarations, which stay alive
         // (so keep their address) until the file is read.
         let text = &self.src[value.range()];
-        let key = Arc::as_ptr(&param.decl) as usize;
-        if !remembered {
-            param.value = Some(Arc::new(convert_value(
-                &param.decl.ty,
-                &elems,
-                &param.name,
-                &param.location,
-                diags,
-            )));
-            return Ok(param);
-        }
-        if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
-            param.value = Some(v.clone());
-            return Ok(param);
-        }
-        let before = diags.len();
-        let v = Arc::new(convert_value(
-            &param.decl.ty,
-            &elems,
-            &param.name,
-            &param.location,
-            diags,
-        ));
-        if diags.len() == before
-            && text.len() <= MAX_SHARED_VALUE_BYTES
-            && self.shared_values < MAX_SHARED_VALUES
-        {
-            self.shared_values += 1;
-            self.values
-                .entry(key)
-                .or_default()
-                .insert(Box::from(text), v.clone());
-        }
-        param.value = Some(v);
-        Ok(param)
+        let key = Arc::as_ptr(&decl) as usize;
+        let value = 'value: {
+            // A value seen before is shared without looking at its elements.
+            if remembered {
+                if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
+                    break 'value v.clone();
+                }
+            }
+            let elems = self.elems(toks);
+            if !remembered {
+                break 'value Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
+            }
+            let before = diags.len();
+            let v = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
+            if diags.len() == before
+                && text.len() <= MAX_SHARED_VALUE_BYTES
+                && self.shared_values < MAX_SHARED_VALUES
+            {
+                self.shared_values += 1;
+                self.values
+                    .entry(key)
+                    .or_default()
+                    .insert(Box::from(text), v.clone());
+            }
+            v
+        };
+        Ok(Param::from_shared(
+            name,
+            Some(value),
+            Some(decl),
+            Some(location),
+            Some(origin),
+        ))
     }
 
     /// The shared copy of output name `name` (see [`Assembler::outputs`]).
@@ -971,69 +956,63 @@ impl<'a> Assembler<'a, '_> {
         }
     }
 
-    fn elems(&self, value: &Piece, arena: &[Token]) -> Vec<Elem<'a>> {
+    /// The elements of a value's tokens.
+    fn elems(&self, toks: &[Token]) -> Elems<'a> {
         let src: &'a [u8] = self.src;
-        let one = |t: &Token| -> Elem<'a> {
-            if t.kind == TokKind::Str {
-                Elem::Str(decode_string(src, t))
-            } else {
-                Elem::Num(std::str::from_utf8(&src[t.start..t.end]).unwrap_or("0"))
-            }
-        };
-        match value {
-            Piece::Value(t) => vec![one(t)],
-            Piece::Array { items, .. } => arena
-                .get(items.clone())
-                .unwrap_or_default()
-                .iter()
-                .map(one)
-                .collect(),
-            Piece::Comment(_) => Vec::new(),
-        }
+        toks.iter()
+            .map(|t| {
+                if t.kind == TokKind::Str {
+                    Elem::Str(decode_str(src, t))
+                } else {
+                    Elem::Num(std::str::from_utf8(&src[t.start..t.end]).unwrap_or("0"))
+                }
+            })
+            .collect()
     }
 
     /// Connections of a `reference` parameter: one `handle:output` string per element, split
     /// at the last `:`, bound to the latest version of the handle defined so far.
     fn read_links(
         &mut self,
-        p: &ReadParam,
+        name: &str,
+        location: &Location,
         ty: &Type,
-        elems: Vec<Elem<'_>>,
+        toks: &[Token],
         diags: &mut Diagnostics,
-    ) -> Result<Vec<Link>, Error> {
+    ) -> Result<Links, Error> {
         let expected = match ty.array {
             ArraySpec::Fixed(n) => Some(n),
             ArraySpec::None => Some(1),
             ArraySpec::Dynamic => None,
         };
-        if expected.is_some_and(|n| n != elems.len()) {
+        if expected.is_some_and(|n| n != toks.len()) {
             diags.push(
                 Diagnostic::warning(
                     "RB014",
                     format!(
                         "`{}` has {} connection(s) but its type `{ty}` takes {}",
-                        p.name,
-                        elems.len(),
+                        name,
+                        toks.len(),
                         expected.unwrap_or(0)
                     ),
                 )
-                .at(p.location.clone()),
+                .at(location.clone()),
             );
         }
-        let mut links = Vec::with_capacity(elems.len());
-        for e in elems {
-            let Elem::Str(s) = e else { continue };
+        let mut links = Links::with_capacity(toks.len());
+        for t in toks {
+            let s = decode_str(self.src, t);
             let (handle, output) = match s.rfind(':') {
                 Some(k) if k + 1 == s.len() => {
                     return Err(Diagnostic::error(
                         "RB008",
-                        format!("connection `{s}` of `{}` has an empty output name", p.name),
+                        format!("connection `{s}` of `{}` has an empty output name", name),
                     )
-                    .at(p.location.clone())
+                    .at(location.clone())
                     .into());
                 }
                 Some(k) => (&s[..k], Some(&s[k + 1..])),
-                None => (s.as_str(), None),
+                None => (&*s, None),
             };
             let output = output.map(|o| self.output_name(o));
             match self.net.find(handle) {
@@ -1045,9 +1024,9 @@ impl<'a> Assembler<'a, '_> {
                     diags.push(
                         Diagnostic::warning(
                             "RB018",
-                            format!("`{}` references `{handle}`, which is not defined before this request; kept as a dangling connection", p.name),
+                            format!("`{}` references `{handle}`, which is not defined before this request; kept as a dangling connection", name),
                         )
-                        .at(p.location.clone()),
+                        .at(location.clone()),
                     );
                     links.push(Link {
                         upstream: Upstream::Missing(Box::from(handle)),
@@ -1062,18 +1041,47 @@ impl<'a> Assembler<'a, '_> {
 
 /// For each parameter occurrence: whether an earlier occurrence has the same name (RB015),
 /// and whether a later one does (this one is overridden).
-fn duplicates(read: &[ReadParam]) -> (Vec<bool>, Vec<bool>) {
+fn duplicates(read: &[Param]) -> (Flags, Flags) {
+    let mut repeated: Flags = smallvec::smallvec![false; read.len()];
+    let mut shadowed: Flags = smallvec::smallvec![false; read.len()];
+    // Names of repeated declarations are one shared string, so most comparisons are of two
+    // pointers.
+    let same = |a: &str, b: &str| std::ptr::eq(a, b) || a == b;
+    if read.len() <= SMALL_REQUEST {
+        // Each occurrence against the nearest earlier one with its name.
+        for j in 1..read.len() {
+            if let Some(i) = (0..j).rev().find(|&i| same(read[i].name(), read[j].name())) {
+                repeated[j] = true;
+                shadowed[i] = true;
+            }
+        }
+        return (repeated, shadowed);
+    }
     let mut order: Vec<usize> = (0..read.len()).collect();
-    order.sort_by(|&a, &b| read[a].name.cmp(&read[b].name).then(a.cmp(&b)));
-    let mut repeated = vec![false; read.len()];
-    let mut shadowed = vec![false; read.len()];
+    order.sort_by(|&a, &b| read[a].name().cmp(read[b].name()).then(a.cmp(&b)));
     for w in order.windows(2) {
-        if read[w[0]].name == read[w[1]].name {
+        if same(read[w[0]].name(), read[w[1]].name()) {
             repeated[w[1]] = true;
             shadowed[w[0]] = true;
         }
     }
     (repeated, shadowed)
+}
+
+/// One flag per parameter occurrence of a request.
+type Flags = SmallVec<[bool; 32]>;
+
+/// Requests with at most this many parameters are checked for duplicates pairwise (a sort
+/// costs more for so few).
+const SMALL_REQUEST: usize = 24;
+
+/// The number and string tokens of a value: the bare token, or the array's elements.
+fn value_tokens<'p>(value: &'p Piece, arena: &'p [Token]) -> &'p [Token] {
+    match value {
+        Piece::Value(t) => std::slice::from_ref(t),
+        Piece::Array { items, .. } => arena.get(items.clone()).unwrap_or_default(),
+        Piece::Comment(_) => &[],
+    }
 }
 
 fn piece_name(p: &Piece) -> &'static str {
@@ -1183,7 +1191,7 @@ fn scalar(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> 
         },
         BaseType::Float => Value::Float(floats()[0]),
         BaseType::String => match &elems[0] {
-            Elem::Str(s) => Value::Str(s.clone()),
+            Elem::Str(s) => Value::Str(s.to_string()),
             Elem::Num(_) => return None,
         },
         b if b.is_triple() => {
@@ -1233,7 +1241,7 @@ fn flat(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Va
     let items = elems
         .iter()
         .map(|e| match e {
-            Elem::Str(s) => Value::Str(s.clone()),
+            Elem::Str(s) => Value::Str(s.to_string()),
             Elem::Num(t) => match t.parse::<i32>() {
                 Ok(i) => Value::Int(i),
                 Err(_) => Value::Float(parse_f32(t, note)),
@@ -1245,8 +1253,8 @@ fn flat(base: &BaseType, elems: &[Elem<'_>], note: &mut dyn FnMut(String)) -> Va
 
 /// One material per terminal node version, in file order.
 fn add_materials(net: &mut Network) {
-    let mut taken: HashSet<String> = HashSet::new();
-    let mut suffixes: HashMap<String, usize> = HashMap::new();
+    let mut taken: FxHashSet<String> = FxHashSet::default();
+    let mut suffixes: FxHashMap<String, usize> = FxHashMap::default();
     let terminals: Vec<NodeId> = net
         .node_ids()
         .filter(|&id| net[id].kind() != RequestKind::Pattern)

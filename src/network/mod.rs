@@ -53,9 +53,8 @@ use crate::types::{Type, Value};
 use hashbrown::HashTable;
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
 use petgraph::visit::EdgeRef;
-use rustc_hash::FxBuildHasher;
+use rustc_hash::{FxBuildHasher, FxHashMap, FxHashSet};
 use smallvec::SmallVec;
-use std::collections::HashMap;
 use std::fmt;
 use std::hash::BuildHasher;
 use std::ops::{Index, Range};
@@ -297,7 +296,7 @@ pub enum ParamChange {
 }
 
 /// A parameter's connections, in order.
-type Links = SmallVec<[Link; 1]>;
+pub(crate) type Links = SmallVec<[Link; 1]>;
 
 /// One parameter of a node: authored value, connections, declaration and change state.
 #[derive(Debug, Clone, PartialEq)]
@@ -380,6 +379,14 @@ impl Param {
             value_touched: false,
             links_touched: false,
         }
+    }
+
+    /// The parameter with the connections `links` as read from a file (not a change;
+    /// crate-internal: readers). [`Network::add_source_edges`] mirrors them once the node is
+    /// in a network.
+    pub(crate) fn with_source_links(mut self, links: Links) -> Param {
+        self.links = links;
+        self
     }
 
     /// The parameter name.
@@ -590,11 +597,19 @@ impl PartialEq for Node {
 impl Node {
     /// A node with no parameters (crate-internal; use [`Network::add_node`]).
     pub(crate) fn new_raw(handle: &str, shader: &str, kind: RequestKind) -> Node {
+        Node::new_shared(handle, Arc::from(shader), kind)
+    }
+
+    /// [`Node::new_raw`] with a shared shader id (crate-internal: readers).
+    pub(crate) fn new_shared(handle: &str, shader: Arc<str>, kind: RequestKind) -> Node {
+        // Room for the `#version` suffix the network appends.
+        let mut key = String::with_capacity(handle.len() + 4);
+        key.push_str(handle);
         Node {
-            key: handle.to_string(),
+            key,
             handle_len: handle.len(),
             version: 0,
-            shader: Arc::from(shader),
+            shader,
             kind,
             params: Vec::new(),
             by_name: HashTable::new(),
@@ -842,9 +857,9 @@ pub struct Material {
 pub struct Network {
     graph: StableDiGraph<Node, Edge>,
     /// Every version of each handle, oldest first (usually one, kept inline).
-    handles: HashMap<Box<str>, SmallVec<[NodeId; 1]>>,
+    handles: FxHashMap<Box<str>, SmallVec<[NodeId; 1]>>,
     /// The shader ids of the nodes, each stored once.
-    shaders: std::collections::HashSet<Arc<str>>,
+    shaders: FxHashSet<Arc<str>>,
     materials: Vec<Material>,
     /// True between [`Network::suspend_edges`] and [`Network::restore_edges`]: links are not
     /// mirrored by graph edges then.
@@ -924,10 +939,30 @@ impl Network {
                 self.shaders.insert(node.shader.clone());
             }
         }
-        let key: Box<str> = Box::from(node.handle());
-        let id = self.graph.add_node(node);
-        self.handles.entry(key).or_default().push(id);
-        id
+        match self.handles.get_mut(node.handle()) {
+            Some(versions) => {
+                let id = self.graph.add_node(node);
+                versions.push(id);
+                id
+            }
+            None => {
+                let key: Box<str> = Box::from(node.handle());
+                let id = self.graph.add_node(node);
+                self.handles.entry(key).or_default().push(id);
+                id
+            }
+        }
+    }
+
+    /// The network's shared copy of shader id `shader` (crate-internal: readers build nodes
+    /// with it rather than a copy of their own).
+    pub(crate) fn shared_shader(&mut self, shader: &str) -> Arc<str> {
+        if let Some(shared) = self.shaders.get(shader) {
+            return shared.clone();
+        }
+        let shared: Arc<str> = Arc::from(shader);
+        self.shaders.insert(shared.clone());
+        shared
     }
 
     /// Change the request kind of node `id` (crate-internal: the JSON reader learns a node's
@@ -1150,6 +1185,31 @@ impl Network {
             let index = self.graph[down].params[param].links.len();
             self.add_edge_for(down, param, &link, index);
             self.graph[down].params[param].links.push(link);
+        }
+    }
+
+    /// Mirror by graph edges the connections that the parameters of node `down` were built
+    /// with ([`Param::with_source_links`]), in parameter and connection order
+    /// (crate-internal: readers).
+    pub(crate) fn add_source_edges(&mut self, down: NodeId) {
+        if self.edges_suspended {
+            return;
+        }
+        let mut edges: SmallVec<[(NodeId, Edge); 4]> = SmallVec::new();
+        for p in &self.graph[down].params {
+            for (index, link) in p.links.iter().enumerate() {
+                if let Some(up) = link.upstream_node() {
+                    let edge = Edge {
+                        output: link.output.clone(),
+                        input: p.name.clone(),
+                        index,
+                    };
+                    edges.push((up, edge));
+                }
+            }
+        }
+        for (up, edge) in edges {
+            self.graph.add_edge(up, down, edge);
         }
     }
 

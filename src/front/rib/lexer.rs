@@ -2,13 +2,12 @@
 //!
 //! Tokens are produced one at a time; the parser keeps only the tokens of the shading request
 //! it is reading, so pass-through requests (geometry with millions of numbers) cost no memory.
-//! String contents are decoded on demand ([`decode_string`]).
+//! String contents are decoded on demand ([`decode_string`], [`decode_str`]). Comments and
+//! strings are scanned with `memchr`, and lines and columns are counted over whole tokens
+//! rather than byte by byte.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-use nom::branch::alt;
-use nom::character::complete::{char, digit0, digit1, one_of};
-use nom::combinator::{opt, recognize};
-use nom::{IResult, Parser};
+use std::borrow::Cow;
 use std::sync::Arc;
 
 /// What a token is.
@@ -41,17 +40,42 @@ pub(crate) struct Token {
     pub escaped: bool,
 }
 
-/// Recognises a RIB number: `[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?`.
-fn number(i: &[u8]) -> IResult<&[u8], &[u8]> {
-    recognize((
-        opt(one_of("+-")),
-        alt((
-            recognize((digit1, opt((char('.'), digit0)))),
-            recognize((char('.'), digit1)),
-        )),
-        opt((one_of("eE"), opt(one_of("+-")), digit1)),
-    ))
-    .parse(i)
+/// The length of the RIB number at the start of `i`:
+/// `[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?`, or `None` if `i` does not start
+/// with one.
+fn number(i: &[u8]) -> Option<usize> {
+    let digits = |from: usize| {
+        i[from.min(i.len())..]
+            .iter()
+            .take_while(|b| b.is_ascii_digit())
+            .count()
+    };
+    let mut n = usize::from(matches!(i.first(), Some(b'+' | b'-')));
+    let int = digits(n);
+    n += int;
+    if i.get(n) == Some(&b'.') {
+        let frac = digits(n + 1);
+        if int == 0 && frac == 0 {
+            return None;
+        }
+        n += 1 + frac;
+    } else if int == 0 {
+        return None;
+    }
+    // An exponent only when digits follow it (`1e` is the number `1` then an identifier).
+    if matches!(i.get(n), Some(b'e' | b'E')) {
+        let sign = usize::from(matches!(i.get(n + 1), Some(b'+' | b'-')));
+        let exp = digits(n + 1 + sign);
+        if exp > 0 {
+            n += 1 + sign + exp;
+        }
+    }
+    Some(n)
+}
+
+/// The number of characters in `s` (UTF-8 continuation bytes are not counted).
+fn chars(s: &[u8]) -> u32 {
+    s.iter().filter(|&&b| (b as i8) >= -0x40).count() as u32
 }
 
 /// True for the RIB whitespace bytes: space, `\t`, `\r`, `\n`, `\f`, `\v`.
@@ -99,12 +123,12 @@ impl<'a> Lexer<'a> {
 
     /// Advance over `src[pos..end]`, keeping line and column (characters) up to date.
     fn advance_to(&mut self, end: usize) {
-        for &b in &self.src[self.pos..end] {
-            if b == b'\n' {
-                self.line += 1;
-                self.col = 1;
-            } else if b & 0xC0 != 0x80 {
-                self.col += 1;
+        let s = &self.src[self.pos..end];
+        match memchr::memrchr(b'\n', s) {
+            None => self.col += chars(s),
+            Some(last) => {
+                self.line += memchr::memchr_iter(b'\n', s).count() as u32;
+                self.col = 1 + chars(&s[last + 1..]);
             }
         }
         self.pos = end;
@@ -145,11 +169,11 @@ impl<'a> Lexer<'a> {
         };
         match b {
             b'#' => {
-                let end = self.src[start..]
-                    .iter()
-                    .position(|&c| c == b'\n')
-                    .map_or(self.src.len(), |n| start + n);
-                self.advance_to(end);
+                let end =
+                    memchr::memchr(b'\n', &self.src[start..]).map_or(self.src.len(), |n| start + n);
+                // No newline inside: only the column moves.
+                self.col += chars(&self.src[start..end]);
+                self.pos = end;
                 tok.kind = TokKind::Comment;
             }
             b'[' | b']' => {
@@ -191,12 +215,12 @@ impl<'a> Lexer<'a> {
             }
             c if c.is_ascii_digit() || matches!(c, b'+' | b'-' | b'.') => {
                 match number(&self.src[start..]) {
-                    Ok((_, text)) => {
-                        self.pos += text.len();
-                        self.col += text.len() as u32;
+                    Some(len) => {
+                        self.pos += len;
+                        self.col += len as u32;
                         tok.kind = TokKind::Number;
                     }
-                    Err(_) => return Err(self.unexpected(start, line, col)),
+                    None => return Err(self.unexpected(start, line, col)),
                 }
             }
             _ => return Err(self.unexpected(start, line, col)),
@@ -239,7 +263,7 @@ impl<'a> Lexer<'a> {
         let mut i = start + 1;
         let mut escaped = false;
         loop {
-            let Some(off) = self.src[i..].iter().position(|&c| c == q || c == b'\\') else {
+            let Some(off) = memchr::memchr2(q, b'\\', &self.src[i..]) else {
                 return Err(Diagnostic::error("RB003", "unterminated string")
                     .at(self.loc(self.line, self.col))
                     .into());
@@ -300,9 +324,15 @@ fn is_known_escape(e: u8, quote: u8) -> bool {
 /// The decoded content of a string token (quotes removed, escapes applied). Invalid UTF-8 is
 /// replaced by U+FFFD.
 pub(crate) fn decode_string(src: &[u8], t: &Token) -> String {
+    decode_str(src, t).into_owned()
+}
+
+/// [`decode_string`], borrowing from `src` when the string has no escape and is valid UTF-8
+/// (as nearly every string of a scene is).
+pub(crate) fn decode_str<'s>(src: &'s [u8], t: &Token) -> Cow<'s, str> {
     let inner = &src[t.start + 1..t.end - 1];
     if !t.escaped {
-        return String::from_utf8_lossy(inner).into_owned();
+        return String::from_utf8_lossy(inner);
     }
     let mut out: Vec<u8> = Vec::with_capacity(inner.len());
     let mut i = 0;
@@ -347,7 +377,7 @@ pub(crate) fn decode_string(src: &[u8], t: &Token) -> String {
             other => out.push(other),
         }
     }
-    String::from_utf8_lossy(&out).into_owned()
+    Cow::Owned(String::from_utf8_lossy(&out).into_owned())
 }
 
 #[cfg(test)]
