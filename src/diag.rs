@@ -606,7 +606,7 @@ impl Diagnostics {
 }
 
 /// How many items [`join_bounded`] names at each end of a long list.
-pub const LIST_ENDS: usize = 3;
+pub(crate) const LIST_ENDS: usize = 3;
 
 /// The items of a list of `len` joined with `, `, naming at most [`LIST_ENDS`] at each end
 /// of a longer list and the number left out between them; `item(i)` is called only for the
@@ -617,7 +617,7 @@ pub const LIST_ENDS: usize = 3;
 /// assert_eq!(join_bounded(3, |i| i.to_string()), "0, 1, 2");
 /// assert_eq!(join_bounded(10, |i| i.to_string()), "0, 1, 2, … 4 more …, 7, 8, 9");
 /// ```
-pub fn join_bounded(len: usize, mut item: impl FnMut(usize) -> String) -> String {
+pub(crate) fn join_bounded(len: usize, mut item: impl FnMut(usize) -> String) -> String {
     if len <= 2 * LIST_ENDS + 1 {
         return (0..len).map(item).collect::<Vec<_>>().join(", ");
     }

@@ -13,7 +13,7 @@
 //! 3. [`cond`]: the conditional language (lexer, parser, AST, evaluator);
 //! 4. [`network`]: the shader-network graph;
 //! 5. [`resolve`]: vstruct expansion;
-//! 6. [`ir`], [`lower`], [`interp`]: the closure IR, its lowering per material model, and the
+//! 6. [`ir`], `lower`, [`interp`]: the closure IR, its lowering per material model, and the
 //!    CPU interpreter;
 //! 7. [`back`]: writers for RIB, JSON, Graphviz dot and images.
 //!
@@ -46,7 +46,12 @@ pub mod resolve;
 
 pub mod interp;
 pub mod ir;
+// Lowering is reached through `pipeline`; its recipes and graph traits are internals, public
+// only to the crate's own tests (feature `testkit`).
+#[cfg(feature = "testkit")]
 pub mod lower;
+#[cfg(not(feature = "testkit"))]
+pub(crate) mod lower;
 
 pub mod back;
 pub mod raster;

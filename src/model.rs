@@ -298,7 +298,7 @@ impl Definition {
 /// definitions such as PxrLayerMixer declare hundreds of them, and resolution and lowering
 /// look several up for every member or parameter binding.
 #[derive(Debug, Clone)]
-pub struct IndexedDefinition {
+pub(crate) struct IndexedDefinition {
     def: Arc<Definition>,
     inputs: rustc_hash::FxHashMap<String, usize>,
     /// Output name → position in `def.outputs` (the first of duplicates).

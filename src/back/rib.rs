@@ -116,6 +116,7 @@ pub fn write_rib(
 /// let rib = write_rib_to_vec(b"", &net, &NoDefinitions).unwrap();
 /// assert_eq!(String::from_utf8(rib).unwrap(), "Pattern \"PxrFractal\" \"f\"\n\t\"int layers\" [2]\n");
 /// ```
+#[cfg(any(test, feature = "testkit"))]
 pub fn write_rib_to_vec(
     source: &[u8],
     net: &Network,
@@ -617,7 +618,7 @@ fn value_fits(ty: &Type, v: &Value) -> bool {
 }
 
 /// A value in RIB syntax, always bracketed: `[1]`, `[0.5]`, `["s"]`, `[1 0 0]`.
-pub fn format_value(v: &Value) -> String {
+pub(crate) fn format_value(v: &Value) -> String {
     let mut out = String::from("[");
     push_elements(v, &mut out);
     out.push(']');
@@ -679,6 +680,7 @@ fn push_elements(v: &Value, out: &mut String) {
 /// assert_eq!(quote("a \"b\"\n"), r#""a \"b\"\n""#);
 /// assert_eq!(quote("\u{1}"), r#""\001""#);
 /// ```
+#[cfg(any(test, feature = "testkit"))]
 pub fn quote(s: &str) -> String {
     format!("\"{}\"", escape(s))
 }

@@ -58,7 +58,8 @@ pub fn parse_args(
 }
 
 /// Parse an `.args` document with explicit options.
-pub fn parse_args_with(
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn parse_args_with(
     bytes: &[u8],
     path: &str,
     id: &str,
@@ -1393,7 +1394,7 @@ pub(crate) fn args_type(word: &str) -> Option<Type> {
 
 /// A parsed default and the most severe problem found.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ParsedDefault {
+pub(crate) struct ParsedDefault {
     /// The value used (`None`: no default).
     pub value: Option<Value>,
     /// AR012 severity and message, if anything was off.

@@ -607,7 +607,8 @@ pub fn parse_json(
 
 /// [`parse_json`] within `limits`: the input's size, its nodes, each node's parameters and
 /// each input's connections ([`Network::check_limits`]); exceeding one is [`Error::Limit`].
-pub fn parse_json_limited(
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn parse_json_limited(
     bytes: &[u8],
     path: &str,
     types: &dyn ParamTypes,

@@ -1,7 +1,7 @@
 //! Reading input bytes with bounds: definition files and networks come from paths the user
 //! (or a folder someone else controls) names, so what a path names decides how it is read.
 //!
-//! * [`read_regular_file`] reads only a regular file (after following symlinks) of at most a
+//! * `read_regular_file` reads only a regular file (after following symlinks) of at most a
 //!   given size. It opens without blocking, so a FIFO with that name is refused instead of
 //!   waiting forever for a writer, and it checks the opened file, not the name, so a file
 //!   swapped after a folder walk is judged as what is actually read. Definitions are read
@@ -126,7 +126,7 @@ pub(crate) fn open_regular(path: &Path) -> Result<(File, u64), ReadError> {
 }
 
 /// Read the regular file `path` (symlinks followed) if it holds at most `limit` bytes.
-pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+pub(crate) fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
     let (file, len) = open_regular(path)?;
     if len > limit {
         return Err(ReadError::TooLarge {

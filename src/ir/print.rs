@@ -25,7 +25,8 @@ pub(crate) fn fmt_vec3(v: Vec3) -> String {
 }
 
 /// An operand: the literal for a constant register, else `rN`.
-pub fn operand(p: &Program, r: Reg) -> String {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn operand(p: &Program, r: Reg) -> String {
     match p.constant(r) {
         Some(v) => fmt_vec3(v),
         None => format!("r{}", r.0),

@@ -5,7 +5,7 @@
 //!
 //! The lowering reads the network through the small [`Graph`] trait and definitions through
 //! [`Definitions`], so that it works on the crate's network model and on hand-built graphs
-//! ([`SimpleGraph`]) alike.
+//! (`SimpleGraph`, for tests) alike.
 //!
 //! Parameter binding, in order of preference: a connection from an interpreted
 //! pattern → program expression; a connection from any other node → external input slot
@@ -46,6 +46,7 @@ use crate::registry::{Definition, IndexedDefinition, NumericRange};
 use crate::types::{BaseType, Type, Value};
 use glam::Vec3;
 use rustc_hash::{FxHashMap, FxHashSet};
+#[cfg(any(test, feature = "testkit"))]
 use std::collections::HashMap;
 use std::fmt::Debug;
 use std::hash::Hash;
@@ -93,14 +94,17 @@ pub trait Definitions {
 
 /// No definitions at all: every recipe uses its built-in defaults (LW003).
 #[derive(Debug, Clone, Copy, Default)]
+#[cfg(any(test, feature = "testkit"))]
 pub struct NoDefinitions;
 
+#[cfg(any(test, feature = "testkit"))]
 impl Definitions for NoDefinitions {
     fn definition(&self, _shader: &str) -> Option<Arc<Definition>> {
         None
     }
 }
 
+#[cfg(any(test, feature = "testkit"))]
 impl Definitions for HashMap<String, Arc<Definition>> {
     fn definition(&self, shader: &str) -> Option<Arc<Definition>> {
         self.get(shader).cloned()
@@ -109,11 +113,13 @@ impl Definitions for HashMap<String, Arc<Definition>> {
 
 /// A small in-memory network for tests and API users who build materials by hand.
 #[derive(Debug, Clone, Default)]
+#[cfg(any(test, feature = "testkit"))]
 pub struct SimpleGraph {
     nodes: Vec<SimpleNode>,
 }
 
 #[derive(Debug, Clone)]
+#[cfg(any(test, feature = "testkit"))]
 struct SimpleNode {
     handle: String,
     shader: String,
@@ -121,6 +127,7 @@ struct SimpleNode {
     conns: HashMap<String, (usize, String)>,
 }
 
+#[cfg(any(test, feature = "testkit"))]
 impl SimpleGraph {
     /// An empty graph.
     pub fn new() -> Self {
@@ -166,6 +173,7 @@ impl SimpleGraph {
     }
 }
 
+#[cfg(any(test, feature = "testkit"))]
 impl Graph for SimpleGraph {
     type Id = usize;
     fn shader(&self, n: usize) -> &str {

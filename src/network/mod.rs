@@ -64,7 +64,7 @@ use std::sync::Arc;
 pub type NodeId = NodeIndex;
 
 /// Identifies a graph edge of a [`Network`].
-pub type EdgeId = EdgeIndex;
+pub(crate) type EdgeId = EdgeIndex;
 
 /// The request kind that created a node (RIB request name; JSON: from its terminal).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]

@@ -40,10 +40,10 @@
 mod param_types;
 pub mod tables;
 
+pub(crate) use crate::model::IndexedDefinition;
 pub(crate) use crate::model::NumericRange;
 pub use crate::model::{
-    CondSource, Definition, Direction, IndexedDefinition, MemberDecl, Metadata, Property,
-    SourceKind,
+    CondSource, Definition, Direction, MemberDecl, Metadata, Property, SourceKind,
 };
 pub use tables::{CondEntry, InputHead, InputMember, OutputHead, OutputMember, VstructTables};
 
@@ -69,7 +69,8 @@ const OSO_PEEK_BYTES: u64 = 64 << 10;
 
 /// The crate's own `args/` files compiled into the binary: `(path relative to args/, bytes)`,
 /// in byte-wise sorted path order.
-pub fn embedded_files() -> &'static [(&'static str, &'static [u8])] {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn embedded_files() -> &'static [(&'static str, &'static [u8])] {
     include!(concat!(env!("OUT_DIR"), "/embedded_args.rs"))
 }
 
@@ -385,7 +386,7 @@ impl Registry {
 
     /// The definition of `id` with its input index (built on first use), for callers that
     /// look inputs up by name many times.
-    pub fn indexed(&self, id: &str) -> Option<Arc<IndexedDefinition>> {
+    pub(crate) fn indexed(&self, id: &str) -> Option<Arc<IndexedDefinition>> {
         let (entry, def) = self.loaded(id)?;
         let def = def?;
         Some(
