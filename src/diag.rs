@@ -611,12 +611,6 @@ pub(crate) const LIST_ENDS: usize = 3;
 /// The items of a list of `len` joined with `, `, naming at most [`LIST_ENDS`] at each end
 /// of a longer list and the number left out between them; `item(i)` is called only for the
 /// items named, so a message about a list of 100,000 nodes costs what one about 6 does.
-///
-/// ```
-/// use vstructc::diag::join_bounded;
-/// assert_eq!(join_bounded(3, |i| i.to_string()), "0, 1, 2");
-/// assert_eq!(join_bounded(10, |i| i.to_string()), "0, 1, 2, … 4 more …, 7, 8, 9");
-/// ```
 pub(crate) fn join_bounded(len: usize, mut item: impl FnMut(usize) -> String) -> String {
     if len <= 2 * LIST_ENDS + 1 {
         return (0..len).map(item).collect::<Vec<_>>().join(", ");
@@ -754,6 +748,19 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_lists_are_joined_with_their_ends_and_a_count() {
+        assert_eq!(join_bounded(3, |i| i.to_string()), "0, 1, 2");
+        assert_eq!(join_bounded(7, |i| i.to_string()), "0, 1, 2, 3, 4, 5, 6");
+        let mut asked = Vec::new();
+        let text = join_bounded(10, |i| {
+            asked.push(i);
+            i.to_string()
+        });
+        assert_eq!(text, "0, 1, 2, … 4 more …, 7, 8, 9");
+        assert_eq!(asked, [0, 1, 2, 7, 8, 9], "only the named items are formatted");
+    }
 
     #[test]
     fn line_column_counts_characters() {
