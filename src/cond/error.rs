@@ -63,7 +63,8 @@ impl ParseError {
 
     /// What was expected and what was found, in one sentence in the language's words rather
     /// than token names: `expected a number or a quoted string, found the end of the
-    /// expression`.
+    /// expression`. An error that is not about an unexpected token (a bound of
+    /// [`crate::limits::Limits`] exceeded) is said by its [`ParseError::message`] as it is.
     ///
     /// ```
     /// let err = vstructc::cond::parse("set 1 if x is").unwrap_err();
@@ -73,6 +74,9 @@ impl ParseError {
     /// );
     /// ```
     pub fn in_words(&self) -> String {
+        if self.limit.is_some() || self.expected.is_empty() {
+            return self.message.clone();
+        }
         let mut items: Vec<String> = Vec::new();
         let cmp = ["==", "!=", "<", ">", "<=", ">="];
         let all_cmp = cmp.iter().all(|c| self.expected.iter().any(|e| e == c));
