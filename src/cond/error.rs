@@ -90,9 +90,7 @@ impl ParseError {
                 }
                 continue;
             }
-            let word = match e {
-                _ => expected_word(e),
-            };
+            let word = expected_word(e);
             if !items.contains(&word) {
                 items.push(word);
             }
