@@ -28,14 +28,19 @@ pub enum ColorChoice {
 impl ColorChoice {
     /// Whether to colour output written to standard error.
     pub fn colours_stderr(self) -> bool {
+        use std::io::IsTerminal as _;
+        self.colours(
+            std::env::var_os("NO_COLOR").as_deref(),
+            std::io::stderr().is_terminal(),
+        )
+    }
+
+    /// Whether to colour, given the `NO_COLOR` variable and whether the output is a terminal.
+    fn colours(self, no_color: Option<&std::ffi::OsStr>, terminal: bool) -> bool {
         match self {
             ColorChoice::Always => true,
             ColorChoice::Never => false,
-            ColorChoice::Auto => {
-                use std::io::IsTerminal as _;
-                let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-                !no_color && std::io::stderr().is_terminal()
-            }
+            ColorChoice::Auto => terminal && no_color.is_none_or(|v| v.is_empty()),
         }
     }
 }
@@ -337,6 +342,18 @@ mod tests {
         assert_eq!(s.line(4), None);
         assert_eq!(s.line(0), None);
         assert_eq!(Source::new(Arc::from("x")).line(1), Some("x"));
+    }
+
+    #[test]
+    fn auto_colours_a_terminal_unless_no_color_is_set() {
+        use std::ffi::OsStr;
+        let auto = ColorChoice::Auto;
+        assert!(auto.colours(None, true));
+        assert!(auto.colours(Some(OsStr::new("")), true));
+        assert!(!auto.colours(Some(OsStr::new("1")), true));
+        assert!(!auto.colours(None, false));
+        assert!(ColorChoice::Always.colours(Some(OsStr::new("1")), false));
+        assert!(!ColorChoice::Never.colours(None, true));
     }
 
     #[test]
