@@ -10,6 +10,7 @@ use std::ops::Range;
 /// the form `expected NUMBER or STRING, found PARAM "y"` (for a predicate's operator slot the
 /// expected set is summarised as `a comparison operator (==, !=, <, >, <=, >=)`; the full set,
 /// which also holds `IS` and `IS_NOT`, is in [`ParseError::expected`]).
+/// [`ParseError::in_words`] says the same in the language's words, for readers.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParseError {
     /// Byte span of the offending token (empty at end of input).
