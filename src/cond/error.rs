@@ -10,6 +10,7 @@ use std::ops::Range;
 /// the form `expected NUMBER or STRING, found PARAM "y"` (for a predicate's operator slot the
 /// expected set is summarised as `a comparison operator (==, !=, <, >, <=, >=)`; the full set,
 /// which also holds `IS` and `IS_NOT`, is in [`ParseError::expected`]).
+/// [`ParseError::in_words`] says the same in the language's words, for readers.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParseError {
     /// Byte span of the offending token (empty at end of input).
@@ -61,6 +62,48 @@ impl ParseError {
         out
     }
 
+    /// What was expected and what was found, in one sentence in the language's words rather
+    /// than token names: `expected a number or a quoted string, found the end of the
+    /// expression`. An error that is not about an unexpected token (a bound of
+    /// [`crate::limits::Limits`] exceeded) is said by its [`ParseError::message`] as it is.
+    ///
+    /// ```
+    /// let err = vstructc::cond::parse("set 1 if x is").unwrap_err();
+    /// assert_eq!(
+    ///     err.in_words(),
+    ///     "expected `connected` or `set`, found the end of the expression"
+    /// );
+    /// ```
+    pub fn in_words(&self) -> String {
+        if self.limit.is_some() || self.expected.is_empty() {
+            return self.message.clone();
+        }
+        let mut items: Vec<String> = Vec::new();
+        let cmp = ["==", "!=", "<", ">", "<=", ">="];
+        let all_cmp = cmp.iter().all(|c| self.expected.iter().any(|e| e == c));
+        let mut pushed_cmp = false;
+        for e in &self.expected {
+            let e = e.as_str();
+            if all_cmp && cmp.contains(&e) {
+                if !pushed_cmp {
+                    items.push("a comparison (`==`, `!=`, `<`, `>`, `<=` or `>=`)".into());
+                    pushed_cmp = true;
+                }
+                continue;
+            }
+            let word = expected_word(e);
+            if !items.contains(&word) {
+                items.push(word);
+            }
+        }
+        let expected = match items.as_slice() {
+            [] => String::from("something else"),
+            [one] => one.clone(),
+            [init @ .., last] => format!("{} or {last}", init.join(", ")),
+        };
+        format!("expected {expected}, found {}", found_words(&self.found))
+    }
+
     /// A VS001 diagnostic (warning, as in definitions) with the span, the caret rendering,
     /// the expected set and the notes. The caller adds the location.
     pub fn to_diagnostic(&self, text: &str) -> Diagnostic {
@@ -103,6 +146,47 @@ impl fmt::Display for ParseError {
 }
 
 impl std::error::Error for ParseError {}
+
+/// One expected token in words: keywords as written, literals and names described.
+fn expected_word(token: &str) -> String {
+    match token {
+        "NUMBER" => "a number".into(),
+        "STRING" => "a quoted string".into(),
+        "PARAM" => "a parameter name".into(),
+        "end of input" => "the end of the expression".into(),
+        t if !t.is_empty() && t.chars().all(|c| c.is_ascii_uppercase() || c == '_') => {
+            format!("`{}`", t.to_ascii_lowercase().replace('_', " "))
+        }
+        t => format!("`{t}`"),
+    }
+}
+
+/// The offending token as found (see [`ParseError::found`]) in words.
+fn found_words(found: &str) -> String {
+    if found == "end of input" {
+        return "the end of the expression".into();
+    }
+    if let Some(n) = found.strip_prefix("NUMBER ") {
+        return format!("the number {n}");
+    }
+    if let Some(s) = found.strip_prefix("STRING ") {
+        return format!("the string {s}");
+    }
+    if let Some(p) = found.strip_prefix("PARAM ") {
+        return format!("the name {p}");
+    }
+    if let Some(t) = found
+        .strip_prefix('\'')
+        .and_then(|f| f.strip_suffix('\''))
+        .filter(|t| !t.is_empty())
+    {
+        return format!("`{t}`");
+    }
+    if !found.is_empty() && found.chars().all(|c| c.is_ascii_uppercase() || c == '_') {
+        return format!("`{}`", found.to_ascii_lowercase().replace('_', " "));
+    }
+    found.to_string()
+}
 
 fn indent(text: &str) -> String {
     text.lines()

@@ -520,7 +520,7 @@ impl ParseError {
         let cmp = Want::Cmp.message_text();
         self.message = format!("expected {cmp}, found {}", self.found);
         self.notes.push(
-            "a parameter name is followed by a comparison operator and a NUMBER or STRING, \
+            "a parameter name is followed by a comparison operator and a number or a quoted string, \
              or by `is connected`, `is not connected`, `is set` or `is not set`"
                 .into(),
         );
@@ -582,14 +582,14 @@ fn hints(
             if wants.contains(&Want::Number) {
                 if prev_kind == Some(TokenKind::Kw(Keyword::Set)) {
                     notes.push(format!(
-                        "`set` takes a NUMBER or STRING literal; to copy a parameter write \
+                        "`set` takes a number or a quoted string; to copy a parameter write \
                          `copy {p}`"
                     ));
                 } else if matches!(p, "true" | "false") {
                     notes.push("there are no boolean literals; compare with 1 or 0".into());
                 } else {
                     notes.push(
-                        "a parameter can only be compared with a NUMBER or STRING literal".into(),
+                        "a parameter can only be compared with a number or a quoted string".into(),
                     );
                 }
             }

@@ -10,3 +10,4 @@ mod diagnostics;
 mod eval;
 mod info;
 mod render;
+mod snippets;

@@ -306,5 +306,5 @@ fn deep_parentheses_in_a_definition_are_a_positioned_warning() {
         "{}",
         tail(&m.stderr)
     );
-    assert!(m.stderr.contains("  --> "), "{}", tail(&m.stderr));
+    assert!(m.stderr.contains(" --> "), "{}", tail(&m.stderr));
 }

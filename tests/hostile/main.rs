@@ -122,7 +122,7 @@ fn check(name: &str, o: &Outcome, status: i32, code: &str) {
         );
         if code.starts_with("error") || code.starts_with("warning") {
             assert!(
-                o.stderr.contains("  --> "),
+                o.stderr.contains("--> "),
                 "{name}: unpositioned:\n{}",
                 o.stderr
             );

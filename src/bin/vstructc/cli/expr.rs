@@ -1,5 +1,6 @@
 //! `vstructc expr 'TEXT' [--json]`: parse one conditional expression and print its
-//! desugared form and AST, or the syntax error with a caret under the offending column.
+//! desugared form and AST, or the syntax error: what was expected, in the language's words,
+//! and the expression with a caret under the offending token.
 //!
 //! The parse error is reported as `error[VS001]` here (in a definition the same problem is a
 //! warning, because loading continues; here it is the command's only input). Exit status: 0
@@ -9,7 +10,7 @@ use super::CommonOptions;
 use super::input::print_stdout;
 use std::process::ExitCode;
 use vstructc::cond::{self, Extensions};
-use vstructc::diag::{Diagnostics, Location, Severity};
+use vstructc::diag::{Diagnostic, Diagnostics, Location};
 
 /// Arguments of `vstructc expr`.
 #[derive(Debug, clap::Args)]
@@ -86,14 +87,28 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
                     return failed;
                 }
             }
-            let d = err
-                .to_diagnostic_with(text, Severity::Error)
-                .at(Location::new("<expr>", line, column));
+            // One sentence of what was expected, in the language's words, and the text with a
+            // caret under the offending token; the notes say what the mistake likely is.
+            let mut d = Diagnostic::error(
+                cond::ParseError::CODE,
+                format!("conditional expression: {}", err.in_words()),
+            )
+            .with_span(err.span.clone())
+            .at(Location::new("<expr>", line, column));
+            for n in err.notes.iter().filter(|n| !restates_expected(n)) {
+                d = d.with_note(format!("note: {n}"));
+            }
+            super::snippet::remember("<expr>", text.as_bytes());
             let mut diags = Diagnostics::new();
             diags.push(d);
             super::report(&diags, common)
         }
     }
+}
+
+/// The parser's note that lists again what may follow a parameter name: the message says it.
+fn restates_expected(note: &str) -> bool {
+    note.starts_with("a parameter name is followed by")
 }
 
 fn pretty(v: &serde_json::Value) -> String {

@@ -106,6 +106,7 @@ fn read_bytes(path: &Path) -> Result<(String, Vec<u8>), Error> {
     if path.as_os_str() == "-" {
         let name = "<stdin>".to_string();
         let bytes = stream_bytes(std::io::stdin().lock(), &name, max)?;
+        super::snippet::remember(&name, &bytes);
         return Ok((name, bytes));
     }
     let name = path.display().to_string();

@@ -8,9 +8,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vstructc::diag::{
-    DEFAULT_MAX_PER_CODE, Diagnostics, MAX_HUMAN_LINE, Severity, Shown, bound_line,
-};
+use vstructc::diag::{DEFAULT_MAX_PER_CODE, Diagnostics, Severity, Shown};
 use vstructc::registry::Prefer;
 
 /// `eprintln!` that ignores a failing standard error (`2>/dev/full`): the exit status still
@@ -31,6 +29,7 @@ pub mod input;
 pub mod material;
 pub mod render;
 pub mod resolve;
+pub mod snippet;
 
 /// Top-level command line.
 #[derive(Debug, Parser)]
@@ -75,6 +74,10 @@ pub struct CommonOptions {
     /// identical diagnostics (same code, place and message) once.
     #[arg(long, value_name = "N", global = true)]
     pub max_diagnostics: Option<usize>,
+    /// Colour human diagnostics: `auto` when standard error is a terminal and `NO_COLOR` is
+    /// unset or empty.
+    #[arg(long, value_enum, value_name = "WHEN", global = true, default_value_t = snippet::ColorChoice::Auto)]
+    pub color: snippet::ColorChoice,
 }
 
 /// `--prefer`'s values, mapped onto the library's [`Prefer`].
@@ -93,7 +96,8 @@ fn prefer_parser() -> impl clap::builder::TypedValueParser<Value = Prefer> {
 /// How diagnostics are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
 pub enum DiagFormat {
-    /// `severity[CODE]: message` and `  --> file:line:col`.
+    /// `severity[CODE]: message`, `  --> file:line:col` and, when the source is at hand,
+    /// the offending line with a caret under the column.
     #[default]
     Human,
     /// One JSON object per line.
@@ -155,7 +159,8 @@ pub fn run(cli: Cli) -> ExitCode {
 /// Volume control ([`Diagnostics::volume_limited`]): in human output identical diagnostics
 /// are printed once, at most `--max-diagnostics` of one code (default
 /// [`DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
-/// bounded ([`MAX_HUMAN_LINE`]). JSON output keeps every diagnostic, whole, unless
+/// bounded ([`vstructc::diag::MAX_HUMAN_LINE`]); a located diagnostic shows its source line
+/// with a caret ([`snippet::render`]), coloured as `--color` says. JSON output keeps every diagnostic, whole, unless
 /// `--max-diagnostics` is given; its count line is an object `{"code": CODE, "suppressed": N}`.
 /// The exit status counts every diagnostic, shown or not.
 /// Failures to write to stderr are ignored (there is nowhere left to report them).
@@ -170,7 +175,8 @@ pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
         d.severity != Severity::Note || common.verbose
     });
     let mut err = std::io::BufWriter::new(std::io::stderr().lock());
-    let _ = print_shown(&mut err, &shown, common.diag_format).and_then(|_| err.flush());
+    let colour = human && common.color.colours_stderr();
+    let _ = print_shown(&mut err, &shown, common.diag_format, colour).and_then(|_| err.flush());
     if diags.has_errors() || (common.deny_warnings && diags.has_warnings()) {
         ExitCode::from(1)
     } else {
@@ -178,14 +184,16 @@ pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
     }
 }
 
-fn print_shown(out: &mut dyn Write, shown: &Shown<'_>, format: DiagFormat) -> std::io::Result<()> {
+fn print_shown(
+    out: &mut dyn Write,
+    shown: &Shown<'_>,
+    format: DiagFormat,
+    colour: bool,
+) -> std::io::Result<()> {
+    let mut sources = snippet::Sources::default();
     for d in &shown.items {
         match format {
-            DiagFormat::Human => {
-                for line in d.render_human().lines() {
-                    writeln!(out, "{}", bound_line(line, MAX_HUMAN_LINE))?;
-                }
-            }
+            DiagFormat::Human => writeln!(out, "{}", snippet::render(d, &mut sources, colour))?,
             DiagFormat::Json => writeln!(out, "{}", d.render_json())?,
         }
     }
