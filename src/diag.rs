@@ -759,7 +759,11 @@ mod tests {
             i.to_string()
         });
         assert_eq!(text, "0, 1, 2, … 4 more …, 7, 8, 9");
-        assert_eq!(asked, [0, 1, 2, 7, 8, 9], "only the named items are formatted");
+        assert_eq!(
+            asked,
+            [0, 1, 2, 7, 8, 9],
+            "only the named items are formatted"
+        );
     }
 
     #[test]

@@ -213,7 +213,7 @@ struct Resolver<'a> {
     types: HashMap<String, TypeInfo>,
     /// `--no-conditions`: how many members were connected without evaluating a conditional
     /// that does not always connect, and the first one (VS022 reports them once).
-    unconditioned: Option<(usize, String, Option<Location>)>,
+    unconditioned: Option<(usize, String)>,
     /// Scratch while a [`Decision`] is computed: the choice of each conditional evaluated so
     /// far, keyed by the shared parse result, so members with the same expression text share
     /// one evaluation (exact because expanding D never changes U; when D is U nothing is
@@ -930,7 +930,7 @@ impl Resolver<'_> {
         );
         let d = self.located(d, ctx.node, Some(ctx.member));
         if self.unconditioned.is_none() {
-            self.unconditioned = Some((1, hop, d.location.clone()));
+            self.unconditioned = Some((1, hop));
         }
         if self.options.verbose {
             self.out.diagnostics.push(d);
@@ -938,12 +938,13 @@ impl Resolver<'_> {
     }
 
     /// VS022 once: how many members `--no-conditions` connected without evaluating their
-    /// conditional, at the first of them.
+    /// conditional, naming the first. It is about the whole run, so it has no location (a
+    /// source snippet under it would point at one member of many).
     fn report_unconditioned(&mut self) {
-        let Some((count, first, location)) = self.unconditioned.take() else {
+        let Some((count, first)) = self.unconditioned.take() else {
             return;
         };
-        let mut d = Diagnostic::info(
+        let d = Diagnostic::info(
             "VS022",
             format!(
                 "--no-conditions: {count} member{} connected without evaluating a conditional \
@@ -956,7 +957,6 @@ impl Resolver<'_> {
                 }
             ),
         );
-        d.location = location;
         self.out.diagnostics.push(d);
     }
 
