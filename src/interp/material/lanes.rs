@@ -27,6 +27,7 @@ use crate::interp::diffuse::{
 use crate::interp::frame::Frame;
 use crate::interp::fresnel::Fresnel;
 use crate::interp::ggx::{GgxView, ViewTerms};
+use crate::interp::leaves::Leaf;
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid};
@@ -114,7 +115,7 @@ impl LeafLanes {
         Some(match (&b.lobe, &b.aux) {
             (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => LeafLanes::Lambert {
                 rho: l.rho,
-                rho_pi: l.prepare().rho_pi,
+                rho_pi: l.prepare(Vec3::Z, false).rho_pi,
             },
             (Lobe::OrenNayar(o), Aux::OrenNayar(bound)) => LeafLanes::OrenNayar {
                 lobe: *o,

@@ -6,7 +6,7 @@
 
 use crate::interp::fresnel::{self, Fresnel};
 use crate::interp::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
-use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{Leaf, LobeAlbedo, LobeEval, LobeSample, PreparedLeaf};
 use crate::interp::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
 use crate::interp::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;
@@ -495,93 +495,6 @@ impl MicrofacetR {
         }
     }
 
-    /// Precomputes the view-only terms for `v` (`v.z > 0`).
-    pub fn prepare(&self, v: Vec3) -> PreparedMicrofacetR {
-        // Direct table lookups: baking the curves ([`MicrofacetR::bind`]) pays only when
-        // reused.
-        let bound = MicrofacetBound {
-            albedo_fresnel: self.albedo_fresnel(),
-            ggx_view: GgxView::constants(&self.ggx),
-            curves: None,
-            alpha: self.ggx.lookup_alpha(),
-            delta: self.ggx.is_delta(),
-            ratios: None,
-        };
-        self.prepare_bound(v, &bound)
-    }
-
-    /// The view-independent part of [`MicrofacetR::prepare`], for
-    /// [`MicrofacetR::prepare_bound`].
-    pub fn bind(&self) -> MicrofacetBound {
-        let albedo_fresnel = self.albedo_fresnel();
-        let y = tables::ggx_axis(self.ggx.lookup_alpha());
-        let (sq, h82) = match self.masking {
-            Masking::HeightCorrelated => (TableId::SqHc, TableId::H82Hc),
-            Masking::Separable => (TableId::SqSep, TableId::H82Sep),
-        };
-        let curves = match albedo_fresnel {
-            Fresnel::One => Some((None, None)),
-            Fresnel::Schlick { q, .. } => {
-                Some((Some(MuCurve::new3(sq, y, tables::q_axis(q))), None))
-            }
-            Fresnel::F82 { q, .. } => Some((
-                Some(MuCurve::new3(sq, y, tables::q_axis(q))),
-                Some(MuCurve::new2(h82, y)),
-            )),
-            Fresnel::Dielectric { .. } | Fresnel::Conductor { .. } => None,
-        };
-        MicrofacetBound {
-            albedo_fresnel,
-            ggx_view: GgxView::constants(&self.ggx),
-            curves: curves.map(|(sq, h82)| ReflectionCurves {
-                e1: MuCurve::new2(e1_table(self.masking), y),
-                sq,
-                h82,
-            }),
-            alpha: self.ggx.lookup_alpha(),
-            delta: self.ggx.is_delta(),
-            ratios: (self.uses_ratio() && self.fresnel != Fresnel::One).then(|| {
-                let ratio =
-                    |v| aniso_fresnel_ratio(&self.fresnel, &self.ggx, self.masking, v).to_array();
-                if is_aniso(&self.ggx) {
-                    RatioGrid::new(ratio)
-                } else {
-                    // The albedo itself (E1 · R), so a prepare reads one curve.
-                    let alpha = self.ggx.lookup_alpha();
-                    RatioGrid::isotropic(|v| {
-                        let e1v = e1(self.masking, v.z, alpha);
-                        ratio(v).map(|r| e1v * r)
-                    })
-                }
-            }),
-        }
-    }
-
-    /// As [`MicrofacetR::prepare`], with `bound` the result of [`MicrofacetR::bind`]
-    /// (computed once by the caller).
-    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
-    #[inline(always)]
-    pub fn prepare_bound(&self, v: Vec3, bound: &MicrofacetBound) -> PreparedMicrofacetR {
-        let mut p = PreparedMicrofacetR {
-            ggx: self.ggx,
-            masking: self.masking,
-            fresnel: self.fresnel,
-            v,
-            lambda_v: 0.0,
-            view: bound.ggx_view,
-            g1_v: 0.0,
-            inv_4mu: 0.0,
-            scale: Vec3::ONE,
-            ms: Vec3::ZERO,
-            e_row: None,
-            p_ms: 0.0,
-            delta: bound.delta,
-            albedo: Vec3::ZERO,
-        };
-        self.set_view(&mut p, v, bound);
-        p
-    }
-
     /// The view-dependent fields of `p`, a record [`MicrofacetR::prepare_bound`] made of
     /// this lobe with `bound` (at any view): all that changes from view to view, so a
     /// record kept from an earlier point is brought to `v` by this alone.
@@ -638,15 +551,109 @@ impl MicrofacetR {
     }
 }
 
+impl Leaf for MicrofacetR {
+    type Prepared = PreparedMicrofacetR;
+    type Bound = MicrofacetBound;
+
+    /// Precomputes the view-only terms for `v` (`v.z > 0`).
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
+        // Direct table lookups: baking the curves ([`MicrofacetR::bind`]) pays only when
+        // reused.
+        let bound = MicrofacetBound {
+            albedo_fresnel: self.albedo_fresnel(),
+            ggx_view: GgxView::constants(&self.ggx),
+            curves: None,
+            alpha: self.ggx.lookup_alpha(),
+            delta: self.ggx.is_delta(),
+            ratios: None,
+        };
+        self.prepare_bound(v, false, &bound)
+    }
+
+    /// The view-independent part of [`MicrofacetR::prepare`], for
+    /// [`MicrofacetR::prepare_bound`].
+    fn bind(&self) -> Self::Bound {
+        let albedo_fresnel = self.albedo_fresnel();
+        let y = tables::ggx_axis(self.ggx.lookup_alpha());
+        let (sq, h82) = match self.masking {
+            Masking::HeightCorrelated => (TableId::SqHc, TableId::H82Hc),
+            Masking::Separable => (TableId::SqSep, TableId::H82Sep),
+        };
+        let curves = match albedo_fresnel {
+            Fresnel::One => Some((None, None)),
+            Fresnel::Schlick { q, .. } => {
+                Some((Some(MuCurve::new3(sq, y, tables::q_axis(q))), None))
+            }
+            Fresnel::F82 { q, .. } => Some((
+                Some(MuCurve::new3(sq, y, tables::q_axis(q))),
+                Some(MuCurve::new2(h82, y)),
+            )),
+            Fresnel::Dielectric { .. } | Fresnel::Conductor { .. } => None,
+        };
+        MicrofacetBound {
+            albedo_fresnel,
+            ggx_view: GgxView::constants(&self.ggx),
+            curves: curves.map(|(sq, h82)| ReflectionCurves {
+                e1: MuCurve::new2(e1_table(self.masking), y),
+                sq,
+                h82,
+            }),
+            alpha: self.ggx.lookup_alpha(),
+            delta: self.ggx.is_delta(),
+            ratios: (self.uses_ratio() && self.fresnel != Fresnel::One).then(|| {
+                let ratio =
+                    |v| aniso_fresnel_ratio(&self.fresnel, &self.ggx, self.masking, v).to_array();
+                if is_aniso(&self.ggx) {
+                    RatioGrid::new(ratio)
+                } else {
+                    // The albedo itself (E1 · R), so a prepare reads one curve.
+                    let alpha = self.ggx.lookup_alpha();
+                    RatioGrid::isotropic(|v| {
+                        let e1v = e1(self.masking, v.z, alpha);
+                        ratio(v).map(|r| e1v * r)
+                    })
+                }
+            }),
+        }
+    }
+
+    /// As [`MicrofacetR::prepare`], with `bound` the result of [`MicrofacetR::bind`]
+    /// (computed once by the caller).
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
+    fn prepare_bound(&self, v: Vec3, _flipped: bool, bound: &MicrofacetBound) -> Self::Prepared {
+        let mut p = PreparedMicrofacetR {
+            ggx: self.ggx,
+            masking: self.masking,
+            fresnel: self.fresnel,
+            v,
+            lambda_v: 0.0,
+            view: bound.ggx_view,
+            g1_v: 0.0,
+            inv_4mu: 0.0,
+            scale: Vec3::ONE,
+            ms: Vec3::ZERO,
+            e_row: None,
+            p_ms: 0.0,
+            delta: bound.delta,
+            albedo: Vec3::ZERO,
+        };
+        self.set_view(&mut p, v, bound);
+        p
+    }
+}
+
 impl PreparedMicrofacetR {
     /// True when the lobe is a specular delta.
     pub fn is_delta(&self) -> bool {
         self.delta
     }
+}
 
+impl PreparedLeaf for PreparedMicrofacetR {
     /// Single-scattering `f·μ_i` and VNDF pdf at `l` (`l.z > 0`), plus the KC part.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if self.delta || l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -664,7 +671,7 @@ impl PreparedMicrofacetR {
 
     /// Density of [`PreparedMicrofacetR::sample`] at `l`.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         if self.delta || l.z <= 0.0 {
             return 0.0;
         }
@@ -674,7 +681,7 @@ impl PreparedMicrofacetR {
     }
 
     /// VNDF sample (`u[0]`, `u[1]`); `u[2]` chooses the Kulla–Conty part when present.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         if self.delta {
             return Some(LobeSample {
                 l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
@@ -720,7 +727,7 @@ impl PreparedMicrofacetR {
     }
 
     /// Directional albedo (tables; compensation included).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(self.albedo)
     }
 }
@@ -896,96 +903,6 @@ impl Dielectric {
         }
     }
 
-    /// The view-independent part of [`Dielectric::prepare`].
-    pub fn bind(&self) -> DielectricBound {
-        let ggx_view = GgxView::constants(&self.ggx);
-        let consts = self.consts();
-        let aniso = is_aniso(&self.ggx).then(|| {
-            // A reflection-only lobe needs no transmission ratios.
-            let want = [
-                true,
-                self.mode != DielectricMode::R,
-                self.mode != DielectricMode::R,
-            ];
-            [consts.eta0, 1.0 / consts.eta0].map(|eta| {
-                Some(RatioGrid::new(|v| {
-                    aniso_dielectric_ratios(&self.ggx, self.masking, v, eta, want)
-                }))
-            })
-        });
-        if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
-            return DielectricBound {
-                curves: None,
-                aniso,
-                ggx_view,
-                consts,
-            };
-        }
-        let y = tables::ggx_axis(self.ggx.lookup_alpha());
-        let at = |eta: f32| {
-            let (inv, z) = tables::eta_axis(eta);
-            let ids = if inv {
-                [TableId::ErDielInv, TableId::EtDielInv, TableId::EtnDielInv]
-            } else {
-                [TableId::ErDiel, TableId::EtDiel, TableId::EtnDiel]
-            };
-            ids.map(|t| MuCurve::new3(t, y, z))
-        };
-        let eta0 = consts.eta0;
-        DielectricBound {
-            curves: Some([at(eta0), at(1.0 / eta0)]),
-            aniso,
-            ggx_view,
-            consts,
-        }
-    }
-
-    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
-    /// below the surface (the frame was flipped), so η is inverted.
-    pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
-        let bound = DielectricBound {
-            curves: None,
-            aniso: None,
-            ggx_view: GgxView::constants(&self.ggx),
-            consts: self.consts(),
-        };
-        self.prepare_bound(v, flipped, &bound)
-    }
-
-    /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
-    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
-    #[inline(always)]
-    pub fn prepare_bound(
-        &self,
-        v: Vec3,
-        flipped: bool,
-        bound: &DielectricBound,
-    ) -> PreparedDielectric {
-        let c = &bound.consts;
-        let whole = self.whole_interface(flipped);
-        let mut p = PreparedDielectric {
-            ggx: self.ggx,
-            masking: self.masking,
-            eta: if flipped { 1.0 / c.eta0 } else { c.eta0 },
-            v,
-            lambda_v: 0.0,
-            view: bound.ggx_view,
-            g1_v: 0.0,
-            inv_mu: 0.0,
-            refl: self.mode != DielectricMode::T || whole,
-            trans: self.mode != DielectricMode::R,
-            tint_r: self.tint_r,
-            tint_t: self.tint_t,
-            lum_r: c.lum_r,
-            lum_t: c.lum_t,
-            t_fresnel: self.t_fresnel || whole,
-            delta: c.delta,
-            albedo: LobeAlbedo::default(),
-        };
-        self.set_view(&mut p, v, flipped, bound);
-        p
-    }
-
     /// The view-dependent fields of `p`, a record [`Dielectric::prepare_bound`] made of
     /// this lobe with `bound` and `flipped` (at any view): all that changes from view to
     /// view, so a record kept from an earlier point is brought to `v` by this alone.
@@ -1042,6 +959,101 @@ impl Dielectric {
             p.albedo.transmit = self.tint_t * if p.t_fresnel { et } else { etn };
             p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
         }
+    }
+}
+
+impl Leaf for Dielectric {
+    type Prepared = PreparedDielectric;
+    type Bound = DielectricBound;
+
+    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
+    /// below the surface (the frame was flipped), so η is inverted.
+    fn prepare(&self, v: Vec3, flipped: bool) -> Self::Prepared {
+        let bound = DielectricBound {
+            curves: None,
+            aniso: None,
+            ggx_view: GgxView::constants(&self.ggx),
+            consts: self.consts(),
+        };
+        self.prepare_bound(v, flipped, &bound)
+    }
+
+    /// The view-independent part of [`Dielectric::prepare`].
+    fn bind(&self) -> Self::Bound {
+        let ggx_view = GgxView::constants(&self.ggx);
+        let consts = self.consts();
+        let aniso = is_aniso(&self.ggx).then(|| {
+            // A reflection-only lobe needs no transmission ratios.
+            let want = [
+                true,
+                self.mode != DielectricMode::R,
+                self.mode != DielectricMode::R,
+            ];
+            [consts.eta0, 1.0 / consts.eta0].map(|eta| {
+                Some(RatioGrid::new(|v| {
+                    aniso_dielectric_ratios(&self.ggx, self.masking, v, eta, want)
+                }))
+            })
+        });
+        if self.masking != Masking::HeightCorrelated || self.ggx.is_delta() {
+            return DielectricBound {
+                curves: None,
+                aniso,
+                ggx_view,
+                consts,
+            };
+        }
+        let y = tables::ggx_axis(self.ggx.lookup_alpha());
+        let at = |eta: f32| {
+            let (inv, z) = tables::eta_axis(eta);
+            let ids = if inv {
+                [TableId::ErDielInv, TableId::EtDielInv, TableId::EtnDielInv]
+            } else {
+                [TableId::ErDiel, TableId::EtDiel, TableId::EtnDiel]
+            };
+            ids.map(|t| MuCurve::new3(t, y, z))
+        };
+        let eta0 = consts.eta0;
+        DielectricBound {
+            curves: Some([at(eta0), at(1.0 / eta0)]),
+            aniso,
+            ggx_view,
+            consts,
+        }
+    }
+
+    /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
+    fn prepare_bound(
+        &self,
+        v: Vec3,
+        flipped: bool,
+        bound: &DielectricBound,
+    ) -> Self::Prepared {
+        let c = &bound.consts;
+        let whole = self.whole_interface(flipped);
+        let mut p = PreparedDielectric {
+            ggx: self.ggx,
+            masking: self.masking,
+            eta: if flipped { 1.0 / c.eta0 } else { c.eta0 },
+            v,
+            lambda_v: 0.0,
+            view: bound.ggx_view,
+            g1_v: 0.0,
+            inv_mu: 0.0,
+            refl: self.mode != DielectricMode::T || whole,
+            trans: self.mode != DielectricMode::R,
+            tint_r: self.tint_r,
+            tint_t: self.tint_t,
+            lum_r: c.lum_r,
+            lum_t: c.lum_t,
+            t_fresnel: self.t_fresnel || whole,
+            delta: c.delta,
+            albedo: LobeAlbedo::default(),
+        };
+        self.set_view(&mut p, v, flipped, bound);
+        p
     }
 }
 
@@ -1103,9 +1115,32 @@ impl PreparedDielectric {
         }
     }
 
+    fn sample_delta(&self, u: f32) -> Option<LobeSample> {
+        let f = fresnel::dielectric(self.v.z, self.eta);
+        let p_r = self.p_reflect(f);
+        if u < p_r {
+            return Some(LobeSample {
+                l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
+                weight: self.tint_r * (f / p_r),
+                pdf: p_r,
+                delta: true,
+            });
+        }
+        let l = refract(self.v, Vec3::Z, self.eta)?;
+        let p_t = 1.0 - p_r;
+        (p_t > 0.0).then(|| LobeSample {
+            l,
+            weight: self.tint_t * (self.t_factor(f) / (self.eta * self.eta * p_t)),
+            pdf: p_t,
+            delta: true,
+        })
+    }
+}
+
+impl PreparedLeaf for PreparedDielectric {
     /// `f·|μ_i|` and the pdf of [`PreparedDielectric::sample`].
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if self.delta {
             return LobeEval::ZERO;
         }
@@ -1145,12 +1180,12 @@ impl PreparedDielectric {
 
     /// Density of [`PreparedDielectric::sample`] at `l`.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         self.eval(l).pdf
     }
 
     /// VNDF sample (`u[0]`, `u[1]`), reflection or refraction chosen with `u[2]`.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         if self.delta {
             return self.sample_delta(u[2]);
         }
@@ -1185,29 +1220,8 @@ impl PreparedDielectric {
         })
     }
 
-    fn sample_delta(&self, u: f32) -> Option<LobeSample> {
-        let f = fresnel::dielectric(self.v.z, self.eta);
-        let p_r = self.p_reflect(f);
-        if u < p_r {
-            return Some(LobeSample {
-                l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
-                weight: self.tint_r * (f / p_r),
-                pdf: p_r,
-                delta: true,
-            });
-        }
-        let l = refract(self.v, Vec3::Z, self.eta)?;
-        let p_t = 1.0 - p_r;
-        (p_t > 0.0).then(|| LobeSample {
-            l,
-            weight: self.tint_t * (self.t_factor(f) / (self.eta * self.eta * p_t)),
-            pdf: p_t,
-            delta: true,
-        })
-    }
-
     /// Reflected and transmitted albedos (transmission also as energy, `η'² E_T`).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         self.albedo
     }
 }
