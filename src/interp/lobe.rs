@@ -476,11 +476,11 @@ impl RefreshLeaf {
         match (self, &mut out.state) {
             (RefreshLeaf::Lambert, State::Lambert(p)) => p.albedo().reflect,
             (RefreshLeaf::OrenNayar(o, b), State::OrenNayar(p)) => {
-                o.set_view(p, v, b);
+                o.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::MicrofacetR(m, b), State::MicrofacetR(p)) => {
-                m.set_view(p, v, b);
+                m.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::Dielectric(d, b), State::Dielectric(p)) => {
@@ -488,15 +488,15 @@ impl RefreshLeaf {
                 p.albedo().reflect
             }
             (RefreshLeaf::Ward(w, b), State::Ward(p)) => {
-                w.set_view(p, v, b);
+                w.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::SheenCK(s, b), State::SheenCK(p)) => {
-                s.set_view(p, v, b);
+                s.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::SheenLTC(s, b), State::SheenLTC(p)) => {
-                *p = s.prepare_bound(v, false, b);
+                s.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             _ => {

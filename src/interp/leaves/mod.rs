@@ -38,6 +38,16 @@ pub trait Leaf {
     /// [`Leaf::prepare`] with the view-independent part read from `bound` (this leaf's
     /// [`Leaf::bind`]).
     fn prepare_bound(&self, v: Vec3, flipped: bool, bound: &Self::Bound) -> Self::Prepared;
+
+    /// Brings `p`, a record [`Leaf::prepare_bound`] made of this leaf with `bound` and the
+    /// same `flipped` at some other view, to the view `v`: afterwards it holds the bits of
+    /// `prepare_bound(v, flipped, bound)`. The refresh of a record kept from an earlier
+    /// point; families whose view-independent fields are worth keeping write only the
+    /// view-dependent ones, the others (this default) prepare the record whole.
+    #[inline(always)]
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, flipped: bool, bound: &Self::Bound) {
+        *p = self.prepare_bound(v, flipped, bound);
+    }
 }
 
 /// A BSDF leaf prepared at a view ([`Leaf::prepare`]): what eval and sample run on.

@@ -233,29 +233,6 @@ pub struct OrenNayarBound {
     pub(in crate::interp) qon: Option<MuCurve>,
 }
 
-impl OrenNayar {
-
-    /// The view-dependent fields of `p`, a record [`OrenNayar::prepare_bound`] made of
-    /// this lobe with `b` (at any view): all that changes from view to view.
-    #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedOrenNayar, v: Vec3, b: &OrenNayarBound) {
-        p.v = v;
-        match self.variant {
-            OrenNayarVariant::Qualitative => {
-                p.albedo = self.rho * b.qon.as_ref().map_or(1.0, |c| c.at(v.z));
-            }
-            OrenNayarVariant::Fujii => p.albedo = self.rho * eon_e_hat(v.z, p.sigma),
-            OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => {
-                if p.sigma >= EON_SIGMA_MIN {
-                    let e_o = p.e_hat(v.z);
-                    p.ms = b.ms_scale * (1.0 - e_o);
-                    p.albedo = self.rho * e_o + b.rho_ms * (1.0 - e_o);
-                }
-            }
-        }
-    }
-}
-
 impl Leaf for OrenNayar {
     type Prepared = PreparedOrenNayar;
     type Bound = OrenNayarBound;
@@ -334,8 +311,28 @@ impl Leaf for OrenNayar {
     #[inline(always)]
     fn prepare_bound(&self, v: Vec3, _flipped: bool, b: &OrenNayarBound) -> Self::Prepared {
         let mut p = b.template;
-        self.set_view(&mut p, v, b);
+        self.set_view(&mut p, v, false, b);
         p
+    }
+
+    /// The view-dependent fields of `p`, a record [`OrenNayar::prepare_bound`] made of
+    /// this lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, b: &OrenNayarBound) {
+        p.v = v;
+        match self.variant {
+            OrenNayarVariant::Qualitative => {
+                p.albedo = self.rho * b.qon.as_ref().map_or(1.0, |c| c.at(v.z));
+            }
+            OrenNayarVariant::Fujii => p.albedo = self.rho * eon_e_hat(v.z, p.sigma),
+            OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast => {
+                if p.sigma >= EON_SIGMA_MIN {
+                    let e_o = p.e_hat(v.z);
+                    p.ms = b.ms_scale * (1.0 - e_o);
+                    p.albedo = self.rho * e_o + b.rho_ms * (1.0 - e_o);
+                }
+            }
+        }
     }
 }
 

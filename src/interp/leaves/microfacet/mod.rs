@@ -494,61 +494,6 @@ impl MicrofacetR {
             f => f,
         }
     }
-
-    /// The view-dependent fields of `p`, a record [`MicrofacetR::prepare_bound`] made of
-    /// this lobe with `bound` (at any view): all that changes from view to view, so a
-    /// record kept from an earlier point is brought to `v` by this alone.
-    #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedMicrofacetR, v: Vec3, bound: &MicrofacetBound) {
-        let albedo_fresnel = &bound.albedo_fresnel;
-        // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
-        let conductor = self.fresnel.is_conductor();
-        let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
-        let f_average = || clamp1(albedo_fresnel.average());
-        let alpha = bound.alpha;
-        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
-        p.v = v;
-        p.lambda_v = t.lambda_v;
-        p.view.c_z = t.view.c_z;
-        p.view.c_s = t.view.c_s;
-        p.g1_v = t.g1_v;
-        p.inv_4mu = 0.25 / safe_mu(v.z);
-        if p.delta {
-            p.albedo = self.fresnel.eval(v.z);
-            return;
-        }
-        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
-        // μ do not see, and a conductor's exact Fresnel is not a form the curves hold: both
-        // are E1 times a Fresnel ratio.
-        let ess = clamp1(match &bound.curves {
-            _ if self.uses_ratio() => self.ratio_albedo(bound.ratios.as_ref(), v),
-            Some(c) => c.albedo(albedo_fresnel, v.z),
-            None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
-        });
-        match self.comp {
-            Compensation::None => p.albedo = ess,
-            Compensation::Turquin(k) => {
-                p.scale = turquin_scale(k, f_average(), self.masking, v.z, alpha);
-                p.albedo = ess * p.scale;
-            }
-            Compensation::KullaConty => {
-                let f_avg = f_average();
-                let e_avg = e1_avg(self.masking, alpha).min(1.0 - 1e-6);
-                let f_ms = f_avg * f_avg * e_avg / (Vec3::ONE - f_avg * (1.0 - e_avg));
-                let e_o = e1(self.masking, v.z, alpha);
-                p.ms = f_ms * ((1.0 - e_o) * FRAC_1_PI / (1.0 - e_avg));
-                p.e_row = Some(Row::new(e1_table(self.masking), tables::ggx_axis(alpha)));
-                let a_ms = f_ms * (1.0 - e_o);
-                let total = lum(ess + a_ms);
-                p.p_ms = if total > 0.0 {
-                    (lum(a_ms) / total).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                p.albedo = ess + a_ms;
-            }
-        }
-    }
 }
 
 impl Leaf for MicrofacetR {
@@ -638,8 +583,63 @@ impl Leaf for MicrofacetR {
             delta: bound.delta,
             albedo: Vec3::ZERO,
         };
-        self.set_view(&mut p, v, bound);
+        self.set_view(&mut p, v, false, bound);
         p
+    }
+
+    /// The view-dependent fields of `p`, a record [`MicrofacetR::prepare_bound`] made of
+    /// this lobe with `bound` (at any view): all that changes from view to view, so a
+    /// record kept from an earlier point is brought to `v` by this alone.
+    #[inline(always)]
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, bound: &MicrofacetBound) {
+        let albedo_fresnel = &bound.albedo_fresnel;
+        // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
+        let conductor = self.fresnel.is_conductor();
+        let clamp1 = |c: Rgb| if conductor { c.min(Vec3::ONE) } else { c };
+        let f_average = || clamp1(albedo_fresnel.average());
+        let alpha = bound.alpha;
+        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
+        p.v = v;
+        p.lambda_v = t.lambda_v;
+        p.view.c_z = t.view.c_z;
+        p.view.c_s = t.view.c_s;
+        p.g1_v = t.g1_v;
+        p.inv_4mu = 0.25 / safe_mu(v.z);
+        if p.delta {
+            p.albedo = self.fresnel.eval(v.z);
+            return;
+        }
+        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
+        // μ do not see, and a conductor's exact Fresnel is not a form the curves hold: both
+        // are E1 times a Fresnel ratio.
+        let ess = clamp1(match &bound.curves {
+            _ if self.uses_ratio() => self.ratio_albedo(bound.ratios.as_ref(), v),
+            Some(c) => c.albedo(albedo_fresnel, v.z),
+            None => reflection_albedo(albedo_fresnel, self.masking, v.z, alpha),
+        });
+        match self.comp {
+            Compensation::None => p.albedo = ess,
+            Compensation::Turquin(k) => {
+                p.scale = turquin_scale(k, f_average(), self.masking, v.z, alpha);
+                p.albedo = ess * p.scale;
+            }
+            Compensation::KullaConty => {
+                let f_avg = f_average();
+                let e_avg = e1_avg(self.masking, alpha).min(1.0 - 1e-6);
+                let f_ms = f_avg * f_avg * e_avg / (Vec3::ONE - f_avg * (1.0 - e_avg));
+                let e_o = e1(self.masking, v.z, alpha);
+                p.ms = f_ms * ((1.0 - e_o) * FRAC_1_PI / (1.0 - e_avg));
+                p.e_row = Some(Row::new(e1_table(self.masking), tables::ggx_axis(alpha)));
+                let a_ms = f_ms * (1.0 - e_o);
+                let total = lum(ess + a_ms);
+                p.p_ms = if total > 0.0 {
+                    (lum(a_ms) / total).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                p.albedo = ess + a_ms;
+            }
+        }
     }
 }
 
@@ -902,64 +902,6 @@ impl Dielectric {
             lum_t: lum(self.tint_t).max(0.0),
         }
     }
-
-    /// The view-dependent fields of `p`, a record [`Dielectric::prepare_bound`] made of
-    /// this lobe with `bound` and `flipped` (at any view): all that changes from view to
-    /// view, so a record kept from an earlier point is brought to `v` by this alone.
-    #[inline(always)]
-    pub(in crate::interp) fn set_view(
-        &self,
-        p: &mut PreparedDielectric,
-        v: Vec3,
-        flipped: bool,
-        bound: &DielectricBound,
-    ) {
-        let eta = p.eta;
-        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
-        let alpha = bound.consts.alpha;
-        p.v = v;
-        p.lambda_v = t.lambda_v;
-        p.view.c_z = t.view.c_z;
-        p.view.c_s = t.view.c_s;
-        p.g1_v = t.g1_v;
-        p.inv_mu = 1.0 / safe_mu(v.z);
-        // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
-        if self.turquin > 0.0 {
-            let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
-            p.tint_r = self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha);
-            p.lum_r = lum(p.tint_r).max(0.0);
-        }
-        let (refl, trans) = (p.refl, p.trans);
-        let [er, et, etn] = if p.delta {
-            let f = fresnel::dielectric(v.z, eta);
-            let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
-            [f, (1.0 - f) * t, t]
-        } else {
-            let want = [refl, trans && p.t_fresnel, trans && !p.t_fresnel];
-            match &bound.curves {
-                _ if is_aniso(&self.ggx) => {
-                    let grid = bound
-                        .aniso
-                        .as_ref()
-                        .and_then(|g| g[usize::from(flipped)].as_ref());
-                    self.aniso_albedos(grid, v, eta, want)
-                }
-                Some(c) => {
-                    let c = &c[usize::from(flipped)];
-                    let at = |i: usize| if want[i] { c[i].at(v.z) } else { 0.0 };
-                    [at(0), at(1), at(2)]
-                }
-                None => dielectric_albedos_masked(self.masking, v.z, alpha, eta, want),
-            }
-        };
-        if refl {
-            p.albedo.reflect = p.tint_r * er;
-        }
-        if trans {
-            p.albedo.transmit = self.tint_t * if p.t_fresnel { et } else { etn };
-            p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
-        }
-    }
 }
 
 impl Leaf for Dielectric {
@@ -1054,6 +996,64 @@ impl Leaf for Dielectric {
         };
         self.set_view(&mut p, v, flipped, bound);
         p
+    }
+
+    /// The view-dependent fields of `p`, a record [`Dielectric::prepare_bound`] made of
+    /// this lobe with `bound` and `flipped` (at any view): all that changes from view to
+    /// view, so a record kept from an earlier point is brought to `v` by this alone.
+    #[inline(always)]
+    fn set_view(
+        &self,
+        p: &mut Self::Prepared,
+        v: Vec3,
+        flipped: bool,
+        bound: &DielectricBound,
+    ) {
+        let eta = p.eta;
+        let t = ViewTerms::from_constants(&bound.ggx_view, self.masking, v);
+        let alpha = bound.consts.alpha;
+        p.v = v;
+        p.lambda_v = t.lambda_v;
+        p.view.c_z = t.view.c_z;
+        p.view.c_s = t.view.c_s;
+        p.g1_v = t.g1_v;
+        p.inv_mu = 1.0 / safe_mu(v.z);
+        // Turquin's factor only when on: the dielectric's average Fresnel costs a logarithm.
+        if self.turquin > 0.0 {
+            let f_avg = Vec3::splat(fresnel::dielectric_avg(eta));
+            p.tint_r = self.tint_r * turquin_scale(self.turquin, f_avg, self.masking, v.z, alpha);
+            p.lum_r = lum(p.tint_r).max(0.0);
+        }
+        let (refl, trans) = (p.refl, p.trans);
+        let [er, et, etn] = if p.delta {
+            let f = fresnel::dielectric(v.z, eta);
+            let t = if f < 1.0 { 1.0 / (eta * eta) } else { 0.0 };
+            [f, (1.0 - f) * t, t]
+        } else {
+            let want = [refl, trans && p.t_fresnel, trans && !p.t_fresnel];
+            match &bound.curves {
+                _ if is_aniso(&self.ggx) => {
+                    let grid = bound
+                        .aniso
+                        .as_ref()
+                        .and_then(|g| g[usize::from(flipped)].as_ref());
+                    self.aniso_albedos(grid, v, eta, want)
+                }
+                Some(c) => {
+                    let c = &c[usize::from(flipped)];
+                    let at = |i: usize| if want[i] { c[i].at(v.z) } else { 0.0 };
+                    [at(0), at(1), at(2)]
+                }
+                None => dielectric_albedos_masked(self.masking, v.z, alpha, eta, want),
+            }
+        };
+        if refl {
+            p.albedo.reflect = p.tint_r * er;
+        }
+        if trans {
+            p.albedo.transmit = self.tint_t * if p.t_fresnel { et } else { etn };
+            p.albedo.transmit_energy = p.albedo.transmit * (eta * eta);
+        }
     }
 }
 

@@ -89,19 +89,6 @@ impl SheenCK {
         MuCurve::new2(self.table(), tables::sheen_axis(self.clamped_r()))
     }
 
-    /// The view-dependent fields of `p`, a record [`SheenCK::prepare_bound`] made of this
-    /// lobe with `b` (at any view): all that changes from view to view.
-    #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedSheenCK, v: Vec3, b: &SheenCKBound) {
-        p.v = v;
-        p.lambda_o = match self.masking {
-            SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
-            SheenMasking::MaterialX => 0.0,
-        };
-        p.inv_4mu = 0.25 / v.z.max(1e-7);
-        p.albedo = b.curve.at(v.z);
-    }
-
     /// The prepared lobe given its table albedo `e` at `μ_o`.
     #[inline]
     fn prepare_with_albedo(&self, v: Vec3, e: f32) -> PreparedSheenCK {
@@ -161,8 +148,21 @@ impl Leaf for SheenCK {
             inv_4mu: 0.0,
             albedo: 0.0,
         };
-        self.set_view(&mut p, v, b);
+        self.set_view(&mut p, v, false, b);
         p
+    }
+
+    /// The view-dependent fields of `p`, a record [`SheenCK::prepare_bound`] made of this
+    /// lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, b: &SheenCKBound) {
+        p.v = v;
+        p.lambda_o = match self.masking {
+            SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
+            SheenMasking::MaterialX => 0.0,
+        };
+        p.inv_4mu = 0.25 / v.z.max(1e-7);
+        p.albedo = b.curve.at(v.z);
     }
 }
 

@@ -174,23 +174,6 @@ impl Ward {
         MuCurve::new2(t, tables::ward_axis((ax * ay).sqrt()))
     }
 
-    /// The view-dependent fields of `p`, a record [`Ward::prepare_bound`] made of this
-    /// lobe with `b` (at any view): all that changes from view to view.
-    #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedWard, v: Vec3, b: &WardBound) {
-        if self.variant == WardVariant::Classic {
-            // The only view-dependent part of the core: `1/√μ_o` in the classic norm.
-            p.core.norm = b.core.norm / v.z.max(1e-7).sqrt();
-        }
-        p.v = v;
-        let e = if b.is_aniso() {
-            self.aniso_albedo(b, v)
-        } else {
-            b.curve.at(v.z)
-        };
-        p.albedo = self.rho * e;
-    }
-
     /// The albedo (ρ = 1) of an anisotropic bound lobe at local view `v` (shared by the
     /// scalar and the lane-parallel prepares).
     #[inline]
@@ -241,8 +224,25 @@ impl Leaf for Ward {
             v,
             albedo: Vec3::ZERO,
         };
-        self.set_view(&mut p, v, b);
+        self.set_view(&mut p, v, false, b);
         p
+    }
+
+    /// The view-dependent fields of `p`, a record [`Ward::prepare_bound`] made of this
+    /// lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, b: &WardBound) {
+        if self.variant == WardVariant::Classic {
+            // The only view-dependent part of the core: `1/√μ_o` in the classic norm.
+            p.core.norm = b.core.norm / v.z.max(1e-7).sqrt();
+        }
+        p.v = v;
+        let e = if b.is_aniso() {
+            self.aniso_albedo(b, v)
+        } else {
+            b.curve.at(v.z)
+        };
+        p.albedo = self.rho * e;
     }
 }
 
