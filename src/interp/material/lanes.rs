@@ -31,7 +31,7 @@ use crate::interp::leaves::Leaf;
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid};
-use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking};
+use crate::interp::sheen::{SheenCKBound, SheenLTCBound, SheenMasking};
 use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::{LaneCoords, MuCurve};
@@ -254,18 +254,8 @@ impl LeafLanes {
                     out.set(k, lobe.rho * e[k]);
                 }
             }
-            LeafLanes::SheenCK { bound } => {
-                let e = bound.curve.at_lanes(at);
-                for k in 0..W {
-                    out.set(k, Vec3::splat(e[k]));
-                }
-            }
-            LeafLanes::SheenLTC { bound } => {
-                for k in 0..W {
-                    e_hat[k] = bound.albedo(mu[k].clamp(0.0, 1.0));
-                    out.set(k, Vec3::splat(e_hat[k]));
-                }
-            }
+            LeafLanes::SheenCK { bound } => bound.albedo_lanes(at, out),
+            LeafLanes::SheenLTC { bound } => bound.albedo_lanes(mu, out, e_hat),
         }
     }
 
@@ -362,24 +352,8 @@ impl LeafLanes {
                     }
                 }
             }
-            LeafLanes::SheenCK { bound } => {
-                let x = kernel.sheen_ck_mut();
-                for k in 0..W {
-                    x.v.set(k, v.get(k));
-                    x.half_inv_r[k] = bound.half_inv_r;
-                    x.norm[k] = bound.norm;
-                }
-            }
-            LeafLanes::SheenLTC { bound } => {
-                let x = kernel.sheen_ltc_mut();
-                let e = *e_hat;
-                for k in 0..W {
-                    x.set(
-                        k,
-                        &SheenLTC::prepare_bound_with_albedo(v.get(k), bound, e[k]),
-                    );
-                }
-            }
+            LeafLanes::SheenCK { bound } => kernel.sheen_ck_mut().set_views(bound, v),
+            LeafLanes::SheenLTC { bound } => kernel.sheen_ltc_mut().set_views(bound, v, e_hat),
         }
     }
 }
