@@ -36,7 +36,7 @@ use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::{LaneCoords, MuCurve};
 use crate::interp::vmath::{select, select3};
-use crate::interp::ward::{Ward, WardBound, WardVariant};
+use crate::interp::ward::{Ward, WardBound};
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, TintMode};
 use glam::Vec3;
@@ -243,17 +243,7 @@ impl LeafLanes {
                     out.set(k, lobe.tint_r * e_r[k]);
                 }
             }
-            LeafLanes::Ward { lobe, bound } if bound.is_aniso() => {
-                for k in 0..W {
-                    out.set(k, lobe.rho * lobe.aniso_albedo(bound, view(k)));
-                }
-            }
-            LeafLanes::Ward { lobe, bound } => {
-                let e = bound.curve.at_lanes(at);
-                for k in 0..W {
-                    out.set(k, lobe.rho * e[k]);
-                }
-            }
+            LeafLanes::Ward { lobe, bound } => lobe.albedo_lanes(bound, v, at, out),
             LeafLanes::SheenCK { bound } => bound.albedo_lanes(at, out),
             LeafLanes::SheenLTC { bound } => bound.albedo_lanes(mu, out, e_hat),
         }
@@ -337,21 +327,7 @@ impl LeafLanes {
                     x.set(k, *eta, t.g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
                 }
             }
-            LeafLanes::Ward { lobe, bound } => {
-                let x = kernel.ward_mut();
-                let classic = lobe.variant == WardVariant::Classic;
-                x.any_classic = classic;
-                for k in 0..W {
-                    x.v.set(k, v.get(k));
-                    x.set(k, &bound.core, lobe.variant, lobe.rho, lw.p[k], lw.w.get(k));
-                }
-                // The classic norm's only view-dependent part, `1/√μ_o` (as its prepare).
-                if classic {
-                    for k in 0..W {
-                        x.norm[k] = bound.core.norm / v.z[k].max(1e-7).sqrt();
-                    }
-                }
-            }
+            LeafLanes::Ward { lobe, bound } => kernel.ward_mut().set_views(lobe, bound, v, lw),
             LeafLanes::SheenCK { bound } => kernel.sheen_ck_mut().set_views(bound, v),
             LeafLanes::SheenLTC { bound } => kernel.sheen_ltc_mut().set_views(bound, v, e_hat),
         }
