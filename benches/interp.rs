@@ -60,6 +60,7 @@ use std::hint::black_box;
 use vstructc::interp::diffuse::{
     Lambert, OrenNayar, OrenNayarBound, OrenNayarVariant, PreparedLambert, PreparedOrenNayar,
 };
+use vstructc::interp::leaves::{Leaf, PreparedLeaf};
 use vstructc::interp::microfacet::{
     DielectricBound, MicrofacetBound, PreparedDielectric, PreparedMicrofacetR,
 };
@@ -222,10 +223,10 @@ impl Native {
     fn prepare(b: &BoundLeaves, frame: Frame, v: Vec3, p: [f32; 10]) -> Native {
         let v = frame.to_local(v);
         let l = &b.leaves;
-        let sheen = l.sheen.prepare_bound(v, &b.sheen);
+        let sheen = l.sheen.prepare_bound(v, false, &b.sheen);
         let spec = l.spec.prepare_bound(v, false, &b.spec);
         let coat = l.coat.prepare_bound(v, false, &b.coat);
-        let fuzz = l.fuzz.prepare_bound(v, &b.fuzz);
+        let fuzz = l.fuzz.prepare_bound(v, false, &b.fuzz);
         let w = ref10_weights(
             fuzz.albedo().reflect,
             coat.albedo().reflect,
@@ -234,14 +235,14 @@ impl Native {
         );
         Native {
             frame,
-            metal: l.metal.prepare_bound(v, &b.metal),
+            metal: l.metal.prepare_bound(v, false, &b.metal),
             ward: [
-                l.ward[0].prepare_bound(v, &b.ward[0]),
-                l.ward[1].prepare_bound(v, &b.ward[1]),
-                l.ward[2].prepare_bound(v, &b.ward[2]),
+                l.ward[0].prepare_bound(v, false, &b.ward[0]),
+                l.ward[1].prepare_bound(v, false, &b.ward[1]),
+                l.ward[2].prepare_bound(v, false, &b.ward[2]),
             ],
-            eon: l.eon.prepare_bound(v, &b.eon),
-            lambert: l.lambert.prepare(),
+            eon: l.eon.prepare_bound(v, false, &b.eon),
+            lambert: l.lambert.prepare(v, false),
             sheen,
             spec,
             coat,

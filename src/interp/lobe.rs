@@ -15,7 +15,7 @@
 
 use super::diffuse::{
     Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarBound, OrenNayarVariant, PreparedBurley,
-    PreparedLambert, PreparedMiaDiffuse, PreparedOrenNayar,
+    PreparedLambert, PreparedMiaDiffuse, PreparedOrenNayar, PreparedTranslucent,
 };
 use super::emission::{Emission, Transparent};
 use super::math::{Rgb, flip};
@@ -27,6 +27,7 @@ use super::sheen::{
     PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking,
 };
 use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward, WardBound};
+use super::leaves::{Leaf, PreparedLeaf};
 pub use super::leaves::{LobeAlbedo, LobeEval, LobeSample};
 use glam::Vec3;
 
@@ -171,7 +172,7 @@ pub struct PreparedLobe {
 pub(super) enum State {
     Inactive,
     Lambert(PreparedLambert),
-    Translucent(PreparedLambert),
+    Translucent(PreparedTranslucent),
     OrenNayar(PreparedOrenNayar),
     MiaDiffuse(PreparedMiaDiffuse),
     Burley(PreparedBurley),
@@ -322,22 +323,22 @@ impl Lobe {
             };
         }
         match self {
-            Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l) => put!(Lambert, l.prepare()),
-            Lobe::Translucent(l) => put!(Translucent, l.prepare()),
+            Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l) => put!(Lambert, l.prepare(v, false)),
+            Lobe::Translucent(l) => put!(Translucent, PreparedTranslucent(l.prepare(v, false))),
             Lobe::OrenNayar(o) => put!(
                 OrenNayar,
                 match aux {
-                    Aux::OrenNayar(b) => o.prepare_bound(v, b),
-                    _ => o.prepare(v),
+                    Aux::OrenNayar(b) => o.prepare_bound(v, false, b),
+                    _ => o.prepare(v, false),
                 }
             ),
-            Lobe::MiaDiffuse(m) => put!(MiaDiffuse, m.prepare(v)),
-            Lobe::Burley(b) => put!(Burley, b.prepare(v)),
+            Lobe::MiaDiffuse(m) => put!(MiaDiffuse, m.prepare(v, false)),
+            Lobe::Burley(b) => put!(Burley, b.prepare(v, false)),
             Lobe::MicrofacetR(m) => put!(
                 MicrofacetR,
                 match aux {
-                    Aux::Microfacet(b) => m.prepare_bound(v, b),
-                    _ => m.prepare(v),
+                    Aux::Microfacet(b) => m.prepare_bound(v, false, b),
+                    _ => m.prepare(v, false),
                 }
             ),
             Lobe::Dielectric(d) => put!(
@@ -350,23 +351,23 @@ impl Lobe {
             Lobe::Ward(w) => put!(
                 Ward,
                 match aux {
-                    Aux::Ward(c) => w.prepare_bound(v, c),
-                    _ => w.prepare(v),
+                    Aux::Ward(c) => w.prepare_bound(v, false, c),
+                    _ => w.prepare(v, false),
                 }
             ),
-            Lobe::MiaHighlight3(m) => put!(MiaHighlight3, m.prepare(v)),
+            Lobe::MiaHighlight3(m) => put!(MiaHighlight3, m.prepare(v, false)),
             Lobe::SheenCK(s) => put!(
                 SheenCK,
                 match aux {
-                    Aux::SheenCK(c) => s.prepare_bound(v, c),
-                    _ => s.prepare(v),
+                    Aux::SheenCK(c) => s.prepare_bound(v, false, c),
+                    _ => s.prepare(v, false),
                 }
             ),
             Lobe::SheenLTC(s) => put!(
                 SheenLTC,
                 match aux {
-                    Aux::SheenLTC(b) => s.prepare_bound(v, b),
-                    _ => s.prepare(v),
+                    Aux::SheenLTC(b) => s.prepare_bound(v, false, b),
+                    _ => s.prepare(v, false),
                 }
             ),
             Lobe::Emission(_) | Lobe::Transparent(_) => out.state = State::Inactive,
@@ -475,11 +476,11 @@ impl RefreshLeaf {
         match (self, &mut out.state) {
             (RefreshLeaf::Lambert, State::Lambert(p)) => p.albedo().reflect,
             (RefreshLeaf::OrenNayar(o, b), State::OrenNayar(p)) => {
-                o.set_view(p, v, b);
+                o.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::MicrofacetR(m, b), State::MicrofacetR(p)) => {
-                m.set_view(p, v, b);
+                m.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::Dielectric(d, b), State::Dielectric(p)) => {
@@ -487,15 +488,15 @@ impl RefreshLeaf {
                 p.albedo().reflect
             }
             (RefreshLeaf::Ward(w, b), State::Ward(p)) => {
-                w.set_view(p, v, b);
+                w.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::SheenCK(s, b), State::SheenCK(p)) => {
-                s.set_view(p, v, b);
+                s.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             (RefreshLeaf::SheenLTC(s, b), State::SheenLTC(p)) => {
-                *p = s.prepare_bound(v, b);
+                s.set_view(p, v, false, b);
                 p.albedo().reflect
             }
             _ => {
@@ -557,7 +558,7 @@ impl PreparedLobe {
         match &self.state {
             State::Inactive | State::Emission(_) | State::Transparent(..) => LobeEval::ZERO,
             State::Lambert(p) => p.eval(l),
-            State::Translucent(p) => p.eval_translucent(l),
+            State::Translucent(p) => p.eval(l),
             State::OrenNayar(p) => p.eval(l),
             State::MiaDiffuse(p) => p.eval(l),
             State::Burley(p) => p.eval(l),
@@ -577,7 +578,7 @@ impl PreparedLobe {
         match &self.state {
             State::Inactive | State::Emission(_) | State::Transparent(..) => 0.0,
             State::Lambert(p) => p.pdf(l),
-            State::Translucent(p) => p.pdf_translucent(l),
+            State::Translucent(p) => p.pdf(l),
             State::OrenNayar(p) => p.pdf(l),
             State::MiaDiffuse(p) => p.pdf(l),
             State::Burley(p) => p.pdf(l),
@@ -598,7 +599,7 @@ impl PreparedLobe {
             State::Inactive | State::Emission(_) => None,
             State::Transparent(t, v) => return Some(t.sample(*v)),
             State::Lambert(p) => p.sample(u),
-            State::Translucent(p) => p.sample_translucent(u),
+            State::Translucent(p) => p.sample(u),
             State::OrenNayar(p) => p.sample(u),
             State::MiaDiffuse(p) => p.sample(u),
             State::Burley(p) => p.sample(u),
@@ -625,7 +626,7 @@ impl PreparedLobe {
             State::Inactive | State::Emission(_) => LobeAlbedo::default(),
             State::Transparent(t, _) => t.albedo(),
             State::Lambert(p) => p.albedo(),
-            State::Translucent(p) => p.albedo_translucent(),
+            State::Translucent(p) => p.albedo(),
             State::OrenNayar(p) => p.albedo(),
             State::MiaDiffuse(p) => p.albedo(),
             State::Burley(p) => p.albedo(),

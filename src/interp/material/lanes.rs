@@ -27,15 +27,16 @@ use crate::interp::diffuse::{
 use crate::interp::frame::Frame;
 use crate::interp::fresnel::Fresnel;
 use crate::interp::ggx::{GgxView, ViewTerms};
+use crate::interp::leaves::Leaf;
 use crate::interp::lobe::{Aux, Lobe};
 use crate::interp::math::{Rgb, lum, safe_mu};
 use crate::interp::microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid};
-use crate::interp::sheen::{SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking};
+use crate::interp::sheen::{SheenCKBound, SheenLTCBound, SheenMasking};
 use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
 use crate::interp::tables::{LaneCoords, MuCurve};
 use crate::interp::vmath::{select, select3};
-use crate::interp::ward::{Ward, WardBound, WardVariant};
+use crate::interp::ward::{Ward, WardBound};
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, TintMode};
 use glam::Vec3;
@@ -114,7 +115,7 @@ impl LeafLanes {
         Some(match (&b.lobe, &b.aux) {
             (Lobe::Lambert(l) | Lobe::SubsurfaceProxy(l), _) => LeafLanes::Lambert {
                 rho: l.rho,
-                rho_pi: l.prepare().rho_pi,
+                rho_pi: l.prepare(Vec3::Z, false).rho_pi,
             },
             (Lobe::OrenNayar(o), Aux::OrenNayar(bound)) => LeafLanes::OrenNayar {
                 lobe: *o,
@@ -242,29 +243,9 @@ impl LeafLanes {
                     out.set(k, lobe.tint_r * e_r[k]);
                 }
             }
-            LeafLanes::Ward { lobe, bound } if bound.is_aniso() => {
-                for k in 0..W {
-                    out.set(k, lobe.rho * lobe.aniso_albedo(bound, view(k)));
-                }
-            }
-            LeafLanes::Ward { lobe, bound } => {
-                let e = bound.curve.at_lanes(at);
-                for k in 0..W {
-                    out.set(k, lobe.rho * e[k]);
-                }
-            }
-            LeafLanes::SheenCK { bound } => {
-                let e = bound.curve.at_lanes(at);
-                for k in 0..W {
-                    out.set(k, Vec3::splat(e[k]));
-                }
-            }
-            LeafLanes::SheenLTC { bound } => {
-                for k in 0..W {
-                    e_hat[k] = bound.albedo(mu[k].clamp(0.0, 1.0));
-                    out.set(k, Vec3::splat(e_hat[k]));
-                }
-            }
+            LeafLanes::Ward { lobe, bound } => lobe.albedo_lanes(bound, v, at, out),
+            LeafLanes::SheenCK { bound } => bound.albedo_lanes(at, out),
+            LeafLanes::SheenLTC { bound } => bound.albedo_lanes(mu, out, e_hat),
         }
     }
 
@@ -346,39 +327,9 @@ impl LeafLanes {
                     x.set(k, *eta, t.g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
                 }
             }
-            LeafLanes::Ward { lobe, bound } => {
-                let x = kernel.ward_mut();
-                let classic = lobe.variant == WardVariant::Classic;
-                x.any_classic = classic;
-                for k in 0..W {
-                    x.v.set(k, v.get(k));
-                    x.set(k, &bound.core, lobe.variant, lobe.rho, lw.p[k], lw.w.get(k));
-                }
-                // The classic norm's only view-dependent part, `1/√μ_o` (as its prepare).
-                if classic {
-                    for k in 0..W {
-                        x.norm[k] = bound.core.norm / v.z[k].max(1e-7).sqrt();
-                    }
-                }
-            }
-            LeafLanes::SheenCK { bound } => {
-                let x = kernel.sheen_ck_mut();
-                for k in 0..W {
-                    x.v.set(k, v.get(k));
-                    x.half_inv_r[k] = bound.half_inv_r;
-                    x.norm[k] = bound.norm;
-                }
-            }
-            LeafLanes::SheenLTC { bound } => {
-                let x = kernel.sheen_ltc_mut();
-                let e = *e_hat;
-                for k in 0..W {
-                    x.set(
-                        k,
-                        &SheenLTC::prepare_bound_with_albedo(v.get(k), bound, e[k]),
-                    );
-                }
-            }
+            LeafLanes::Ward { lobe, bound } => kernel.ward_mut().set_views(lobe, bound, v, lw),
+            LeafLanes::SheenCK { bound } => kernel.sheen_ck_mut().set_views(bound, v),
+            LeafLanes::SheenLTC { bound } => kernel.sheen_ltc_mut().set_views(bound, v, e_hat),
         }
     }
 }

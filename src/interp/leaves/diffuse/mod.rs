@@ -3,7 +3,7 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{Leaf, LobeAlbedo, LobeEval, LobeSample, PreparedLeaf};
 use crate::interp::math::{Rgb, pdf_cosine, pow5, sample_cosine};
 use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;
@@ -45,20 +45,77 @@ pub struct PreparedLambert {
     pub(in crate::interp) rho_pi: Rgb,
 }
 
-impl Lambert {
+impl Leaf for Lambert {
+    type Prepared = PreparedLambert;
+    type Bound = ();
+
     /// Precomputes the view-only terms.
-    pub fn prepare(&self) -> PreparedLambert {
+    fn prepare(&self, _v: Vec3, _flipped: bool) -> Self::Prepared {
         PreparedLambert {
             rho: self.rho,
             rho_pi: self.rho * FRAC_1_PI,
         }
     }
+
+    /// Nothing to bind: the view-independent terms are the parameters.
+    fn bind(&self) {}
+
+    /// [`Leaf::prepare`].
+    #[inline(always)]
+    fn prepare_bound(&self, v: Vec3, flipped: bool, _: &()) -> Self::Prepared {
+        self.prepare(v, flipped)
+    }
 }
 
-impl PreparedLambert {
+/// A prepared Lambert read as translucent: the same `ρ` on the lower hemisphere
+/// (`Lobe::Translucent`).
+#[derive(Debug, Clone, Copy)]
+pub struct PreparedTranslucent(pub(in crate::interp) PreparedLambert);
+
+impl PreparedLeaf for PreparedTranslucent {
+    /// Translucent: `ρ |μ_i| / π` on the lower hemisphere.
+    #[inline(always)]
+    fn eval(&self, l: Vec3) -> LobeEval {
+        if l.z >= 0.0 {
+            return LobeEval::ZERO;
+        }
+        LobeEval {
+            f_cos: self.0.rho_pi * -l.z,
+            pdf: -l.z * FRAC_1_PI,
+        }
+    }
+
+    /// Translucent density.
+    #[inline]
+    fn pdf(&self, l: Vec3) -> f32 {
+        pdf_cosine(-l.z)
+    }
+
+    /// Translucent: cosine sample mirrored to the lower hemisphere; weight ρ.
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+        let l = sample_cosine(u[0], u[1])?;
+        Some(LobeSample {
+            l: Vec3::new(l.x, l.y, -l.z),
+            weight: self.0.rho,
+            pdf: pdf_cosine(l.z),
+            delta: false,
+        })
+    }
+
+    /// Translucent albedo: ρ, transmitted (no index change: energy equals radiance).
+    fn albedo(&self) -> LobeAlbedo {
+        LobeAlbedo {
+            reflect: Vec3::ZERO,
+            transmit: self.0.rho,
+            transmit_energy: self.0.rho,
+        }
+    }
+}
+
+impl PreparedLeaf for PreparedLambert {
     /// `ρ μ_i / π` on the upper hemisphere.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -70,12 +127,12 @@ impl PreparedLambert {
 
     /// Cosine density.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         pdf_cosine(l.z)
     }
 
     /// Cosine sample; weight ρ.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         let l = sample_cosine(u[0], u[1])?;
         Some(LobeSample {
             l,
@@ -86,46 +143,8 @@ impl PreparedLambert {
     }
 
     /// Albedo ρ.
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(self.rho)
-    }
-
-    /// Translucent: `ρ |μ_i| / π` on the lower hemisphere.
-    #[inline(always)]
-    pub fn eval_translucent(&self, l: Vec3) -> LobeEval {
-        if l.z >= 0.0 {
-            return LobeEval::ZERO;
-        }
-        LobeEval {
-            f_cos: self.rho_pi * -l.z,
-            pdf: -l.z * FRAC_1_PI,
-        }
-    }
-
-    /// Translucent density.
-    #[inline]
-    pub fn pdf_translucent(&self, l: Vec3) -> f32 {
-        pdf_cosine(-l.z)
-    }
-
-    /// Translucent: cosine sample mirrored to the lower hemisphere; weight ρ.
-    pub fn sample_translucent(&self, u: [f32; 3]) -> Option<LobeSample> {
-        let l = sample_cosine(u[0], u[1])?;
-        Some(LobeSample {
-            l: Vec3::new(l.x, l.y, -l.z),
-            weight: self.rho,
-            pdf: pdf_cosine(l.z),
-            delta: false,
-        })
-    }
-
-    /// Translucent albedo: ρ, transmitted (no index change: energy equals radiance).
-    pub fn albedo_translucent(&self) -> LobeAlbedo {
-        LobeAlbedo {
-            reflect: Vec3::ZERO,
-            transmit: self.rho,
-            transmit_energy: self.rho,
-        }
     }
 }
 
@@ -202,9 +221,24 @@ pub struct PreparedOrenNayar {
     pub(in crate::interp) albedo: Rgb,
 }
 
-impl OrenNayar {
+/// The view-independent part of an [`OrenNayar`] lobe's prepare ([`OrenNayar::bind`]):
+/// the prepared lobe at `μ_o = 1` as a template, EON's multiple-scattering colour terms,
+/// and the QON albedo curve.
+#[derive(Debug, Clone, Copy)]
+pub struct OrenNayarBound {
+    pub(in crate::interp) template: PreparedOrenNayar,
+    /// EON: `ρ_ms` and `ρ_ms/(π(1 − Ē))` (zero below the σ cut-off and for QON/FON).
+    pub(in crate::interp) rho_ms: Rgb,
+    pub(in crate::interp) ms_scale: Rgb,
+    pub(in crate::interp) qon: Option<MuCurve>,
+}
+
+impl Leaf for OrenNayar {
+    type Prepared = PreparedOrenNayar;
+    type Bound = OrenNayarBound;
+
     /// Precomputes the view-only terms for view `v` (`v.z > 0`).
-    pub fn prepare(&self, v: Vec3) -> PreparedOrenNayar {
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
         let sigma = if self.sigma.is_nan() {
             0.0
         } else {
@@ -248,24 +282,10 @@ impl OrenNayar {
         }
         p
     }
-}
 
-/// The view-independent part of an [`OrenNayar`] lobe's prepare ([`OrenNayar::bind`]):
-/// the prepared lobe at `μ_o = 1` as a template, EON's multiple-scattering colour terms,
-/// and the QON albedo curve.
-#[derive(Debug, Clone, Copy)]
-pub struct OrenNayarBound {
-    pub(in crate::interp) template: PreparedOrenNayar,
-    /// EON: `ρ_ms` and `ρ_ms/(π(1 − Ē))` (zero below the σ cut-off and for QON/FON).
-    pub(in crate::interp) rho_ms: Rgb,
-    pub(in crate::interp) ms_scale: Rgb,
-    pub(in crate::interp) qon: Option<MuCurve>,
-}
-
-impl OrenNayar {
     /// The view-independent part of [`OrenNayar::prepare`].
-    pub fn bind(&self) -> OrenNayarBound {
-        let template = self.prepare(Vec3::Z);
+    fn bind(&self) -> Self::Bound {
+        let template = self.prepare(Vec3::Z, false);
         let (mut rho_ms, mut ms_scale) = (Vec3::ZERO, Vec3::ZERO);
         let energy = matches!(
             self.variant,
@@ -289,16 +309,16 @@ impl OrenNayar {
     /// [`OrenNayar::prepare`] with the result of [`OrenNayar::bind`].
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
-    pub fn prepare_bound(&self, v: Vec3, b: &OrenNayarBound) -> PreparedOrenNayar {
+    fn prepare_bound(&self, v: Vec3, _flipped: bool, b: &OrenNayarBound) -> Self::Prepared {
         let mut p = b.template;
-        self.set_view(&mut p, v, b);
+        self.set_view(&mut p, v, false, b);
         p
     }
 
     /// The view-dependent fields of `p`, a record [`OrenNayar::prepare_bound`] made of
     /// this lobe with `b` (at any view): all that changes from view to view.
     #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedOrenNayar, v: Vec3, b: &OrenNayarBound) {
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, b: &OrenNayarBound) {
         p.v = v;
         match self.variant {
             OrenNayarVariant::Qualitative => {
@@ -344,10 +364,12 @@ impl PreparedOrenNayar {
         };
         self.a + self.b * st
     }
+}
 
+impl PreparedLeaf for PreparedOrenNayar {
     /// `f·μ_i` and the cosine pdf.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -363,17 +385,17 @@ impl PreparedOrenNayar {
 
     /// Cosine density.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         pdf_cosine(l.z)
     }
 
     /// Cosine sample.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         cosine_sample(u, |l| self.eval(l).f_cos)
     }
 
     /// Directional albedo at this view.
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(self.albedo)
     }
 }
@@ -406,24 +428,36 @@ pub struct PreparedMiaDiffuse {
     qon: PreparedOrenNayar,
 }
 
-impl MiaDiffuse {
+impl Leaf for MiaDiffuse {
+    type Prepared = PreparedMiaDiffuse;
+    type Bound = ();
+
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
-    pub fn prepare(&self, v: Vec3) -> PreparedMiaDiffuse {
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
         let on = OrenNayar {
             rho: self.rho,
             sigma: self.sigma,
             variant: OrenNayarVariant::Qualitative,
         };
-        let mut qon = on.prepare(v);
+        let mut qon = on.prepare(v, false);
         qon.albedo = self.rho * tables::lookup2(TableId::Mia, v.z, qon.sigma);
         PreparedMiaDiffuse { qon }
     }
+
+    /// Nothing to bind: the view-independent terms are the parameters.
+    fn bind(&self) {}
+
+    /// [`Leaf::prepare`].
+    #[inline(always)]
+    fn prepare_bound(&self, v: Vec3, flipped: bool, _: &()) -> Self::Prepared {
+        self.prepare(v, flipped)
+    }
 }
 
-impl PreparedMiaDiffuse {
+impl PreparedLeaf for PreparedMiaDiffuse {
     /// `f_QON(V, L)·s(μ_i)` and the cosine pdf.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -435,17 +469,17 @@ impl PreparedMiaDiffuse {
 
     /// Cosine density.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         pdf_cosine(l.z)
     }
 
     /// Cosine sample.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         cosine_sample(u, |l| self.eval(l).f_cos)
     }
 
     /// Directional albedo (table).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(self.qon.albedo)
     }
 }
@@ -477,9 +511,12 @@ pub(crate) fn burley_albedo_fit(mu: f32, sigma: f32) -> f32 {
     a + (b - a) * sigma
 }
 
-impl Burley {
+impl Leaf for Burley {
+    type Prepared = PreparedBurley;
+    type Bound = ();
+
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
-    pub fn prepare(&self, v: Vec3) -> PreparedBurley {
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
         let sigma = if self.sigma.is_nan() {
             0.0
         } else {
@@ -493,12 +530,21 @@ impl Burley {
             albedo: self.rho * burley_albedo_fit(v.z, sigma),
         }
     }
+
+    /// Nothing to bind: the view-independent terms are the parameters.
+    fn bind(&self) {}
+
+    /// [`Leaf::prepare`].
+    #[inline(always)]
+    fn prepare_bound(&self, v: Vec3, flipped: bool, _: &()) -> Self::Prepared {
+        self.prepare(v, flipped)
+    }
 }
 
-impl PreparedBurley {
+impl PreparedLeaf for PreparedBurley {
     /// `(ρ/π) F_D(μ_i) F_D(μ_o) μ_i` with `F_D90 = 1/2 + 2σ(L·h)²`, `(L·h)² = (1 + V·L)/2`.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -514,17 +560,17 @@ impl PreparedBurley {
 
     /// Cosine density.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         pdf_cosine(l.z)
     }
 
     /// Cosine sample.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         cosine_sample(u, |l| self.eval(l).f_cos)
     }
 
     /// Directional albedo (Hill's fit).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(self.albedo)
     }
 }

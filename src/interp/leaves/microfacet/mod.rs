@@ -6,7 +6,7 @@
 
 use crate::interp::fresnel::{self, Fresnel};
 use crate::interp::ggx::{Ggx, GgxView, Masking, ViewTerms, g2};
-use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{Leaf, LobeAlbedo, LobeEval, LobeSample, PreparedLeaf};
 use crate::interp::math::{Rgb, lum, pdf_cosine, reflect, refract, safe_mu, sample_cosine};
 use crate::interp::tables::{self, MuCurve, Row, TableId};
 use glam::Vec3;
@@ -494,9 +494,14 @@ impl MicrofacetR {
             f => f,
         }
     }
+}
+
+impl Leaf for MicrofacetR {
+    type Prepared = PreparedMicrofacetR;
+    type Bound = MicrofacetBound;
 
     /// Precomputes the view-only terms for `v` (`v.z > 0`).
-    pub fn prepare(&self, v: Vec3) -> PreparedMicrofacetR {
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
         // Direct table lookups: baking the curves ([`MicrofacetR::bind`]) pays only when
         // reused.
         let bound = MicrofacetBound {
@@ -507,12 +512,12 @@ impl MicrofacetR {
             delta: self.ggx.is_delta(),
             ratios: None,
         };
-        self.prepare_bound(v, &bound)
+        self.prepare_bound(v, false, &bound)
     }
 
     /// The view-independent part of [`MicrofacetR::prepare`], for
     /// [`MicrofacetR::prepare_bound`].
-    pub fn bind(&self) -> MicrofacetBound {
+    fn bind(&self) -> Self::Bound {
         let albedo_fresnel = self.albedo_fresnel();
         let y = tables::ggx_axis(self.ggx.lookup_alpha());
         let (sq, h82) = match self.masking {
@@ -561,7 +566,7 @@ impl MicrofacetR {
     /// (computed once by the caller).
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
-    pub fn prepare_bound(&self, v: Vec3, bound: &MicrofacetBound) -> PreparedMicrofacetR {
+    fn prepare_bound(&self, v: Vec3, _flipped: bool, bound: &MicrofacetBound) -> Self::Prepared {
         let mut p = PreparedMicrofacetR {
             ggx: self.ggx,
             masking: self.masking,
@@ -578,7 +583,7 @@ impl MicrofacetR {
             delta: bound.delta,
             albedo: Vec3::ZERO,
         };
-        self.set_view(&mut p, v, bound);
+        self.set_view(&mut p, v, false, bound);
         p
     }
 
@@ -586,7 +591,7 @@ impl MicrofacetR {
     /// this lobe with `bound` (at any view): all that changes from view to view, so a
     /// record kept from an earlier point is brought to `v` by this alone.
     #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedMicrofacetR, v: Vec3, bound: &MicrofacetBound) {
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, bound: &MicrofacetBound) {
         let albedo_fresnel = &bound.albedo_fresnel;
         // A conductor's albedo and average Fresnel are its F82 fit's, clamped to [0, 1].
         let conductor = self.fresnel.is_conductor();
@@ -643,10 +648,12 @@ impl PreparedMicrofacetR {
     pub fn is_delta(&self) -> bool {
         self.delta
     }
+}
 
+impl PreparedLeaf for PreparedMicrofacetR {
     /// Single-scattering `f·μ_i` and VNDF pdf at `l` (`l.z > 0`), plus the KC part.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if self.delta || l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -664,7 +671,7 @@ impl PreparedMicrofacetR {
 
     /// Density of [`PreparedMicrofacetR::sample`] at `l`.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         if self.delta || l.z <= 0.0 {
             return 0.0;
         }
@@ -674,7 +681,7 @@ impl PreparedMicrofacetR {
     }
 
     /// VNDF sample (`u[0]`, `u[1]`); `u[2]` chooses the Kulla–Conty part when present.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         if self.delta {
             return Some(LobeSample {
                 l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
@@ -720,7 +727,7 @@ impl PreparedMicrofacetR {
     }
 
     /// Directional albedo (tables; compensation included).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(self.albedo)
     }
 }
@@ -895,9 +902,26 @@ impl Dielectric {
             lum_t: lum(self.tint_t).max(0.0),
         }
     }
+}
+
+impl Leaf for Dielectric {
+    type Prepared = PreparedDielectric;
+    type Bound = DielectricBound;
+
+    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
+    /// below the surface (the frame was flipped), so η is inverted.
+    fn prepare(&self, v: Vec3, flipped: bool) -> Self::Prepared {
+        let bound = DielectricBound {
+            curves: None,
+            aniso: None,
+            ggx_view: GgxView::constants(&self.ggx),
+            consts: self.consts(),
+        };
+        self.prepare_bound(v, flipped, &bound)
+    }
 
     /// The view-independent part of [`Dielectric::prepare`].
-    pub fn bind(&self) -> DielectricBound {
+    fn bind(&self) -> Self::Bound {
         let ggx_view = GgxView::constants(&self.ggx);
         let consts = self.consts();
         let aniso = is_aniso(&self.ggx).then(|| {
@@ -940,27 +964,15 @@ impl Dielectric {
         }
     }
 
-    /// Precomputes the view-only terms for `v` (`v.z > 0`); `flipped` says the view was
-    /// below the surface (the frame was flipped), so η is inverted.
-    pub fn prepare(&self, v: Vec3, flipped: bool) -> PreparedDielectric {
-        let bound = DielectricBound {
-            curves: None,
-            aniso: None,
-            ggx_view: GgxView::constants(&self.ggx),
-            consts: self.consts(),
-        };
-        self.prepare_bound(v, flipped, &bound)
-    }
-
     /// [`Dielectric::prepare`] with the result of [`Dielectric::bind`].
     // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
     #[inline(always)]
-    pub fn prepare_bound(
+    fn prepare_bound(
         &self,
         v: Vec3,
         flipped: bool,
         bound: &DielectricBound,
-    ) -> PreparedDielectric {
+    ) -> Self::Prepared {
         let c = &bound.consts;
         let whole = self.whole_interface(flipped);
         let mut p = PreparedDielectric {
@@ -990,9 +1002,9 @@ impl Dielectric {
     /// this lobe with `bound` and `flipped` (at any view): all that changes from view to
     /// view, so a record kept from an earlier point is brought to `v` by this alone.
     #[inline(always)]
-    pub(in crate::interp) fn set_view(
+    fn set_view(
         &self,
-        p: &mut PreparedDielectric,
+        p: &mut Self::Prepared,
         v: Vec3,
         flipped: bool,
         bound: &DielectricBound,
@@ -1103,9 +1115,32 @@ impl PreparedDielectric {
         }
     }
 
+    fn sample_delta(&self, u: f32) -> Option<LobeSample> {
+        let f = fresnel::dielectric(self.v.z, self.eta);
+        let p_r = self.p_reflect(f);
+        if u < p_r {
+            return Some(LobeSample {
+                l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
+                weight: self.tint_r * (f / p_r),
+                pdf: p_r,
+                delta: true,
+            });
+        }
+        let l = refract(self.v, Vec3::Z, self.eta)?;
+        let p_t = 1.0 - p_r;
+        (p_t > 0.0).then(|| LobeSample {
+            l,
+            weight: self.tint_t * (self.t_factor(f) / (self.eta * self.eta * p_t)),
+            pdf: p_t,
+            delta: true,
+        })
+    }
+}
+
+impl PreparedLeaf for PreparedDielectric {
     /// `f·|μ_i|` and the pdf of [`PreparedDielectric::sample`].
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if self.delta {
             return LobeEval::ZERO;
         }
@@ -1145,12 +1180,12 @@ impl PreparedDielectric {
 
     /// Density of [`PreparedDielectric::sample`] at `l`.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         self.eval(l).pdf
     }
 
     /// VNDF sample (`u[0]`, `u[1]`), reflection or refraction chosen with `u[2]`.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         if self.delta {
             return self.sample_delta(u[2]);
         }
@@ -1185,29 +1220,8 @@ impl PreparedDielectric {
         })
     }
 
-    fn sample_delta(&self, u: f32) -> Option<LobeSample> {
-        let f = fresnel::dielectric(self.v.z, self.eta);
-        let p_r = self.p_reflect(f);
-        if u < p_r {
-            return Some(LobeSample {
-                l: Vec3::new(-self.v.x, -self.v.y, self.v.z),
-                weight: self.tint_r * (f / p_r),
-                pdf: p_r,
-                delta: true,
-            });
-        }
-        let l = refract(self.v, Vec3::Z, self.eta)?;
-        let p_t = 1.0 - p_r;
-        (p_t > 0.0).then(|| LobeSample {
-            l,
-            weight: self.tint_t * (self.t_factor(f) / (self.eta * self.eta * p_t)),
-            pdf: p_t,
-            delta: true,
-        })
-    }
-
     /// Reflected and transmitted albedos (transmission also as energy, `η'² E_T`).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         self.albedo
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Prepared forms assume the (possibly flipped) view has `μ_o > 0`.
 
-use crate::interp::leaves::{LobeAlbedo, LobeEval, LobeSample};
+use crate::interp::leaves::{Leaf, LobeAlbedo, LobeEval, LobeSample, PreparedLeaf};
 use crate::interp::math::{sample_cosine, sample_uniform_hemisphere};
 use crate::interp::tables::{self, MuCurve, TableId};
 use glam::Vec3;
@@ -67,13 +67,6 @@ pub struct PreparedSheenCK {
 }
 
 impl SheenCK {
-    /// Precomputes the view-only terms for `v` (`v.z > 0`).
-    pub fn prepare(&self, v: Vec3) -> PreparedSheenCK {
-        // One lookup: baking the whole curve ([`SheenCK::albedo_curve`]) pays only when
-        // reused.
-        let e = tables::lookup2(self.table(), v.z, tables::sheen_axis(self.clamped_r()));
-        self.prepare_with_albedo(v, e)
-    }
 
     fn table(&self) -> TableId {
         match self.masking {
@@ -94,48 +87,6 @@ impl SheenCK {
     /// The albedo table at this lobe's roughness, for [`SheenCK::prepare_bound`].
     pub fn albedo_curve(&self) -> MuCurve {
         MuCurve::new2(self.table(), tables::sheen_axis(self.clamped_r()))
-    }
-
-    /// The view-independent part of [`SheenCK::prepare`] ([`SheenCKBound`]).
-    pub fn bind(&self) -> SheenCKBound {
-        let p = self.prepare_with_albedo(Vec3::Z, 0.0);
-        SheenCKBound {
-            curve: self.albedo_curve(),
-            half_inv_r: p.half_inv_r,
-            norm: p.norm,
-            coef: p.coef,
-        }
-    }
-
-    /// [`SheenCK::prepare`] with the result of [`SheenCK::bind`].
-    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
-    #[inline(always)]
-    pub fn prepare_bound(&self, v: Vec3, b: &SheenCKBound) -> PreparedSheenCK {
-        let mut p = PreparedSheenCK {
-            v,
-            half_inv_r: b.half_inv_r,
-            norm: b.norm,
-            masking: self.masking,
-            coef: b.coef,
-            lambda_o: 0.0,
-            inv_4mu: 0.0,
-            albedo: 0.0,
-        };
-        self.set_view(&mut p, v, b);
-        p
-    }
-
-    /// The view-dependent fields of `p`, a record [`SheenCK::prepare_bound`] made of this
-    /// lobe with `b` (at any view): all that changes from view to view.
-    #[inline(always)]
-    pub(in crate::interp) fn set_view(&self, p: &mut PreparedSheenCK, v: Vec3, b: &SheenCKBound) {
-        p.v = v;
-        p.lambda_o = match self.masking {
-            SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
-            SheenMasking::MaterialX => 0.0,
-        };
-        p.inv_4mu = 0.25 / v.z.max(1e-7);
-        p.albedo = b.curve.at(v.z);
     }
 
     /// The prepared lobe given its table albedo `e` at `μ_o`.
@@ -160,10 +111,65 @@ impl SheenCK {
     }
 }
 
-impl PreparedSheenCK {
+impl Leaf for SheenCK {
+    type Prepared = PreparedSheenCK;
+    type Bound = SheenCKBound;
+
+    /// Precomputes the view-only terms for `v` (`v.z > 0`).
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
+        // One lookup: baking the whole curve ([`SheenCK::albedo_curve`]) pays only when
+        // reused.
+        let e = tables::lookup2(self.table(), v.z, tables::sheen_axis(self.clamped_r()));
+        self.prepare_with_albedo(v, e)
+    }
+
+    /// The view-independent part of [`SheenCK::prepare`] ([`SheenCKBound`]).
+    fn bind(&self) -> Self::Bound {
+        let p = self.prepare_with_albedo(Vec3::Z, 0.0);
+        SheenCKBound {
+            curve: self.albedo_curve(),
+            half_inv_r: p.half_inv_r,
+            norm: p.norm,
+            coef: p.coef,
+        }
+    }
+
+    /// [`SheenCK::prepare`] with the result of [`SheenCK::bind`].
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
+    fn prepare_bound(&self, v: Vec3, _flipped: bool, b: &SheenCKBound) -> Self::Prepared {
+        let mut p = PreparedSheenCK {
+            v,
+            half_inv_r: b.half_inv_r,
+            norm: b.norm,
+            masking: self.masking,
+            coef: b.coef,
+            lambda_o: 0.0,
+            inv_4mu: 0.0,
+            albedo: 0.0,
+        };
+        self.set_view(&mut p, v, false, b);
+        p
+    }
+
+    /// The view-dependent fields of `p`, a record [`SheenCK::prepare_bound`] made of this
+    /// lobe with `b` (at any view): all that changes from view to view.
+    #[inline(always)]
+    fn set_view(&self, p: &mut Self::Prepared, v: Vec3, _flipped: bool, b: &SheenCKBound) {
+        p.v = v;
+        p.lambda_o = match self.masking {
+            SheenMasking::Original => ck_ln_lambda(&b.coef, v.z).exp(),
+            SheenMasking::MaterialX => 0.0,
+        };
+        p.inv_4mu = 0.25 / v.z.max(1e-7);
+        p.albedo = b.curve.at(v.z);
+    }
+}
+
+impl PreparedLeaf for PreparedSheenCK {
     /// `f·μ_i` and the uniform-hemisphere pdf.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -189,12 +195,12 @@ impl PreparedSheenCK {
 
     /// Uniform-hemisphere density.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         if l.z > 0.0 { 0.5 * FRAC_1_PI } else { 0.0 }
     }
 
     /// Uniform-hemisphere sample.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         let l = sample_uniform_hemisphere(u[0], u[1]);
         let e = self.eval(l);
         (e.pdf > 0.0).then(|| LobeSample {
@@ -206,7 +212,7 @@ impl PreparedSheenCK {
     }
 
     /// Directional albedo (table).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(Vec3::splat(self.albedo))
     }
 }
@@ -285,28 +291,6 @@ pub struct PreparedSheenLTC {
 }
 
 impl SheenLTC {
-    /// The view-independent part of [`SheenLTC::prepare`].
-    pub fn bind(&self) -> SheenLTCBound {
-        let y = if self.r.is_nan() {
-            1.0
-        } else {
-            self.r.clamp(0.01, 1.0)
-        };
-        SheenLTCBound::at_roughness(y)
-    }
-
-    /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
-    #[inline(always)]
-    pub fn prepare(&self, v: Vec3) -> PreparedSheenLTC {
-        self.prepare_bound(v, &self.bind())
-    }
-
-    /// [`SheenLTC::prepare`] with the result of [`SheenLTC::bind`].
-    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
-    #[inline(always)]
-    pub fn prepare_bound(&self, v: Vec3, fit: &SheenLTCBound) -> PreparedSheenLTC {
-        Self::prepare_bound_with_albedo(v, fit, fit.albedo(v.z.clamp(0.0, 1.0)))
-    }
 
     /// [`SheenLTC::prepare_bound`] given its albedo `e_hat` (`fit.albedo(μ_o)`, clamped
     /// `μ_o`), for callers that have already computed it.
@@ -332,6 +316,34 @@ impl SheenLTC {
     }
 }
 
+impl Leaf for SheenLTC {
+    type Prepared = PreparedSheenLTC;
+    type Bound = SheenLTCBound;
+
+    /// Precomputes the view-only terms (LTC frame, coefficients, `Ê`) for `v` (`v.z > 0`).
+    #[inline(always)]
+    fn prepare(&self, v: Vec3, _flipped: bool) -> Self::Prepared {
+        self.prepare_bound(v, false, &self.bind())
+    }
+
+    /// The view-independent part of [`SheenLTC::prepare`].
+    fn bind(&self) -> Self::Bound {
+        let y = if self.r.is_nan() {
+            1.0
+        } else {
+            self.r.clamp(0.01, 1.0)
+        };
+        SheenLTCBound::at_roughness(y)
+    }
+
+    /// [`SheenLTC::prepare`] with the result of [`SheenLTC::bind`].
+    // Inlined into `Lobe::prepare_aux_into` so the state is stored straight into its record.
+    #[inline(always)]
+    fn prepare_bound(&self, v: Vec3, _flipped: bool, fit: &SheenLTCBound) -> Self::Prepared {
+        Self::prepare_bound_with_albedo(v, fit, fit.albedo(v.z.clamp(0.0, 1.0)))
+    }
+}
+
 impl PreparedSheenLTC {
     /// The LTC density `D(w)` of a direction with `l.z > 0`.
     #[inline]
@@ -341,10 +353,12 @@ impl PreparedSheenLTC {
         let k = self.a / wp.length_squared().max(1e-30);
         wz.max(0.0) * FRAC_1_PI * k * k
     }
+}
 
+impl PreparedLeaf for PreparedSheenLTC {
     /// `Ê·D(w)` and the exact pdf `D(w)`.
     #[inline(always)]
-    pub fn eval(&self, l: Vec3) -> LobeEval {
+    fn eval(&self, l: Vec3) -> LobeEval {
         if l.z <= 0.0 {
             return LobeEval::ZERO;
         }
@@ -357,12 +371,12 @@ impl PreparedSheenLTC {
 
     /// Exact pdf `D(w)`.
     #[inline]
-    pub fn pdf(&self, l: Vec3) -> f32 {
+    fn pdf(&self, l: Vec3) -> f32 {
         if l.z <= 0.0 { 0.0 } else { self.density(l) }
     }
 
     /// Exact LTC sample: cosine-sample `w'`, map by the LTC matrix; weight `Ê`.
-    pub fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
+    fn sample(&self, u: [f32; 3]) -> Option<LobeSample> {
         let wp = sample_cosine(u[0], u[1])?;
         let w = Vec3::new((wp.x - self.b * wp.z) / self.a, wp.y / self.a, wp.z).normalize();
         let l = self.ax_x * w.x + self.ax_y * w.y + Vec3::Z * w.z;
@@ -379,7 +393,7 @@ impl PreparedSheenLTC {
     }
 
     /// Directional albedo: exactly `Ê` (the LTC has unit mass).
-    pub fn albedo(&self) -> LobeAlbedo {
+    fn albedo(&self) -> LobeAlbedo {
         LobeAlbedo::reflect(Vec3::splat(self.e_hat))
     }
 }

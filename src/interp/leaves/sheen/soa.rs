@@ -1,9 +1,13 @@
 //! The structure-of-arrays kernels of the Conty–Kulla (MaterialX masking) and LTC sheen leaves: their lanes
 //! ([`crate::interp::soa`]), the per-lane setters that `Kernel::rebuild` and the lane-parallel
 //! prepare share (both fold the slot's weight and probability into the same fields in the
-//! same order) and the batched eval.
+//! same order), the lane-parallel prepare's per-family steps (albedo and view terms of `W`
+//! views from the bound leaf) and the batched eval.
 
+use super::{SheenCKBound, SheenLTC, SheenLTCBound};
 use crate::interp::soa::{Acc, LaneWeights, Vec3x, add_valid, lane_l};
+use crate::interp::tables::LaneCoords;
+use glam::Vec3;
 use crate::interp::vmath;
 use std::f32::consts::FRAC_1_PI;
 
@@ -68,5 +72,75 @@ impl<const W: usize> SheenLTCX<W> {
         self.a[k] = p.a;
         self.b[k] = p.b;
         self.e_hat[k] = p.e_hat;
+    }
+}
+
+impl SheenCKBound {
+    /// The lane-parallel prepare's albedo `E(μ_o)` of `W` views, at their coordinates `at`
+    /// along this leaf's curve, as the scalar prepare computes it.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn albedo_lanes<const W: usize>(
+        &self,
+        at: &LaneCoords<W>,
+        out: &mut Vec3x<W>,
+    ) {
+        let e = self.curve.at_lanes(at);
+        for k in 0..W {
+            out.set(k, Vec3::splat(e[k]));
+        }
+    }
+}
+
+impl SheenLTCBound {
+    /// The lane-parallel prepare's albedo `Ê(μ_o)` of `W` views with cosines `mu`, also left
+    /// in `e_hat` for [`SheenLTCX::set_views`].
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn albedo_lanes<const W: usize>(
+        &self,
+        mu: &[f32; W],
+        out: &mut Vec3x<W>,
+        e_hat: &mut [f32; W],
+    ) {
+        for k in 0..W {
+            e_hat[k] = self.albedo(mu[k].clamp(0.0, 1.0));
+            out.set(k, Vec3::splat(e_hat[k]));
+        }
+    }
+}
+
+impl<const W: usize> SheenCKX<W> {
+    /// The lane-parallel prepare's view terms: lane `k` holds the leaf `bound` at view
+    /// `v[k]` (this family folds no weight into its fields).
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn set_views(&mut self, bound: &SheenCKBound, v: &Vec3x<W>) {
+        for k in 0..W {
+            self.v.set(k, v.get(k));
+            self.half_inv_r[k] = bound.half_inv_r;
+            self.norm[k] = bound.norm;
+        }
+    }
+}
+
+impl<const W: usize> SheenLTCX<W> {
+    /// The lane-parallel prepare's view terms: lane `k` holds the leaf `bound` at view
+    /// `v[k]`, with the albedo `e_hat[k]` [`SheenLTCBound::albedo_lanes`] computed.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn set_views(
+        &mut self,
+        bound: &SheenLTCBound,
+        v: &Vec3x<W>,
+        e_hat: &[f32; W],
+    ) {
+        let e = *e_hat;
+        for k in 0..W {
+            self.set(
+                k,
+                &SheenLTC::prepare_bound_with_albedo(v.get(k), bound, e[k]),
+            );
+        }
     }
 }

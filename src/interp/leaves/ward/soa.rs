@@ -1,10 +1,12 @@
 //! The structure-of-arrays kernels of the Ward (classic and GM) leaves: their lanes
 //! ([`crate::interp::soa`]), the per-lane setters that `Kernel::rebuild` and the lane-parallel
 //! prepare share (both fold the slot's weight and probability into the same fields in the
-//! same order) and the batched eval.
+//! same order), the lane-parallel prepare's per-family steps (albedo and view terms of `W`
+//! views from the bound leaf) and the batched eval.
 
 use crate::interp::soa::{Acc, LaneWeights, Vec3x, add_baked, flag, lane_l, pick};
-use crate::interp::ward::WardVariant;
+use crate::interp::tables::LaneCoords;
+use crate::interp::ward::{Ward, WardBound, WardVariant};
 use crate::interp::vmath;
 use glam::Vec3;
 
@@ -103,5 +105,61 @@ impl<const W: usize> WardX<W> {
         self.norm[k] = core.norm;
         self.pdf_norm[k] = core.pdf_norm * p;
         self.rho.set(k, rho * w);
+    }
+}
+
+impl Ward {
+    /// The lane-parallel prepare's albedo `E(μ_o)` of `W` views `v` (at coordinates `at` along
+    /// the bound curve), as the scalar prepare computes it: an anisotropic lobe's depends on
+    /// the view's azimuth, which the curve does not see, and is computed per lane by the
+    /// scalar prepare's own function.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn albedo_lanes<const W: usize>(
+        &self,
+        bound: &WardBound,
+        v: &Vec3x<W>,
+        at: &LaneCoords<W>,
+        out: &mut Vec3x<W>,
+    ) {
+        if bound.is_aniso() {
+            for k in 0..W {
+                let view = Vec3::new(v.x[k], v.y[k], v.z[k]);
+                out.set(k, self.rho * self.aniso_albedo(bound, view));
+            }
+        } else {
+            let e = bound.curve.at_lanes(at);
+            for k in 0..W {
+                out.set(k, self.rho * e[k]);
+            }
+        }
+    }
+}
+
+impl<const W: usize> WardX<W> {
+    /// The lane-parallel prepare's view terms: lane `k` holds `lobe` (bound as `bound`) at
+    /// view `v[k]`, with the slot's weights and probabilities `lw` folded in as
+    /// `Kernel::rebuild` folds them.
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn set_views(
+        &mut self,
+        lobe: &Ward,
+        bound: &WardBound,
+        v: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+    ) {
+        let classic = lobe.variant == WardVariant::Classic;
+        self.any_classic = classic;
+        for k in 0..W {
+            self.v.set(k, v.get(k));
+            self.set(k, &bound.core, lobe.variant, lobe.rho, lw.p[k], lw.w.get(k));
+        }
+        // The classic norm's only view-dependent part, `1/√μ_o` (as its prepare).
+        if classic {
+            for k in 0..W {
+                self.norm[k] = bound.core.norm / v.z[k].max(1e-7).sqrt();
+            }
+        }
     }
 }
