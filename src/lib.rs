@@ -31,6 +31,25 @@
 
 #![warn(missing_docs)]
 
+/// Declares modules that are public under the `testkit` feature (the crate's own tests and
+/// benches reach into them) and crate-private otherwise. With `allow_dead_code:` first, the
+/// build without `testkit` also allows the items only those tests use.
+macro_rules! testkit_mods {
+    (allow_dead_code: $($name:ident),+ $(,)?) => {$(
+        #[cfg(feature = "testkit")]
+        pub mod $name;
+        #[cfg(not(feature = "testkit"))]
+        #[allow(dead_code, unreachable_pub)]
+        pub(crate) mod $name;
+    )+};
+    ($($name:ident),+ $(,)?) => {$(
+        #[cfg(feature = "testkit")]
+        pub mod $name;
+        #[cfg(not(feature = "testkit"))]
+        pub(crate) mod $name;
+    )+};
+}
+
 pub mod diag;
 pub mod limits;
 pub mod types;
@@ -46,12 +65,8 @@ pub mod resolve;
 
 pub mod interp;
 pub mod ir;
-// Lowering is reached through `pipeline`; its recipes and graph traits are internals, public
-// only to the crate's own tests (feature `testkit`).
-#[cfg(feature = "testkit")]
-pub mod lower;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod lower;
+// Lowering is reached through `pipeline`; its recipes and graph traits are internals.
+testkit_mods!(lower);
 
 pub mod back;
 pub mod raster;

@@ -34,17 +34,8 @@ macro_rules! testkit_pub {
 // Internal modules: public only under the `testkit` feature, for the crate's own tests and
 // benches (the cross-path comparisons reach leaves, kernels and SIMD levels directly). A
 // program using the library sees the items re-exported below and `preview`.
-macro_rules! internal {
-    ($($name:ident),* $(,)?) => {$(
-        #[cfg(feature = "testkit")]
-        pub mod $name;
-        #[cfg(not(feature = "testkit"))]
-        #[allow(dead_code, unreachable_pub)]
-        mod $name;
-    )*};
-}
-
-internal!(
+testkit_mods!(
+    allow_dead_code:
     batch, frame, fresnel, ggx, leaves, lobe, material, math, simd, soa, tables, vmath,
 );
 

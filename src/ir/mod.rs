@@ -12,18 +12,7 @@ pub mod print;
 
 // The parameter program, the flat form and the passes are internals: public only to the
 // crate's own tests and benches (feature `testkit`).
-#[cfg(feature = "testkit")]
-pub mod algebra;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod algebra;
-#[cfg(feature = "testkit")]
-pub mod passes;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod passes;
-#[cfg(feature = "testkit")]
-pub mod program;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod program;
+testkit_mods!(algebra, passes, program);
 
 #[cfg(not(feature = "testkit"))]
 pub(crate) use algebra::{AlbedoSource, Flat};

@@ -19,26 +19,7 @@ pub mod scene;
 
 // One module per material model. The recipes are internals: public only to the crate's own
 // tests (feature `testkit`), which check their built-in defaults against the shipped `.args`.
-#[cfg(feature = "testkit")]
-pub mod mia;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod mia;
-#[cfg(feature = "testkit")]
-pub mod patterns;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod patterns;
-#[cfg(feature = "testkit")]
-pub mod physical;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod physical;
-#[cfg(feature = "testkit")]
-pub mod pxr;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod pxr;
-#[cfg(feature = "testkit")]
-pub mod vray;
-#[cfg(not(feature = "testkit"))]
-pub(crate) mod vray;
+testkit_mods!(mia, patterns, physical, pxr, vray);
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::ir::{IrBuilder, MaterialIr, Reg, value_to_vec3};
