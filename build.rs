@@ -37,10 +37,11 @@ fn main() {
     for f in &files {
         let rel = f.strip_prefix(&args_dir).unwrap_or(f);
         let rel = rel.to_string_lossy().replace('\\', "/");
+        // The path is joined when the crate compiles, not here: a build script's output is
+        // reused when the same target directory serves another checkout of the project.
         code.push_str(&format!(
-            "    ({:?}, include_bytes!({:?}) as &[u8]),\n",
-            rel,
-            f.to_string_lossy()
+            "    ({rel:?}, include_bytes!(concat!(env!(\"CARGO_MANIFEST_DIR\"), \"/args/{}\")) as &[u8]),\n",
+            rel.escape_default()
         ));
     }
     code.push_str("]\n");
