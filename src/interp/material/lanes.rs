@@ -21,19 +21,17 @@
 
 use super::{Material, Target, ThrOp, clean, sat};
 use crate::interp::batch::{PreparedBatch, ShadingBatch};
-use crate::interp::diffuse::{
-    EON_SIGMA_MIN, OrenNayar, OrenNayarBound, OrenNayarVariant, eon_e_hat, eon_e_hat_fast,
-};
+use crate::interp::diffuse::{OrenNayar, OrenNayarBound};
+use crate::interp::diffuse::soa::lambert_set_views;
 use crate::interp::frame::Frame;
-use crate::interp::fresnel::Fresnel;
-use crate::interp::ggx::{GgxView, ViewTerms};
+use crate::interp::ggx::GgxView;
 use crate::interp::leaves::Leaf;
 use crate::interp::lobe::{Aux, Lobe};
-use crate::interp::math::{Rgb, lum, safe_mu};
+use crate::interp::math::{Rgb, lum};
 use crate::interp::microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid};
 use crate::interp::sheen::{SheenCKBound, SheenLTCBound, SheenMasking};
 use crate::interp::simd::{Level, call_widest, widest_versions};
-use crate::interp::soa::{Kernel, LaneWeights, OrenNayarX, Vec3x};
+use crate::interp::soa::{Kernel, LaneWeights, Vec3x};
 use crate::interp::tables::{LaneCoords, MuCurve};
 use crate::interp::vmath::{select, select3};
 use crate::interp::ward::{Ward, WardBound};
@@ -173,76 +171,21 @@ impl LeafLanes {
         e_hat: &mut [f32; W],
     ) {
         let mu = &v.z;
-        // An anisotropic lobe's albedo depends on the view's azimuth, which the curves along
-        // μ do not see: it is computed per lane, by the scalar prepare's own function.
-        let view = |k: usize| Vec3::new(v.x[k], v.y[k], v.z[k]);
         match self {
             LeafLanes::Lambert { rho, .. } => {
                 for k in 0..W {
                     out.set(k, *rho);
                 }
             }
-            LeafLanes::OrenNayar { lobe, bound } => {
-                let t = &bound.template;
-                // Each branch is decided once, outside the loop over lanes, so that the loop
-                // has none.
-                let mut energy = |e_of: fn(f32, f32) -> f32, out: &mut Vec3x<W>| {
-                    for k in 0..W {
-                        let e_o = e_of(mu[k], t.sigma);
-                        e_hat[k] = e_o;
-                        out.set(k, lobe.rho * e_o + bound.rho_ms * (1.0 - e_o));
-                    }
-                };
-                match (lobe.variant, &bound.qon) {
-                    (OrenNayarVariant::Qualitative, Some(c)) => {
-                        let c = c.at_lanes(at);
-                        for k in 0..W {
-                            out.set(k, lobe.rho * c[k]);
-                        }
-                    }
-                    (OrenNayarVariant::Fujii, _) => {
-                        for k in 0..W {
-                            out.set(k, lobe.rho * eon_e_hat(mu[k], t.sigma));
-                        }
-                    }
-                    (OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast, _)
-                        if t.sigma >= EON_SIGMA_MIN =>
-                    {
-                        if t.fast {
-                            energy(eon_e_hat_fast, out);
-                        } else {
-                            energy(eon_e_hat, out);
-                        }
-                    }
-                    // EON below the σ cut-off is Lambert: the template's albedo (QON always
-                    // has its curve).
-                    _ => {
-                        for k in 0..W {
-                            out.set(k, t.albedo);
-                        }
-                    }
-                }
-            }
-            LeafLanes::Conductor { lobe, ratios, .. } => {
-                for k in 0..W {
-                    out.set(k, lobe.ratio_albedo(Some(ratios), view(k)).min(Vec3::ONE));
-                }
-            }
+            LeafLanes::OrenNayar { lobe, bound } => lobe.albedo_lanes(bound, mu, at, out, e_hat),
+            LeafLanes::Conductor { lobe, ratios, .. } => lobe.albedo_lanes(ratios, v, out),
             LeafLanes::DielectricR {
-                lobe, eta, aniso, ..
-            } if lobe.ggx.ax != lobe.ggx.ay => {
-                for k in 0..W {
-                    let [er, ..] =
-                        lobe.aniso_albedos(aniso.as_ref(), view(k), *eta, [true, false, false]);
-                    out.set(k, lobe.tint_r * er);
-                }
-            }
-            LeafLanes::DielectricR { lobe, e_r, .. } => {
-                let e_r = e_r.at_lanes(at);
-                for k in 0..W {
-                    out.set(k, lobe.tint_r * e_r[k]);
-                }
-            }
+                lobe,
+                eta,
+                e_r,
+                aniso,
+                ..
+            } => lobe.albedo_lanes_r(*eta, e_r, aniso.as_ref(), v, at, out),
             LeafLanes::Ward { lobe, bound } => lobe.albedo_lanes(bound, v, at, out),
             LeafLanes::SheenCK { bound } => bound.albedo_lanes(at, out),
             LeafLanes::SheenLTC { bound } => bound.albedo_lanes(mu, out, e_hat),
@@ -263,70 +206,19 @@ impl LeafLanes {
         e_hat: &[f32; W],
     ) {
         match self {
-            LeafLanes::Lambert { rho_pi, .. } => {
-                let x = kernel.lambert_mut();
-                for k in 0..W {
-                    x.set(k, *rho_pi * lw.w.get(k));
-                }
-            }
+            LeafLanes::Lambert { rho_pi, .. } => lambert_set_views(kernel.lambert_mut(), *rho_pi, lw),
             LeafLanes::OrenNayar { lobe, bound } => {
-                let x = kernel.oren_nayar_mut();
-                let t = &bound.template;
-                x.fast = t.fast;
-                let energy = matches!(
-                    lobe.variant,
-                    OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast
-                ) && t.sigma >= EON_SIGMA_MIN;
-                // `ms` is the template's (0) unless EON's multiple scattering is on; then
-                // `e_hat` holds `Ê(μ_o)` (the albedo's, by the same form).
-                // One loop per case, with no branch inside (it would stop the vectoriser).
-                let e = *e_hat;
-                let fill = |with_ms: bool, x: &mut OrenNayarX<W>| {
-                    for k in 0..W {
-                        let mut p = *t;
-                        p.v = v.get(k);
-                        if with_ms {
-                            p.ms = bound.ms_scale * (1.0 - e[k]);
-                        }
-                        x.set(k, &p, lw.w.get(k));
-                    }
-                };
-                if energy {
-                    fill(true, x);
-                } else {
-                    fill(false, x);
-                }
+                kernel.oren_nayar_mut().set_views(lobe, bound, v, lw, e_hat)
             }
             LeafLanes::Conductor { lobe, ggx_view, .. } => {
-                let x = kernel.conductor_mut();
-                let Fresnel::Conductor { eta, kappa } = lobe.fresnel else {
-                    return;
-                };
-                for k in 0..W {
-                    let vk = v.get(k);
-                    let t = ViewTerms::from_constants(ggx_view, lobe.masking, vk);
-                    x.g.set(k, vk, &t.view);
-                    let inv_4mu = 0.25 / safe_mu(vk.z);
-                    x.pdf_c[k] = t.g1_v * inv_4mu * lw.p[k];
-                    x.set_ior(k, eta, kappa);
-                    x.scale_q.set(k, Vec3::ONE * inv_4mu * lw.w.get(k));
-                }
+                kernel.conductor_mut().set_views(lobe, ggx_view, v, lw)
             }
             LeafLanes::DielectricR {
                 lobe,
                 ggx_view,
                 eta,
                 ..
-            } => {
-                let x = kernel.dielectric_r_mut();
-                for k in 0..W {
-                    let vk = v.get(k);
-                    let t = ViewTerms::from_constants(ggx_view, lobe.masking, vk);
-                    x.g.set(k, vk, &t.view);
-                    let inv_mu = 1.0 / safe_mu(vk.z);
-                    x.set(k, *eta, t.g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
-                }
-            }
+            } => kernel.dielectric_r_mut().set_views_r(lobe, ggx_view, *eta, v, lw),
             LeafLanes::Ward { lobe, bound } => kernel.ward_mut().set_views(lobe, bound, v, lw),
             LeafLanes::SheenCK { bound } => kernel.sheen_ck_mut().set_views(bound, v),
             LeafLanes::SheenLTC { bound } => kernel.sheen_ltc_mut().set_views(bound, v, e_hat),

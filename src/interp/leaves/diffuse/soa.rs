@@ -3,6 +3,11 @@
 //! prepare share (both fold the slot's weight and probability into the same fields in the
 //! same order) and the batched eval.
 
+use super::{
+    EON_SIGMA_MIN, OrenNayar, OrenNayarBound, OrenNayarVariant, eon_e_hat, eon_e_hat_fast,
+};
+use crate::interp::math::Rgb;
+use crate::interp::tables::LaneCoords;
 use crate::interp::soa::{Acc, LaneWeights, Vec3x, add_baked, flag, lane_l, pick};
 use crate::interp::vmath;
 use glam::Vec3;
@@ -119,5 +124,116 @@ impl<const W: usize> OrenNayarX<W> {
         self.v.set(k, p.v);
         self.rho_pi.set(k, p.rho_pi * w);
         self.ms.set(k, p.ms * w);
+    }
+}
+
+/// The lane-parallel prepare's view terms of a Lambert leaf (and the subsurface proxy):
+/// lane `k` holds `ρ/π` with the slot's weight `lw.w[k]` folded in.
+#[inline(always)]
+pub(in crate::interp) fn lambert_set_views<const W: usize>(
+    x: &mut Vec3x<W>,
+    rho_pi: Rgb,
+    lw: &LaneWeights<W>,
+) {
+    for k in 0..W {
+        x.set(k, rho_pi * lw.w.get(k));
+    }
+}
+
+impl OrenNayar {
+    /// The lane-parallel prepare's albedo `E(μ_o)` of `W` views with cosines `mu` (at their
+    /// coordinates `at` along the leaf's curves), as the scalar prepare computes it. The
+    /// energy variants also leave `Ê(μ_o)` in `e_hat` for [`OrenNayarX::set_views`].
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn albedo_lanes<const W: usize>(
+        &self,
+        bound: &OrenNayarBound,
+        mu: &[f32; W],
+        at: &LaneCoords<W>,
+        out: &mut Vec3x<W>,
+        e_hat: &mut [f32; W],
+    ) {
+        let t = &bound.template;
+        // Each branch is decided once, outside the loop over lanes, so that the loop has
+        // none.
+        let mut energy = |e_of: fn(f32, f32) -> f32, out: &mut Vec3x<W>| {
+            for k in 0..W {
+                let e_o = e_of(mu[k], t.sigma);
+                e_hat[k] = e_o;
+                out.set(k, self.rho * e_o + bound.rho_ms * (1.0 - e_o));
+            }
+        };
+        match (self.variant, &bound.qon) {
+            (OrenNayarVariant::Qualitative, Some(c)) => {
+                let c = c.at_lanes(at);
+                for k in 0..W {
+                    out.set(k, self.rho * c[k]);
+                }
+            }
+            (OrenNayarVariant::Fujii, _) => {
+                for k in 0..W {
+                    out.set(k, self.rho * eon_e_hat(mu[k], t.sigma));
+                }
+            }
+            (OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast, _)
+                if t.sigma >= EON_SIGMA_MIN =>
+            {
+                if t.fast {
+                    energy(eon_e_hat_fast, out);
+                } else {
+                    energy(eon_e_hat, out);
+                }
+            }
+            // EON below the σ cut-off is Lambert: the template's albedo (QON always has its
+            // curve).
+            _ => {
+                for k in 0..W {
+                    out.set(k, t.albedo);
+                }
+            }
+        }
+    }
+}
+
+impl<const W: usize> OrenNayarX<W> {
+    /// The lane-parallel prepare's view terms: lane `k` holds the leaf (`lobe`, `bound`) at
+    /// view `v[k]`, with the slot's weight folded in as `Kernel::rebuild` folds it, and
+    /// `e_hat` as [`OrenNayar::albedo_lanes`] left it (computing it once saves an `acos` or
+    /// an `exp` per lane).
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn set_views(
+        &mut self,
+        lobe: &OrenNayar,
+        bound: &OrenNayarBound,
+        v: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+        e_hat: &[f32; W],
+    ) {
+        let t = &bound.template;
+        self.fast = t.fast;
+        let energy = matches!(
+            lobe.variant,
+            OrenNayarVariant::Energy | OrenNayarVariant::EnergyFast
+        ) && t.sigma >= EON_SIGMA_MIN;
+        // `ms` is the template's (0) unless EON's multiple scattering is on; then `e_hat`
+        // holds `Ê(μ_o)` (the albedo's, by the same form). One loop per case, with no branch
+        // inside (it would stop the vectoriser).
+        let fill = |with_ms: bool, x: &mut OrenNayarX<W>| {
+            for k in 0..W {
+                let mut p = *t;
+                p.v = v.get(k);
+                if with_ms {
+                    p.ms = bound.ms_scale * (1.0 - e_hat[k]);
+                }
+                x.set(k, &p, lw.w.get(k));
+            }
+        };
+        if energy {
+            fill(true, self);
+        } else {
+            fill(false, self);
+        }
     }
 }

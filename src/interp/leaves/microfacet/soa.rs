@@ -3,6 +3,11 @@
 //! prepare share (both fold the slot's weight and probability into the same fields in the
 //! same order) and the batched eval.
 
+use super::{Dielectric, MicrofacetR, RatioGrid};
+use crate::interp::fresnel::Fresnel;
+use crate::interp::ggx::ViewTerms;
+use crate::interp::math::safe_mu;
+use crate::interp::tables::{LaneCoords, MuCurve};
 use crate::interp::soa::{Acc, LaneWeights, Vec3x, add_baked, lane_l};
 use crate::interp::fresnel::{self, dielectric_half};
 use crate::interp::ggx::GgxView;
@@ -225,5 +230,103 @@ impl<const W: usize> DielectricX<W> {
         let q = 0.25 * inv_mu;
         self.pdf_c[k] = g1_v * q * p;
         self.tint_q.set(k, tint_r * q * w);
+    }
+}
+
+impl MicrofacetR {
+    /// The lane-parallel prepare's albedo of a rough conductor lobe without compensation at
+    /// `W` local views `v`: `E1` times the exact Fresnel's `ratios`, per lane, by the scalar
+    /// prepare's own function.
+    #[inline(always)]
+    pub(in crate::interp) fn albedo_lanes<const W: usize>(
+        &self,
+        ratios: &RatioGrid,
+        v: &Vec3x<W>,
+        out: &mut Vec3x<W>,
+    ) {
+        for k in 0..W {
+            out.set(k, self.ratio_albedo(Some(ratios), v.get(k)).min(Vec3::ONE));
+        }
+    }
+}
+
+impl<const W: usize> ConductorX<W> {
+    /// The lane-parallel prepare's view terms: lane `k` holds the conductor `lobe` (with
+    /// its GGX data `ggx_view`) at view `v[k]`, with the slot's weights and probabilities
+    /// `lw` folded in as `Kernel::rebuild` folds them.
+    #[inline(always)]
+    pub(in crate::interp) fn set_views(
+        &mut self,
+        lobe: &MicrofacetR,
+        ggx_view: &GgxView,
+        v: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+    ) {
+        let Fresnel::Conductor { eta, kappa } = lobe.fresnel else {
+            return;
+        };
+        for k in 0..W {
+            let vk = v.get(k);
+            let t = ViewTerms::from_constants(ggx_view, lobe.masking, vk);
+            self.g.set(k, vk, &t.view);
+            let inv_4mu = 0.25 / safe_mu(vk.z);
+            self.pdf_c[k] = t.g1_v * inv_4mu * lw.p[k];
+            self.set_ior(k, eta, kappa);
+            self.scale_q.set(k, Vec3::ONE * inv_4mu * lw.w.get(k));
+        }
+    }
+}
+
+impl Dielectric {
+    /// The lane-parallel prepare's albedo of a rough dielectric lobe in mode R (no Turquin
+    /// factor) at `W` local views `v`: `E_R` at its index `eta` along the curve `e_r` (at
+    /// the lanes' coordinates `at`), or, for an anisotropic lobe, whose albedo depends on
+    /// the view's azimuth, per lane by the scalar prepare's own function (with its `aniso`
+    /// ratios).
+    #[allow(clippy::needless_range_loop)] // index loops over lanes vectorise best
+    #[inline(always)]
+    pub(in crate::interp) fn albedo_lanes_r<const W: usize>(
+        &self,
+        eta: f32,
+        e_r: &MuCurve,
+        aniso: Option<&RatioGrid>,
+        v: &Vec3x<W>,
+        at: &LaneCoords<W>,
+        out: &mut Vec3x<W>,
+    ) {
+        if self.ggx.ax != self.ggx.ay {
+            for k in 0..W {
+                let [er, ..] = self.aniso_albedos(aniso, v.get(k), eta, [true, false, false]);
+                out.set(k, self.tint_r * er);
+            }
+        } else {
+            let e_r = e_r.at_lanes(at);
+            for k in 0..W {
+                out.set(k, self.tint_r * e_r[k]);
+            }
+        }
+    }
+}
+
+impl<const W: usize> DielectricX<W> {
+    /// The lane-parallel prepare's view terms of a dielectric in mode R: lane `k` holds
+    /// `lobe` (with its GGX data `ggx_view` and index `eta`) at view `v[k]`, with the slot's
+    /// weights and probabilities `lw` folded in as `Kernel::rebuild` folds them.
+    #[inline(always)]
+    pub(in crate::interp) fn set_views_r(
+        &mut self,
+        lobe: &Dielectric,
+        ggx_view: &GgxView,
+        eta: f32,
+        v: &Vec3x<W>,
+        lw: &LaneWeights<W>,
+    ) {
+        for k in 0..W {
+            let vk = v.get(k);
+            let t = ViewTerms::from_constants(ggx_view, lobe.masking, vk);
+            self.g.set(k, vk, &t.view);
+            let inv_mu = 1.0 / safe_mu(vk.z);
+            self.set(k, eta, t.g1_v, inv_mu, lobe.tint_r, lw.p[k], lw.w.get(k));
+        }
     }
 }
