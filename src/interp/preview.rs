@@ -394,13 +394,12 @@ fn shade_row_with(
     }
 }
 
-testkit_pub! {
-    /// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
-    fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
-        let mut scratch = Scratch::default();
-        let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
-        shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
-    }
+/// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
+#[cfg(feature = "testkit")]
+pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+    let mut scratch = Scratch::default();
+    let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
+    shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
 }
 
 /// Shade row `j` `W` pixels at a time with caller-owned working memory (the batched path
