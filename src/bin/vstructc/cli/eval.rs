@@ -12,7 +12,9 @@
 //! transparency. `--json` prints the same as one JSON object.
 
 use super::CommonOptions;
-use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
+use super::material::{
+    MaterialArgs, check_input_names, check_input_syntax, load_materials, packed_inputs,
+};
 use glam::{Vec2, Vec3};
 use serde_json::{Value as Json, json};
 use std::fmt::Write as _;
@@ -199,6 +201,9 @@ pub fn run(args: &EvalArgs, common: &CommonOptions) -> ExitCode {
         Ok(x) => x,
         Err(msg) => return usage(msg),
     };
+    if let Err(msg) = check_input_syntax(&args.source.inputs) {
+        return usage(msg);
+    }
     let (materials, diags) = match load_materials(&args.source, common) {
         Ok(x) => x,
         Err(status) => return status,
