@@ -1,8 +1,9 @@
 //! The `vstructc` command line. The binary's `main` only calls [`main`];
 //! each subcommand lives in its own module and returns an exit status.
 //!
-//! Exit status: 0 success (warnings on stderr), 1 input errors (or warnings under
-//! `--deny-warnings`), 2 usage errors.
+//! Exit status, the same in every command ([`EXIT_STATUS`]): 0 success (warnings on
+//! stderr), 1 input errors (or warnings under `--deny-warnings`) or no material to act on
+//! (`compile`, `render`, `eval`), 2 usage errors, found before the input is read.
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Write;
@@ -33,12 +34,19 @@ pub mod render;
 pub mod resolve;
 pub mod snippet;
 
+/// The exit status rules, shown by `--help`: the same in every command.
+pub const EXIT_STATUS: &str = "Exit status (every command): 0 success (warnings allowed), \
+1 when the input has errors (or warnings under --deny-warnings) or holds no material to act \
+on (compile, render, eval), 2 usage errors (found before the input is read). Machine output: \
+--json on list, info, expr, resolve, explain, compile and eval (docs/json.md).";
+
 /// Top-level command line.
 #[derive(Debug, Parser)]
 #[command(
     name = "vstructc",
     version,
-    about = "Shader-network compiler: vstruct resolution, closure IR, previews"
+    about = "Shader-network compiler: vstruct resolution, closure IR, previews",
+    after_help = EXIT_STATUS
 )]
 pub struct Cli {
     /// Options shared by every subcommand.
