@@ -506,7 +506,11 @@ fn a_full_disk_on_stdout_is_io001_in_every_command() {
         &["expr", "--json", "connect if a == 1 else ignore"],
         &["expr", "--json", "connect if a == else ignore"],
         &["explain", "mixer.diffuseColor", "examples/layered.rib"],
-        &["explain", "mixer.enableDiffuseAlways", "examples/layered.rib"],
+        &[
+            "explain",
+            "mixer.enableDiffuseAlways",
+            "examples/layered.rib",
+        ],
         &["resolve", "examples/chain.rib"],
         &["resolve", "--format", "json", "examples/chain.rib"],
         &["render", "--size", "8", "examples/layered.rib", "-o", "-"],

@@ -1,6 +1,6 @@
 //! `vstructc info SHADER`: a readable summary of one shader definition (kind, source, params
 //! grouped by page, outputs, vstruct heads with member counts, conditional expressions), or
-//! `--json` for tools.
+//! `--json` for tools: plain fields, values as `{"type", "value"}` (docs/json.md).
 //!
 //! Exit status: 0 on success, 1 when an input error was reported (a rejected definition file,
 //! a missing `--args` path), 2 when the shader id is unknown.
@@ -20,7 +20,8 @@ pub struct InfoArgs {
     /// The shader id (e.g. `PxrLayerMixer`).
     #[arg(value_name = "SHADER")]
     pub shader: String,
-    /// Print a JSON document instead of the readable summary.
+    /// Print a JSON document on standard output instead of the readable summary
+    /// (docs/json.md).
     #[arg(long)]
     pub json: bool,
 }

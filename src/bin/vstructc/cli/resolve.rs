@@ -88,6 +88,11 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     let format = match output_format(asked, args.output.as_deref()) {
         Ok(f) => f,
         Err(msg) => {
+            let msg = if args.json {
+                msg.replace("--format json", "--json")
+            } else {
+                msg
+            };
             eprintln_quiet!("error: {msg}");
             return ExitCode::from(2);
         }
