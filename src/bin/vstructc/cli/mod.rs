@@ -126,7 +126,7 @@ impl clap::builder::TypedValueParser for ExtParser {
         value: &std::ffi::OsStr,
     ) -> Result<String, clap::Error> {
         let s = value.to_string_lossy();
-        vstructc::cond::Extensions::from_names(&[s.as_ref()])
+        vstructc::cond::Extensions::from_names([s.as_ref()])
             .map(|_| s.to_string())
             .map_err(|e| clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("{e}\n")))
     }
