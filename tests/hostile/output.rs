@@ -505,7 +505,21 @@ fn a_full_disk_on_stdout_is_io001_in_every_command() {
         &["expr", "connect if a == 1 else ignore"],
         &["expr", "--json", "connect if a == 1 else ignore"],
         &["expr", "--json", "connect if a == else ignore"],
-        &["explain", "mixer.diffuseColor", "examples/layered.rib"],
+        &[
+            "explain",
+            "mixer.layer1_diffuseColor",
+            "examples/layered.rib",
+        ],
+        &[
+            "explain",
+            "--json",
+            "mixer.layer1_enableClearcoat",
+            "examples/layered.rib",
+        ],
+        &["compile", "--json", "examples/layered.rib"],
+        &["list"],
+        &["list", "--json"],
+        &["resolve", "--json", "examples/chain.rib"],
         &[
             "explain",
             "mixer.enableDiffuseAlways",

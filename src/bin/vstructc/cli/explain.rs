@@ -14,7 +14,7 @@ use super::CommonOptions;
 use super::input::{ReadInput, read};
 use super::json::{self, LocationDoc, TypedValue};
 use serde::Serialize;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -137,6 +137,8 @@ struct Teller<'a> {
     net: &'a Network,
     registry: &'a Registry,
     events: &'a [MemberEvent],
+    /// The indexes of the events about each `(node, member)`, in order.
+    by_member: HashMap<(NodeId, &'a str), Vec<usize>>,
     told: HashSet<(NodeId, String)>,
 }
 
@@ -147,9 +149,10 @@ impl Teller<'_> {
 
     /// Indexes of the events about `node.input` before `before`.
     fn events_of(&self, node: NodeId, input: &str, before: usize) -> Vec<usize> {
-        (0..before.min(self.events.len()))
-            .filter(|&i| self.events[i].node == node && self.events[i].member == input)
-            .collect()
+        self.by_member
+            .get(&(node, input))
+            .map(|v| v.iter().copied().take_while(|&i| i < before).collect())
+            .unwrap_or_default()
     }
 
     /// The story of `node.input` as it stood after the events before `before`.
@@ -380,10 +383,18 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         ));
     }
     let res = resolve(&mut network, &registry, &options);
+    let mut by_member: HashMap<(NodeId, &str), Vec<usize>> = HashMap::new();
+    for (i, e) in res.events.iter().enumerate() {
+        by_member
+            .entry((e.node, e.member.as_str()))
+            .or_default()
+            .push(i);
+    }
     let mut teller = Teller {
         net: &network,
         registry: &registry,
         events: &res.events,
+        by_member,
         told: HashSet::new(),
     };
     let story = teller.story(node, input, usize::MAX, 0);
