@@ -272,6 +272,10 @@ fn every_data_command_has_json() {
         ]),
     ];
     assert!(docs.iter().all(Json::is_object));
+    // The network form's keys include node and material names; the others are all fields.
+    for (i, doc) in docs.iter().enumerate().filter(|(i, _)| *i != 3) {
+        assert_plain(&format!("document {i}"), doc);
+    }
 }
 
 /// `explain` on the chain example: the value the lacquer layer's conditional wrote into the
