@@ -572,8 +572,22 @@ fn help_lists_the_extension_names() {
 
 #[test]
 fn help_states_the_exit_status_rules() {
-    let help = stdout(&vstructc(&["--help"]));
-    assert!(help.contains("Exit status"), "{help}");
-    assert!(help.contains("0 success"), "{help}");
-    assert!(help.contains("2 usage"), "{help}");
+    for command in [
+        "", "list", "info", "expr", "resolve", "explain", "compile", "render", "eval",
+    ] {
+        let args: Vec<&str> = [command, "--help"]
+            .into_iter()
+            .filter(|a| !a.is_empty())
+            .collect();
+        let help = stdout(&vstructc(&args));
+        assert!(
+            help.contains("Exit status (every command): 0 success"),
+            "{command}: {help}"
+        );
+        assert!(
+            help.contains("holds no material to act on"),
+            "{command}: {help}"
+        );
+        assert!(help.contains("2 usage errors"), "{command}: {help}");
+    }
 }

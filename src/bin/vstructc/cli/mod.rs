@@ -172,20 +172,28 @@ pub enum DiagFormat {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// List the known shaders: kind, format and the file each definition is read from.
+    #[command(after_help = EXIT_STATUS)]
     List(list::ListArgs),
     /// Summarise one shader definition.
+    #[command(after_help = EXIT_STATUS)]
     Info(info::InfoArgs),
     /// Parse one conditional expression and print its desugared form or diagnostics.
+    #[command(after_help = EXIT_STATUS)]
     Expr(expr::ExprArgs),
     /// Expand the vstruct connections of a network (RIB or JSON) and write it back.
+    #[command(after_help = EXIT_STATUS)]
     Resolve(resolve::ResolveArgs),
-    /// Tell the story of one member input's value during resolution.
+    /// Tell where one input's value comes from (authored, default, written by resolution).
+    #[command(after_help = EXIT_STATUS)]
     Explain(explain::ExplainArgs),
     /// Lower each material of a network to the closure IR and print it.
+    #[command(after_help = EXIT_STATUS)]
     Compile(compile::CompileArgs),
     /// Render a material-ball preview (PNG or PFM).
+    #[command(after_help = EXIT_STATUS)]
     Render(render::RenderArgs),
     /// Evaluate each lobe of a material for one pair of directions.
+    #[command(after_help = EXIT_STATUS)]
     Eval(eval::EvalArgs),
 }
 
