@@ -325,6 +325,7 @@ fn explain_tells_written_values_from_authored_ones() {
             "origin",
             "shader",
             "toldAbove",
+            "truncated",
             "upstream",
             "value"
         ]
@@ -590,4 +591,39 @@ fn help_states_the_exit_status_rules() {
         );
         assert!(help.contains("2 usage errors"), "{command}: {help}");
     }
+}
+
+/// A value written through a long chain of mixers: the story follows it 16 steps upstream
+/// and says where it stops.
+#[test]
+fn explain_stops_a_long_story_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("mixers.rib");
+    let mut rib = String::from(
+        "Pattern \"PxrLayer\" \"layer\" \"int enableDiffuse\" [1]\n\
+         Pattern \"PxrLayerMixer\" \"m0\" \"reference vstruct baselayer\" [\"layer:pxrMaterialOut\"]\n",
+    );
+    for i in 1..24 {
+        rib.push_str(&format!(
+            "Pattern \"PxrLayerMixer\" \"m{i}\" \"reference vstruct baselayer\" [\"m{}:pxrMaterialOut\"]\n",
+            i - 1
+        ));
+    }
+    std::fs::write(&input, rib).unwrap();
+    let input = input.display().to_string();
+    let out = vstructc(&["explain", "m23.baselayer_enableDiffuse", &input]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.starts_with("m23.baselayer_enableDiffuse = 1 (written by resolution)\n"));
+    assert!(
+        text.contains("the story goes on upstream (more than 16 steps)"),
+        "{text}"
+    );
+    assert!(!text.contains("reads layer.enableDiffuse"), "{text}");
+    let near = vstructc(&["explain", "m3.baselayer_enableDiffuse", &input]);
+    assert!(
+        stdout(&near).contains("reads layer.enableDiffuse = authored 1 at "),
+        "{}",
+        stdout(&near)
+    );
 }

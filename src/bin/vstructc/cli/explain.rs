@@ -68,9 +68,12 @@ pub struct Story {
     /// For a connection to an upstream member output: the stories of the upstream inputs
     /// the output carries (inputs of the same member name that have a value or connection).
     pub upstream: Vec<Story>,
-    /// True when this input's story was already told earlier in the document (or the story
-    /// is deeper than the limit): `events` and `upstream` are then empty.
+    /// True when this input's story was already told earlier in the document: `events` and
+    /// `upstream` are then empty.
     pub told_above: bool,
+    /// True when the story is more than 16 steps upstream of the input explained and stops
+    /// here: `events` and `upstream` are then empty.
+    pub truncated: bool,
 }
 
 /// A connection.
@@ -213,8 +216,13 @@ impl Teller<'_> {
             events: Vec::new(),
             upstream: Vec::new(),
             told_above: false,
+            truncated: false,
         };
-        if depth > MAX_DEPTH || !self.told.insert((node, input.to_string())) {
+        if depth > MAX_DEPTH {
+            story.truncated = true;
+            return story;
+        }
+        if !self.told.insert((node, input.to_string())) {
             story.told_above = true;
             return story;
         }
@@ -263,10 +271,11 @@ impl Teller<'_> {
                     }
                 }
             }
-            inputs.dedup();
+            let mut seen = HashSet::new();
+            inputs.retain(|i| seen.insert(i.clone()));
             for i in inputs {
                 let s = self.story(up, &i, before, depth + 1);
-                if s.told_above || !matches!(s.origin, "default" | "none") {
+                if s.told_above || !s.events.is_empty() || !matches!(s.origin, "default" | "none") {
                     out.push(s);
                 } else {
                     // A default the output merely carries is no part of the story.
@@ -419,10 +428,21 @@ fn value_text(v: &Option<TypedValue>) -> String {
 /// A plain JSON value as the readable output prints values: numbers space-separated,
 /// strings quoted.
 fn plain_text(v: &serde_json::Value) -> String {
+    use serde_json::Value as J;
+    // Numbers as the library prints them: `1`, `0.2` (serde_json would print `1.0`).
+    let number = |n: &serde_json::Number| match (n.as_i64(), n.as_f64()) {
+        (Some(i), _) => i.to_string(),
+        (None, Some(x)) => format!("{x}"),
+        _ => n.to_string(),
+    };
     match v {
-        serde_json::Value::Array(items) if items.iter().all(|i| i.is_number()) => items
+        J::Number(n) => number(n),
+        J::Array(items) if items.iter().all(J::is_number) => items
             .iter()
-            .map(|i| i.to_string())
+            .filter_map(|i| match i {
+                J::Number(n) => Some(number(n)),
+                _ => None,
+            })
             .collect::<Vec<_>>()
             .join(" "),
         other => other.to_string(),
@@ -480,6 +500,13 @@ pub fn render_story(s: &mut String, story: &Story, indent: usize) {
     };
     if story.told_above {
         let _ = writeln!(s, "{pad}{summary}: told above");
+        return;
+    }
+    if story.truncated {
+        let _ = writeln!(
+            s,
+            "{pad}{summary}: the story goes on upstream (more than {MAX_DEPTH} steps)"
+        );
         return;
     }
     let _ = writeln!(s, "{pad}{summary}");
