@@ -28,7 +28,9 @@
 
 use super::CommonOptions;
 use super::input::{report_error, stream_output};
-use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
+use super::material::{
+    MaterialArgs, check_input_names, check_input_syntax, load_materials, packed_inputs,
+};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -151,13 +153,32 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
     } else {
         image_format(&out, args.pfm)
     };
+    let usage = |msg: String| {
+        eprintln_quiet!("error: {msg}");
+        ExitCode::from(2)
+    };
+    // Every flag is checked before the input is read: a usage error prints nothing else.
     let format = match format {
         Ok(f) => f,
-        Err(msg) => {
-            eprintln_quiet!("error: {msg}");
-            return ExitCode::from(2);
-        }
+        Err(msg) => return usage(msg),
     };
+    let aov = match args.aov.as_deref() {
+        None => None,
+        Some(a) => match a.strip_prefix("lobe:") {
+            Some(name) if !name.is_empty() => Some(name),
+            _ => return usage(format!("--aov `{a}`: expected `lobe:NAME`")),
+        },
+    };
+    if let Err(msg) = check_input_syntax(&args.source.inputs) {
+        return usage(msg);
+    }
+    let size_check = PreviewOptions {
+        size: args.size,
+        ..PreviewOptions::default()
+    };
+    if let Err(e) = size_check.validate() {
+        return usage(e.to_string());
+    }
     let (materials, diags) = match load_materials(&args.source, common) {
         Ok(x) => x,
         Err(status) => return status,
@@ -166,20 +187,9 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
     if status != ExitCode::SUCCESS {
         return status;
     }
-    let usage = |msg: String| {
-        eprintln_quiet!("error: {msg}");
-        ExitCode::from(2)
-    };
     if let Err(msg) = check_input_names(&materials, &args.source.inputs) {
         return usage(msg);
     }
-    let aov = match args.aov.as_deref() {
-        None => None,
-        Some(a) => match a.strip_prefix("lobe:") {
-            Some(name) if !name.is_empty() => Some(name),
-            _ => return usage(format!("--aov `{a}`: expected `lobe:NAME`")),
-        },
-    };
     if let Some(name) = aov {
         if !materials
             .iter()
