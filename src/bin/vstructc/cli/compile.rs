@@ -15,7 +15,7 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vstructc::interp::TableAlbedo;
-use vstructc::ir::{MaterialIr, Node, print};
+use vstructc::ir::{MaterialIr, Node};
 use vstructc::pipeline::Lowering;
 
 /// What `compile` prints.
@@ -161,8 +161,8 @@ pub fn material_doc(ir: &MaterialIr, emit: Emit) -> MaterialDoc {
 /// Render one lowered material.
 pub fn render(ir: &MaterialIr, emit: Emit) -> String {
     match emit {
-        Emit::Ir => print::ir_text(ir),
-        Emit::Lobes => print::lobes_text(ir, &TableAlbedo),
+        Emit::Ir => ir.text(),
+        Emit::Lobes => ir.lobes_text(&TableAlbedo),
         Emit::Dot => vstructc::back::dot::to_dot(ir),
     }
 }

@@ -18,7 +18,7 @@ use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vstructc::diag::{closest_names, did_you_mean};
+use vstructc::diag::did_you_mean;
 use vstructc::network::{Network, NodeId};
 use vstructc::registry::Registry;
 use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
@@ -375,17 +375,14 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
     options.record_events = true;
     let Some(node) = network.find(handle) else {
         let handles: Vec<&str> = network.node_ids().map(|n| network[n].handle()).collect();
-        let hint = did_you_mean(&closest_names(handle, handles.iter().copied()));
+        let hint = did_you_mean(handle, handles.iter().copied());
         return usage(format!("no node `{handle}` in {name}{hint}"));
     };
     if let Some(def) = registry.definition(network[node].shader())
         && def.input(input).is_none()
         && network[node].param(input).is_none()
     {
-        let hint = did_you_mean(&closest_names(
-            input,
-            def.inputs.iter().map(|p| p.name.as_str()),
-        ));
+        let hint = did_you_mean(input, def.inputs.iter().map(|p| p.name.as_str()));
         return usage(format!(
             "`{}` ({}) has no input `{input}`{hint}",
             handle, def.id

@@ -11,7 +11,7 @@ use super::{CommonOptions, report};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::process::ExitCode;
-use vstructc::diag::{closest_names, did_you_mean};
+use vstructc::diag::did_you_mean;
 use vstructc::registry::{Definition, Property, Registry, VstructTables};
 
 /// Arguments of `vstructc info`.
@@ -38,7 +38,7 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
     }
     let Some(def) = def else {
         let ids = registry.ids();
-        let hint = did_you_mean(&closest_names(&args.shader, ids.iter().copied()));
+        let hint = did_you_mean(&args.shader, ids.iter().copied());
         eprintln_quiet!("error: unknown shader `{}`{hint}", args.shader);
         if !ids.is_empty() && ids.len() <= 50 {
             eprintln_quiet!("  known shaders: {}", ids.join(", "));

@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vstructc::diag::{DEFAULT_MAX_PER_CODE, Diagnostics, Severity, Shown};
+use vstructc::diag::{Diagnostics, Severity, Shown};
 use vstructc::registry::Prefer;
 
 /// `eprintln!` that ignores a failing standard error (`2>/dev/full`): the exit status still
@@ -233,8 +233,8 @@ pub fn run(cli: Cli) -> ExitCode {
 ///
 /// Volume control ([`Diagnostics::volume_limited`]): in human output identical diagnostics
 /// are printed once, at most `--max-diagnostics` of one code (default
-/// [`DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
-/// bounded ([`vstructc::diag::MAX_HUMAN_LINE`]); a located diagnostic shows its source line
+/// [`Diagnostics::DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
+/// bounded ([`vstructc::diag::Diagnostic::MAX_HUMAN_LINE`]); a located diagnostic shows its source line
 /// with a caret ([`snippet::render`]), coloured as `--color` says. JSON output keeps every diagnostic, whole, unless
 /// `--max-diagnostics` is given; its count line is an object `{"code": CODE, "suppressed": N}`.
 /// The exit status counts every diagnostic, shown or not.
@@ -243,7 +243,7 @@ pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
     let human = common.diag_format == DiagFormat::Human;
     let limit = match common.max_diagnostics {
         Some(n) => n,
-        None if human => DEFAULT_MAX_PER_CODE,
+        None if human => Diagnostics::DEFAULT_MAX_PER_CODE,
         None => 0,
     };
     let shown = diags.volume_limited(limit, human, |d| {
