@@ -300,3 +300,92 @@ fn bad_invocations_exit_with_the_documented_status() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("bad.rib:"));
     assert!(!out.exists());
 }
+
+/// An EXR file's single part as the `exr` crate reads it: size, compression, and each
+/// channel's name with its samples, which must be 32-bit floats.
+fn read_exr(
+    path: &Path,
+) -> (
+    usize,
+    usize,
+    exr::compression::Compression,
+    Vec<(String, Vec<f32>)>,
+) {
+    use exr::image::{FlatSamples, read::read_first_flat_layer_from_file};
+    let image = read_first_flat_layer_from_file(path).unwrap();
+    let layer = image.layer_data;
+    let channels = layer
+        .channel_data
+        .list
+        .into_iter()
+        .map(|c| match c.sample_data {
+            FlatSamples::F32(v) => (c.name.to_string(), v),
+            other => panic!("channel {} is not f32: {other:?}", c.name),
+        })
+        .collect();
+    (
+        layer.size.0,
+        layer.size.1,
+        layer.encoding.compression,
+        channels,
+    )
+}
+
+#[test]
+fn exr_output_is_the_linear_render_in_f32() {
+    let dir = tmp("exr");
+    // Two balls of 40 pixels: 40 rows are two full blocks of 16 scan lines and a short one.
+    let input = data("two.rib");
+    for extra in [&["--size", "40"][..], &["--size", "40", "--furnace"]] {
+        let pfm = read_pfm(&render_ok(&input, &dir.join("a.pfm"), extra));
+        render_ok(&input, &dir.join("a.exr"), extra);
+        let (w, h, compression, channels) = read_exr(&dir.join("a.exr"));
+        assert_eq!((w, h), (pfm.w, pfm.h));
+        assert_eq!(compression, exr::compression::Compression::ZIP16);
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["B", "G", "R"]);
+        // The same bits as the linear PFM: not tone-mapped, not sRGB-encoded, not rounded.
+        for (k, p) in pfm.px.iter().enumerate() {
+            let got = [channels[2].1[k], channels[1].1[k], channels[0].1[k]];
+            assert_eq!(
+                got.map(f32::to_bits),
+                p.map(f32::to_bits),
+                "pixel {k} {extra:?}"
+            );
+        }
+        assert!(
+            pfm.px.iter().flatten().any(|&c| c > 0.0 && c < 0.9),
+            "the render has mid-tones an sRGB encoding would change"
+        );
+    }
+    // The extension is matched without regard to case, and the file is deterministic.
+    let lower = render_ok(&input, &dir.join("b.exr"), &["--size", "40"]);
+    let upper = render_ok(&input, &dir.join("b.EXR"), &["--size", "40"]);
+    assert!(lower == upper, "two renders to EXR differ");
+}
+
+#[test]
+fn unsupported_and_conflicting_output_formats_are_usage_errors() {
+    let dir = tmp("formats");
+    let white = data("white.rib");
+    for (name, extra, message) in [
+        ("x.jpg", &[][..], "`.jpg` output is not supported"),
+        (
+            "x.exr",
+            &["--pfm"][..],
+            "--pfm conflicts with the output file's extension `.exr`",
+        ),
+        (
+            "x.png",
+            &["--pfm"][..],
+            "--pfm conflicts with the output file's extension `.png`",
+        ),
+    ] {
+        let out = dir.join(name);
+        let o = render(&white, &out, extra);
+        assert_eq!(o.status.code(), Some(2), "{name} {extra:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(message), "{name}: {err}");
+        assert!(!out.exists());
+    }
+}

@@ -7,11 +7,11 @@
 //! in material order).
 //!
 //! Output: `-o PATH` (`-` for standard output); without `-o`, `<input stem>.png` (`.pfm`
-//! with `--pfm`) in the current directory, `preview.png` for standard input. A path ending
-//! in `.pfm` selects PFM, and so does `--pfm` whatever the extension; another extension than
-//! `.png` or `.pfm` without `--pfm` (`.exr`, …), or `--pfm` with `.png`, is a usage error
-//! found before any work. The file is written atomically
-//! (temporary file, then rename).
+//! with `--pfm`) in the current directory, `preview.png` for standard input. The extension
+//! picks the format: `.png` sRGB PNG, `.pfm` linear PFM, `.exr` linear OpenEXR (32-bit
+//! float); `--pfm` selects PFM whatever the extension. Another extension (`.jpg`, …), or
+//! `--pfm` with `.png` or `.exr`, is a usage error found before any work. The file is
+//! written atomically (temporary file, then rename).
 //!
 //! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
 //! rows at a time and each row is encoded into the output as it is finished
@@ -44,7 +44,8 @@ pub struct RenderArgs {
     /// Input, material and external inputs.
     #[command(flatten)]
     pub source: MaterialArgs,
-    /// Output file (`-`: standard output). Default: `<input stem>.png` (or `.pfm`).
+    /// Output file (`-`: standard output); the extension picks the format: `.png` (sRGB),
+    /// `.pfm` or `.exr` (linear float). Default: `<input stem>.png` (or `.pfm`).
     #[arg(short, long, value_name = "PATH")]
     pub output: Option<PathBuf>,
     /// Side of one ball in pixels (1 to 8192).
@@ -115,23 +116,24 @@ fn write_sheet(
     result
 }
 
-/// The image format of the output file `out`: `.pfm` or `--pfm` is PFM (`--pfm` whatever
-/// the extension, but `.png`), `.png` or no extension PNG; another extension without `--pfm`
-/// (`.exr`, …), or `--pfm` with `.png`, is a usage error.
+/// The image format of the output file `out`, by its extension (ASCII case ignored): `.png`
+/// or none PNG, `.pfm` PFM, `.exr` EXR; `--pfm` selects PFM whatever the name, except that
+/// it conflicts with `.png` and `.exr`. Another extension is a usage error.
 fn image_format(out: &Path, pfm: bool) -> Result<ImageFormat, String> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match (ext.as_deref(), pfm) {
-        (Some("png"), true) => {
-            Err("--pfm conflicts with the output file's extension `.png`".into())
-        }
+        (Some(e @ ("png" | "exr")), true) => Err(format!(
+            "--pfm conflicts with the output file's extension `.{e}`"
+        )),
         (Some("pfm"), _) | (_, true) => Ok(ImageFormat::Pfm),
         (Some("png") | None, false) => Ok(ImageFormat::Png),
+        (Some("exr"), false) => Ok(ImageFormat::Exr),
         (Some(e), false) => Err(format!(
-            "`.{e}` output is not supported: `render` writes PNG (`.png`) or linear PFM (`.pfm`, \
-             or any name with `--pfm`)"
+            "`.{e}` output is not supported: `render` writes PNG (`.png`), linear PFM (`.pfm`, \
+             or any name with `--pfm`) or linear OpenEXR (`.exr`)"
         )),
     }
 }
