@@ -389,3 +389,51 @@ fn unsupported_and_conflicting_output_formats_are_usage_errors() {
         assert!(!out.exists());
     }
 }
+
+#[test]
+fn a_png_contact_sheet_names_its_balls() {
+    let dir = tmp("labels");
+    let input = data("two.rib");
+    let size = 64u32;
+    let s = ["--size", "64"];
+    let labelled = png_decode::decode(&render_ok(&input, &dir.join("l.png"), &s));
+    let plain = png_decode::decode(&render_ok(
+        &input,
+        &dir.join("p.png"),
+        &["--size", "64", "--no-labels"],
+    ));
+    assert_eq!((plain.width, plain.height), (2 * size, size));
+    assert_eq!(labelled.width, 2 * size);
+    assert!(labelled.height > size, "no label band: {}", labelled.height);
+    // The balls are untouched.
+    for y in 0..size {
+        for x in 0..2 * size {
+            assert_eq!(labelled.pixel(x, y), plain.pixel(x, y), "{x},{y}");
+        }
+    }
+    // Each ball's band has its name: text pixels in both cells, different names.
+    let background = labelled.pixel(0, labelled.height - 1);
+    let band = |c: u32| -> Vec<[u8; 3]> {
+        (size..labelled.height)
+            .flat_map(|y| (0..size).map(move |x| (x, y)))
+            .map(|(x, y)| labelled.pixel(c * size + x, y))
+            .collect()
+    };
+    for c in 0..2 {
+        let ink = band(c).iter().filter(|&&p| p != background).count();
+        assert!(ink > 10, "cell {c}: {ink} text pixels");
+    }
+    assert_ne!(band(0), band(1));
+    // One material, or a linear format: no labels.
+    let one = png_decode::decode(&render_ok(
+        &input,
+        &dir.join("one.png"),
+        &["--size", "64", "--material", "red"],
+    ));
+    assert_eq!((one.width, one.height), (size, size));
+    let pfm = read_pfm(&render_ok(&input, &dir.join("s.pfm"), &s));
+    assert_eq!((pfm.w, pfm.h), (128, 64));
+    render_ok(&input, &dir.join("s.exr"), &s);
+    let (w, h, _, _) = read_exr(&dir.join("s.exr"));
+    assert_eq!((w, h), (128, 64));
+}

@@ -1,10 +1,12 @@
 //! `vstructc render INPUT [-o ball.png] [--size N] [--furnace] [--pfm] [--aov lobe:NAME]
-//! [--input NAME=VALUE]... [--material HANDLE]`: the material-ball preview (docs/preview.md).
+//! [--input NAME=VALUE]... [--material HANDLE] [--no-labels]`: the material-ball preview
+//! (docs/preview.md).
 //!
 //! The input is read, resolved and lowered as by `compile`; each material is compiled for
 //! the interpreter and rendered ([`vstructc::interp::preview`]). With several materials and no
 //! `--material`, the balls are arranged in a contact sheet (a grid, `⌈√n⌉` columns, row-major
-//! in material order).
+//! in material order); in PNG each ball has its material's name under it unless
+//! `--no-labels` (PFM and EXR hold rendered values only).
 //!
 //! Output: `-o PATH` (`-` for standard output); without `-o`, `<input stem>.png` (`.pfm`
 //! with `--pfm`) in the current directory, `preview.png` for standard input. The extension
@@ -63,6 +65,10 @@ pub struct RenderArgs {
     /// Use the batched (16-lane) interpreter.
     #[arg(long)]
     pub batched: bool,
+    /// No material names under the balls of a PNG contact sheet (PFM and EXR never have
+    /// them).
+    #[arg(long)]
+    pub no_labels: bool,
 }
 
 /// The leaf a `lobe:NAME` AOV designates in `m`: by label, then kind name, then `#node`.
@@ -205,6 +211,8 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         ..PreviewOptions::default()
     };
     let base = if args.furnace { base.furnace() } else { base };
+    // A contact sheet names its balls in PNG; linear images keep only rendered values.
+    let labels = materials.len() > 1 && !format.is_linear() && !args.no_labels;
     let mut balls = Vec::with_capacity(materials.len());
     for c in &materials {
         let inputs = match packed_inputs(&c.material, &args.source.inputs) {
@@ -221,6 +229,7 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         balls.push(Ball {
             material: &c.material,
             options,
+            label: labels.then(|| c.name.clone()),
         });
     }
     let sheet = match ContactSheet::new(balls, base.env) {
