@@ -232,9 +232,9 @@ mod tests {
         assert!((0..8).all(|y| !cut.ink(0, y) && !cut.ink(31, y)));
         // Other characters show as `?`; every glyph differs from every other.
         assert_eq!(Label::fit("é", 32, 1), Label::fit("?", 32, 1));
-        for a in 0..GLYPHS.len() {
-            for b in a + 1..GLYPHS.len() {
-                assert_ne!(GLYPHS[a], GLYPHS[b], "glyphs {a} and {b}");
+        for (a, ga) in GLYPHS.iter().enumerate() {
+            for (b, gb) in GLYPHS.iter().enumerate().skip(a + 1) {
+                assert_ne!(ga, gb, "glyphs {a} and {b}");
             }
         }
         // A box too narrow for one glyph draws nothing.
