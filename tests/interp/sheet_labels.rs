@@ -129,3 +129,33 @@ fn a_long_name_is_cut_with_an_ellipsis_inside_its_cell() {
     assert!(k >= 5, "only {k} characters kept in a {SIZE}-pixel cell");
     assert!(text(&sheet(&m, SIZE, &[Some(&long[..k]), None]).3) != text(&px));
 }
+
+#[test]
+fn labels_are_dark_on_a_light_background() {
+    let m = Material::new(&coated_ir()).expect("compiles");
+    let options = PreviewOptions {
+        size: SIZE,
+        ..PreviewOptions::default()
+    }
+    .furnace();
+    let ball = Ball {
+        material: &m,
+        options: options.clone(),
+        label: Some("white".into()),
+    };
+    let sheet = ContactSheet::new(vec![ball.clone(), ball], options.env).unwrap();
+    let mut band = Vec::new();
+    let mut row = 0;
+    sheet
+        .render_rows(RowOrder::TopDown, &|_| {}, |r| {
+            if row >= SIZE {
+                band.extend_from_slice(r);
+            }
+            row += 1;
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+    assert_eq!(options.env, Vec3::ONE);
+    assert!(band.contains(&Vec3::ZERO), "no black text");
+    assert!(band.iter().all(|&p| p == Vec3::ZERO || p == Vec3::ONE));
+}
