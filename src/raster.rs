@@ -4,6 +4,8 @@
 
 use glam::Vec3;
 
+pub(crate) mod font;
+
 /// A linear RGB image, rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
