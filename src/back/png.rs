@@ -6,8 +6,8 @@
 //!
 //! [`write_rows`] writes an image row by row as it is rendered, so a contact sheet of any
 //! size is never held whole ([`crate::interp::preview::ContactSheet::render_rows`] hands
-//! out the rows in the format's [`ImageFormat::order`]). [`encode_png`] and [`encode_pfm`]
-//! encode an image held in memory the same way.
+//! out the rows in the format's [`ImageFormat::order`]). [`Image::encode`] encodes an image
+//! held in memory the same way.
 
 use crate::raster::{Image, RowOrder};
 use glam::Vec3;
@@ -24,7 +24,8 @@ pub(crate) fn srgb_encode(x: f32) -> f32 {
 }
 
 /// One linear colour as 8-bit sRGB.
-pub fn srgb8(c: Vec3) -> [u8; 3] {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn srgb8(c: Vec3) -> [u8; 3] {
     c.to_array()
         .map(|x| (srgb_encode(x) * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8)
 }
@@ -314,24 +315,21 @@ mod exr_image {
     }
 }
 
-/// Encode `img` as an 8-bit sRGB PNG.
-#[cfg(feature = "png")]
-pub fn encode_png(img: &Image) -> Result<Vec<u8>, crate::diag::Error> {
-    use crate::diag::{Diagnostic, Error};
-    let mut out = Vec::new();
-    encode_image(img, ImageFormat::Png, &mut out)
-        .map_err(|e| Error::Input(Box::new(Diagnostic::error("IO002", format!("PNG: {e}")))))?;
-    Ok(out)
-}
-
-/// Encode `img` as a linear little-endian PFM (`PF`, scale −1, rows bottom to top).
-pub fn encode_pfm(img: &Image) -> Vec<u8> {
-    let mut out = Vec::with_capacity(img.pixels.len() * 12 + 32);
-    // Writing to a vector fails only for an empty image, whose header is still written.
-    if encode_image(img, ImageFormat::Pfm, &mut out).is_err() {
-        out = format!("PF\n{} {}\n-1.0\n", img.width, img.height).into_bytes();
+impl Image {
+    /// The image encoded in `format`, in memory (for files and streams, [`write_rows`]
+    /// writes rows as they are produced). Fails only when the encoder does (an error naming
+    /// the format).
+    pub fn encode(&self, format: ImageFormat) -> Result<Vec<u8>, crate::diag::Error> {
+        use crate::diag::{Diagnostic, Error};
+        let mut out = Vec::with_capacity(self.pixels.len() * 12 + 32);
+        encode_image(self, format, &mut out).map_err(|e| {
+            Error::Input(Box::new(Diagnostic::error(
+                "IO002",
+                format!("{format:?} encoding: {e}"),
+            )))
+        })?;
+        Ok(out)
     }
-    out
 }
 
 /// Write `img` in `format` on `out`.

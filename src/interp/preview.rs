@@ -24,11 +24,11 @@
 //! general form).
 //!
 //! Memory is bounded whatever the number of materials: [`ContactSheet`] renders a grid of
-//! balls a band of pixel rows at a time (at most [`BAND_PIXELS`] pixels, never a whole ball
-//! or sheet) and hands each finished row to the caller, who streams it to a file
+//! balls a band of pixel rows at a time (at most [`ContactSheet::BAND_PIXELS`] pixels, never
+//! a whole ball or sheet) and hands each finished row to the caller, who streams it to a file
 //! ([`crate::back::png::write_rows`]). Sizes are checked here, not only by the command line:
 //! a ball has at most [`Limits::preview_pixels`] pixels ([`PreviewOptions::limits`]) and a
-//! sheet's sides are at most [`MAX_SHEET_SIDE`] ([`PreviewError`] names the limit and the
+//! sheet's sides are at most [`ContactSheet::MAX_SIDE`] ([`PreviewError`] names the limit and the
 //! value).
 
 use super::batch::{PreparedBatch, ShadingBatch};
@@ -44,13 +44,7 @@ pub use crate::raster::{Image, RowOrder};
 use std::f32::consts::{PI, TAU};
 
 /// Lanes of the batched preview path.
-pub const PREVIEW_LANES: usize = 16;
-
-/// The largest side, in pixels, of a contact sheet: the PNG format's limit (2³¹ − 1).
-pub const MAX_SHEET_SIDE: usize = (1 << 31) - 1;
-
-/// The most pixels a [`ContactSheet`] holds at once (one band of rows, 12 MB of RGB).
-pub const BAND_PIXELS: usize = 1 << 20;
+pub(crate) const PREVIEW_LANES: usize = 16;
 
 /// Preview settings outside what can be rendered.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -66,7 +60,7 @@ pub enum PreviewError {
         /// The limit, the ball's pixel count and the maximum.
         exceeded: LimitExceeded,
     },
-    /// A contact sheet would be wider or taller than [`MAX_SHEET_SIDE`].
+    /// A contact sheet would be wider or taller than [`ContactSheet::MAX_SIDE`].
     #[error(
         "a contact sheet of {count} balls of {size} pixels would be {width}×{height} pixels; \
          a side is limited to {max}"
@@ -80,7 +74,7 @@ pub enum PreviewError {
         width: usize,
         /// Sheet height.
         height: usize,
-        /// [`MAX_SHEET_SIDE`].
+        /// [`ContactSheet::MAX_SIDE`].
         max: usize,
     },
     /// A contact sheet needs at least one ball, all of one size.
@@ -107,7 +101,7 @@ pub struct PreviewOptions {
     /// Packed external inputs (see [`Material::input_layout`]); missing slots take their
     /// fallbacks.
     pub inputs: Vec<f32>,
-    /// Use the batched interpreter ([`PREVIEW_LANES`] points at a time).
+    /// Use the batched interpreter (16 points at a time).
     pub batched: bool,
     /// One point at a time, prepare every pixel with the general prepare (lobe records)
     /// even when the material qualifies for the uniform-material prepare (constant
@@ -510,7 +504,8 @@ impl Labels {
 
 /// Balls of equal size in a grid of `⌈√n⌉` columns, row-major in the given order, empty
 /// cells in a background colour; rendered a band of pixel rows at a time, so its memory is
-/// at most [`BAND_PIXELS`] pixels (and at least one pixel row) whatever the number of balls.
+/// at most [`ContactSheet::BAND_PIXELS`] pixels (and at least one pixel row) whatever the
+/// number of balls.
 ///
 /// **Labels.** When some ball has a [`Ball::label`] and balls are at least 32 pixels, each row of balls is followed by a band of
 /// `12 × max(1, ⌊size / 128⌋)` rows in the background colour, where each label is written
@@ -520,12 +515,12 @@ impl Labels {
 /// Ball pixels are the same with or without labels.
 ///
 /// ```
-/// use vstructc::interp::preview::{ContactSheet, MAX_SHEET_SIDE, PreviewError};
+/// use vstructc::interp::preview::{ContactSheet, PreviewError};
 /// use glam::Vec3;
 /// // Sides are checked before anything is rendered.
 /// let none = ContactSheet::new(Vec::new(), Vec3::ZERO);
 /// assert!(matches!(none, Err(PreviewError::SheetBalls { .. })));
-/// # let _ = MAX_SHEET_SIDE;
+/// # let _ = ContactSheet::MAX_SIDE;
 /// ```
 #[derive(Debug, Clone)]
 pub struct ContactSheet<'m> {
@@ -538,10 +533,16 @@ pub struct ContactSheet<'m> {
 }
 
 impl<'m> ContactSheet<'m> {
+    /// The largest side, in pixels, of a contact sheet: the PNG format's limit (2³¹ − 1).
+    pub const MAX_SIDE: usize = (1 << 31) - 1;
+
+    /// The most pixels a contact sheet holds at once (one band of rows, 12 MB of RGB).
+    pub const BAND_PIXELS: usize = 1 << 20;
+
     /// A sheet of `balls`, empty cells filled with `background`, labelled if some ball has
     /// a label. Fails if there is no ball, if the balls' sizes differ or fail
     /// [`PreviewOptions::validate`], or if a side of the sheet would exceed
-    /// [`MAX_SHEET_SIDE`].
+    /// [`ContactSheet::MAX_SIDE`].
     pub fn new(balls: Vec<Ball<'m>>, background: Rgb) -> Result<Self, PreviewError> {
         let mut sizes: Vec<usize> = balls.iter().map(|b| b.options.size).collect();
         sizes.sort_unstable();
@@ -561,13 +562,13 @@ impl<'m> ContactSheet<'m> {
             columns.saturating_mul(size),
             rows.saturating_mul(cell_height),
         );
-        if width > MAX_SHEET_SIDE || height > MAX_SHEET_SIDE {
+        if width > ContactSheet::MAX_SIDE || height > ContactSheet::MAX_SIDE {
             return Err(PreviewError::SheetSide {
                 count,
                 size,
                 width,
                 height,
-                max: MAX_SHEET_SIDE,
+                max: ContactSheet::MAX_SIDE,
             });
         }
         Ok(ContactSheet {
@@ -611,7 +612,7 @@ impl<'m> ContactSheet<'m> {
         mut emit: impl FnMut(&[Rgb]) -> Result<(), E>,
     ) -> Result<(), E> {
         let width = self.width();
-        let band_rows = (BAND_PIXELS / width).clamp(1, self.size);
+        let band_rows = (ContactSheet::BAND_PIXELS / width).clamp(1, self.size);
         let mut band = Vec::with_capacity(band_rows * width);
         let mut done = 0;
         let mut ball_rows: Vec<usize> = (0..self.rows).collect();

@@ -31,9 +31,8 @@ use crate::types::{Type, Value};
 use glam::Vec3;
 use rustc_hash::FxHashMap as HashMap;
 
-/// Maximum number of BSDF lobes of one material. `Emission` and `Transparent` leaves
-/// do not count; the mia three-Ward highlight counts as one.
-pub const MAX_LOBES: usize = 16;
+/// [`MaterialIr::MAX_LOBES`], for the crate's own fixed-size arrays.
+pub(crate) const MAX_LOBES: usize = 16;
 
 /// Which lowering recipe produced an IR.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -137,11 +136,16 @@ pub struct MaterialIr {
     pub frames: Vec<FrameSlot>,
     #[cfg(not(feature = "testkit"))]
     pub(crate) frames: Vec<FrameSlot>,
-    /// Number of BSDF lobes (≤ [`MAX_LOBES`]).
+    /// Number of BSDF lobes (≤ [`MaterialIr::MAX_LOBES`]).
     pub max_static_lobes: u8,
 }
 
 impl MaterialIr {
+    /// Maximum number of BSDF lobes of one material (more is an error when lowering).
+    /// `Emission` and `Transparent` leaves do not count; the mia three-Ward highlight counts
+    /// as one.
+    pub const MAX_LOBES: usize = MAX_LOBES;
+
     /// The IR as text: inputs, the closure tree and the weight program (what `compile
     /// --emit ir` prints).
     pub fn text(&self) -> String {

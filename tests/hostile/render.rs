@@ -162,11 +162,11 @@ fn sheet_is_balls_side_by_side(input: &Path, names: &[&str], size: usize) {
 }
 
 /// Five balls (3 columns, 2 rows, one empty cell) of 600 pixels: a ball row (1800 × 600)
-/// is more than one band of `BAND_PIXELS`, so bands split a ball row too.
+/// is more than one band of `ContactSheet::BAND_PIXELS`, so bands split a ball row too.
 #[test]
 fn the_streamed_sheet_is_the_balls_side_by_side() {
     let size = 600;
-    assert!(3 * size * size > vstructc::interp::preview::BAND_PIXELS);
+    assert!(3 * size * size > vstructc::interp::preview::ContactSheet::BAND_PIXELS);
     let input = scratch("sheet5.rib", materials(5));
     sheet_is_balls_side_by_side(&input, &["m0", "m1", "m2", "m3", "m4"], size);
 }

@@ -396,7 +396,7 @@ fn tint_modes() {
     assert_eq!(leaf_throughput(TintMode::Gray, tint, coat, e), coat * 0.5);
 }
 
-/// MAX_LOBES: 17 lobes is LW010.
+/// MaterialIr::MAX_LOBES: 17 lobes is LW010.
 #[test]
 fn too_many_lobes_is_lw010() {
     let mut b = IrBuilder::new();

@@ -16,7 +16,7 @@ use crate::common::pfm;
 
 use pfm::{Pfm, read_pfm};
 use std::path::PathBuf;
-use vstructc::back::png::{encode_pfm, encode_png, srgb8};
+use vstructc::back::png::{ImageFormat, srgb8};
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::interp::Material;
 use vstructc::interp::preview::{Image, PreviewOptions, render_ball};
@@ -106,10 +106,10 @@ fn blessing() -> bool {
 fn bless(name: &str, image: &Image) {
     let path = reference_path(name);
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    std::fs::write(&path, encode_pfm(image)).unwrap();
+    std::fs::write(&path, image.encode(ImageFormat::Pfm).unwrap()).unwrap();
     let review = common::repo_dir().join("target/render-regression");
     std::fs::create_dir_all(&review).unwrap();
-    let png = encode_png(image).expect("encodes");
+    let png = image.encode(ImageFormat::Png).expect("encodes");
     std::fs::write(review.join(format!("{name}.png")), png).unwrap();
 }
 
@@ -160,7 +160,7 @@ fn golden_network_matches_its_reference() {
 #[test]
 fn the_comparison_sees_a_small_change() {
     let image = render(&common::recipe_at_defaults("PxrSurface"));
-    let as_pfm = |img: &Image| read_pfm(&encode_pfm(img));
+    let as_pfm = |img: &Image| read_pfm(&img.encode(ImageFormat::Pfm).unwrap());
     let reference = as_pfm(&image);
     assert_eq!(relative_rms(&image, &reference), 0.0);
     let mean = reference.px.iter().flatten().sum::<f32>() / (3 * reference.px.len()) as f32;
