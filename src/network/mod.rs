@@ -313,9 +313,9 @@ pub struct Param {
     links: Links,
     /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
     /// a smaller `Param` keeps nodes with hundreds of members compact.
+    /// Also holds the change flags: a parameter without a source is [`ParamChange::Added`]
+    /// (or `Removed`) whatever was done to it, so only source parameters need them.
     source: Option<Box<ParamSource>>,
-    value_touched: bool,
-    links_touched: bool,
 }
 
 /// Where a parameter read from a file came from. Small and free of shared pointers: the
@@ -327,6 +327,10 @@ struct ParamSource {
     /// The index into [`NodeSource::items`]; [`NO_ORIGIN`] for none.
     origin: u32,
     at: ParamAt,
+    /// The value was set or removed since the parameter was read.
+    value_touched: bool,
+    /// The connections were set or changed since the parameter was read.
+    links_touched: bool,
 }
 
 /// [`ParamSource::origin`] of a parameter not read from a RIB request.
@@ -351,8 +355,6 @@ impl Param {
             value: None,
             links: Links::new(),
             source: None,
-            value_touched: false,
-            links_touched: false,
         }
     }
 
@@ -391,10 +393,10 @@ impl Param {
                     decl,
                     origin: origin.unwrap_or(NO_ORIGIN),
                     at,
+                    value_touched: false,
+                    links_touched: false,
                 })
             }),
-            value_touched: false,
-            links_touched: false,
         }
     }
 
@@ -404,6 +406,21 @@ impl Param {
     pub(crate) fn with_source_links(mut self, links: Links) -> Param {
         self.links = links;
         self
+    }
+
+    /// Record that the value was set or removed (a change only for a parameter read from a
+    /// source).
+    fn touch_value(&mut self) {
+        if let Some(s) = &mut self.source {
+            s.value_touched = true;
+        }
+    }
+
+    /// Record that the connections changed (see [`Param::touch_value`]).
+    fn touch_links(&mut self) {
+        if let Some(s) = &mut self.source {
+            s.links_touched = true;
+        }
     }
 
     /// The parameter name.
@@ -470,12 +487,16 @@ impl Param {
         if self.source_item().is_none() {
             return ParamChange::Added;
         }
-        if self.links_touched && !self.links.is_empty() {
+        let (value_touched, links_touched) = self
+            .source
+            .as_ref()
+            .map_or((false, false), |s| (s.value_touched, s.links_touched));
+        if links_touched && !self.links.is_empty() {
             ParamChange::Connected
         } else if !self.links.is_empty() {
             // Only the (unchanged) connection is written for a connected parameter.
             ParamChange::Unchanged
-        } else if self.links_touched || self.value_touched {
+        } else if links_touched || value_touched {
             ParamChange::ValueReplaced
         } else {
             ParamChange::Unchanged
@@ -1203,7 +1224,7 @@ impl Network {
         let i = n.index_of(name)?;
         let old = n.params[i].value.take().map(Arc::unwrap_or_clone);
         if old.is_some() {
-            n.params[i].value_touched = true;
+            n.params[i].touch_value();
             n.dirty = true;
         }
         old
@@ -1293,7 +1314,7 @@ impl Network {
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         p.links.push(link);
-        p.links_touched = true;
+        p.touch_links();
         n.dirty = true;
     }
 
@@ -1483,7 +1504,7 @@ impl Network {
         if p.value.as_deref() == Some(&value) {
             return Some(value);
         }
-        p.value_touched = true;
+        p.touch_value();
         n.dirty = true;
         p.value.replace(Arc::new(value)).map(Arc::unwrap_or_clone)
     }
@@ -1501,7 +1522,7 @@ impl Network {
         let i = n.insert_param_hashed(name.clone(), hash);
         let p = &mut n.params[i];
         p.value = Some(value.clone());
-        p.value_touched = true;
+        p.touch_value();
         n.dirty = true;
     }
 
@@ -1517,7 +1538,7 @@ impl Network {
         }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
-        p.links_touched = true;
+        p.touch_links();
         n.dirty = true;
         std::mem::replace(&mut p.links, links)
     }
@@ -1570,7 +1591,7 @@ impl Network {
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         let link = p.links.remove(index);
-        p.links_touched = true;
+        p.touch_links();
         n.dirty = true;
         Some(link)
     }
