@@ -297,11 +297,11 @@ impl Writer<'_> {
         let mut lines = Lines::new(indent, self.scratch.take());
         self.header(node, &mut lines.body);
         for item in &src.items {
-            for c in &item.leading_comments {
+            for c in src.leading_comments(item) {
                 lines.pending.push(self.bytes(c)?);
             }
             let param = item.param.and_then(|k| node.all_params().get(k as usize));
-            let trailing = match &item.trailing_comment {
+            let trailing = match src.trailing_comment(item) {
                 Some(c) => Some(self.bytes(c)?),
                 None => None,
             };

@@ -37,8 +37,8 @@
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
-    Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamTypes, RequestKind,
-    Terminal,
+    Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes,
+    RequestKind, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -1003,17 +1003,11 @@ impl Reader<'_> {
             let p = ptr(&ppointer, pname);
             let (value, decl) = self.parameter(shader, pname, pj, &p)?;
             index.insert(pname, params.len());
-            let location = Location {
-                file: self.file.clone(),
-                line: 0,
-                column: 0,
-                pointer: Some(p),
-            };
             params.push(Param::from_source(
                 pname.clone(),
                 Some(value),
                 Some(decl),
-                Some(location),
+                ParamAt::JsonParameter,
                 None,
             ));
         }
@@ -1037,7 +1031,13 @@ impl Reader<'_> {
                 .map(|(i, c)| self.connection(c, &ptr(&p, &i.to_string())))
                 .collect::<Result<_, Error>>()?;
             let k = *index.entry(input).or_insert_with(|| {
-                params.push(Param::from_source(input.clone(), None, None, None, None));
+                params.push(Param::from_source(
+                    input.clone(),
+                    None,
+                    None,
+                    ParamAt::Unknown,
+                    None,
+                ));
                 params.len() - 1
             });
             conns.push((k, list));

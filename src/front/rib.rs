@@ -31,7 +31,7 @@ use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Links, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
-    ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
+    ParamAt, ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
@@ -460,10 +460,33 @@ const MAX_SHARED_VALUES: usize = 1 << 16;
 /// Values written in at most this many bytes are remembered for sharing.
 const MAX_SHARED_VALUE_BYTES: usize = 48;
 
+/// Where a parameter's decl string is: enough to build its [`Location`] when a diagnostic
+/// needs one (most parameters need none, and keep only line and column).
+#[derive(Clone, Copy)]
+struct At<'f> {
+    file: &'f Arc<str>,
+    line: u32,
+    column: u32,
+}
+
+impl At<'_> {
+    fn loc(&self) -> Location {
+        Location::new(self.file.clone(), self.line, self.column)
+    }
+}
+
+/// A position in a request's comment list ([`NodeSource::comments`]). A comment takes at
+/// least two bytes (`#` and a line end), so a file within the default size limit
+/// ([`Limits::network_file_bytes`], 4 GiB) holds fewer than `u32::MAX`; beyond, the position
+/// saturates.
+fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
+}
+
 /// A decl and its value as found in a request, before interpretation.
 struct RawParam<'p> {
     decl_tok: Token,
-    location: Location,
+    location: At<'p>,
     value: &'p Piece,
     /// The request's array elements ([`Args::items`]).
     arena: &'p [Token],
@@ -522,11 +545,14 @@ impl<'a> Assembler<'a, '_> {
         let room = (pieces.len() - i) / 2;
         let mut params: Vec<Param> = Vec::with_capacity(room);
         let mut items: Vec<SourceParam> = Vec::with_capacity(room);
-        let mut pending = header_comments;
+        // Every comment of the request in source order; those from `pending` on belong to no
+        // parameter occurrence yet.
+        let mut comments = header_comments;
+        let mut pending = 0;
         while i < pieces.len() {
             let decl_tok = match &pieces[i] {
                 Piece::Comment(c) => {
-                    pending.push(c.start..c.end);
+                    comments.push(c.start..c.end);
                     i += 1;
                     continue;
                 }
@@ -545,17 +571,21 @@ impl<'a> Assembler<'a, '_> {
             };
             i += 1;
             while let Some(Piece::Comment(c)) = pieces.get(i) {
-                pending.push(c.start..c.end);
+                comments.push(c.start..c.end);
                 i += 1;
             }
-            let location = lx.tok_loc(&decl_tok);
+            let location = At {
+                file: lx.file(),
+                line: decl_tok.line,
+                column: decl_tok.col,
+            };
             let Some(value_piece) = pieces.get(i) else {
                 let decl_text = decode_string(self.src, &decl_tok);
                 return Err(Diagnostic::error(
                     "RB007",
                     format!("parameter `{}` has no value", decl_text.trim()),
                 )
-                .at(location)
+                .at(location.loc())
                 .into());
             };
             i += 1;
@@ -563,17 +593,20 @@ impl<'a> Assembler<'a, '_> {
                 param: None,
                 decl: decl_tok.start..decl_tok.end,
                 value: value_piece.range(),
-                leading_comments: std::mem::take(&mut pending),
-                trailing_comment: None,
+                comments: 0..0,
+                trailing: false,
             };
             end = item.value.end;
             if let Some(Piece::Comment(c)) = pieces.get(i) {
                 if c.line == value_piece.end_line() {
-                    item.trailing_comment = Some(c.start..c.end);
+                    comments.push(c.start..c.end);
+                    item.trailing = true;
                     end = c.end;
                     i += 1;
                 }
             }
+            item.comments = index_u32(pending)..index_u32(comments.len());
+            pending = comments.len();
             let origin = items.len() as u32;
             item.param = Some(origin);
             items.push(item);
@@ -595,8 +628,8 @@ impl<'a> Assembler<'a, '_> {
                     p.name()
                 ),
             );
-            if let Some(l) = p.location() {
-                d = d.at(l.clone());
+            if let Some((line, column)) = p.line_column() {
+                d = d.at(lx.loc(line, column));
             }
             diags.push(d);
         }
@@ -630,17 +663,21 @@ impl<'a> Assembler<'a, '_> {
         }
         // Comments after the last parameter lie outside the span (they are passed through);
         // only comments inside the header of a request without parameters remain.
-        pending.retain(|c| c.end <= end);
+        let mut end_comments = comments.split_off(pending);
+        end_comments.retain(|c| c.end <= end);
         self.add_node(
             kind,
             &handle,
             &shader,
-            kw.start..end,
             location,
             params,
-            items,
+            NodeSource {
+                span: kw.start..end,
+                items,
+                comments,
+                end_comments,
+            },
             &shadowed,
-            pending,
         );
         Ok(())
     }
@@ -665,18 +702,16 @@ impl<'a> Assembler<'a, '_> {
         kind: RequestKind,
         handle: &str,
         shader: &str,
-        span: Range<usize>,
         location: Location,
         mut params: Vec<Param>,
-        mut items: Vec<SourceParam>,
+        mut source: NodeSource,
         shadowed: &[bool],
-        end_comments: Vec<Range<usize>>,
     ) {
         // Later duplicates win: earlier occurrences are not parameters, but their source
         // items stay (their comments move to the next written parameter).
         if shadowed.iter().any(|&s| s) {
             let mut kept = Vec::with_capacity(params.len());
-            for ((p, &shadow), item) in params.into_iter().zip(shadowed).zip(&mut items) {
+            for ((p, &shadow), item) in params.into_iter().zip(shadowed).zip(&mut source.items) {
                 if shadow {
                     item.param = None;
                 } else {
@@ -689,14 +724,7 @@ impl<'a> Assembler<'a, '_> {
         let shader = self.net.shared_shader(shader);
         let mut node = Node::new_shared(handle, shader, kind);
         node.set_raw_params(params);
-        node.set_origin(
-            Some(location),
-            Some(NodeSource {
-                span,
-                items,
-                end_comments,
-            }),
-        );
+        node.set_origin(Some(location), Some(source));
         let id = self.net.insert_node(node);
         self.net.add_source_edges(id);
     }
@@ -718,7 +746,8 @@ impl<'a> Assembler<'a, '_> {
         let toks = value_tokens(value, arena);
         if decl.reference && toks.iter().all(|t| t.kind == TokKind::Str) {
             let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
-            let param = Param::from_shared(name, None, Some(decl), Some(location), Some(origin));
+            let at = ParamAt::LineColumn(location.line, location.column);
+            let param = Param::from_shared(name, None, Some(decl), at, Some(origin));
             return Ok(param.with_source_links(links));
         }
         if decl.reference {
@@ -727,7 +756,7 @@ impl<'a> Assembler<'a, '_> {
                     "RB014",
                     format!("`reference` parameter `{name}` has numbers instead of `handle:output` strings; kept as a value"),
                 )
-                .at(location.clone()),
+                .at(location.loc()),
             );
         }
         // Keyed by the declaration's address: only remembered declarations, which stay alive
@@ -763,7 +792,7 @@ impl<'a> Assembler<'a, '_> {
             name,
             Some(value),
             Some(decl),
-            Some(location),
+            ParamAt::LineColumn(location.line, location.column),
             Some(origin),
         ))
     }
@@ -787,7 +816,7 @@ impl<'a> Assembler<'a, '_> {
         &mut self,
         shader: &str,
         decl_tok: &Token,
-        location: &Location,
+        location: &At<'_>,
         diags: &mut Diagnostics,
     ) -> Result<(Arc<str>, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
@@ -798,7 +827,7 @@ impl<'a> Assembler<'a, '_> {
         let decl_text = decode_string(self.src, decl_tok);
         let Some(words) = split_decl(&decl_text) else {
             return Err(Diagnostic::error("RB006", "empty parameter declaration")
-                .at(location.clone())
+                .at(location.loc())
                 .into());
         };
         let name: Arc<str> = Arc::from(words.name);
@@ -811,7 +840,7 @@ impl<'a> Assembler<'a, '_> {
                         words.extra.join(" ")
                     ),
                 )
-                .at(location.clone()),
+                .at(location.loc()),
             );
         }
         let (ty, inline_type) = self.decl_type(shader, &words, location, diags)?;
@@ -845,7 +874,7 @@ impl<'a> Assembler<'a, '_> {
         &self,
         shader: &str,
         words: &DeclWords<'_>,
-        location: &Location,
+        location: &At<'_>,
         diags: &mut Diagnostics,
     ) -> Result<(Type, bool), Error> {
         let array = match words.array {
@@ -859,7 +888,7 @@ impl<'a> Assembler<'a, '_> {
                             "RB013",
                             format!("unknown type `{word}` of `{}`", words.name),
                         )
-                        .at(location.clone()),
+                        .at(location.loc()),
                     );
                     return Ok((Type::scalar(BaseType::Unknown(word)), true));
                 }
@@ -874,7 +903,7 @@ impl<'a> Assembler<'a, '_> {
                         words.name
                     ),
                 )
-                .at(location.clone())
+                .at(location.loc())
                 .into());
             };
             diags.push(
@@ -885,7 +914,7 @@ impl<'a> Assembler<'a, '_> {
                         words.name
                     ),
                 )
-                .at(location.clone()),
+                .at(location.loc()),
             );
             if let (Some(n), ArraySpec::None) = (array, ty.array) {
                 ty.array = ArraySpec::Fixed(n);
@@ -898,7 +927,7 @@ impl<'a> Assembler<'a, '_> {
                     "RB013",
                     format!("unknown type `{word}` of `{}`", words.name),
                 )
-                .at(location.clone()),
+                .at(location.loc()),
             );
             return Ok((Type::scalar(BaseType::Unknown(word.to_string())), true));
         };
@@ -910,7 +939,7 @@ impl<'a> Assembler<'a, '_> {
                         "RB013",
                         format!("unknown type `{word}` of `{}`", words.name),
                     )
-                    .at(location.clone()),
+                    .at(location.loc()),
                 );
                 return Ok((Type::scalar(BaseType::Unknown(word)), true));
             }
@@ -925,7 +954,7 @@ impl<'a> Assembler<'a, '_> {
         shader: &str,
         name: &str,
         decl: &Decl,
-        location: &Location,
+        location: &At<'_>,
         diags: &mut Diagnostics,
     ) {
         if !self.types.has_definitions()
@@ -951,7 +980,7 @@ impl<'a> Assembler<'a, '_> {
                         decl.ty
                     ),
                 )
-                .at(location.clone()),
+                .at(location.loc()),
             );
         }
     }
@@ -975,7 +1004,7 @@ impl<'a> Assembler<'a, '_> {
     fn read_links(
         &mut self,
         name: &str,
-        location: &Location,
+        location: &At<'_>,
         ty: &Type,
         toks: &[Token],
         diags: &mut Diagnostics,
@@ -996,7 +1025,7 @@ impl<'a> Assembler<'a, '_> {
                         expected.unwrap_or(0)
                     ),
                 )
-                .at(location.clone()),
+                .at(location.loc()),
             );
         }
         let mut links = Links::with_capacity(toks.len());
@@ -1008,7 +1037,7 @@ impl<'a> Assembler<'a, '_> {
                         "RB008",
                         format!("connection `{s}` of `{}` has an empty output name", name),
                     )
-                    .at(location.clone())
+                    .at(location.loc())
                     .into());
                 }
                 Some(k) => (&s[..k], Some(&s[k + 1..])),
@@ -1026,7 +1055,7 @@ impl<'a> Assembler<'a, '_> {
                             "RB018",
                             format!("`{}` references `{handle}`, which is not defined before this request; kept as a dangling connection", name),
                         )
-                        .at(location.clone()),
+                        .at(location.loc()),
                     );
                     links.push(Link {
                         upstream: Upstream::Missing(Box::from(handle)),
@@ -1113,7 +1142,7 @@ fn convert_value(
     ty: &Type,
     elems: &[Elem<'_>],
     name: &str,
-    location: &Location,
+    location: &At<'_>,
     diags: &mut Diagnostics,
 ) -> Value {
     let warn = |diags: &mut Diagnostics, why: String| {
@@ -1122,7 +1151,7 @@ fn convert_value(
                 "RB014",
                 format!("value of `{name}` does not match its type `{ty}`: {why}"),
             )
-            .at(location.clone()),
+            .at(location.loc()),
         );
     };
     if let BaseType::Unknown(_) = ty.base {

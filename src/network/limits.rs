@@ -39,8 +39,8 @@ impl Network {
             for p in params {
                 limits
                     .check(Limit::ConnectionsPerInput, p.connections().len() as u64)
-                    .map_err(|e| match p.location() {
-                        Some(loc) => e.at(loc.clone()),
+                    .map_err(|e| match node.param_location(p) {
+                        Some(loc) => e.at(loc),
                         None => at_node(e),
                     })?;
             }

@@ -265,16 +265,16 @@ impl Link {
     }
 }
 
-/// The weight of a graph edge (upstream → downstream): which output feeds which input, and
-/// the position of this connection in the input's connection list.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// The weight of a graph edge (upstream → downstream): which connection of which downstream
+/// input the edge mirrors. Two numbers rather than names, so that a resolved scene with
+/// millions of connections keeps small edges; [`Network::edge_link`] gives the input and the
+/// link (upstream output included).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Edge {
-    /// Upstream output (`None`: whole-node reference).
-    pub output: Option<Arc<str>>,
-    /// Downstream input.
-    pub input: Arc<str>,
+    /// Position of the downstream input in [`Node::all_params`] of the downstream node.
+    pub param: u32,
     /// Element index: position in the downstream input's ordered connection list.
-    pub index: usize,
+    pub index: u32,
 }
 
 /// How a parameter differs from what was read from the RIB source.
@@ -313,18 +313,39 @@ pub struct Param {
     links: Links,
     /// Boxed: most parameters of a resolved scene were added by resolution and have none, and
     /// a smaller `Param` keeps nodes with hundreds of members compact.
+    /// Also holds the change flags: a parameter without a source is [`ParamChange::Added`]
+    /// (or `Removed`) whatever was done to it, so only source parameters need them.
     source: Option<Box<ParamSource>>,
-    value_touched: bool,
-    links_touched: bool,
 }
 
-/// Where a parameter read from a file came from.
+/// Where a parameter read from a file came from. Small and free of shared pointers: the
+/// file name is the node's ([`Node::location`]), so a parameter keeps only its position.
 #[derive(Debug, Clone, PartialEq)]
 struct ParamSource {
     /// Shared by the parameters of every node that repeats the declaration.
     decl: Option<Arc<Decl>>,
-    location: Option<Location>,
-    origin: Option<u32>,
+    /// The index into [`NodeSource::items`]; [`NO_ORIGIN`] for none.
+    origin: u32,
+    at: ParamAt,
+    /// The value was set or removed since the parameter was read.
+    value_touched: bool,
+    /// The connections were set or changed since the parameter was read.
+    links_touched: bool,
+}
+
+/// [`ParamSource::origin`] of a parameter not read from a RIB request.
+const NO_ORIGIN: u32 = u32::MAX;
+
+/// Where a parameter was declared, relative to its node's file (crate-internal: readers).
+/// [`Node::param_location`] turns it into a [`Location`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ParamAt {
+    /// Not known.
+    Unknown,
+    /// 1-based line and column (in characters) of the declaration in the node's file.
+    LineColumn(u32, u32),
+    /// A JSON node's `parameters` member of this name (under the node's JSON Pointer).
+    JsonParameter,
 }
 
 impl Param {
@@ -334,8 +355,6 @@ impl Param {
             value: None,
             links: Links::new(),
             source: None,
-            value_touched: false,
-            links_touched: false,
         }
     }
 
@@ -344,14 +363,14 @@ impl Param {
         name: String,
         value: Option<Value>,
         decl: Option<Decl>,
-        location: Option<Location>,
+        at: ParamAt,
         origin: Option<u32>,
     ) -> Param {
         Param::from_shared(
             Arc::from(name),
             value.map(Arc::new),
             decl.map(Arc::new),
-            location,
+            at,
             origin,
         )
     }
@@ -362,22 +381,22 @@ impl Param {
         name: Arc<str>,
         value: Option<Arc<Value>>,
         decl: Option<Arc<Decl>>,
-        location: Option<Location>,
+        at: ParamAt,
         origin: Option<u32>,
     ) -> Param {
         Param {
             name,
             value,
             links: Links::new(),
-            source: (decl.is_some() || location.is_some() || origin.is_some()).then(|| {
+            source: (decl.is_some() || at != ParamAt::Unknown || origin.is_some()).then(|| {
                 Box::new(ParamSource {
                     decl,
-                    location,
-                    origin,
+                    origin: origin.unwrap_or(NO_ORIGIN),
+                    at,
+                    value_touched: false,
+                    links_touched: false,
                 })
             }),
-            value_touched: false,
-            links_touched: false,
         }
     }
 
@@ -387,6 +406,21 @@ impl Param {
     pub(crate) fn with_source_links(mut self, links: Links) -> Param {
         self.links = links;
         self
+    }
+
+    /// Record that the value was set or removed (a change only for a parameter read from a
+    /// source).
+    fn touch_value(&mut self) {
+        if let Some(s) = &mut self.source {
+            s.value_touched = true;
+        }
+    }
+
+    /// Record that the connections changed (see [`Param::touch_value`]).
+    fn touch_links(&mut self) {
+        if let Some(s) = &mut self.source {
+            s.links_touched = true;
+        }
     }
 
     /// The parameter name.
@@ -420,15 +454,20 @@ impl Param {
         self.source.as_ref()?.decl.as_deref()
     }
 
-    /// Where the parameter was declared (RIB decl string; JSON pointer), if known.
-    pub fn location(&self) -> Option<&Location> {
-        self.source.as_ref()?.location.as_ref()
+    /// The 1-based line and column of the parameter's declaration in its node's file, if it
+    /// was read from RIB ([`Node::param_location`] gives the whole location).
+    pub fn line_column(&self) -> Option<(u32, u32)> {
+        match self.source.as_ref()?.at {
+            ParamAt::LineColumn(line, column) => Some((line, column)),
+            ParamAt::Unknown | ParamAt::JsonParameter => None,
+        }
     }
 
     /// The index of this parameter's occurrence in [`NodeSource::items`], if it was read from
     /// a RIB request.
     pub fn source_item(&self) -> Option<usize> {
-        self.source.as_ref()?.origin.map(|o| o as usize)
+        let origin = self.source.as_ref()?.origin;
+        (origin != NO_ORIGIN).then_some(origin as usize)
     }
 
     /// How the parameter differs from the source (see [`ParamChange`]).
@@ -448,12 +487,16 @@ impl Param {
         if self.source_item().is_none() {
             return ParamChange::Added;
         }
-        if self.links_touched && !self.links.is_empty() {
+        let (value_touched, links_touched) = self
+            .source
+            .as_ref()
+            .map_or((false, false), |s| (s.value_touched, s.links_touched));
+        if links_touched && !self.links.is_empty() {
             ParamChange::Connected
         } else if !self.links.is_empty() {
             // Only the (unchanged) connection is written for a connected parameter.
             ParamChange::Unchanged
-        } else if self.links_touched || self.value_touched {
+        } else if links_touched || value_touched {
             ParamChange::ValueReplaced
         } else {
             ParamChange::Unchanged
@@ -470,8 +513,37 @@ pub struct NodeSource {
     pub span: Range<usize>,
     /// Every parameter occurrence in source order (duplicates included).
     pub items: Vec<SourceParam>,
+    /// The comments of the parameter occurrences, in source order, each from `#` to the end
+    /// of its line (newline excluded); an occurrence names its own by
+    /// [`SourceParam::comments`] (see [`NodeSource::leading_comments`] and
+    /// [`NodeSource::trailing_comment`]). One list per request: most parameters have none.
+    pub comments: Vec<Range<usize>>,
     /// Comments inside the span that precede no parameter (a request without parameters).
     pub end_comments: Vec<Range<usize>>,
+}
+
+impl NodeSource {
+    /// The comments between the previous parameter occurrence and `item` (or inside `item`,
+    /// between decl and value).
+    pub fn leading_comments(&self, item: &SourceParam) -> &[Range<usize>] {
+        let all = self.of(item);
+        &all[..all.len() - usize::from(item.trailing)]
+    }
+
+    /// The comment on the same line as the end of `item`'s value, if any.
+    pub fn trailing_comment(&self, item: &SourceParam) -> Option<&Range<usize>> {
+        if item.trailing {
+            self.of(item).last()
+        } else {
+            None
+        }
+    }
+
+    fn of(&self, item: &SourceParam) -> &[Range<usize>] {
+        self.comments
+            .get(item.comments.start as usize..item.comments.end as usize)
+            .unwrap_or(&[])
+    }
 }
 
 /// One parameter occurrence inside a RIB request.
@@ -484,11 +556,12 @@ pub struct SourceParam {
     pub decl: Range<usize>,
     /// The value (array brackets or the bare value token included).
     pub value: Range<usize>,
-    /// Comments between the previous parameter and this one (or inside this one, between
-    /// decl and value), each from `#` to the end of its line (newline excluded).
-    pub leading_comments: Vec<Range<usize>>,
-    /// A comment on the same line as the end of the value.
-    pub trailing_comment: Option<Range<usize>>,
+    /// This occurrence's comments in [`NodeSource::comments`]: the leading ones, then the
+    /// trailing one when [`SourceParam::trailing`] is set.
+    pub comments: Range<u32>,
+    /// True if the last of [`SourceParam::comments`] is on the same line as the end of the
+    /// value.
+    pub trailing: bool,
 }
 
 /// One shader node (one RIB request, one JSON node).
@@ -573,6 +646,16 @@ pub(crate) fn name_hash(name: &str) -> u64 {
 /// The [`name_hash`] whose low half is `h`.
 fn unfold(h: u32) -> u64 {
     u64::from(h) << 32 | u64::from(h)
+}
+
+/// The weight of the edge mirroring connection `index` of the parameter at position `param`.
+/// A node's parameters and an input's connections are bounded by [`crate::Limits`] far below
+/// `u32::MAX`; beyond it the numbers saturate.
+fn edge_weight(param: usize, index: usize) -> Edge {
+    Edge {
+        param: u32::try_from(param).unwrap_or(u32::MAX),
+        index: u32::try_from(index).unwrap_or(u32::MAX),
+    }
 }
 
 /// A node with at most this many parameters has no name index: scanning them is as fast, and
@@ -678,6 +761,42 @@ impl Node {
     /// Where the node was defined (RIB request keyword; JSON pointer), if known.
     pub fn location(&self) -> Option<&Location> {
         self.location.as_ref()
+    }
+
+    /// Where parameter `p` of this node was declared (RIB: the decl string's line and column;
+    /// JSON: the pointer to its `parameters` member), if known. The location is built on
+    /// demand: a parameter stores only its position, the file is the node's.
+    ///
+    /// ```
+    /// use vstructc::front::rib::{RibOptions, parse_rib};
+    /// use vstructc::network::NoDefinitions;
+    /// use vstructc::Diagnostics;
+    /// let src = b"Pattern \"PxrFractal\" \"f\"\n  \"int layers\" [3]\n";
+    /// let mut diags = Diagnostics::new();
+    /// let net = parse_rib(src, "a.rib", &NoDefinitions, &RibOptions::default(), &mut diags).unwrap();
+    /// let f = &net[net.find("f").unwrap()];
+    /// let at = f.param_location(f.param("layers").unwrap()).unwrap();
+    /// assert_eq!(at.to_string(), "a.rib:2:3");
+    /// ```
+    pub fn param_location(&self, p: &Param) -> Option<Location> {
+        let node = self.location.as_ref()?;
+        match p.source.as_ref()?.at {
+            ParamAt::Unknown => None,
+            ParamAt::LineColumn(line, column) => {
+                Some(Location::new(node.file.clone(), line, column))
+            }
+            ParamAt::JsonParameter => {
+                let mut pointer = node.pointer.clone()?;
+                pointer.push_str("/parameters/");
+                pointer.push_str(&p.name.replace('~', "~0").replace('/', "~1"));
+                Some(Location {
+                    file: node.file.clone(),
+                    line: 0,
+                    column: 0,
+                    pointer: Some(pointer),
+                })
+            }
+        }
     }
 
     /// The RIB source layout of the request, if the node was read from RIB.
@@ -891,6 +1010,26 @@ impl Network {
         &self.graph
     }
 
+    /// The downstream input and the connection that graph edge `edge` mirrors, if the edge
+    /// exists.
+    ///
+    /// ```
+    /// use vstructc::network::Network;
+    /// let mut net = Network::new();
+    /// let a = net.add_node("a", "PxrFractal");
+    /// let d = net.add_node("d", "PxrSurface");
+    /// net.connect(d, "diffuseGain", a, "resultF");
+    /// let e = net.graph().edge_indices().next().unwrap();
+    /// let (input, link) = net.edge_link(e).unwrap();
+    /// assert_eq!((input.name(), link.output()), ("diffuseGain", Some("resultF")));
+    /// ```
+    pub fn edge_link(&self, edge: EdgeIndex) -> Option<(&Param, &Link)> {
+        let w = self.graph.edge_weight(edge)?;
+        let (_, down) = self.graph.edge_endpoints(edge)?;
+        let p = self.graph[down].params.get(w.param as usize)?;
+        Some((p, p.links.get(w.index as usize)?))
+    }
+
     /// Number of nodes (all versions).
     pub fn node_count(&self) -> usize {
         self.graph.node_count()
@@ -1085,7 +1224,7 @@ impl Network {
         let i = n.index_of(name)?;
         let old = n.params[i].value.take().map(Arc::unwrap_or_clone);
         if old.is_some() {
-            n.params[i].value_touched = true;
+            n.params[i].touch_value();
             n.dirty = true;
         }
         old
@@ -1175,7 +1314,7 @@ impl Network {
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         p.links.push(link);
-        p.links_touched = true;
+        p.touch_links();
         n.dirty = true;
     }
 
@@ -1196,15 +1335,10 @@ impl Network {
             return;
         }
         let mut edges: SmallVec<[(NodeId, Edge); 4]> = SmallVec::new();
-        for p in &self.graph[down].params {
+        for (param, p) in self.graph[down].params.iter().enumerate() {
             for (index, link) in p.links.iter().enumerate() {
                 if let Some(up) = link.upstream_node() {
-                    let edge = Edge {
-                        output: link.output.clone(),
-                        input: p.name.clone(),
-                        index,
-                    };
-                    edges.push((up, edge));
+                    edges.push((up, edge_weight(param, index)));
                 }
             }
         }
@@ -1222,16 +1356,7 @@ impl Network {
         let Some(up) = link.upstream_node() else {
             return;
         };
-        let input = self.graph[down].params[param].name.clone();
-        self.graph.add_edge(
-            up,
-            down,
-            Edge {
-                output: link.output.clone(),
-                input,
-                index,
-            },
-        );
+        self.graph.add_edge(up, down, edge_weight(param, index));
     }
 
     /// The graph edges mirroring the links of parameter `param` of `down`, with their
@@ -1243,11 +1368,11 @@ impl Network {
         if self.edges_suspended || p.links.iter().all(|l| l.upstream_node().is_none()) {
             return Vec::new();
         }
-        let name = &p.name;
+        let param = param as u32;
         self.graph
             .edges_directed(down, petgraph::Direction::Incoming)
-            .filter(|e| *e.weight().input == **name)
-            .map(|e| (e.id(), e.weight().index))
+            .filter(|e| e.weight().param == param)
+            .map(|e| (e.id(), e.weight().index as usize))
             .collect()
     }
 
@@ -1288,12 +1413,7 @@ impl Network {
                     let Some(up) = p.links[index].upstream_node() else {
                         continue;
                     };
-                    let weight = Edge {
-                        output: p.links[index].output.clone(),
-                        input: p.name.clone(),
-                        index,
-                    };
-                    self.graph.add_edge(up, down, weight);
+                    self.graph.add_edge(up, down, edge_weight(i, index));
                 }
             }
         }
@@ -1384,7 +1504,7 @@ impl Network {
         if p.value.as_deref() == Some(&value) {
             return Some(value);
         }
-        p.value_touched = true;
+        p.touch_value();
         n.dirty = true;
         p.value.replace(Arc::new(value)).map(Arc::unwrap_or_clone)
     }
@@ -1402,7 +1522,7 @@ impl Network {
         let i = n.insert_param_hashed(name.clone(), hash);
         let p = &mut n.params[i];
         p.value = Some(value.clone());
-        p.value_touched = true;
+        p.touch_value();
         n.dirty = true;
     }
 
@@ -1418,7 +1538,7 @@ impl Network {
         }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
-        p.links_touched = true;
+        p.touch_links();
         n.dirty = true;
         std::mem::replace(&mut p.links, links)
     }
@@ -1465,13 +1585,13 @@ impl Network {
             } else if k > index
                 && let Some(w) = self.graph.edge_weight_mut(e)
             {
-                w.index = k - 1;
+                w.index = edge_weight(i, k - 1).index;
             }
         }
         let n = &mut self.graph[down];
         let p = &mut n.params[i];
         let link = p.links.remove(index);
-        p.links_touched = true;
+        p.touch_links();
         n.dirty = true;
         Some(link)
     }
@@ -1660,9 +1780,21 @@ mod tests {
     fn sourced_node(net: &mut Network) -> NodeId {
         let mut node = Node::new_raw("n", "PxrLayer", RequestKind::Pattern);
         node.set_raw_params(vec![
-            Param::from_source("b".into(), Some(Value::Int(1)), None, None, Some(0)),
-            Param::from_source("a".into(), Some(Value::Float(0.5)), None, None, Some(1)),
-            Param::from_source("c".into(), None, None, None, Some(2)),
+            Param::from_source(
+                "b".into(),
+                Some(Value::Int(1)),
+                None,
+                ParamAt::Unknown,
+                Some(0),
+            ),
+            Param::from_source(
+                "a".into(),
+                Some(Value::Float(0.5)),
+                None,
+                ParamAt::Unknown,
+                Some(1),
+            ),
+            Param::from_source("c".into(), None, None, ParamAt::Unknown, Some(2)),
         ]);
         let id = net.insert_node(node);
         let up = net.add_node("u", "PxrFractal");
@@ -1732,11 +1864,11 @@ mod tests {
         net.connect(d, "x", b, "o2");
         net.push_link(d, "x", Link::missing("ghost", None));
         assert_eq!(net.graph().edge_count(), 2);
-        let mut weights: Vec<_> = net.graph().edge_weights().cloned().collect();
-        weights.sort_by_key(|w| w.index);
-        assert_eq!(weights[0].output.as_deref(), Some("o1"));
-        assert_eq!(weights[1].index, 1);
-        assert_eq!(&*weights[1].input, "x");
+        let mut edges: Vec<_> = net.graph().edge_indices().collect();
+        edges.sort_by_key(|&e| net.graph()[e].index);
+        assert_eq!(net.edge_link(edges[0]).unwrap().1.output(), Some("o1"));
+        assert_eq!(net.graph()[edges[1]].index, 1);
+        assert_eq!(net.edge_link(edges[1]).unwrap().0.name(), "x");
         net.remove_connection(d, "x", 0);
         let w: Vec<_> = net.graph().edge_weights().cloned().collect();
         assert_eq!(w.len(), 1);
@@ -1779,7 +1911,13 @@ mod tests {
                 .iter()
                 .enumerate()
                 .map(|(k, n)| {
-                    Param::from_source(n.clone(), Some(Value::Int(k as i32)), None, None, None)
+                    Param::from_source(
+                        n.clone(),
+                        Some(Value::Int(k as i32)),
+                        None,
+                        ParamAt::Unknown,
+                        None,
+                    )
                 })
                 .collect(),
         );

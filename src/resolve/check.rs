@@ -246,8 +246,8 @@ impl<'a> Checker<'a> {
 
     fn push(&mut self, d: Diagnostic, node: NodeId, name: &str, p: &Param) {
         let n = &self.net[node];
-        let d = match p.location().or(n.location()) {
-            Some(l) => d.at(l.clone()),
+        let d = match n.param_location(p).or_else(|| n.location().cloned()) {
+            Some(l) => d.at(l),
             None => d,
         };
         self.out.push(d.with_node(n.handle()).with_param(name));

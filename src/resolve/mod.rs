@@ -1083,7 +1083,7 @@ impl Resolver<'_> {
         let n = &self.net[node];
         let loc: Option<Location> = param
             .and_then(|p| n.param(p))
-            .and_then(|p| p.location().cloned())
+            .and_then(|p| n.param_location(p))
             .or_else(|| n.location().cloned());
         let mut d = match loc {
             Some(l) => d.at(l),

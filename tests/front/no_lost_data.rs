@@ -63,8 +63,8 @@ fn inside_comments(bytes: &[u8], net: &Network) -> Vec<Vec<Vec<u8>>> {
         .map(|s| {
             let mut ranges: Vec<Range<usize>> = s.end_comments.clone();
             for item in &s.items {
-                ranges.extend(item.leading_comments.iter().cloned());
-                ranges.extend(item.trailing_comment.iter().cloned());
+                ranges.extend(s.leading_comments(item).iter().cloned());
+                ranges.extend(s.trailing_comment(item).cloned());
             }
             ranges.iter().map(|r| bytes[r.clone()].to_vec()).collect()
         })

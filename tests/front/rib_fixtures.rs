@@ -294,7 +294,7 @@ fn hand_edited_network_versions_and_quotes() {
                 .is_some_and(|k| net[solid].all_params()[k as usize].name() == "specularIor")
         })
         .unwrap();
-    assert!(ior.trailing_comment.is_some());
+    assert!(src.trailing_comment(ior).is_some());
     // Materials: one per Bxdf version; the second version of a name gets a suffix.
     let names: Vec<&str> = net.materials().iter().map(|m| m.name.as_str()).collect();
     assert!(names.contains(&"ConstantCurvature") && names.contains(&"ConstantCurvature#1"));

@@ -111,6 +111,11 @@ impl<'a> Lexer<'a> {
         Location::new(self.file.clone(), line, col)
     }
 
+    /// The file name of this source.
+    pub fn file(&self) -> &Arc<str> {
+        &self.file
+    }
+
     /// The location of a token.
     pub fn tok_loc(&self, t: &Token) -> Location {
         self.loc(t.line, t.col)
