@@ -191,7 +191,9 @@ impl Teller<'_> {
                 .definition(n.shader())
                 .and_then(|d| d.input(input).and_then(|p| p.default.clone()))
         };
-        let location = param.and_then(|p| p.location()).map(LocationDoc::of);
+        let location = param
+            .and_then(|p| n.param_location(p))
+            .map(|l| LocationDoc::of(&l));
         let (origin, value, location) = if resolved && !connections.is_empty() {
             ("resolved", None, None)
         } else if let Some(v) = written {
@@ -309,9 +311,12 @@ impl Teller<'_> {
                     ("written", None, Some(Box::new(s)))
                 } else {
                     let location = (origin == "authored")
-                        .then(|| self.net[e.upstream].param(&r.param)?.location())
+                        .then(|| {
+                            let up = &self.net[e.upstream];
+                            up.param_location(up.param(&r.param)?)
+                        })
                         .flatten()
-                        .map(LocationDoc::of);
+                        .map(|l| LocationDoc::of(&l));
                     (origin, location, None)
                 };
                 ReadDoc {
