@@ -336,7 +336,9 @@ def test_to_numpy(reg):
 
 
 def test_long_calls_release_the_gil(reg):
-    """Another thread keeps running while one renders: the render releases the GIL."""
+    """Another thread runs while one renders: the render releases the GIL. A long switch
+    interval keeps the interpreter from handing the GIL over on its own, so a call that held
+    it would let the other thread count nothing."""
     m = vstructc.compile(built(reg), reg)[0]
     stop = threading.Event()
     count = [0]
@@ -345,16 +347,19 @@ def test_long_calls_release_the_gil(reg):
         while not stop.is_set():
             count[0] += 1
 
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1.0)
     t = threading.Thread(target=spin)
-    t.start()
     try:
+        t.start()
         before = count[0]
-        m.render(size=384)
+        m.render(size=256)
         during = count[0] - before
     finally:
         stop.set()
         t.join()
-    assert during > 10_000
+        sys.setswitchinterval(interval)
+    assert during > 1000
 
 
 def test_resolve_rib_example(repo):
