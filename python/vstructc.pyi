@@ -86,7 +86,8 @@ class Network:
     def diagnostics(self) -> list[Diagnostic]:
         """The reader's warnings and infos."""
     @property
-    def resolved(self) -> bool: ...
+    def resolved(self) -> bool:
+        """True once resolved and not changed since (add_node, set_param, connect clear it)."""
     def add_node(self, handle: str, shader: str, kind: Optional[str] = None) -> None:
         """kind: pattern, bxdf, displace, light, lightfilter (default: the definition's)."""
     def set_param(

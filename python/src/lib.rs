@@ -691,7 +691,8 @@ impl Network {
             .collect()
     }
 
-    /// True once the network has been resolved.
+    /// True once the network has been resolved and not changed since (add_node, set_param
+    /// and connect clear it; compile resolves a network that is not resolved).
     #[getter]
     fn resolved(&self) -> bool {
         self.resolved
@@ -732,6 +733,7 @@ impl Network {
                 .unwrap_or(RequestKind::Pattern),
         };
         self.net.add_node_of_kind(handle, shader, kind);
+        self.resolved = false;
         Ok(())
     }
 
@@ -766,6 +768,7 @@ impl Network {
         };
         let v = value_from_py(value, &ty)?;
         self.net.set_param(node, name, v);
+        self.resolved = false;
         Ok(())
     }
 
@@ -775,6 +778,7 @@ impl Network {
         let d = self.node(down)?;
         let u = self.node(up)?;
         self.net.connect(d, input, u, output);
+        self.resolved = false;
         Ok(())
     }
 

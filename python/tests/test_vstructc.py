@@ -128,6 +128,10 @@ def test_built_network_resolves(reg):
     assert net.resolved
     assert all(d.severity != "error" for d in diags)
     assert net.value("mixer", "layer1_enableClearcoat") == 1
+    net.set_param("coat", "enableClearcoat", 0)
+    assert not net.resolved  # a change after resolution: compile resolves again
+    net.set_param("coat", "enableClearcoat", 1)
+    vstructc.resolve(net, reg)
     conns = net.connections("surface")
     assert ("inputMaterial", "mixer", "pxrMaterialOut") not in conns
     assert any(c[0] == "diffuseColor" and c[1] == "mixer" for c in conns)
