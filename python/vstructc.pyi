@@ -11,7 +11,8 @@ Vec3 = tuple[float, float, float]
 class Error(Exception):
     """A vstructc error; `.diagnostics` holds the diagnostics that explain it."""
 
-    diagnostics: list[Diagnostic]
+    diagnostics: Sequence[Diagnostic]
+    """The diagnostics (a list when vstructc raised the error, () otherwise)."""
 
 class InputError(Error):
     """Malformed input (a network or definition text); `.diagnostics[0]` says where."""

@@ -1281,6 +1281,9 @@ impl Image {
 fn vstructc_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // An Error raised without diagnostics (by Python code) still has the attribute.
+    py.get_type::<Error>()
+        .setattr("diagnostics", PyTuple::empty(py))?;
     m.add("Error", py.get_type::<Error>())?;
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("LimitError", py.get_type::<LimitError>())?;

@@ -57,6 +57,13 @@ def test_version():
     assert vstructc.__version__ == "0.1.0"
 
 
+def test_error_classes():
+    assert issubclass(vstructc.InputError, vstructc.Error)
+    assert issubclass(vstructc.LimitError, vstructc.Error)
+    assert issubclass(vstructc.Error, Exception)
+    assert vstructc.Error("x").diagnostics == ()
+
+
 # --- Registry ------------------------------------------------------------------------
 
 
