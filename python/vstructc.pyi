@@ -1,12 +1,12 @@
 """vstructc: vstruct resolution for RenderMan shader networks, from Python."""
 
 from os import PathLike
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Optional, Sequence, Union, final
 
 __version__: str
 
-Value = Union[int, float, str, bool, tuple[float, ...], list[Any]]
-Vec3 = tuple[float, float, float]
+_Value = Union[int, float, str, bool, tuple[float, ...], list[Any]]
+_Vec3 = tuple[float, float, float]
 
 class Error(Exception):
     """A vstructc error; `.diagnostics` holds the diagnostics that explain it."""
@@ -20,6 +20,7 @@ class InputError(Error):
 class LimitError(Error):
     """A bound on sizes or counts was exceeded (code LM001)."""
 
+@final
 class Diagnostic:
     """One finding: a stable code, a severity, a message and where it is."""
 
@@ -49,17 +50,18 @@ class Diagnostic:
     def meaning(self) -> Optional[str]:
         """The documented meaning of the code."""
 
+@final
 class Registry:
     """Shader definitions (.args, .oso): `paths` first, then VSTRUCTC_ARGS_PATH (env=True),
     then the embedded definitions (embedded=True)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         paths: Optional[Sequence[Union[str, PathLike[str]]]] = None,
         embedded: bool = True,
         prefer: str = "oso",
         env: bool = False,
-    ) -> None: ...
+    ) -> Registry: ...
     def shaders(self) -> list[str]:
         """Every shader id on the search path, sorted."""
     def definition(self, shader: str) -> Optional[dict[str, Any]]:
@@ -73,10 +75,11 @@ class Registry:
     def diagnostics(self) -> list[Diagnostic]:
         """Diagnostics of the search path and of every definition loaded so far."""
 
+@final
 class Network:
     """A shader network: nodes, parameter values, connections and materials."""
 
-    def __init__(self, registry: Optional[Registry] = None) -> None: ...
+    def __new__(cls, registry: Optional[Registry] = None) -> Network: ...
     @staticmethod
     def from_rib(text: Union[str, bytes], registry: Registry, name: str = "<rib>") -> Network:
         """Reads RIB; raises vstructc.Error on malformed text."""
@@ -92,7 +95,7 @@ class Network:
     def add_node(self, handle: str, shader: str, kind: Optional[str] = None) -> None:
         """kind: pattern, bxdf, displace, light, lightfilter (default: the definition's)."""
     def set_param(
-        self, handle: str, name: str, value: Value, type: Optional[str] = None
+        self, handle: str, name: str, value: _Value, type: Optional[str] = None
     ) -> None:
         """The type comes from `type`, else the definition, else the value."""
     def connect(self, down: str, input: str, up: str, output: str) -> None: ...
@@ -103,7 +106,7 @@ class Network:
         """(handle, shader) in the order read or added."""
     def materials(self) -> list[dict[str, Any]]:
         """name, terminals ({terminal: handle}), nodes (handles)."""
-    def value(self, handle: str, name: str) -> Optional[Value]:
+    def value(self, handle: str, name: str) -> Optional[_Value]:
         """None when neither authored nor written by resolution."""
     def connections(self, handle: str) -> list[tuple[str, str, Optional[str]]]:
         """(input, upstream handle, upstream output or None)."""
@@ -130,6 +133,7 @@ def compile(
 ) -> list[Material]:
     """Compiles the materials (resolving first when the network is not resolved)."""
 
+@final
 class Material:
     """A compiled material; directions are in the surface frame (normal +Z)."""
 
@@ -137,14 +141,15 @@ class Material:
     def name(self) -> str: ...
     @property
     def recipe(self) -> str: ...
-    def lobes(self, wo: Vec3 = (0.0, 0.0, 1.0)) -> list[dict[str, Any]]:
+    def lobes(self, wo: _Vec3 = (0.0, 0.0, 1.0)) -> list[dict[str, Any]]:
         """kind, label, weight per lobe."""
-    def eval(self, wo: Vec3, wi: Vec3) -> dict[str, Any]:
+    def eval(self, wo: _Vec3, wi: _Vec3) -> dict[str, Any]:
         """total (f·cos, r g b), pdf, lobes."""
-    def albedo(self, wo: Vec3 = (0.0, 0.0, 1.0)) -> dict[str, Vec3]:
+    def albedo(self, wo: _Vec3 = (0.0, 0.0, 1.0)) -> dict[str, _Vec3]:
         """reflect, transmit."""
     def render(self, size: int = 256, furnace: bool = False) -> Image: ...
 
+@final
 class Image:
     """A linear RGB float32 image, rows top to bottom."""
 
@@ -153,7 +158,7 @@ class Image:
     @property
     def height(self) -> int: ...
     @property
-    def pixels(self) -> list[Vec3]: ...
+    def pixels(self) -> list[_Vec3]: ...
     def tobytes(self) -> bytes: ...
     def to_numpy(self) -> Any:
         """(height, width, 3) float32 array; ImportError without numpy."""
