@@ -163,4 +163,4 @@ class Image:
     def to_numpy(self) -> Any:
         """(height, width, 3) float32 array; ImportError without numpy."""
     def save(self, path: Union[str, PathLike[str]]) -> None:
-        """PNG (.png) or PFM (.pfm)."""
+        """PNG (.png), or linear float PFM (.pfm) or OpenEXR (.exr)."""

@@ -15,7 +15,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::sync::Arc;
 use vstructc::back::json::write_json;
-use vstructc::back::png::{encode_pfm, encode_png};
+use vstructc::back::png::ImageFormat;
 use vstructc::back::rib::write_rib;
 use vstructc::cond::Extensions;
 use vstructc::front::{NetFormat, ReadOptions, read_network};
@@ -1243,28 +1243,28 @@ impl Image {
         arr.call_method1("reshape", ((self.inner.height, self.inner.width, 3),))?
             .call_method0("copy")
     }
-    /// Writes the image: PNG (sRGB, 8 bit) when `path` ends in .png, PFM (linear float)
-    /// when it ends in .pfm.
+    /// Writes the image: PNG (sRGB, 8 bit) when `path` ends in .png, PFM or OpenEXR (linear
+    /// 32-bit float) when it ends in .pfm or .exr.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        let img = &self.inner;
-        let data = match ext.as_deref() {
-            Some("png") => py
-                .detach(|| guarded(|| encode_png(img)))
-                .map_err(|m| error_msg(py, m))?
-                .map_err(|e| lib_error(py, e))?,
-            Some("pfm") => py
-                .detach(|| guarded(|| encode_pfm(img)))
-                .map_err(|m| error_msg(py, m))?,
+        let format = match ext.as_deref() {
+            Some("png") => ImageFormat::Png,
+            Some("pfm") => ImageFormat::Pfm,
+            Some("exr") => ImageFormat::Exr,
             _ => {
                 return Err(PyValueError::new_err(
-                    "the image file name ends in .png or .pfm",
+                    "the image file name ends in .png, .pfm or .exr",
                 ));
             }
         };
+        let img = &self.inner;
+        let data = py
+            .detach(|| guarded(|| img.encode(format)))
+            .map_err(|m| error_msg(py, m))?
+            .map_err(|e| lib_error(py, e))?;
         let p = path.as_path();
         py.detach(|| guarded(|| vstructc::back::output::write_file(p, |w| w.write_all(&data))))
             .map_err(|m| error_msg(py, m))?

@@ -325,6 +325,8 @@ def test_render_and_save(reg, tmp_path):
     assert (tmp_path / "ball.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     img.save(str(tmp_path / "ball.pfm"))
     assert (tmp_path / "ball.pfm").read_bytes()[:2] == b"PF"
+    img.save(tmp_path / "ball.exr")
+    assert (tmp_path / "ball.exr").read_bytes()[:4] == b"\x76\x2f\x31\x01"
     with pytest.raises(ValueError):
         img.save(tmp_path / "ball.jpg")
     furnace = m.render(size=8, furnace=True)
