@@ -1,0 +1,5 @@
+//! Unit tests of the library's internals for this stage (reached through the `testkit` feature).
+
+mod packs;
+mod preview;
+mod vmath;
