@@ -15,7 +15,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 fn bench_args_load(c: &mut Criterion) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/fixtures/args/pixar/PxrLayerMixer.args"
+        "/../../shared/fixtures/args/pixar/PxrLayerMixer.args"
     );
     let Ok(bytes) = std::fs::read(path) else {
         eprintln!("notice: {path} not found; skipping args_load");

@@ -14,7 +14,7 @@ use vstructc::cond;
 mod scan;
 
 fn fixture_exprs() -> Vec<String> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/fixtures");
     if !dir.is_dir() {
         eprintln!("notice: ../shared/fixtures not found; benchmarking the §11.1 examples only");
         return [

@@ -55,8 +55,8 @@
 //! ```
 
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
-use glam::Vec3;
 use std::hint::black_box;
+use vstructc::glam::Vec3;
 use vstructc::interp::diffuse::{
     Lambert, OrenNayar, OrenNayarBound, OrenNayarVariant, PreparedLambert, PreparedOrenNayar,
 };

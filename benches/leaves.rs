@@ -9,8 +9,8 @@
 //! per (V, L).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::Vec3;
 use std::hint::black_box;
+use vstructc::glam::Vec3;
 use vstructc::interp::diffuse::{Lambert, OrenNayar, OrenNayarVariant};
 use vstructc::interp::soa::{DielectricRBatch, DielectricRView, Vec3x};
 use vstructc::interp::*;

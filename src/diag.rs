@@ -200,7 +200,8 @@ impl fmt::Display for Location {
 
 /// 1-based (line, column) of byte `offset` in `text`; columns count characters.
 /// Offsets past the end map to the position just after the last character.
-pub fn line_column(text: &str, offset: usize) -> (u32, u32) {
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn line_column(text: &str, offset: usize) -> (u32, u32) {
     let mut offset = offset.min(text.len());
     while !text.is_char_boundary(offset) {
         offset -= 1;
@@ -244,6 +245,40 @@ pub struct Diagnostic {
 }
 
 impl Diagnostic {
+    /// The longest line, in characters, of a diagnostic in a human report; a longer line keeps
+    /// its beginning and end and says how many characters were left out.
+    pub const MAX_HUMAN_LINE: usize = 2000;
+
+    /// `line` shortened to at most about `max` characters: its beginning and end, and between
+    /// them how many characters were left out. Shorter lines are returned unchanged.
+    ///
+    /// ```
+    /// use vstructc::diag::Diagnostic;
+    /// let long = "x".repeat(10_000);
+    /// let short = Diagnostic::bound_line(&long, 100);
+    /// assert!(short.chars().count() < 160);
+    /// assert!(short.contains("9900 characters left out"));
+    /// ```
+    pub fn bound_line(line: &str, max: usize) -> std::borrow::Cow<'_, str> {
+        let count = line.chars().count();
+        if count <= max {
+            return std::borrow::Cow::Borrowed(line);
+        }
+        let head = max / 2;
+        let tail = max - head;
+        let start_tail = line
+            .char_indices()
+            .nth(count - tail)
+            .map_or(line.len(), |(i, _)| i);
+        let end_head = line.char_indices().nth(head).map_or(0, |(i, _)| i);
+        std::borrow::Cow::Owned(format!(
+            "{} … [{} characters left out] … {}",
+            &line[..end_head],
+            count - max,
+            &line[start_tail..]
+        ))
+    }
+
     /// A diagnostic without location.
     pub fn new(severity: Severity, code: impl Into<Code>, message: impl Into<String>) -> Self {
         Diagnostic {
@@ -343,6 +378,10 @@ pub struct Diagnostics {
 }
 
 impl Diagnostics {
+    /// How many diagnostics of one code a human report shows before it summarises the rest
+    /// (`--max-diagnostics`, whose 0 means no limit).
+    pub const DEFAULT_MAX_PER_CODE: usize = 20;
+
     /// An empty list.
     pub fn new() -> Self {
         Self::default()
@@ -456,16 +495,7 @@ impl Diagnostics {
 /// a quarter of `name`'s length (at least 1, at most 3), else names that begin with `name`
 /// when it has at least 3 characters. Ties keep the candidates' order.
 ///
-/// ```
-/// use vstructc::diag::closest_names;
-/// let names = ["diffuseColor", "diffuseGain", "specularColor"];
-/// assert_eq!(closest_names("diffuseColour", names), ["diffuseColor"]);
-/// assert_eq!(closest_names("DIFFUSEGAIN", names), ["diffuseGain"]);
-/// assert_eq!(closest_names("pxrlayer", ["PxrLayerMixer", "PxrLayer"]), ["PxrLayer"]);
-/// assert_eq!(closest_names("diffuse", names), ["diffuseGain", "diffuseColor"]);
-/// assert!(closest_names("roughness", names).is_empty());
-/// ```
-pub fn closest_names<'a>(
+pub(crate) fn closest_names<'a>(
     name: &str,
     candidates: impl IntoIterator<Item = &'a str>,
 ) -> Vec<&'a str> {
@@ -509,16 +539,34 @@ pub fn closest_names<'a>(
 /// How many names [`closest_names`] suggests at most.
 const SUGGESTIONS: usize = 3;
 
-/// `names` as the end of a message: `"; did you mean `a`?"`, `"; did you mean `a` or `b`?"`,
-/// or nothing for no names.
+/// A "did you mean" hint for an unknown `name` among `candidates`, as the end of a
+/// message: `"; did you mean `a`?"`, `"; did you mean `a` or `b`?"`, or nothing when no
+/// candidate is close. Close candidates are those equal but for case, else within an edit
+/// distance (insertions, deletions, substitutions and swaps of neighbours, ignoring case) of
+/// a quarter of `name`'s length (at least 1, at most 3), else those that begin with `name`
+/// when it has at least 3 characters; at most three, best first.
 ///
 /// ```
 /// use vstructc::diag::did_you_mean;
-/// assert_eq!(did_you_mean(&["coating"]), "; did you mean `coating`?");
-/// assert_eq!(did_you_mean(&["a", "b", "c"]), "; did you mean `a`, `b` or `c`?");
-/// assert_eq!(did_you_mean(&[]), "");
+/// let names = ["diffuseColor", "diffuseGain", "specularColor"];
+/// assert_eq!(did_you_mean("diffuseColour", names), "; did you mean `diffuseColor`?");
+/// assert_eq!(did_you_mean("DIFFUSEGAIN", names), "; did you mean `diffuseGain`?");
+/// assert_eq!(
+///     did_you_mean("pxrlayer", ["PxrLayerMixer", "PxrLayer"]),
+///     "; did you mean `PxrLayer`?"
+/// );
+/// assert_eq!(
+///     did_you_mean("diffuse", names),
+///     "; did you mean `diffuseGain` or `diffuseColor`?"
+/// );
+/// assert_eq!(did_you_mean("roughness", names), "");
 /// ```
-pub fn did_you_mean(names: &[&str]) -> String {
+pub fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
+    hint_text(&closest_names(name, candidates))
+}
+
+/// `names` as the end of a message (see [`did_you_mean`]).
+pub(crate) fn hint_text(names: &[&str]) -> String {
     match names {
         [] => String::new(),
         [one] => format!("; did you mean `{one}`?"),
@@ -528,14 +576,6 @@ pub fn did_you_mean(names: &[&str]) -> String {
         }
     }
 }
-
-/// How many diagnostics of one code a human report shows before it summarises the rest
-/// (`--max-diagnostics`, whose 0 means no limit).
-pub const DEFAULT_MAX_PER_CODE: usize = 20;
-
-/// The longest line, in characters, of a diagnostic in a human report; a longer line keeps
-/// its beginning and end and says how many characters were left out.
-pub const MAX_HUMAN_LINE: usize = 2000;
 
 /// What a report prints out of a [`Diagnostics`] list: see [`Diagnostics::volume_limited`].
 #[derive(Debug, Clone, PartialEq)]
@@ -624,36 +664,6 @@ pub(crate) fn join_bounded(len: usize, mut item: impl FnMut(usize) -> String) ->
         len - 2 * LIST_ENDS,
         tail.join(", ")
     )
-}
-
-/// `line` shortened to at most about `max` characters: its beginning and end, and between
-/// them how many characters were left out. Shorter lines are returned unchanged.
-///
-/// ```
-/// use vstructc::diag::bound_line;
-/// let long = "x".repeat(10_000);
-/// let short = bound_line(&long, 100);
-/// assert!(short.chars().count() < 160);
-/// assert!(short.contains("9900 characters left out"));
-/// ```
-pub fn bound_line(line: &str, max: usize) -> std::borrow::Cow<'_, str> {
-    let count = line.chars().count();
-    if count <= max {
-        return std::borrow::Cow::Borrowed(line);
-    }
-    let head = max / 2;
-    let tail = max - head;
-    let start_tail = line
-        .char_indices()
-        .nth(count - tail)
-        .map_or(line.len(), |(i, _)| i);
-    let end_head = line.char_indices().nth(head).map_or(0, |(i, _)| i);
-    std::borrow::Cow::Owned(format!(
-        "{} … [{} characters left out] … {}",
-        &line[..end_head],
-        count - max,
-        &line[start_tail..]
-    ))
 }
 
 impl IntoIterator for Diagnostics {

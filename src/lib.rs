@@ -32,16 +32,9 @@
 #![warn(missing_docs)]
 
 /// Declares modules that are public under the `testkit` feature (the crate's own tests and
-/// benches reach into them) and crate-private otherwise. With `allow_dead_code:` first, the
-/// build without `testkit` also allows the items only those tests use.
+/// benches reach into them) and crate-private otherwise. Items that only those tests use
+/// compile only with `testkit`.
 macro_rules! testkit_mods {
-    (allow_dead_code: $($name:ident),+ $(,)?) => {$(
-        #[cfg(feature = "testkit")]
-        pub mod $name;
-        #[cfg(not(feature = "testkit"))]
-        #[allow(dead_code, unreachable_pub)]
-        pub(crate) mod $name;
-    )+};
     ($($name:ident),+ $(,)?) => {$(
         #[cfg(feature = "testkit")]
         pub mod $name;

@@ -185,7 +185,7 @@ pub fn compile(
 
 /// Delete every connection still on an input head after resolution (the VS010
 /// placeholders).
-pub fn drop_unresolved(network: &mut Network, registry: &Registry) {
+pub(crate) fn drop_unresolved(network: &mut Network, registry: &Registry) {
     for node in network.nodes_sorted() {
         let Some(tables) = registry.tables(network[node].shader()) else {
             continue;

@@ -4,6 +4,9 @@
 
 use glam::Vec3;
 
+// The label font: public under `testkit` for its unit tests.
+testkit_mods!(font);
+
 /// A linear RGB image, rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {

@@ -1,6 +1,6 @@
 //! The random shading configurations the interpreter and leaf benches evaluate.
 
-use glam::Vec3;
+use vstructc::glam::Vec3;
 use vstructc::interp::Frame;
 use vstructc::interp::verify::Rng;
 

@@ -443,15 +443,14 @@ impl<const W: usize> PreparedBatch<W> {
         }
     }
 
-    testkit_pub! {
-        /// Number of slots that run a vectorised kernel (the others run the scalar leaf per
-        /// lane).
-        fn kernel_count(&self) -> usize {
-            self.slots[..self.count]
-                .iter()
-                .filter(|s| !matches!(s.kernel, Kernel::Scalar))
-                .count()
-        }
+    /// Number of slots that run a vectorised kernel (the others run the scalar leaf per
+    /// lane).
+    #[cfg(feature = "testkit")]
+    pub fn kernel_count(&self) -> usize {
+        self.slots[..self.count]
+            .iter()
+            .filter(|s| !matches!(s.kernel, Kernel::Scalar))
+            .count()
     }
 
     /// The scalar preparation of lane `k` (for `sample` and inspection); `None` when the

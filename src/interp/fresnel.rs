@@ -13,6 +13,7 @@ pub(crate) const MU_BAR: f32 = 1.0 / 7.0;
 
 /// Normal-incidence reflectance of a dielectric interface: `((η − 1)/(η + 1))²`.
 #[inline]
+#[cfg(feature = "testkit")]
 pub fn f0_from_eta(eta: f32) -> f32 {
     let r = (eta - 1.0) / (eta + 1.0);
     r * r
@@ -48,6 +49,7 @@ pub(crate) fn hoffman_f82(f0: Rgb, f90: Rgb, q: f32, a: Rgb, mu: f32) -> Rgb {
 
 /// OpenPBR's F82-tint metal Fresnel (without `specular_weight`): Hoffman F82 with
 /// `F90 = 1`, `q = 5`, `t = specular_color`.
+#[cfg(feature = "testkit")]
 pub fn openpbr_f82_tint(f0: Rgb, specular_color: Rgb, mu: f32) -> Rgb {
     let a = f82_coefficient(f0, Vec3::ONE, 5.0, specular_color);
     hoffman_f82(f0, Vec3::ONE, 5.0, a, mu)
@@ -191,12 +193,14 @@ impl Channels for Vec3A {
 }
 
 /// Conductor reflectance at normal incidence: `((η − 1)² + κ²)/((η + 1)² + κ²)`.
+#[cfg(feature = "testkit")]
 pub fn conductor_f0(eta: Rgb, kappa: Rgb) -> Rgb {
     let k2 = kappa * kappa;
     ((eta - Vec3::ONE) * (eta - Vec3::ONE) + k2) / ((eta + Vec3::ONE) * (eta + Vec3::ONE) + k2)
 }
 
 /// Gulbrandsen's artistic IOR: reflectivity `r` and edge tint `g` → `(η, κ)` per channel.
+#[cfg(feature = "testkit")]
 pub fn artistic_ior(r: Rgb, g: Rgb) -> (Rgb, Rgb) {
     let r = r.clamp(Vec3::ZERO, Vec3::splat(0.99));
     let sr = r.sqrt();
@@ -212,6 +216,7 @@ pub fn artistic_ior(r: Rgb, g: Rgb) -> (Rgb, Rgb) {
 /// mia_material's reflectivity curve `R0(1 − x) + R90 x`, `x = (1 − μ)^E` (the spec's
 /// `SchlickCurve`).
 #[inline]
+#[cfg(feature = "testkit")]
 pub fn mia_curve(mu: f32, r0: f32, r90: f32, e: f32) -> f32 {
     let x = pow_q((1.0 - mu).clamp(0.0, 1.0), e);
     r0 * (1.0 - x) + r90 * x
@@ -303,6 +308,7 @@ impl Fresnel {
     }
 
     /// OpenPBR's F82-tint metal (`F90 = 1`, `q = 5`, `t = specular_color`).
+    #[cfg(feature = "testkit")]
     pub fn openpbr_metal(f0: Rgb, specular_color: Rgb) -> Fresnel {
         Fresnel::f82(f0, Vec3::ONE, 5.0, specular_color)
     }

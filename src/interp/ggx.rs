@@ -36,6 +36,7 @@ impl Ggx {
     }
 
     /// Isotropic distribution.
+    #[cfg(feature = "testkit")]
     pub fn isotropic(alpha: f32) -> Ggx {
         Ggx::new(alpha, alpha)
     }
@@ -69,6 +70,7 @@ impl Ggx {
 
     /// `G1(ω) = 1/(1 + Λ(ω))`.
     #[inline]
+    #[cfg(feature = "testkit")]
     pub fn g1(&self, w: Vec3) -> f32 {
         1.0 / (1.0 + self.lambda(w))
     }
@@ -257,6 +259,7 @@ pub fn g2(masking: Masking, lambda_v: f32, lambda_l: f32) -> f32 {
 /// The shared roughness/anisotropy mapping (MaterialX `roughness_anisotropy`):
 /// `α = clamp(r², 1e-6, 1)`, `s = √(1 − min(|a|, 0.98))`, `α_x = min(α/s, 1)`, `α_y = α s`;
 /// negative `a` swaps the axes. Returns `(α_x, α_y)`.
+#[cfg(feature = "testkit")]
 pub fn roughness_to_alpha(r: f32, a: f32) -> (f32, f32) {
     let alpha = (r * r).clamp(1e-6, 1.0);
     let s = (1.0 - a.abs().min(0.98)).sqrt();

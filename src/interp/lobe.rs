@@ -20,11 +20,16 @@ use super::diffuse::{
 use super::emission::{Emission, Transparent};
 use super::math::{Rgb, flip};
 use super::microfacet::{
-    Compensation, Dielectric, DielectricBound, DielectricMode, MicrofacetBound, MicrofacetR,
-    PreparedDielectric, PreparedMicrofacetR,
+    Dielectric, DielectricBound, MicrofacetBound, MicrofacetR, PreparedDielectric,
+    PreparedMicrofacetR,
+};
+#[cfg(feature = "testkit")]
+use super::{
+    microfacet::{Compensation, DielectricMode},
+    sheen::SheenMasking,
 };
 use super::sheen::{
-    PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenLTCBound, SheenMasking,
+    PreparedSheenCK, PreparedSheenLTC, SheenCK, SheenCKBound, SheenLTC, SheenLTCBound,
 };
 use super::ward::{MiaHighlight3, PreparedMiaHighlight3, PreparedWard, Ward, WardBound};
 use super::leaves::{Leaf, PreparedLeaf};
@@ -33,6 +38,7 @@ use glam::Vec3;
 
 /// Layering class of a leaf.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg(feature = "testkit")]
 pub enum LobeClass {
     /// Throughput 0.
     Opaque,
@@ -44,6 +50,7 @@ pub enum LobeClass {
 
 /// Reciprocity of a leaf.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg(feature = "testkit")]
 pub enum Reciprocity {
     /// `f(V, L) = f(L, V)`.
     Reciprocal,
@@ -154,8 +161,10 @@ pub enum Lobe {
     /// LTC sheen.
     SheenLTC(SheenLTC),
     /// Emission (not part of the BSDF).
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     Emission(Emission),
     /// Straight transparency (delta).
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     Transparent(Transparent),
 }
 
@@ -212,6 +221,7 @@ impl Lobe {
     }
 
     /// Layering class.
+    #[cfg(feature = "testkit")]
     pub fn class(&self) -> LobeClass {
         match self {
             Lobe::MicrofacetR(m) if m.fresnel.is_conductor() => LobeClass::Opaque,
@@ -228,6 +238,7 @@ impl Lobe {
     }
 
     /// Reciprocity.
+    #[cfg(feature = "testkit")]
     pub fn reciprocity(&self) -> Reciprocity {
         let turquin = |k: f32| k > 0.0;
         match self {
@@ -402,6 +413,7 @@ pub(super) enum Aux {
 
 impl BoundLobe {
     /// The lobe.
+    #[cfg(feature = "testkit")]
     pub fn lobe(&self) -> &Lobe {
         &self.lobe
     }

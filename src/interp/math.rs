@@ -17,6 +17,7 @@ pub fn lum(c: Rgb) -> f32 {
 
 /// Mean of the three channels.
 #[inline]
+#[cfg(feature = "testkit")]
 pub fn mean(c: Rgb) -> f32 {
     (c.x + c.y + c.z) * (1.0 / 3.0)
 }

@@ -25,7 +25,6 @@ macro_rules! testkit_pub {
         $(#[$meta])*
         pub fn $($rest)*
         #[cfg(not(feature = "testkit"))]
-        #[allow(dead_code)]
         $(#[$meta])*
         pub(crate) fn $($rest)*
     };
@@ -35,7 +34,6 @@ macro_rules! testkit_pub {
 // benches (the cross-path comparisons reach leaves, kernels and SIMD levels directly). A
 // program using the library sees the items re-exported below and `preview`.
 testkit_mods!(
-    allow_dead_code:
     batch, frame, fresnel, ggx, leaves, lobe, material, math, simd, soa, tables, vmath,
 );
 

@@ -35,6 +35,7 @@ use super::batch::{PreparedBatch, ShadingBatch};
 use super::material::{Material, Prepared, Scratch, ShadingPoint};
 use super::math::Rgb;
 use crate::limits::{Limit, LimitExceeded, Limits};
+use crate::raster::font::{GLYPH_H, Label};
 use glam::{Vec2, Vec3};
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
@@ -397,13 +398,12 @@ fn shade_row_with(
     }
 }
 
-testkit_pub! {
-    /// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
-    fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
-        let mut scratch = Scratch::default();
-        let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
-        shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
-    }
+/// Shade row `j` with the batched interpreter (AOVs fall back to the scalar path).
+#[cfg(feature = "testkit")]
+pub fn shade_row_batched(material: &Material, opts: &PreviewOptions, j: usize, out: &mut [Rgb]) {
+    let mut scratch = Scratch::default();
+    let mut batch = PreparedBatch::<PREVIEW_LANES>::new_boxed();
+    shade_row_lanes(material, opts, j, out, &mut scratch, &mut batch);
 }
 
 /// Shade row `j` `W` pixels at a time with caller-owned working memory (the batched path
@@ -466,11 +466,61 @@ pub struct Ball<'m> {
     pub material: &'m Material,
     /// Its preview options (every ball of a sheet has the same [`PreviewOptions::size`]).
     pub options: PreviewOptions,
+    /// Text written under the ball (the material's name), or none. A sheet where some ball
+    /// has a label gives every cell a label band ([`ContactSheet`]).
+    pub label: Option<String>,
+}
+
+/// The smallest ball side, in pixels, that gets a label: below it a name would be a few
+/// letters at most.
+const LABEL_MIN_SIZE: usize = 32;
+
+/// The labels of a sheet: where they sit and how they look.
+#[derive(Debug, Clone)]
+struct Labels {
+    /// One per ball (`None`: no label under this ball).
+    text: Vec<Option<Label>>,
+    /// Rows of the band under each ball row.
+    rows: usize,
+    /// Rows above the text in the band.
+    top: usize,
+    /// The colour of the text.
+    ink: Rgb,
+}
+
+impl Labels {
+    /// The labels of `balls` of side `size` over `background`; `None` when no ball has a
+    /// label or the balls are too small for one.
+    fn new(balls: &[Ball<'_>], size: usize, background: Rgb) -> Option<Labels> {
+        if size < LABEL_MIN_SIZE || balls.iter().all(|b| b.label.is_none()) {
+            return None;
+        }
+        let scale = (size / 128).max(1);
+        let text: Vec<Option<Label>> = balls
+            .iter()
+            .map(|b| b.label.as_deref().map(|t| Label::fit(t, size, scale)))
+            .collect();
+        // Dark text on a light background, light text on a dark one.
+        let light = background.x + background.y + background.z > 1.5;
+        Some(Labels {
+            text,
+            rows: (GLYPH_H + 4) * scale,
+            top: 2 * scale,
+            ink: if light { Vec3::ZERO } else { Vec3::splat(0.8) },
+        })
+    }
 }
 
 /// Balls of equal size in a grid of `⌈√n⌉` columns, row-major in the given order, empty
 /// cells in a background colour; rendered a band of pixel rows at a time, so its memory is
 /// at most [`BAND_PIXELS`] pixels (and at least one pixel row) whatever the number of balls.
+///
+/// **Labels.** When some ball has a [`Ball::label`] and balls are at least 32 pixels, each row of balls is followed by a band of
+/// `12 × max(1, ⌊size / 128⌋)` rows in the background colour, where each label is written
+/// centred under its ball in a 5 × 8 bitmap font scaled by `max(1, ⌊size / 128⌋)`: light text
+/// (linear 0.8) on a dark background, black on a light one. A label wider than its ball
+/// (less a margin) is cut and ends with `…`; characters outside printable ASCII show as `?`.
+/// Ball pixels are the same with or without labels.
 ///
 /// ```
 /// use vstructc::interp::preview::{ContactSheet, MAX_SHEET_SIDE, PreviewError};
@@ -487,12 +537,14 @@ pub struct ContactSheet<'m> {
     size: usize,
     columns: usize,
     rows: usize,
+    labels: Option<Labels>,
 }
 
 impl<'m> ContactSheet<'m> {
-    /// A sheet of `balls`, empty cells filled with `background`. Fails if there is no ball,
-    /// if the balls' sizes differ or fail [`PreviewOptions::validate`], or if a side of the
-    /// sheet would exceed [`MAX_SHEET_SIDE`].
+    /// A sheet of `balls`, empty cells filled with `background`, labelled if some ball has
+    /// a label. Fails if there is no ball, if the balls' sizes differ or fail
+    /// [`PreviewOptions::validate`], or if a side of the sheet would exceed
+    /// [`MAX_SHEET_SIDE`].
     pub fn new(balls: Vec<Ball<'m>>, background: Rgb) -> Result<Self, PreviewError> {
         let mut sizes: Vec<usize> = balls.iter().map(|b| b.options.size).collect();
         sizes.sort_unstable();
@@ -506,7 +558,12 @@ impl<'m> ContactSheet<'m> {
         let count = balls.len();
         let columns = (count as f64).sqrt().ceil().max(1.0) as usize;
         let rows = count.div_ceil(columns);
-        let (width, height) = (columns.saturating_mul(size), rows.saturating_mul(size));
+        let labels = Labels::new(&balls, size, background);
+        let cell_height = size + labels.as_ref().map_or(0, |l| l.rows);
+        let (width, height) = (
+            columns.saturating_mul(size),
+            rows.saturating_mul(cell_height),
+        );
         if width > MAX_SHEET_SIDE || height > MAX_SHEET_SIDE {
             return Err(PreviewError::SheetSide {
                 count,
@@ -522,6 +579,7 @@ impl<'m> ContactSheet<'m> {
             size,
             columns,
             rows,
+            labels,
         })
     }
 
@@ -530,9 +588,14 @@ impl<'m> ContactSheet<'m> {
         self.columns * self.size
     }
 
-    /// Height in pixels.
+    /// Height in pixels (with the label bands, if any).
     pub fn height(&self) -> usize {
-        self.rows * self.size
+        self.rows * (self.size + self.label_rows())
+    }
+
+    /// Rows of the label band under each row of balls (0 without labels).
+    pub fn label_rows(&self) -> usize {
+        self.labels.as_ref().map_or(0, |l| l.rows)
     }
 
     /// Number of columns of balls.
@@ -558,7 +621,27 @@ impl<'m> ContactSheet<'m> {
         if order == RowOrder::BottomUp {
             ball_rows.reverse();
         }
+        let mut label_row = vec![self.background; width];
+        let mut label_rows = |r: usize,
+                              done: &mut usize,
+                              emit: &mut dyn FnMut(&[Rgb]) -> Result<(), E>|
+         -> Result<(), E> {
+            let mut js: Vec<usize> = (0..self.label_rows()).collect();
+            if order == RowOrder::BottomUp {
+                js.reverse();
+            }
+            for j in js {
+                self.draw_label_row(r, j, &mut label_row);
+                emit(&label_row)?;
+                *done += 1;
+                progress(*done);
+            }
+            Ok(())
+        };
         for r in ball_rows {
+            if order == RowOrder::BottomUp {
+                label_rows(r, &mut done, &mut emit)?;
+            }
             let mut starts: Vec<usize> = (0..self.size).step_by(band_rows).collect();
             if order == RowOrder::BottomUp {
                 starts.reverse();
@@ -578,8 +661,37 @@ impl<'m> ContactSheet<'m> {
                     progress(done);
                 }
             }
+            if order == RowOrder::TopDown {
+                label_rows(r, &mut done, &mut emit)?;
+            }
         }
         Ok(())
+    }
+
+    /// Row `j` of the label band under ball row `r`: the background, and the labels' ink.
+    fn draw_label_row(&self, r: usize, j: usize, row: &mut [Rgb]) {
+        row.fill(self.background);
+        let Some(labels) = &self.labels else {
+            return;
+        };
+        for c in 0..self.columns {
+            let label = labels
+                .text
+                .get(r * self.columns + c)
+                .and_then(Option::as_ref);
+            let Some(label) = label else {
+                continue;
+            };
+            let Some(y) = j.checked_sub(labels.top).filter(|&y| y < label.height()) else {
+                continue;
+            };
+            let cell = &mut row[c * self.size..(c + 1) * self.size];
+            for (x, p) in cell.iter_mut().enumerate() {
+                if label.ink(x, y) {
+                    *p = labels.ink;
+                }
+            }
+        }
     }
 
     /// Shade rows `j0..` of ball row `r` into `band` (whole sheet rows, filled with the

@@ -36,6 +36,7 @@ pub enum Level {
 
 impl Level {
     /// Lower-case name, for reports.
+    #[cfg(feature = "testkit")]
     pub fn name(self) -> &'static str {
         match self {
             Level::Avx512 => "avx512",

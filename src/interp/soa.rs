@@ -10,8 +10,11 @@
 //! families fall back to the scalar lobe lane by lane. Results equal the scalar
 //! [`super::PreparedLobe::eval`] to relative 1e-5 (`tests/interp/soa_kernels.rs`).
 
-use super::fresnel::{Fresnel, dielectric_half_quotient};
+use super::fresnel::Fresnel;
+#[cfg(feature = "testkit")]
+use super::fresnel::dielectric_half_quotient;
 use super::sheen::SheenMasking;
+#[cfg(feature = "testkit")]
 use super::simd::{Level, call_widest, widest_versions};
 use super::ward::WardVariant;
 pub(super) use super::diffuse::soa::OrenNayarX;
@@ -20,6 +23,7 @@ pub(super) use super::microfacet::soa::{ConductorX, DielectricX, GgxX};
 pub(super) use super::sheen::soa::{SheenCKX, SheenLTCX};
 pub(super) use super::ward::soa::WardX;
 use glam::Vec3;
+#[cfg(feature = "testkit")]
 use std::f32::consts::PI;
 
 /// `W` vectors stored as three arrays.
@@ -89,6 +93,7 @@ impl<const W: usize> Vec3x<W> {
 /// underflow and the lane is NaN. Rescaling costs about 10 % here; the
 /// material path's kernels do rescale.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg(feature = "testkit")]
 pub struct DielectricRBatch<const W: usize> {
     /// Width along the tangent (≥ 1e-3: the batch has no delta path).
     pub ax: [f32; W],
@@ -100,6 +105,7 @@ pub struct DielectricRBatch<const W: usize> {
     pub tint: Vec3x<W>,
 }
 
+#[cfg(feature = "testkit")]
 impl<const W: usize> DielectricRBatch<W> {
     /// `f·μ_i` per lane for local views `v` and lights `l` (both unit); lanes with `μ_o ≤ 0`
     /// or `μ_i ≤ 0` give 0. For many lights per view, prepare the view once
@@ -142,6 +148,7 @@ impl<const W: usize> DielectricRBatch<W> {
 /// A [`DielectricRBatch`] at fixed views ([`DielectricRBatch::view`]): evaluates many
 /// lights with the view-only terms computed once.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg(feature = "testkit")]
 pub struct DielectricRView<const W: usize> {
     v: Vec3x<W>,
     /// `max(v_z, 1e-7)` (the scalar clamps `v_z²` at 1e-14).
@@ -159,6 +166,7 @@ pub struct DielectricRView<const W: usize> {
     tint: Vec3x<W>,
 }
 
+#[cfg(feature = "testkit")]
 impl<const W: usize> DielectricRView<W> {
     /// `f·μ_i` per lane for local lights `l` (unit); lanes with `μ_o ≤ 0` or `μ_i ≤ 0`
     /// give 0. Runs in the widest vector extension the CPU has ([`super::simd`]).

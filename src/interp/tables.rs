@@ -78,20 +78,28 @@ pub enum TableId {
     /// `2∫E μ dμ` of [`TableId::E1Sep`].
     EavgE1Sep,
     /// `2∫E μ dμ` of [`TableId::H82Hc`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgH82Hc,
     /// `2∫E μ dμ` of [`TableId::H82Sep`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgH82Sep,
     /// `2∫E μ dμ` of [`TableId::WardClassic`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgWardClassic,
     /// `2∫E μ dμ` of [`TableId::WardGm`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgWardGm,
     /// `2∫E μ dμ` of [`TableId::SheenMx`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgSheenMx,
     /// `2∫E μ dμ` of [`TableId::SheenOrig`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgSheenOrig,
     /// `2∫E μ dμ` of [`TableId::Qon`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgQon,
     /// `2∫E μ dμ` of [`TableId::Mia`].
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     EavgMia,
     /// Anisotropic GGX reflection albedo with F = 1, height-correlated, the view in the
     /// `x`–`z` plane (azimuth 0); axes μ_o, √α_x, √α_y.
@@ -123,6 +131,7 @@ pub enum TableId {
 
 impl TableId {
     /// Every table, primary (quadrature) tables first, then the `Eavg` tables.
+    #[cfg(feature = "testkit")]
     pub const ALL: [TableId; 40] = [
         TableId::E1Hc,
         TableId::E1Sep,
@@ -256,6 +265,7 @@ impl TableId {
     }
 
     /// Always false: every table has entries (present for API symmetry with `len`).
+    #[cfg(feature = "testkit")]
     pub fn is_empty(self) -> bool {
         false
     }
@@ -279,6 +289,7 @@ impl TableId {
 
     /// Ranges `(lo, hi)` of the axis variables (axis 0 is μ_o except for `Eavg` tables, whose
     /// single axis is the parent's second axis).
+    #[cfg(feature = "testkit")]
     pub fn axis_ranges(self) -> [(f32, f32); 3] {
         let second = |t: TableId| match t {
             TableId::WardClassic
@@ -321,10 +332,13 @@ impl TableId {
 #[derive(Debug, Clone)]
 pub struct Lut {
     /// Which table.
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     pub id: TableId,
     /// Generator version recorded in the header.
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     pub generator_version: u32,
     /// Quadrature samples per entry recorded in the header.
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     pub samples_per_entry: u32,
     /// Values, axis 0 fastest.
     pub data: Vec<f32>,
@@ -399,6 +413,7 @@ pub fn decode(id: TableId, bytes: &[u8]) -> Result<Lut, LutError> {
 }
 
 /// Encodes a table blob (used by the generator).
+#[cfg(feature = "testkit")]
 pub fn encode(
     id: TableId,
     generator_version: u32,
@@ -498,6 +513,7 @@ pub fn lut(id: TableId) -> &'static Lut {
 }
 
 /// Decodes every table now (so that later lookups never allocate).
+#[cfg(feature = "testkit")]
 pub fn init_all() {
     for id in TableId::ALL {
         let _ = lut(id);

@@ -1,14 +1,14 @@
 //! The closure IR: a parameter program (straight-line SSA
 //! over `f32x3` registers) and a closure DAG ([`closure`]) whose leaves are BSDF
 //! lobes. Internally, the closure algebra computes the flat form (lobes with weights) for one
-//! point and view and passes optimise; [`print`](mod@print) renders the stable text forms.
+//! point and view and passes optimise; [`MaterialIr::text`] and [`MaterialIr::lobes_text`] render the stable text forms.
 //!
 //! Lowering builds IRs with a builder that folds constants, shares identical ops and nodes,
 //! and drops closures that are statically zero while it builds (so lowering code can build
 //! the full tree of a recipe and let disabled parts vanish).
 
 pub mod closure;
-pub mod print;
+pub(crate) mod print;
 
 // The parameter program, the flat form and the passes are internals: public only to the
 // crate's own tests and benches (feature `testkit`).
@@ -142,6 +142,19 @@ pub struct MaterialIr {
 }
 
 impl MaterialIr {
+    /// The IR as text: inputs, the closure tree and the weight program (what `compile
+    /// --emit ir` prints).
+    pub fn text(&self) -> String {
+        print::ir_text(self)
+    }
+
+    /// The flat lobe list as text (what `compile --emit lobes` prints): each lobe with its
+    /// symbolic weight, then numeric weights at `μ_o = 1` and `0.5` with the inputs'
+    /// fallbacks and the leaves' albedos from `albedo`.
+    pub fn lobes_text(&self, albedo: &dyn AlbedoSource) -> String {
+        print::lobes_text(self, albedo)
+    }
+
     /// The fallback value of every input slot.
     pub fn fallback_inputs(&self) -> Vec<Vec3> {
         self.inputs.iter().map(InputSlot::fallback_vec).collect()

@@ -141,7 +141,7 @@ pub(crate) fn node_text(ir: &MaterialIr, id: NodeId) -> String {
 }
 
 /// The IR as text (`--emit ir`).
-pub fn ir_text(ir: &MaterialIr) -> String {
+pub(crate) fn ir_text(ir: &MaterialIr) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "material {} (recipe {})", ir.name, ir.recipe.name());
     let _ = writeln!(s, "inputs:");
@@ -192,7 +192,7 @@ pub fn ir_text(ir: &MaterialIr) -> String {
 
 /// The flat lobe list as text (`--emit lobes`): each lobe with its symbolic weight, then
 /// numeric weights at `μ_o = 1` and `0.5` with the inputs' fallbacks and `albedo`.
-pub fn lobes_text(ir: &MaterialIr, albedo: &dyn AlbedoSource) -> String {
+pub(crate) fn lobes_text(ir: &MaterialIr, albedo: &dyn AlbedoSource) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "material {} (recipe {})", ir.name, ir.recipe.name());
     let op = |r: Reg| operand(&ir.program, r);

@@ -95,7 +95,7 @@ pub fn terminals(net: &Network, only: Option<&str>) -> Result<Vec<(String, NodeI
         }
         names.sort_unstable();
         names.dedup();
-        let hint = crate::diag::did_you_mean(&crate::diag::closest_names(o, names));
+        let hint = crate::diag::did_you_mean(o, names);
         return Err(Error::Usage(format!(
             "no material or terminal named `{o}`{hint}"
         )));

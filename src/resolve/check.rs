@@ -4,7 +4,7 @@
 //! names), and every node type must be in the registry (VS020, once per type, with the
 //! closest known ids). Whatever the network came from (RIB, JSON, code), the same check.
 
-use crate::diag::{Diagnostic, Diagnostics, closest_names, did_you_mean, join_bounded};
+use crate::diag::{Diagnostic, Diagnostics, closest_names, hint_text, join_bounded};
 use crate::network::{Network, NodeId, Param};
 use crate::registry::tables::VstructTables;
 use crate::registry::{IndexedDefinition, Registry};
@@ -203,7 +203,7 @@ impl<'a> Checker<'a> {
         } else {
             closest_names(name, known.output_names())
         };
-        let text = did_you_mean(&names);
+        let text = hint_text(&names);
         self.suggested.insert(key, text.clone());
         text
     }
@@ -304,7 +304,7 @@ impl<'a> Checker<'a> {
                 "node type `{shader}` {of} is not in the registry: its parameters are kept \
                  verbatim and not checked{}{}",
                 feeds.as_deref().unwrap_or(""),
-                did_you_mean(&suggestions)
+                hint_text(&suggestions)
             );
             let d = if feeds.is_some() || !suggestions.is_empty() {
                 Diagnostic::warning("VS020", message)

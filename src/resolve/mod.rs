@@ -1205,12 +1205,15 @@ impl cond::Upstream for NodeView<'_> {
     }
 }
 
-/// Extensions that act in the resolver and are not implemented yet; a caller asking for them
-/// gets an error instead of silently unchanged results.
-pub fn unsupported_extensions(ext: &Extensions) -> Vec<&'static str> {
-    [Extension::ArrayHeads, Extension::Nested]
-        .into_iter()
-        .filter(|e| ext.contains(*e))
-        .map(Extension::name)
-        .collect()
+impl Extensions {
+    /// The names of the extensions in this set that act in the resolver and are not
+    /// implemented yet: a caller asking for them gets an error instead of silently unchanged
+    /// results.
+    pub fn unsupported_by_resolver(&self) -> Vec<&'static str> {
+        [Extension::ArrayHeads, Extension::Nested]
+            .into_iter()
+            .filter(|e| self.contains(*e))
+            .map(Extension::name)
+            .collect()
+    }
 }

@@ -300,3 +300,140 @@ fn bad_invocations_exit_with_the_documented_status() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("bad.rib:"));
     assert!(!out.exists());
 }
+
+/// An EXR file's single part as the `exr` crate reads it: size, compression, and each
+/// channel's name with its samples, which must be 32-bit floats.
+fn read_exr(
+    path: &Path,
+) -> (
+    usize,
+    usize,
+    exr::compression::Compression,
+    Vec<(String, Vec<f32>)>,
+) {
+    use exr::image::{FlatSamples, read::read_first_flat_layer_from_file};
+    let image = read_first_flat_layer_from_file(path).unwrap();
+    let layer = image.layer_data;
+    let channels = layer
+        .channel_data
+        .list
+        .into_iter()
+        .map(|c| match c.sample_data {
+            FlatSamples::F32(v) => (c.name.to_string(), v),
+            other => panic!("channel {} is not f32: {other:?}", c.name),
+        })
+        .collect();
+    (
+        layer.size.0,
+        layer.size.1,
+        layer.encoding.compression,
+        channels,
+    )
+}
+
+#[test]
+fn exr_output_is_the_linear_render_in_f32() {
+    let dir = tmp("exr");
+    // Two balls of 40 pixels: 40 rows are two full blocks of 16 scan lines and a short one.
+    let input = data("two.rib");
+    for extra in [&["--size", "40"][..], &["--size", "40", "--furnace"]] {
+        let pfm = read_pfm(&render_ok(&input, &dir.join("a.pfm"), extra));
+        render_ok(&input, &dir.join("a.exr"), extra);
+        let (w, h, compression, channels) = read_exr(&dir.join("a.exr"));
+        assert_eq!((w, h), (pfm.w, pfm.h));
+        assert_eq!(compression, exr::compression::Compression::ZIP16);
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["B", "G", "R"]);
+        // The same bits as the linear PFM: not tone-mapped, not sRGB-encoded, not rounded.
+        for (k, p) in pfm.px.iter().enumerate() {
+            let got = [channels[2].1[k], channels[1].1[k], channels[0].1[k]];
+            assert_eq!(
+                got.map(f32::to_bits),
+                p.map(f32::to_bits),
+                "pixel {k} {extra:?}"
+            );
+        }
+        assert!(
+            pfm.px.iter().flatten().any(|&c| c > 0.0 && c < 0.9),
+            "the render has mid-tones an sRGB encoding would change"
+        );
+    }
+    // The extension is matched without regard to case, and the file is deterministic.
+    let lower = render_ok(&input, &dir.join("b.exr"), &["--size", "40"]);
+    let upper = render_ok(&input, &dir.join("b.EXR"), &["--size", "40"]);
+    assert!(lower == upper, "two renders to EXR differ");
+}
+
+#[test]
+fn unsupported_and_conflicting_output_formats_are_usage_errors() {
+    let dir = tmp("formats");
+    let white = data("white.rib");
+    for (name, extra, message) in [
+        ("x.jpg", &[][..], "`.jpg` output is not supported"),
+        (
+            "x.exr",
+            &["--pfm"][..],
+            "--pfm conflicts with the output file's extension `.exr`",
+        ),
+        (
+            "x.png",
+            &["--pfm"][..],
+            "--pfm conflicts with the output file's extension `.png`",
+        ),
+    ] {
+        let out = dir.join(name);
+        let o = render(&white, &out, extra);
+        assert_eq!(o.status.code(), Some(2), "{name} {extra:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(message), "{name}: {err}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn a_png_contact_sheet_names_its_balls() {
+    let dir = tmp("labels");
+    let input = data("two.rib");
+    let size = 64u32;
+    let s = ["--size", "64"];
+    let labelled = png_decode::decode(&render_ok(&input, &dir.join("l.png"), &s));
+    let plain = png_decode::decode(&render_ok(
+        &input,
+        &dir.join("p.png"),
+        &["--size", "64", "--no-labels"],
+    ));
+    assert_eq!((plain.width, plain.height), (2 * size, size));
+    assert_eq!(labelled.width, 2 * size);
+    assert!(labelled.height > size, "no label band: {}", labelled.height);
+    // The balls are untouched.
+    for y in 0..size {
+        for x in 0..2 * size {
+            assert_eq!(labelled.pixel(x, y), plain.pixel(x, y), "{x},{y}");
+        }
+    }
+    // Each ball's band has its name: text pixels in both cells, different names.
+    let background = labelled.pixel(0, labelled.height - 1);
+    let band = |c: u32| -> Vec<[u8; 3]> {
+        (size..labelled.height)
+            .flat_map(|y| (0..size).map(move |x| (x, y)))
+            .map(|(x, y)| labelled.pixel(c * size + x, y))
+            .collect()
+    };
+    for c in 0..2 {
+        let ink = band(c).iter().filter(|&&p| p != background).count();
+        assert!(ink > 10, "cell {c}: {ink} text pixels");
+    }
+    assert_ne!(band(0), band(1));
+    // One material, or a linear format: no labels.
+    let one = png_decode::decode(&render_ok(
+        &input,
+        &dir.join("one.png"),
+        &["--size", "64", "--material", "red"],
+    ));
+    assert_eq!((one.width, one.height), (size, size));
+    let pfm = read_pfm(&render_ok(&input, &dir.join("s.pfm"), &s));
+    assert_eq!((pfm.w, pfm.h), (128, 64));
+    render_ok(&input, &dir.join("s.exr"), &s);
+    let (w, h, _, _) = read_exr(&dir.join("s.exr"));
+    assert_eq!((w, h), (128, 64));
+}

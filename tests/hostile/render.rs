@@ -256,3 +256,88 @@ fn preview_size_is_validated_by_the_library() {
         assert!(o.stderr.contains(message), "{}", o.stderr);
     }
 }
+
+/// `width × height` EXR bytes from `rows` rows given by `row(y)`, as `write_rows` writes them.
+fn exr_rows(
+    width: usize,
+    height: usize,
+    rows: usize,
+    row: impl Fn(usize) -> Vec<glam::Vec3>,
+) -> (std::io::Result<()>, Vec<u8>) {
+    use vstructc::back::png::{ImageFormat, write_rows};
+    let mut out = Vec::new();
+    let r = write_rows(ImageFormat::Exr, &mut out, width, height, |sink| {
+        (0..rows).try_for_each(|y| sink.write_row(&row(y)))
+    });
+    (r, out)
+}
+
+/// EXR keeps every f32 as it is, special values included (the file is read back with the
+/// `exr` crate); an image given too few or too many rows is an error and nothing reaches
+/// the output.
+#[test]
+fn exr_keeps_every_value_and_writes_nothing_on_a_short_or_long_image() {
+    use exr::image::FlatSamples;
+    use exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let specials = [
+        0.0,
+        -0.0,
+        1e-40, // subnormal
+        -1.5,
+        0.5,
+        65504.5,
+        1e30,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::from_bits(0x7fc0_1234), // a NaN with a payload
+    ];
+    let (w, h) = (specials.len(), 37); // 37 rows: two full blocks of 16 and a short one
+    let value = |x: usize, y: usize, c: usize| {
+        if y % 2 == 0 {
+            specials[(x + c) % specials.len()]
+        } else {
+            (y * 1000 + x * 10 + c) as f32 / 7.0
+        }
+    };
+    let row = |y: usize| -> Vec<glam::Vec3> {
+        (0..w)
+            .map(|x| glam::Vec3::new(value(x, y, 0), value(x, y, 1), value(x, y, 2)))
+            .collect()
+    };
+    let (r, bytes) = exr_rows(w, h, h, row);
+    r.unwrap();
+    let image = exr::image::read::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .unwrap();
+    let layer = image.layer_data;
+    assert_eq!((layer.size.0, layer.size.1), (w, h));
+    for (channel, c) in layer.channel_data.list.iter().zip([2, 1, 0]) {
+        let FlatSamples::F32(samples) = &channel.sample_data else {
+            panic!("channel {} is not f32", channel.name);
+        };
+        for y in 0..h {
+            for x in 0..w {
+                assert_eq!(
+                    samples[y * w + x].to_bits(),
+                    value(x, y, c).to_bits(),
+                    "channel {} at {x},{y}",
+                    channel.name
+                );
+            }
+        }
+    }
+    for rows in [0, 16, h - 1, h + 1] {
+        let (r, bytes) = exr_rows(w, h, rows, row);
+        assert!(r.is_err(), "{rows} rows of {h}");
+        assert!(
+            bytes.is_empty(),
+            "{rows} rows of {h}: {} bytes written",
+            bytes.len()
+        );
+    }
+}

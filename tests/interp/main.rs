@@ -20,6 +20,7 @@ mod leaves_tables;
 mod levels;
 mod material;
 mod packs;
+mod sheet_labels;
 mod soa;
 mod soa_kernels;
 mod uniform;

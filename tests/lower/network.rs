@@ -10,7 +10,7 @@ use crate::common;
 use glam::Vec3;
 use std::process::Command;
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::ir::{Fresnel, LeafKind, SimpleAlbedo, print};
+use vstructc::ir::{Fresnel, LeafKind, SimpleAlbedo};
 use vstructc::lower::network::{lower_terminal, terminals};
 use vstructc::network::Network;
 use vstructc::registry::Registry;
@@ -34,9 +34,9 @@ fn compile_all(net: &Network, reg: &Registry) -> (String, Diagnostics) {
     let mut out = String::new();
     for (name, node) in terminals(net, None).unwrap() {
         let ir = lower_terminal(net, reg, node, &name, &mut diags).expect("lowers");
-        out.push_str(&print::ir_text(&ir));
+        out.push_str(&ir.text());
         out.push('\n');
-        out.push_str(&print::lobes_text(&ir, &SimpleAlbedo));
+        out.push_str(&ir.lobes_text(&SimpleAlbedo));
     }
     (out, diags)
 }
@@ -82,10 +82,10 @@ fn golden_fixture_lowers_to_two_lobes_and_one_slot() {
     let mut diags = Diagnostics::new();
     let (name, node) = list[0].clone();
     let ir = lower_terminal(&net, &reg, node, &name, &mut diags).unwrap();
-    assert_eq!(ir.inputs.len(), 1, "{}", print::ir_text(&ir));
+    assert_eq!(ir.inputs.len(), 1, "{}", ir.text());
     assert_eq!(ir.inputs[0].name, "PxrThreshold1.resultR");
     assert_eq!(ir.inputs[0].fallback_vec(), Vec3::ONE);
-    assert_eq!(ir.lobe_count(), 2, "{}", print::ir_text(&ir));
+    assert_eq!(ir.lobe_count(), 2, "{}", ir.text());
     let layer1 = Vec3::new(0.00967446715, 0.179702222, 0.0572573431);
     let layer2 = Vec3::new(0.179702222, 0.0125546111, 0.0125546111);
     for (slot, diffuse, f0) in [(0.0, layer1, Vec3::ZERO), (1.0, layer2, layer2)] {

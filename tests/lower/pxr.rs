@@ -5,7 +5,7 @@
 #![allow(clippy::excessive_precision)]
 use glam::Vec3;
 use vstructc::diag::Diagnostics;
-use vstructc::ir::{LeafKind, MaterialIr, Node, SimpleAlbedo, print};
+use vstructc::ir::{LeafKind, MaterialIr, Node, SimpleAlbedo};
 use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 
 /// The golden network of vstruct.md §12 in its resolved form, built by hand: two layers
@@ -93,8 +93,8 @@ fn lower(g: &SimpleGraph, n: usize) -> (MaterialIr, Diagnostics) {
 fn golden_network_lowers_to_lambert_and_one_schlick_specular() {
     let (g, s) = golden();
     let (ir, d) = lower(&g, s);
-    println!("{}", print::ir_text(&ir));
-    println!("{}", print::lobes_text(&ir, &SimpleAlbedo));
+    println!("{}", ir.text());
+    println!("{}", ir.lobes_text(&SimpleAlbedo));
     assert_eq!(ir.inputs.len(), 1, "one external slot");
     assert_eq!(ir.inputs[0].name, "PxrThreshold1.resultR");
     assert_eq!(ir.inputs[0].fallback_vec(), Vec3::ONE);
@@ -250,7 +250,7 @@ fn mixer_graph(mask: Option<f32>, direct: Option<usize>, flags: [i32; 2]) -> (Si
 
 fn text(g: &SimpleGraph, s: usize) -> String {
     let (ir, _) = lower(g, s);
-    print::ir_text(&ir)
+    ir.text()
 }
 
 /// §4.2 acceptance: mask 0 reproduces the base layer, mask 1 the top layer (the IRs are
@@ -348,7 +348,7 @@ fn layer_outputs_fold_gains_and_rename_rr() {
             _ => {}
         }
     }
-    assert_eq!(seen, 2, "{}", print::ir_text(&ir));
+    assert_eq!(seen, 2, "{}", ir.text());
     // refractionGain 1 replaces the opaque base entirely: no diffuse lobe.
     assert!(ir.leaves().all(|(_, l)| l.label != "diffuse"));
 }
@@ -426,9 +426,9 @@ fn generated_scene_lowers_in_parallel_like_sequentially() {
     assert_eq!(a.len(), 40);
     for ((ra, _), (rb, _)) in a.iter().zip(&b) {
         let (ia, ib) = (ra.as_ref().unwrap(), rb.as_ref().unwrap());
-        assert_eq!(print::ir_text(ia), print::ir_text(ib));
+        assert_eq!(ia.text(), ib.text());
         // Diffuse, specular and the top layer's clearcoat.
-        assert_eq!(ia.lobe_count(), 3, "{}", print::ir_text(ia));
+        assert_eq!(ia.lobe_count(), 3, "{}", ia.text());
     }
 }
 

@@ -3,15 +3,15 @@
 //! with `SimpleAlbedo` (smooth-surface Fresnel estimates), so they can be checked by hand.
 
 use vstructc::diag::Diagnostics;
-use vstructc::ir::{SimpleAlbedo, print};
+use vstructc::ir::SimpleAlbedo;
 use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 
 fn snap(name: &str, g: &SimpleGraph, n: usize) {
     let mut d = Diagnostics::new();
     let ir = lower_node(g, &NoDefinitions, n, name, &mut d).expect("lowers");
-    let mut text = print::ir_text(&ir);
+    let mut text = ir.text();
     text.push('\n');
-    text.push_str(&print::lobes_text(&ir, &SimpleAlbedo));
+    text.push_str(&ir.lobes_text(&SimpleAlbedo));
     let codes: Vec<&str> = d
         .iter()
         .map(|d| d.code.as_str())

@@ -261,15 +261,14 @@ impl Material {
         }
     }
 
-    testkit_pub! {
-        /// True when [`Material::prepare`] and its variants prepare a point seen from above its
-        /// surface by the fused form of the steps for uniform materials (every material that
-        /// [`Material::prepares_lanes`], unless its closure DAG needs more working slots than
-        /// the fused form keeps on the stack). The results are those of
-        /// [`Material::prepare_general_into`], bit for bit.
-        fn prepares_uniform(&self) -> bool {
-            self.uniform.is_some()
-        }
+    /// True when [`Material::prepare`] and its variants prepare a point seen from above its
+    /// surface by the fused form of the steps for uniform materials (every material that
+    /// [`Material::prepares_lanes`], unless its closure DAG needs more working slots than
+    /// the fused form keeps on the stack). The results are those of
+    /// [`Material::prepare_general_into`], bit for bit.
+    #[cfg(feature = "testkit")]
+    pub fn prepares_uniform(&self) -> bool {
+        self.uniform.is_some()
     }
 
     /// The options.

@@ -198,14 +198,13 @@ impl Prepared {
         self.v
     }
 
-    testkit_pub! {
-        /// How many of [`Prepared::lobes`] [`Prepared::eval`] runs in lobe packs (several
-        /// lobes of one family side by side, see
-        /// [`PrepareOptions::pack_lobes`](super::PrepareOptions::pack_lobes)); the others are
-        /// evaluated one by one. For inspection and tests.
-        fn packed_lobe_count(&self) -> usize {
-            self.count - self.plan.solo(self.count).len()
-        }
+    /// How many of [`Prepared::lobes`] [`Prepared::eval`] runs in lobe packs (several
+    /// lobes of one family side by side, see
+    /// [`PrepareOptions::pack_lobes`](super::PrepareOptions::pack_lobes)); the others are
+    /// evaluated one by one. For inspection and tests.
+    #[cfg(feature = "testkit")]
+    pub fn packed_lobe_count(&self) -> usize {
+        self.count - self.plan.solo(self.count).len()
     }
 
     /// `Σ_k w_k ⊙ f_k(V, L)·|μ_i|` and the mixture pdf at world direction `l`. Delta lobes

@@ -69,13 +69,13 @@ fn volume_limit_counts_distinct_diagnostics_per_code() {
 #[test]
 fn bound_line_keeps_both_ends_of_multibyte_text() {
     let line = format!("{}{}", "é".repeat(3000), "←end");
-    let short = bound_line(&line, 100);
+    let short = Diagnostic::bound_line(&line, 100);
     assert!(
         short.starts_with("éé") && short.ends_with("←end"),
         "{short}"
     );
     assert!(short.contains("[2904 characters left out]"), "{short}");
-    assert_eq!(bound_line("short", 100), "short");
+    assert_eq!(Diagnostic::bound_line("short", 100), "short");
 }
 
 #[test]

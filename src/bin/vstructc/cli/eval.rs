@@ -12,7 +12,9 @@
 //! transparency. `--json` prints the same as one JSON object.
 
 use super::CommonOptions;
-use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
+use super::material::{
+    MaterialArgs, check_input_names, check_input_syntax, load_materials, packed_inputs,
+};
 use glam::{Vec2, Vec3};
 use serde_json::{Value as Json, json};
 use std::fmt::Write as _;
@@ -34,7 +36,7 @@ pub struct EvalArgs {
     /// Surface parameters `U,V`.
     #[arg(long, value_name = "U,V", allow_hyphen_values = true)]
     pub uv: Option<String>,
-    /// Print JSON instead of a table.
+    /// Print a JSON document on standard output instead of the table (docs/json.md).
     #[arg(long)]
     pub json: bool,
 }
@@ -82,8 +84,9 @@ fn fmt_num(x: f32) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
+/// An RGB triple (or direction) as three numbers, each the shortest decimal of its `f32`.
 fn rgb_json(c: Vec3) -> Json {
-    json!([c.x, c.y, c.z])
+    super::json::nums(&[c.x, c.y, c.z])
 }
 
 /// One material's evaluation as rows of text.
@@ -199,6 +202,9 @@ pub fn run(args: &EvalArgs, common: &CommonOptions) -> ExitCode {
         Ok(x) => x,
         Err(msg) => return usage(msg),
     };
+    if let Err(msg) = check_input_syntax(&args.source.inputs) {
+        return usage(msg);
+    }
     let (materials, diags) = match load_materials(&args.source, common) {
         Ok(x) => x,
         Err(status) => return status,
@@ -255,10 +261,10 @@ pub fn run(args: &EvalArgs, common: &CommonOptions) -> ExitCode {
                     "weight": rgb_json(r.weight),
                     "f_cos": rgb_json(r.value),
                     "contribution": rgb_json(r.weight * r.value),
-                    "pdf": r.pdf,
-                    "prob": r.prob,
+                    "pdf": super::json::num(r.pdf),
+                    "prob": super::json::num(r.prob),
                 })).collect::<Vec<_>>(),
-                "total": { "f_cos": rgb_json(e.f_cos), "pdf": e.pdf },
+                "total": { "f_cos": rgb_json(e.f_cos), "pdf": super::json::num(e.pdf) },
                 "albedo": { "reflect": rgb_json(a.reflect), "transmit": rgb_json(a.transmit) },
                 "emission": rgb_json(p.emission()),
                 "transparency": rgb_json(p.transparency()),

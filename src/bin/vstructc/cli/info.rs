@@ -1,15 +1,17 @@
 //! `vstructc info SHADER`: a readable summary of one shader definition (kind, source, params
 //! grouped by page, outputs, vstruct heads with member counts, conditional expressions), or
-//! `--json` for tools.
+//! `--json` for tools: plain fields, values as `{"type", "value"}` (docs/json.md).
 //!
 //! Exit status: 0 on success, 1 when an input error was reported (a rejected definition file,
 //! a missing `--args` path), 2 when the shader id is unknown.
 
 use super::input::registry_for;
+use super::json::{self, LocationDoc, TypedValue, format_word, origin, type_word};
 use super::{CommonOptions, report};
+use serde::Serialize;
 use std::fmt::Write as _;
 use std::process::ExitCode;
-use vstructc::diag::{closest_names, did_you_mean};
+use vstructc::diag::did_you_mean;
 use vstructc::registry::{Definition, Property, Registry, VstructTables};
 
 /// Arguments of `vstructc info`.
@@ -18,7 +20,8 @@ pub struct InfoArgs {
     /// The shader id (e.g. `PxrLayerMixer`).
     #[arg(value_name = "SHADER")]
     pub shader: String,
-    /// Print a JSON document instead of the readable summary.
+    /// Print a JSON document on standard output instead of the readable summary
+    /// (docs/json.md).
     #[arg(long)]
     pub json: bool,
 }
@@ -35,7 +38,7 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
     }
     let Some(def) = def else {
         let ids = registry.ids();
-        let hint = did_you_mean(&closest_names(&args.shader, ids.iter().copied()));
+        let hint = did_you_mean(&args.shader, ids.iter().copied());
         eprintln_quiet!("error: unknown shader `{}`{hint}", args.shader);
         if !ids.is_empty() && ids.len() <= 50 {
             eprintln_quiet!("  known shaders: {}", ids.join(", "));
@@ -43,11 +46,15 @@ pub fn run(args: &InfoArgs, common: &CommonOptions) -> ExitCode {
         return ExitCode::from(2);
     };
     let tables = tables.unwrap_or_default();
-    let text = if args.json {
-        render_json(&def, &tables, &registry)
-    } else {
-        render_human(&def, &tables, &registry, common.verbose)
-    };
+    if args.json {
+        let printed = json::print(&info_doc(&def, &tables, &registry, common), common);
+        return if printed == ExitCode::SUCCESS {
+            status
+        } else {
+            printed
+        };
+    }
+    let text = render_human(&def, &tables, &registry, common.verbose);
     match super::input::print_stdout(&text, common) {
         Ok(()) => status,
         Err(failed) => failed,
@@ -235,51 +242,252 @@ fn write_conditionals(out: &mut String, def: &Definition) {
     }
 }
 
-/// The `--json` document: the definition (every field of the model) plus its vstruct tables.
-pub fn render_json(def: &Definition, tables: &VstructTables, registry: &Registry) -> String {
-    use serde_json::json;
-    let input_heads: Vec<_> = tables
+/// The `--json` document (docs/json.md, `info`): the definition in plain JSON, the files
+/// that define the id, and the vstruct tables.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct InfoDoc {
+    /// The definition used.
+    pub definition: DefinitionDoc,
+    /// Every file that defines the id, the one used marked.
+    pub sources: Vec<SourceDoc>,
+    /// Vstruct heads and their members.
+    pub vstruct: VstructDoc,
+}
+
+/// One definition.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct DefinitionDoc {
+    /// Shader id.
+    pub id: String,
+    /// Shader kind (`bxdf`, `pattern`, …; `unknown` when the file does not say).
+    pub kind: String,
+    /// `args` or `oso`.
+    pub format: &'static str,
+    /// The file read (`<embedded>/X.args` for a definition compiled into vstructc).
+    pub path: String,
+    /// Where the definition came from: `embedded`, `args-option`, `environment`.
+    pub origin: &'static str,
+    /// Input parameters in declaration order.
+    pub inputs: Vec<PropertyDoc>,
+    /// Outputs in declaration order.
+    pub outputs: Vec<PropertyDoc>,
+    /// Node-level metadata, `[key, value]` pairs in document order.
+    pub metadata: Vec<[String; 2]>,
+}
+
+/// One input or output.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct PropertyDoc {
+    /// Name.
+    pub name: String,
+    /// Interpreted type word (`float`, `color`, `vstruct`, `float[2]`, `struct Name`, …).
+    #[serde(rename = "type")]
+    pub ty: String,
+    /// The type text as declared in the file.
+    pub declared_type: String,
+    /// Default value (`{"type", "value"}`), or null.
+    pub default: Option<TypedValue>,
+    /// Page path (`:`-joined), or null.
+    pub page: Option<String>,
+    /// UI label, or null.
+    pub label: Option<String>,
+    /// Help text, or null.
+    pub help: Option<String>,
+    /// Widget name, or null.
+    pub widget: Option<String>,
+    /// Whether it accepts connections.
+    pub connectable: bool,
+    /// Connection types (tags).
+    pub connection_types: Vec<String>,
+    /// Options: `{"label", "value"}` pairs.
+    pub options: Vec<OptionDoc>,
+    /// Member declaration, or null.
+    pub vstruct: Option<MemberDoc>,
+    /// Where it is declared.
+    pub location: LocationDoc,
+    /// Every attribute verbatim, `[key, value]` pairs in document order.
+    pub metadata: Vec<[String; 2]>,
+}
+
+/// One option of a property's options list.
+#[derive(Debug, Serialize)]
+pub struct OptionDoc {
+    /// Shown label.
+    pub label: String,
+    /// Value.
+    pub value: String,
+}
+
+/// A property's vstruct member declaration.
+#[derive(Debug, Serialize)]
+pub struct MemberDoc {
+    /// Head name.
+    pub head: String,
+    /// Member name.
+    pub member: String,
+    /// `vstructmemberaliases`, or null.
+    pub alias: Option<String>,
+    /// The conditional expression's text, or null.
+    pub conditional: Option<String>,
+}
+
+/// A file that defines the id.
+#[derive(Debug, Serialize)]
+pub struct SourceDoc {
+    /// `args` or `oso`.
+    pub format: &'static str,
+    /// The file.
+    pub path: String,
+    /// True for the file whose definition is used.
+    pub used: bool,
+}
+
+/// The vstruct tables.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct VstructDoc {
+    /// Input heads.
+    pub input_heads: Vec<HeadDoc>,
+    /// Output heads.
+    pub output_heads: Vec<HeadDoc>,
+}
+
+/// One head and its members.
+#[derive(Debug, Serialize)]
+pub struct HeadDoc {
+    /// Head name.
+    pub name: String,
+    /// Members in declaration order.
+    pub members: Vec<HeadMemberDoc>,
+}
+
+/// One member of a head.
+#[derive(Debug, Serialize)]
+pub struct HeadMemberDoc {
+    /// The member property.
+    pub property: String,
+    /// The names it matches by (member name, then aliases).
+    pub names: Vec<String>,
+    /// Output members: the conditional, or null. Absent on input members.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cond: Option<Option<CondDoc>>,
+}
+
+/// An output member's conditional.
+#[derive(Debug, Serialize)]
+pub struct CondDoc {
+    /// The expression text.
+    pub text: String,
+    /// Where its value starts in the definition file.
+    pub location: LocationDoc,
+    /// Whether it parses.
+    pub parses: bool,
+}
+
+fn pairs(m: &vstructc::registry::Metadata) -> Vec<[String; 2]> {
+    m.iter()
+        .map(|(k, v)| [k.to_string(), v.to_string()])
+        .collect()
+}
+
+fn property_doc(p: &Property) -> PropertyDoc {
+    PropertyDoc {
+        name: p.name.clone(),
+        ty: type_word(&p.ty),
+        declared_type: p.declared_type.clone(),
+        default: p.default.as_ref().map(TypedValue::of),
+        page: p.page.clone(),
+        label: p.label.clone(),
+        help: p.help.clone(),
+        widget: p.widget.clone(),
+        connectable: p.connectable,
+        connection_types: p.connection_types.clone(),
+        options: p
+            .options
+            .iter()
+            .map(|(label, value)| OptionDoc {
+                label: label.clone(),
+                value: value.clone(),
+            })
+            .collect(),
+        vstruct: p.vstruct.as_ref().map(|m| MemberDoc {
+            head: m.head.clone(),
+            member: m.member.clone(),
+            alias: m.alias.clone(),
+            conditional: m.cond.as_ref().map(|c| c.text.clone()),
+        }),
+        location: LocationDoc::of(&p.location),
+        metadata: pairs(&p.metadata),
+    }
+}
+
+/// The `--json` document of `def`.
+pub fn info_doc(
+    def: &Definition,
+    tables: &VstructTables,
+    registry: &Registry,
+    common: &CommonOptions,
+) -> InfoDoc {
+    let input_heads = tables
         .input_heads()
-        .map(|h| {
-            let members: Vec<_> = tables
+        .map(|h| HeadDoc {
+            name: h.to_string(),
+            members: tables
                 .members_in(h)
                 .iter()
-                .map(|m| json!({ "property": m.property, "names": m.names }))
-                .collect();
-            json!({ "name": h, "members": members })
+                .map(|m| HeadMemberDoc {
+                    property: m.property.to_string(),
+                    names: m.names.iter().map(|n| n.to_string()).collect(),
+                    cond: None,
+                })
+                .collect(),
         })
         .collect();
-    let output_heads: Vec<_> = tables
+    let output_heads = tables
         .output_heads()
-        .map(|h| {
-            let members: Vec<_> = tables
+        .map(|h| HeadDoc {
+            name: h.to_string(),
+            members: tables
                 .members_out(h)
                 .iter()
-                .map(|m| {
-                    let cond = m.cond.as_ref().map(|c| {
-                        json!({
-                            "text": c.source.text,
-                            "location": c.source.location,
-                            "parses": c.statement().is_some(),
-                        })
-                    });
-                    json!({ "property": m.property, "names": m.names, "cond": cond })
+                .map(|m| HeadMemberDoc {
+                    property: m.property.to_string(),
+                    names: m.names.iter().map(|n| n.to_string()).collect(),
+                    cond: Some(m.cond.as_ref().map(|c| CondDoc {
+                        text: c.source.text.clone(),
+                        location: LocationDoc::of(&c.source.location),
+                        parses: c.statement().is_some(),
+                    })),
                 })
-                .collect();
-            json!({ "name": h, "members": members })
+                .collect(),
         })
         .collect();
-    let sources: Vec<_> = registry
-        .sources(&def.id)
-        .into_iter()
-        .map(|(kind, path)| json!({ "kind": kind, "path": path, "used": path == def.path }))
-        .collect();
-    let doc = json!({
-        "definition": def,
-        "sources": sources,
-        "vstruct": { "inputHeads": input_heads, "outputHeads": output_heads },
-    });
-    let mut s = serde_json::to_string_pretty(&doc).unwrap_or_else(|_| "{}".into());
-    s.push('\n');
-    s
+    InfoDoc {
+        definition: DefinitionDoc {
+            id: def.id.clone(),
+            kind: def.kind.clone(),
+            format: format_word(def.source),
+            path: def.path.to_string(),
+            origin: origin(&def.path, common),
+            inputs: def.inputs.iter().map(property_doc).collect(),
+            outputs: def.outputs.iter().map(property_doc).collect(),
+            metadata: pairs(&def.metadata),
+        },
+        sources: registry
+            .sources(&def.id)
+            .into_iter()
+            .map(|(kind, path)| SourceDoc {
+                format: format_word(kind),
+                used: path == def.path,
+                path: path.to_string(),
+            })
+            .collect(),
+        vstruct: VstructDoc {
+            input_heads,
+            output_heads,
+        },
+    }
 }

@@ -17,7 +17,7 @@ use vstructc::limits::{Limit, LimitExceeded, Limits};
 use vstructc::network::Network;
 use vstructc::pipeline::{self, Lowering, PipelineOptions, PipelineOutput};
 use vstructc::registry::{Registry, RegistryOptions};
-use vstructc::resolve::{ResolveOptions, unsupported_extensions};
+use vstructc::resolve::ResolveOptions;
 
 /// `--format`'s values, mapped onto the library's [`NetFormat`].
 pub fn format_parser() -> impl clap::builder::TypedValueParser<Value = NetFormat> {
@@ -59,7 +59,7 @@ pub fn resolve_options(
 ) -> Result<ResolveOptions, Error> {
     let extensions =
         Extensions::from_names(&common.ext).map_err(|e| Error::Usage(e.to_string()))?;
-    let missing = unsupported_extensions(&extensions);
+    let missing = extensions.unsupported_by_resolver();
     if !missing.is_empty() {
         return Err(Error::Usage(format!(
             "extension(s) {} are not implemented in resolution yet",

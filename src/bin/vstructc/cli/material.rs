@@ -28,6 +28,10 @@ pub struct MaterialArgs {
     pub strict_rib: bool,
 }
 
+/// The message of exit status 1 when the input has no material to act on (`compile`,
+/// `render`, `eval`).
+pub const NO_MATERIAL: &str = "the input has no material with a lowering recipe";
+
 /// A lowered, compiled material.
 pub struct Compiled {
     /// Material name.
@@ -78,10 +82,40 @@ pub fn load_materials(
     }
     if out.is_empty() {
         super::report(&diags, common);
-        eprintln_quiet!("error: the input has no material with a lowering recipe");
+        eprintln_quiet!("error: {NO_MATERIAL}");
         return Err(ExitCode::from(1));
     }
     Ok((out, diags))
+}
+
+/// Check the form of every `--input NAME=VALUE` setting (a name, `=`, one or three
+/// numbers) before any work; whether a material has the slot is checked once the materials
+/// are loaded ([`check_input_names`]).
+pub fn check_input_syntax(settings: &[String]) -> Result<(), String> {
+    for s in settings {
+        let (_, value) = s
+            .split_once('=')
+            .filter(|(name, _)| !name.is_empty())
+            .ok_or_else(|| format!("--input `{s}`: expected NAME=VALUE"))?;
+        parse_numbers(s, value)?;
+    }
+    Ok(())
+}
+
+/// The numbers of an `--input` value: one, or three separated by commas or spaces.
+fn parse_numbers(setting: &str, value: &str) -> Result<Vec<f32>, String> {
+    let nums: Vec<f32> = value
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--input `{setting}`: `{value}` is not one or three numbers"))?;
+    if !matches!(nums.len(), 1 | 3) {
+        return Err(format!(
+            "--input `{setting}`: `{value}` is not one or three numbers"
+        ));
+    }
+    Ok(nums)
 }
 
 /// Parse `--input NAME=VALUE` settings into packed inputs for `m` (fallbacks elsewhere).
@@ -92,12 +126,7 @@ pub fn packed_inputs(m: &Material, settings: &[String]) -> Result<Vec<f32>, Stri
         let (name, value) = s
             .split_once('=')
             .ok_or_else(|| format!("--input `{s}`: expected NAME=VALUE"))?;
-        let nums: Vec<f32> = value
-            .split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|t| !t.is_empty())
-            .map(|t| t.parse::<f32>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| format!("--input `{s}`: `{value}` is not one or three numbers"))?;
+        let nums = parse_numbers(s, value)?;
         let Some(slot) = m.ir().input_index(name) else {
             // A setting for another material of the input is not an error.
             continue;

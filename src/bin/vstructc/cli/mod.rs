@@ -1,14 +1,15 @@
 //! The `vstructc` command line. The binary's `main` only calls [`main`];
 //! each subcommand lives in its own module and returns an exit status.
 //!
-//! Exit status: 0 success (warnings on stderr), 1 input errors (or warnings under
-//! `--deny-warnings`), 2 usage errors.
+//! Exit status, the same in every command ([`EXIT_STATUS`]): 0 success (warnings on
+//! stderr), 1 input errors (or warnings under `--deny-warnings`) or no material to act on
+//! (`compile`, `render`, `eval`), 2 usage errors, found before the input is read.
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vstructc::diag::{DEFAULT_MAX_PER_CODE, Diagnostics, Severity, Shown};
+use vstructc::diag::{Diagnostics, Severity, Shown};
 use vstructc::registry::Prefer;
 
 /// `eprintln!` that ignores a failing standard error (`2>/dev/full`): the exit status still
@@ -26,17 +27,26 @@ pub mod explain;
 pub mod expr;
 pub mod info;
 pub mod input;
+pub mod json;
+pub mod list;
 pub mod material;
 pub mod render;
 pub mod resolve;
 pub mod snippet;
+
+/// The exit status rules, shown by `--help`: the same in every command.
+pub const EXIT_STATUS: &str = "Exit status (every command): 0 success (warnings allowed), \
+1 when the input has errors (or warnings under --deny-warnings) or holds no material to act \
+on (compile, render, eval), 2 usage errors (found before the input is read). Machine output: \
+--json on list, info, expr, resolve, explain, compile and eval (docs/json.md).";
 
 /// Top-level command line.
 #[derive(Debug, Parser)]
 #[command(
     name = "vstructc",
     version,
-    about = "Shader-network compiler: vstruct resolution, closure IR, previews"
+    about = "Shader-network compiler: vstruct resolution, closure IR, previews",
+    after_help = EXIT_STATUS
 )]
 pub struct Cli {
     /// Options shared by every subcommand.
@@ -57,8 +67,11 @@ pub struct CommonOptions {
     /// Which definition wins when a shader exists as both `.oso` and `.args`.
     #[arg(long, global = true, default_value = "oso", value_parser = prefer_parser())]
     pub prefer: Prefer,
-    /// Enable an opt-in extension by name (repeatable), or `all`.
-    #[arg(long = "ext", value_name = "NAME", global = true)]
+    /// Enable an opt-in extension by name (repeatable, or comma-separated), or `all`.
+    ///
+    /// Every extension is off by default; without them behaviour is the reference's
+    /// (docs/conditional-language.md, docs/resolution.md). An unknown name is a usage error.
+    #[arg(long = "ext", value_name = "NAME", global = true, value_parser = ExtParser)]
     pub ext: Vec<String>,
     /// Treat warnings as errors (exit status 1 after printing every diagnostic).
     #[arg(long, global = true)]
@@ -78,6 +91,57 @@ pub struct CommonOptions {
     /// unset or empty.
     #[arg(long, value_enum, value_name = "WHEN", global = true, default_value_t = snippet::ColorChoice::Auto)]
     pub color: snippet::ColorChoice,
+}
+
+/// `--ext`'s values: every extension name and `all`, listed with a line of help in
+/// `--help`. An unknown name is a usage error at parse time, before any work, with the
+/// library's message (which lists the names).
+#[derive(Debug, Clone, Copy)]
+pub struct ExtParser;
+
+/// One line of help per extension, in [`Extension::ALL`]'s order.
+fn ext_help(e: vstructc::cond::Extension) -> &'static str {
+    use vstructc::cond::Extension as E;
+    match e {
+        E::ElseIf => "chained `A if C1 else B if C2 else C` statements",
+        E::StrictNe => "`p != literal` is `not (p == literal)` in every case",
+        E::TokenStrings => "string literals compare with token and asset values by text",
+        E::SetTuples => "`set NUMBER` fills every component of a colour, point, vector or normal",
+        E::CopyConvert => "`copy` converts int and float and broadcasts a number to a triple",
+        E::MultiAlias => "`vstructmemberaliases` is a list of aliases",
+        E::ArrayHeads => "heads with several connections feed array members (not implemented yet)",
+        E::Nested => "members that are input heads are expanded too (not implemented yet)",
+        E::ArrayIndex => "a condition on `name[i]` reads element i of the array `name`",
+        E::ArgsChildMeta => "vstruct metadata given as child elements in `.args` files",
+    }
+}
+
+impl clap::builder::TypedValueParser for ExtParser {
+    type Value = String;
+
+    fn parse_ref(
+        &self,
+        _cmd: &clap::Command,
+        _arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<String, clap::Error> {
+        let s = value.to_string_lossy();
+        vstructc::cond::Extensions::from_names([s.as_ref()])
+            .map(|_| s.to_string())
+            .map_err(|e| clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("{e}\n")))
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        use clap::builder::PossibleValue;
+        let each = vstructc::cond::Extension::ALL
+            .into_iter()
+            .map(|e| PossibleValue::new(e.name()).help(ext_help(e)));
+        Some(Box::new(each.chain(std::iter::once(
+            PossibleValue::new("all").help("every extension above"),
+        ))))
+    }
 }
 
 /// `--prefer`'s values, mapped onto the library's [`Prefer`].
@@ -107,19 +171,29 @@ pub enum DiagFormat {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// List the known shaders: kind, format and the file each definition is read from.
+    #[command(after_help = EXIT_STATUS)]
+    List(list::ListArgs),
     /// Summarise one shader definition.
+    #[command(after_help = EXIT_STATUS)]
     Info(info::InfoArgs),
     /// Parse one conditional expression and print its desugared form or diagnostics.
+    #[command(after_help = EXIT_STATUS)]
     Expr(expr::ExprArgs),
     /// Expand the vstruct connections of a network (RIB or JSON) and write it back.
+    #[command(after_help = EXIT_STATUS)]
     Resolve(resolve::ResolveArgs),
-    /// Tell the story of one member input's value during resolution.
+    /// Tell where one input's value comes from (authored, default, written by resolution).
+    #[command(after_help = EXIT_STATUS)]
     Explain(explain::ExplainArgs),
     /// Lower each material of a network to the closure IR and print it.
+    #[command(after_help = EXIT_STATUS)]
     Compile(compile::CompileArgs),
     /// Render a material-ball preview (PNG or PFM).
+    #[command(after_help = EXIT_STATUS)]
     Render(render::RenderArgs),
     /// Evaluate each lobe of a material for one pair of directions.
+    #[command(after_help = EXIT_STATUS)]
     Eval(eval::EvalArgs),
 }
 
@@ -143,6 +217,7 @@ pub fn main() -> ExitCode {
 pub fn run(cli: Cli) -> ExitCode {
     let common = &cli.common;
     match &cli.command {
+        Command::List(a) => list::run(a, common),
         Command::Info(a) => info::run(a, common),
         Command::Expr(a) => expr::run(a, common),
         Command::Resolve(a) => resolve::run(a, common),
@@ -158,8 +233,8 @@ pub fn run(cli: Cli) -> ExitCode {
 ///
 /// Volume control ([`Diagnostics::volume_limited`]): in human output identical diagnostics
 /// are printed once, at most `--max-diagnostics` of one code (default
-/// [`DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
-/// bounded ([`vstructc::diag::MAX_HUMAN_LINE`]); a located diagnostic shows its source line
+/// [`Diagnostics::DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
+/// bounded ([`vstructc::diag::Diagnostic::MAX_HUMAN_LINE`]); a located diagnostic shows its source line
 /// with a caret ([`snippet::render`]), coloured as `--color` says. JSON output keeps every diagnostic, whole, unless
 /// `--max-diagnostics` is given; its count line is an object `{"code": CODE, "suppressed": N}`.
 /// The exit status counts every diagnostic, shown or not.
@@ -168,7 +243,7 @@ pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
     let human = common.diag_format == DiagFormat::Human;
     let limit = match common.max_diagnostics {
         Some(n) => n,
-        None if human => DEFAULT_MAX_PER_CODE,
+        None if human => Diagnostics::DEFAULT_MAX_PER_CODE,
         None => 0,
     };
     let shown = diags.volume_limited(limit, human, |d| {

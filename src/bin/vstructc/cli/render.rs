@@ -1,17 +1,19 @@
 //! `vstructc render INPUT [-o ball.png] [--size N] [--furnace] [--pfm] [--aov lobe:NAME]
-//! [--input NAME=VALUE]... [--material HANDLE]`: the material-ball preview (docs/preview.md).
+//! [--input NAME=VALUE]... [--material HANDLE] [--no-labels]`: the material-ball preview
+//! (docs/preview.md).
 //!
 //! The input is read, resolved and lowered as by `compile`; each material is compiled for
 //! the interpreter and rendered ([`vstructc::interp::preview`]). With several materials and no
 //! `--material`, the balls are arranged in a contact sheet (a grid, `⌈√n⌉` columns, row-major
-//! in material order).
+//! in material order); in PNG each ball has its material's name under it unless
+//! `--no-labels` (PFM and EXR hold rendered values only).
 //!
 //! Output: `-o PATH` (`-` for standard output); without `-o`, `<input stem>.png` (`.pfm`
-//! with `--pfm`) in the current directory, `preview.png` for standard input. A path ending
-//! in `.pfm` selects PFM, and so does `--pfm` whatever the extension; another extension than
-//! `.png` or `.pfm` without `--pfm` (`.exr`, …), or `--pfm` with `.png`, is a usage error
-//! found before any work. The file is written atomically
-//! (temporary file, then rename).
+//! with `--pfm`) in the current directory, `preview.png` for standard input. The extension
+//! picks the format: `.png` sRGB PNG, `.pfm` linear PFM, `.exr` linear OpenEXR (32-bit
+//! float); `--pfm` selects PFM whatever the extension. Another extension (`.jpg`, …), or
+//! `--pfm` with `.png` or `.exr`, is a usage error found before any work. The file is
+//! written atomically (temporary file, then rename).
 //!
 //! Memory does not grow with the number of materials: the sheet is rendered a band of pixel
 //! rows at a time and each row is encoded into the output as it is finished
@@ -28,7 +30,9 @@
 
 use super::CommonOptions;
 use super::input::{report_error, stream_output};
-use super::material::{MaterialArgs, check_input_names, load_materials, packed_inputs};
+use super::material::{
+    MaterialArgs, check_input_names, check_input_syntax, load_materials, packed_inputs,
+};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -44,7 +48,8 @@ pub struct RenderArgs {
     /// Input, material and external inputs.
     #[command(flatten)]
     pub source: MaterialArgs,
-    /// Output file (`-`: standard output). Default: `<input stem>.png` (or `.pfm`).
+    /// Output file (`-`: standard output); the extension picks the format: `.png` (sRGB),
+    /// `.pfm` or `.exr` (linear float). Default: `<input stem>.png` (or `.pfm`).
     #[arg(short, long, value_name = "PATH")]
     pub output: Option<PathBuf>,
     /// Side of one ball in pixels (1 to 8192).
@@ -62,6 +67,10 @@ pub struct RenderArgs {
     /// Use the batched (16-lane) interpreter.
     #[arg(long)]
     pub batched: bool,
+    /// No material names under the balls of a PNG contact sheet (PFM and EXR never have
+    /// them).
+    #[arg(long)]
+    pub no_labels: bool,
 }
 
 /// The leaf a `lobe:NAME` AOV designates in `m`: by label, then kind name, then `#node`.
@@ -115,23 +124,24 @@ fn write_sheet(
     result
 }
 
-/// The image format of the output file `out`: `.pfm` or `--pfm` is PFM (`--pfm` whatever
-/// the extension, but `.png`), `.png` or no extension PNG; another extension without `--pfm`
-/// (`.exr`, …), or `--pfm` with `.png`, is a usage error.
+/// The image format of the output file `out`, by its extension (ASCII case ignored): `.png`
+/// or none PNG, `.pfm` PFM, `.exr` EXR; `--pfm` selects PFM whatever the name, except that
+/// it conflicts with `.png` and `.exr`. Another extension is a usage error.
 fn image_format(out: &Path, pfm: bool) -> Result<ImageFormat, String> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match (ext.as_deref(), pfm) {
-        (Some("png"), true) => {
-            Err("--pfm conflicts with the output file's extension `.png`".into())
-        }
+        (Some(e @ ("png" | "exr")), true) => Err(format!(
+            "--pfm conflicts with the output file's extension `.{e}`"
+        )),
         (Some("pfm"), _) | (_, true) => Ok(ImageFormat::Pfm),
         (Some("png") | None, false) => Ok(ImageFormat::Png),
+        (Some("exr"), false) => Ok(ImageFormat::Exr),
         (Some(e), false) => Err(format!(
-            "`.{e}` output is not supported: `render` writes PNG (`.png`) or linear PFM (`.pfm`, \
-             or any name with `--pfm`)"
+            "`.{e}` output is not supported: `render` writes PNG (`.png`), linear PFM (`.pfm`, \
+             or any name with `--pfm`) or linear OpenEXR (`.exr`)"
         )),
     }
 }
@@ -151,13 +161,32 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
     } else {
         image_format(&out, args.pfm)
     };
+    let usage = |msg: String| {
+        eprintln_quiet!("error: {msg}");
+        ExitCode::from(2)
+    };
+    // Every flag is checked before the input is read: a usage error prints nothing else.
     let format = match format {
         Ok(f) => f,
-        Err(msg) => {
-            eprintln_quiet!("error: {msg}");
-            return ExitCode::from(2);
-        }
+        Err(msg) => return usage(msg),
     };
+    let aov = match args.aov.as_deref() {
+        None => None,
+        Some(a) => match a.strip_prefix("lobe:") {
+            Some(name) if !name.is_empty() => Some(name),
+            _ => return usage(format!("--aov `{a}`: expected `lobe:NAME`")),
+        },
+    };
+    if let Err(msg) = check_input_syntax(&args.source.inputs) {
+        return usage(msg);
+    }
+    let size_check = PreviewOptions {
+        size: args.size,
+        ..PreviewOptions::default()
+    };
+    if let Err(e) = size_check.validate() {
+        return usage(e.to_string());
+    }
     let (materials, diags) = match load_materials(&args.source, common) {
         Ok(x) => x,
         Err(status) => return status,
@@ -166,20 +195,9 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
     if status != ExitCode::SUCCESS {
         return status;
     }
-    let usage = |msg: String| {
-        eprintln_quiet!("error: {msg}");
-        ExitCode::from(2)
-    };
     if let Err(msg) = check_input_names(&materials, &args.source.inputs) {
         return usage(msg);
     }
-    let aov = match args.aov.as_deref() {
-        None => None,
-        Some(a) => match a.strip_prefix("lobe:") {
-            Some(name) if !name.is_empty() => Some(name),
-            _ => return usage(format!("--aov `{a}`: expected `lobe:NAME`")),
-        },
-    };
     if let Some(name) = aov {
         if !materials
             .iter()
@@ -203,6 +221,8 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         ..PreviewOptions::default()
     };
     let base = if args.furnace { base.furnace() } else { base };
+    // A contact sheet names its balls in PNG; linear images keep only rendered values.
+    let labels = materials.len() > 1 && !format.is_linear() && !args.no_labels;
     let mut balls = Vec::with_capacity(materials.len());
     for c in &materials {
         let inputs = match packed_inputs(&c.material, &args.source.inputs) {
@@ -219,6 +239,7 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
         balls.push(Ball {
             material: &c.material,
             options,
+            label: labels.then(|| c.name.clone()),
         });
     }
     let sheet = match ContactSheet::new(balls, base.env) {

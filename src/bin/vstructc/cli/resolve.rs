@@ -22,6 +22,10 @@ pub struct ResolveArgs {
     /// input's). A `-o` extension naming the other format is a usage error.
     #[arg(long, value_parser = format_parser())]
     pub format: Option<NetFormat>,
+    /// The resolved network as JSON (the JSON network form): the same as `--format json`,
+    /// the machine-output flag every command that prints data has.
+    #[arg(long, conflicts_with = "format")]
+    pub json: bool,
     /// Write to FILE (atomically) instead of standard output.
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -76,9 +80,19 @@ pub fn output_format(
 
 /// Run `vstructc resolve`.
 pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
-    let format = match output_format(args.format, args.output.as_deref()) {
+    let asked = if args.json {
+        Some(NetFormat::Json)
+    } else {
+        args.format
+    };
+    let format = match output_format(asked, args.output.as_deref()) {
         Ok(f) => f,
         Err(msg) => {
+            let msg = if args.json {
+                msg.replace("--format json", "--json")
+            } else {
+                msg
+            };
             eprintln_quiet!("error: {msg}");
             return ExitCode::from(2);
         }

@@ -11,7 +11,9 @@
 use annotate_snippets::{Level, Renderer, Snippet};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use vstructc::diag::{Diagnostic, MAX_HUMAN_LINE, Severity, bound_line};
+use vstructc::diag::{Diagnostic, Severity};
+
+const MAX_HUMAN_LINE: usize = Diagnostic::MAX_HUMAN_LINE;
 
 /// When diagnostics are coloured (`--color`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -205,7 +207,7 @@ fn level(s: Severity) -> Level {
 
 /// `d` for a reader: the headline and, when the source is at hand, the offending line with a
 /// caret under the column; else `  --> file:line:col`. Then related locations and notes.
-/// Every line is bounded ([`MAX_HUMAN_LINE`]); `colour` adds ANSI escapes.
+/// Every line is bounded ([`Diagnostic::MAX_HUMAN_LINE`]); `colour` adds ANSI escapes.
 pub fn render(d: &Diagnostic, sources: &mut Sources, colour: bool) -> String {
     let plain = Renderer::plain();
     let renderer = if colour {
@@ -220,7 +222,7 @@ pub fn render(d: &Diagnostic, sources: &mut Sources, colour: bool) -> String {
     } else {
         plain
     };
-    let message = bound_line(&d.message, MAX_HUMAN_LINE);
+    let message = Diagnostic::bound_line(&d.message, MAX_HUMAN_LINE);
     let title = level(d.severity).title(&message).id(d.code.as_str());
     let mut out = String::new();
     let mut shown_location = false;
@@ -273,7 +275,7 @@ pub fn render(d: &Diagnostic, sources: &mut Sources, colour: bool) -> String {
         }
     }
     out.lines()
-        .map(|l| bound_line(l, MAX_HUMAN_LINE).into_owned())
+        .map(|l| Diagnostic::bound_line(l, MAX_HUMAN_LINE).into_owned())
         .collect::<Vec<_>>()
         .join("\n")
 }

@@ -154,6 +154,7 @@ pub enum OrenNayarVariant {
     /// Qualitative model (Oren & Nayar 1994), albedo from a table.
     Qualitative,
     /// Fujii's single-scattering form (the `f_ss` of EON), albedo `ρ Ê(μ_o)`.
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     Fujii,
     /// Energy-preserving Oren–Nayar (Portsmouth, Kutz & Hill 2025), exact `Ê` (two `acos`).
     Energy,

@@ -21,6 +21,7 @@ pub enum Compensation {
     /// Turquin 2019 with strength k ∈ [0, 1] (non-reciprocal).
     Turquin(f32),
     /// Kulla & Conty 2017: an added diffuse-like lobe (reciprocal).
+    #[cfg_attr(not(feature = "testkit"), allow(dead_code))]
     KullaConty,
 }
 
@@ -779,6 +780,7 @@ pub struct Dielectric {
 
 impl Dielectric {
     /// A dielectric with unit tints, `t_fresnel` on, no compensation.
+    #[cfg(feature = "testkit")]
     pub fn new(ggx: Ggx, masking: Masking, eta: f32, mode: DielectricMode) -> Dielectric {
         Dielectric {
             ggx,
@@ -1064,6 +1066,7 @@ impl PreparedDielectric {
     }
 
     /// Relative index `η'` of the transmitted side over the view side.
+    #[cfg(feature = "testkit")]
     pub fn eta(&self) -> f32 {
         self.eta
     }

@@ -226,6 +226,7 @@ pub struct SheenLTC {
 
 /// The LTC sheen's fitted directional albedo `Ê(μ_o, r)` (clamped at 0).
 #[inline(always)]
+#[cfg(feature = "testkit")]
 pub fn sheen_ltc_albedo(x: f32, y: f32) -> f32 {
     SheenLTCBound::at_roughness(y).albedo(x)
 }
