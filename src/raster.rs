@@ -4,7 +4,8 @@
 
 use glam::Vec3;
 
-pub(crate) mod font;
+// The label font: public under `testkit` for its unit tests.
+testkit_mods!(font);
 
 /// A linear RGB image, rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]

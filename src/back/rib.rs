@@ -572,6 +572,7 @@ fn decl_word(b: &BaseType) -> &str {
 }
 
 /// Appends the decl type text describing value `v` (`float`, `color`, `int[1]`, …).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn push_value_type(t: &mut Vec<u8>, v: &Value) {
     match v {
         Value::Array(b, items) => {
@@ -582,6 +583,7 @@ fn push_value_type(t: &mut Vec<u8>, v: &Value) {
 }
 
 /// Appends `v` in RIB syntax ([`format_value`]).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn push_value(t: &mut Vec<u8>, v: &Value) {
     match v {
         // The usual values of a resolved scene: no intermediate string.
@@ -603,6 +605,7 @@ fn push_quoted(t: &mut Vec<u8>, s: &str) {
 }
 
 /// True if a decl of type `ty` describes value `v` exactly (so its text can be kept).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn value_fits(ty: &Type, v: &Value) -> bool {
     match (ty.array, v) {
         (ArraySpec::None, Value::Array(..)) => false,
@@ -618,6 +621,7 @@ fn value_fits(ty: &Type, v: &Value) -> bool {
 }
 
 /// A value in RIB syntax, always bracketed: `[1]`, `[0.5]`, `["s"]`, `[1 0 0]`.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn format_value(v: &Value) -> String {
     let mut out = String::from("[");
     push_elements(v, &mut out);
@@ -685,6 +689,9 @@ pub fn quote(s: &str) -> String {
     format!("\"{}\"", escape(s))
 }
 
+/// `s` as the content of a RIB string: quotes and backslashes escaped, newline and tab as
+/// `\n` and `\t`, other control characters in octal.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn escape(s: &str) -> Cow<'_, str> {
     // Names and handles almost never need escaping: use them as they are. The check looks
     // at every byte without stopping early, which lets it run on whole vectors of bytes
@@ -709,91 +716,4 @@ fn escape(s: &str) -> Cow<'_, str> {
         }
     }
     Cow::Owned(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn value_formatting() {
-        assert_eq!(format_value(&Value::Float(0.1)), "[0.1]");
-        assert_eq!(format_value(&Value::Float(1.0)), "[1]");
-        assert_eq!(format_value(&Value::Int(-3)), "[-3]");
-        assert_eq!(
-            format_value(&Value::Triple(BaseType::Color, [0.5, 1.0, 0.25])),
-            "[0.5 1 0.25]"
-        );
-        assert_eq!(
-            format_value(&Value::Array(
-                BaseType::String,
-                vec![Value::Str("a".into()), Value::Str("b\\".into())]
-            )),
-            r#"["a" "b\\"]"#
-        );
-    }
-
-    fn value_type_text(v: &Value) -> String {
-        let mut t = Vec::new();
-        push_value_type(&mut t, v);
-        String::from_utf8(t).unwrap()
-    }
-
-    #[test]
-    fn pushed_values_are_formatted_values() {
-        for v in [
-            Value::Int(-7),
-            Value::Float(0.1),
-            Value::Float(1.0),
-            Value::Float(f32::INFINITY),
-            Value::Float(f32::NAN),
-            Value::Float(-3.0e-40),
-            Value::Triple(BaseType::Color, [0.5, 1.0, 0.25]),
-            Value::Str("a\"b".into()),
-        ] {
-            let mut t = Vec::new();
-            push_value(&mut t, &v);
-            assert_eq!(String::from_utf8(t).unwrap(), format_value(&v), "{v:?}");
-        }
-    }
-
-    #[test]
-    fn value_type_texts() {
-        assert_eq!(value_type_text(&Value::Int(1)), "int");
-        assert_eq!(value_type_text(&Value::Bool(true)), "int");
-        assert_eq!(value_type_text(&Value::Token("x".into())), "string");
-        assert_eq!(
-            value_type_text(&Value::Array(BaseType::Int, vec![Value::Int(0)])),
-            "int[1]"
-        );
-        assert_eq!(
-            value_type_text(&Value::Triple(BaseType::Normal, [0.0; 3])),
-            "normal"
-        );
-    }
-
-    #[test]
-    fn fits() {
-        let f2 = Type::parse_decl("float2");
-        assert!(value_fits(
-            &f2,
-            &Value::Array(BaseType::Float, vec![Value::Float(1.0), Value::Float(2.0)])
-        ));
-        assert!(!value_fits(&f2, &Value::Float(1.0)));
-        assert!(value_fits(
-            &Type::scalar(BaseType::Color),
-            &Value::Triple(BaseType::Color, [0.0; 3])
-        ));
-        assert!(!value_fits(
-            &Type::scalar(BaseType::Vector),
-            &Value::Triple(BaseType::Color, [0.0; 3])
-        ));
-        assert!(!value_fits(&Type::scalar(BaseType::Float), &Value::Int(1)));
-    }
-
-    #[test]
-    fn escapes() {
-        assert_eq!(escape("tab\there"), "tab\\there");
-        assert_eq!(escape("\u{7f}é"), "\\177é");
-    }
 }

@@ -55,10 +55,10 @@ pub use lexer::CmpOp;
 #[cfg(feature = "testkit")]
 pub mod internals {
     pub use super::action::{
-        CopyOutcome, CopyPlan, CopyRejection, SetRejection, SetValue, copy_plan, copy_value,
-        set_value,
+        CopyOutcome, CopyPlan, CopyRejection, SetRejection, SetValue, convert, copy_plan,
+        copy_value, set_value, truncate_to_i32,
     };
-    pub use super::ast::{dump, quote_for};
+    pub use super::ast::{dump, quote_for, split_index};
     pub use super::error::{location_in, render_caret};
     pub use super::eval::evaluate_expr;
     pub use super::lexer::{Keyword, Token, TokenKind, next_token};

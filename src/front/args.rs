@@ -121,6 +121,7 @@ fn count_occurrences(text: &str, needle: &str) -> usize {
 /// key and value from the file. Returns false at the first thing outside that form (the
 /// caller then clears `out` and lets quick-xml read the tag, with its error reporting).
 /// `base` is the byte offset of `raw` in the file.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn plain_attributes<'a>(raw: &'a str, base: usize, out: &mut Vec<Attr<'a>>) -> bool {
     let bytes = raw.as_bytes();
     let mut i = 0;
@@ -203,10 +204,14 @@ impl LineIndex {
 }
 
 /// One attribute of a start tag: key, decoded value, byte offset of the raw value in the file.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 struct Attr<'a> {
-    key: Cow<'a, str>,
-    value: Cow<'a, str>,
-    offset: usize,
+    /// The attribute's name.
+    pub key: Cow<'a, str>,
+    /// Its value, entities decoded.
+    pub value: Cow<'a, str>,
+    /// The byte offset of the raw value in the file.
+    pub offset: usize,
 }
 
 /// Finds an attribute by key.
@@ -1334,6 +1339,7 @@ fn attr_error_position(e: &quick_xml::events::attributes::AttrError) -> usize {
 
 /// Splits `vstructmember` at the first `.`; `None` when head or member would be empty or there
 /// is no dot. Nothing is trimmed.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn split_member(value: &str) -> Option<(String, String)> {
     let (head, member) = value.split_once('.')?;
     (!head.is_empty() && !member.is_empty()).then(|| (head.to_string(), member.to_string()))
@@ -1341,6 +1347,7 @@ pub(crate) fn split_member(value: &str) -> Option<(String, String)> {
 
 /// `.args` booleans: `0`, `false`, `f` (any case) are false; empty is
 /// `empty_is`; anything else is true.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn args_bool(value: &str, empty_is: bool) -> bool {
     let v = value.trim();
     if v.is_empty() {
@@ -1350,6 +1357,7 @@ fn args_bool(value: &str, empty_is: bool) -> bool {
 }
 
 /// Parses an `options` attribute: `a|b|c` or `Label:value|…`.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn parse_options_attr(value: &str) -> Vec<(String, String)> {
     value
         .split('|')
@@ -1394,6 +1402,7 @@ pub(crate) fn args_type(word: &str) -> Option<Type> {
 
 /// A parsed default and the most severe problem found.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) struct ParsedDefault {
     /// The value used (`None`: no default).
     pub value: Option<Value>,
@@ -1418,6 +1427,7 @@ impl Issues {
 
 /// Length of the longest prefix of `s` that is a decimal float:
 /// `[+-]?(d+(.d*)?|.d+)([eE][+-]?d+)?`; 0 if none.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn float_prefix_len(s: &str) -> usize {
     let b = s.as_bytes();
     let digits = |mut i: usize| {
@@ -1566,6 +1576,7 @@ fn element(base: &BaseType, nums: &[f32], ints: &[i32]) -> Option<Value> {
 }
 
 /// Parses a `default` attribute for `ty`. `text` is `None` when absent.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn parse_default(ty: &Type, text: Option<&str>) -> ParsedDefault {
     let mut issues = Issues::default();
     let value = default_value(ty, text, &mut issues);
@@ -1705,240 +1716,4 @@ fn fit_fixed(
     }
     items.truncate(n);
     items.resize(n, zero);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    /// Attributes as quick-xml reads and normalises them: (key, value, value offset in `raw`).
-    fn quick_xml_attributes(raw: &str) -> Option<Vec<(String, String, usize)>> {
-        let tag = format!("<p{raw}/>");
-        let mut reader = Reader::from_str(&tag);
-        let Ok(Event::Empty(e)) = reader.read_event() else {
-            return None;
-        };
-        let mut out = Vec::new();
-        for a in e.attributes() {
-            let a = a.ok()?;
-            let value = a.normalized_value(XmlVersion::Implicit1_0).ok()?;
-            let offset = a.value.as_ptr() as usize - tag.as_ptr() as usize - 2;
-            out.push((a.key.as_ref().to_string(), value.into_owned(), offset));
-        }
-        Some(out)
-    }
-
-    proptest! {
-        /// Whenever the plain fast path accepts a tag, it reads exactly what quick-xml reads.
-        #[test]
-        fn plain_attributes_agree_with_quick_xml(raw in "( {1,2}[a-c_1:]{0,3} ?= ?[\"'][a-c &<\t\"']{0,4}[\"']){0,4} ?") {
-            let mut fast = Vec::new();
-            if plain_attributes(&raw, 0, &mut fast) {
-                let fast: Vec<_> = fast
-                    .iter()
-                    .map(|a| (a.key.to_string(), a.value.to_string(), a.offset))
-                    .collect();
-                prop_assert_eq!(Some(fast), quick_xml_attributes(&raw));
-            }
-        }
-    }
-
-    #[test]
-    fn plain_attributes_take_the_common_form_and_leave_the_rest() {
-        let mut out = Vec::new();
-        assert!(plain_attributes(r#" name="a" type='float'"#, 10, &mut out));
-        assert_eq!(out.len(), 2);
-        assert_eq!(
-            (&*out[1].key, &*out[1].value, out[1].offset),
-            ("type", "float", 26)
-        );
-        for other in [
-            r#" name = "a""#,     // spaced `=`
-            r#" name="a&amp;b""#, // entity
-            r#" a="1"b="2""#,     // no whitespace between attributes
-            r#" a="1" a="2""#,    // duplicate
-            r#" help="x	y""#,     // tab to normalise
-            r#" name="unterminated"#,
-        ] {
-            out.clear();
-            assert!(!plain_attributes(other, 0, &mut out), "{other}");
-        }
-    }
-
-    fn ty(b: BaseType) -> Type {
-        Type::scalar(b)
-    }
-
-    #[test]
-    fn float_prefix_rules() {
-        assert_eq!(float_prefix_len("1."), 2);
-        assert_eq!(float_prefix_len(".5"), 2);
-        assert_eq!(float_prefix_len("1e-3"), 4);
-        assert_eq!(float_prefix_len("-0"), 2);
-        assert_eq!(float_prefix_len("1e"), 1);
-        assert_eq!(float_prefix_len("."), 0);
-        assert_eq!(float_prefix_len("abc"), 0);
-        assert_eq!(float_prefix_len("2.5x"), 3);
-    }
-
-    #[test]
-    fn int_defaults_like_atoi() {
-        let d = parse_default(&ty(BaseType::Int), Some("1.0"));
-        assert_eq!(d.value, Some(Value::Int(1)));
-        let (sev, msg) = d.issue.unwrap();
-        assert_eq!(sev, Severity::Warning);
-        assert!(msg.contains("1 is used"), "{msg}");
-        assert_eq!(
-            parse_default(&ty(BaseType::Int), Some("1e3")).value,
-            Some(Value::Int(1))
-        );
-        assert_eq!(
-            parse_default(&ty(BaseType::Int), Some("x")).value,
-            Some(Value::Int(0))
-        );
-        let ok = parse_default(&ty(BaseType::Int), Some(" -7 "));
-        assert_eq!((ok.value, ok.issue), (Some(Value::Int(-7)), None));
-    }
-
-    #[test]
-    fn float_defaults() {
-        let d = parse_default(&ty(BaseType::Float), Some("0.5f"));
-        assert_eq!(d.value, Some(Value::Float(0.5)));
-        assert_eq!(d.issue.unwrap().0, Severity::Info);
-        let d = parse_default(&ty(BaseType::Float), Some("2.5x"));
-        assert_eq!(d.value, Some(Value::Float(2.5)));
-        assert_eq!(d.issue.unwrap().0, Severity::Warning);
-        let d = parse_default(&ty(BaseType::Float), Some("abc"));
-        assert_eq!(d.value, Some(Value::Float(0.0)));
-        assert_eq!(d.issue.unwrap().0, Severity::Warning);
-        let d = parse_default(&ty(BaseType::Float), Some(".5"));
-        assert_eq!((d.value, d.issue), (Some(Value::Float(0.5)), None));
-    }
-
-    #[test]
-    fn absent_and_empty_defaults() {
-        assert_eq!(
-            parse_default(&ty(BaseType::Float), None).value,
-            Some(Value::Float(0.0))
-        );
-        assert_eq!(
-            parse_default(&ty(BaseType::String), None).value,
-            Some(Value::Str(String::new()))
-        );
-        assert_eq!(
-            parse_default(&ty(BaseType::Color), Some("")).value,
-            Some(Value::Triple(BaseType::Color, [0.0; 3]))
-        );
-        assert_eq!(parse_default(&ty(BaseType::Matrix), None).value, None);
-        assert_eq!(parse_default(&ty(BaseType::Vstruct), Some("1")).value, None);
-        assert_eq!(
-            parse_default(&ty(BaseType::Struct(None)), Some("1")).value,
-            None
-        );
-        assert_eq!(
-            parse_default(&ty(BaseType::Terminal("bxdf".into())), Some("1")).value,
-            None
-        );
-    }
-
-    #[test]
-    fn triples_need_three_numbers() {
-        let d = parse_default(&ty(BaseType::Color), Some("0.18, 0.18 0.18"));
-        assert_eq!(d.value, Some(Value::Triple(BaseType::Color, [0.18; 3])));
-        assert!(d.issue.is_none());
-        let d = parse_default(&ty(BaseType::Normal), Some("0 0"));
-        assert_eq!(d.value, Some(Value::Triple(BaseType::Normal, [0.0; 3])));
-        assert_eq!(d.issue.unwrap().0, Severity::Warning);
-        let d = parse_default(&ty(BaseType::Matrix), Some("1 0 0"));
-        assert_eq!(d.value, None);
-        assert!(d.issue.is_some());
-    }
-
-    #[test]
-    fn string_scalar_is_verbatim() {
-        let d = parse_default(&ty(BaseType::String), Some(" a, b "));
-        assert_eq!(d.value, Some(Value::Str(" a, b ".into())));
-    }
-
-    #[test]
-    fn arrays() {
-        let fixed = Type {
-            base: BaseType::Float,
-            array: ArraySpec::Fixed(3),
-        };
-        let d = parse_default(&fixed, Some("1 2"));
-        assert_eq!(
-            d.value,
-            Some(Value::Array(
-                BaseType::Float,
-                vec![Value::Float(1.0), Value::Float(2.0), Value::Float(0.0)]
-            ))
-        );
-        assert!(d.issue.is_some());
-        let d = parse_default(&fixed, Some("1 2 3 4"));
-        assert_eq!(
-            d.value.as_ref().map(|v| v.numbers()),
-            Some(vec![1.0, 2.0, 3.0])
-        );
-        let dynamic = Type {
-            base: BaseType::Color,
-            array: ArraySpec::Dynamic,
-        };
-        let d = parse_default(&dynamic, Some("1 1 1 2 2"));
-        assert_eq!(
-            d.value.as_ref().map(|v| v.numbers()),
-            Some(vec![1.0, 1.0, 1.0])
-        );
-        assert!(d.issue.is_some());
-        let d = parse_default(&dynamic, Some(""));
-        assert_eq!(d.value, Some(Value::Array(BaseType::Color, vec![])));
-        assert_eq!(parse_default(&dynamic, None).value, None);
-        let strings = Type {
-            base: BaseType::String,
-            array: ArraySpec::Dynamic,
-        };
-        let d = parse_default(&strings, Some("a b,c"));
-        assert_eq!(
-            d.value.map(|v| v.to_string()),
-            Some("[\"a\", \"b\", \"c\"]".into())
-        );
-    }
-
-    #[test]
-    fn member_split() {
-        assert_eq!(split_member("a.b.c"), Some(("a".into(), "b.c".into())));
-        assert_eq!(split_member("ab"), None);
-        assert_eq!(split_member(".x"), None);
-        assert_eq!(split_member("x."), None);
-        assert_eq!(split_member(""), None);
-        assert_eq!(
-            split_member("inputMaterial. diffuseGain"),
-            Some(("inputMaterial".into(), " diffuseGain".into()))
-        );
-    }
-
-    #[test]
-    fn booleans() {
-        for f in ["0", "false", "False", "F", "f", "FALSE"] {
-            assert!(!args_bool(f, true), "{f}");
-        }
-        for t in ["1", "true", "yes", "T"] {
-            assert!(args_bool(t, false), "{t}");
-        }
-        assert!(args_bool("", true));
-        assert!(!args_bool("", false));
-    }
-
-    #[test]
-    fn options_attribute() {
-        assert_eq!(
-            parse_options_attr("a|b"),
-            vec![("a".into(), "a".into()), ("b".into(), "b".into())]
-        );
-        assert_eq!(
-            parse_options_attr("Off:0|On:1")[1],
-            ("On".into(), "1".into())
-        );
-    }
 }

@@ -535,6 +535,7 @@ impl<'a> Lexer<'a> {
 }
 
 /// The array shape for a length literal: `N > 0` fixed, `-1` dynamic, anything else invalid.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn array_spec(text: &str, float: bool) -> Option<ArraySpec> {
     if float {
         return None;
@@ -548,6 +549,7 @@ fn array_spec(text: &str, float: bool) -> Option<ArraySpec> {
 
 /// Decode C escapes as OSL does: `\n \t \v \b \r \f \a \\ \" \' \?` and 1–3 octal digits.
 /// Other escapes are kept verbatim (backslash included).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn unescape(raw: &[u8]) -> String {
     let mut out = Vec::with_capacity(raw.len());
     let mut i = 0;
@@ -1182,6 +1184,7 @@ fn truthy(value: &Value) -> bool {
 }
 
 /// `a|b|c` or `Label:value|…` → `(label, value)` pairs (label = value for plain values).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn parse_options(text: &str) -> Vec<(String, String)> {
     text.split('|')
         .filter(|s| !s.is_empty())
@@ -1190,34 +1193,4 @@ fn parse_options(text: &str) -> Vec<(String, String)> {
             None => (s.to_string(), s.to_string()),
         })
         .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn unescape_handles_c_escapes() {
-        assert_eq!(unescape(br#"a\\\"b"#), "a\\\"b");
-        assert_eq!(unescape(br"x\ny\t"), "x\ny\t");
-        assert_eq!(unescape(br"\101\60"), "A0");
-        assert_eq!(unescape(br"\q"), "\\q");
-        assert_eq!(unescape(br"end\"), "end\\");
-    }
-
-    #[test]
-    fn array_lengths() {
-        assert_eq!(array_spec("3", false), Some(ArraySpec::Fixed(3)));
-        assert_eq!(array_spec("-1", false), Some(ArraySpec::Dynamic));
-        assert_eq!(array_spec("0", false), None);
-        assert_eq!(array_spec("2.0", true), None);
-    }
-
-    #[test]
-    fn options_split_into_pairs() {
-        assert_eq!(
-            parse_options("opt1:v1|opt2"),
-            vec![("opt1".into(), "v1".into()), ("opt2".into(), "opt2".into())]
-        );
-    }
 }

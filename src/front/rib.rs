@@ -25,7 +25,8 @@
 //! * An integral number written with a fraction or exponent (`1.`) is accepted for `int`.
 //! * Strings with invalid UTF-8 are decoded with U+FFFD replacements.
 
-mod lexer;
+// The tokenizer: public under `testkit` for its unit tests.
+testkit_mods!(lexer);
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
@@ -360,15 +361,24 @@ fn has_reference_decl(src: &[u8], pieces: &[Piece]) -> bool {
 
 /// The words of a decl string: `[class] [reference] type [[N]] name`.
 #[derive(Debug, Default, PartialEq)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 struct DeclWords<'s> {
-    class: Option<&'s str>,
-    reference: bool,
-    type_word: Option<&'s str>,
-    array: Option<&'s str>,
-    name: &'s str,
-    extra: Vec<&'s str>,
+    /// The storage class (`uniform`, `varying`, ...), if any.
+    pub class: Option<&'s str>,
+    /// Whether `reference` precedes the type.
+    pub reference: bool,
+    /// The type word, if any.
+    pub type_word: Option<&'s str>,
+    /// The array size between brackets, if any.
+    pub array: Option<&'s str>,
+    /// The parameter name.
+    pub name: &'s str,
+    /// Words before the type that are none of the above.
+    pub extra: Vec<&'s str>,
 }
 
+/// Splits a decl string into its words; `None` when it has no name.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn split_decl(text: &str) -> Option<DeclWords<'_>> {
     // Walk the words from the end (name, then `[N]`, then type) without collecting them.
     let mut words = text
@@ -1122,6 +1132,7 @@ fn piece_name(p: &Piece) -> &'static str {
 
 /// Decl type vs definition type, for RB016: same base type (any struct names match) and a
 /// compatible shape (`[1]` matches a scalar, anything matches a dynamic array).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn types_compatible(decl: &Type, def: &Type) -> bool {
     let base_ok = match (&decl.base, &def.base) {
         (BaseType::Struct(_), BaseType::Struct(_)) => true,
@@ -1248,6 +1259,7 @@ fn parse_f32(text: &str, note: &mut dyn FnMut(String)) -> f32 {
 }
 
 /// Parse an int: integer text (saturated outside i32, RB014), or an integral float (`1.`).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn parse_int(text: &str, note: &mut dyn FnMut(String)) -> Option<i32> {
     if let Ok(v) = text.parse::<i64>() {
         if let Ok(v) = i32::try_from(v) {
@@ -1320,135 +1332,5 @@ fn add_materials(net: &mut Network) {
             location: node.location().cloned(),
         };
         net.materials_mut().push(material);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::network::NoDefinitions;
-
-    fn read(src: &str) -> (Network, Diagnostics) {
-        let mut d = Diagnostics::new();
-        let net = parse_rib(
-            src.as_bytes(),
-            "t.rib",
-            &NoDefinitions,
-            &RibOptions::default(),
-            &mut d,
-        )
-        .unwrap();
-        (net, d)
-    }
-
-    /// Declarations and values are shared between nodes only when reading them reported
-    /// nothing: a repeated declaration or value with a finding reports it at every place.
-    #[test]
-    fn repeated_findings_are_reported_each_time() {
-        let (_, d) = read(
-            "Pattern \"P\" \"a\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2]\n\
-             Pattern \"P\" \"b\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2]\n",
-        );
-        assert_eq!(d.count("RB013"), 2, "{d:?}");
-        assert_eq!(d.count("RB014"), 2, "{d:?}");
-        let lines: Vec<u32> = d
-            .with_code("RB014")
-            .filter_map(|x| x.location.as_ref().map(|l| l.line))
-            .collect();
-        assert_eq!(lines, [1, 2]);
-    }
-
-    /// Parameters of different nodes with the same declaration and value share them, and
-    /// read the same as when each is read alone.
-    #[test]
-    fn repeated_declarations_and_values_are_shared() {
-        let (net, d) = read(
-            "Pattern \"P\" \"a\" \"float f\" [2] \"color c\" [1 0 0]\n\
-             Pattern \"P\" \"b\" \"float f\" [2] \"color c\" [1 0 1]\n\
-             Pattern \"Q\" \"c\" \"float f\" [2]\n\
-             Pattern \"R\" \"d\" \"reference float x\" [\"a:resultF\"]\n\
-             Pattern \"R\" \"e\" \"reference float x\" [\"b:resultF\"]\n",
-        );
-        assert!(d.is_empty(), "{d:?}");
-        let out = |h: &str| net.connections(net.find(h).unwrap(), "x")[0].output.clone();
-        let (d_out, e_out) = (out("d").unwrap(), out("e").unwrap());
-        assert_eq!(&*d_out, "resultF");
-        assert!(Arc::ptr_eq(&d_out, &e_out));
-        assert_eq!(
-            net.connections(net.find("e").unwrap(), "x")[0].upstream_node(),
-            net.find("b")
-        );
-        let p = |h: &str, n: &str| net[net.find(h).unwrap()].param(n).unwrap();
-        assert!(std::ptr::eq(
-            p("a", "f").decl().unwrap(),
-            p("b", "f").decl().unwrap()
-        ));
-        assert!(std::ptr::eq(
-            p("a", "f").value().unwrap(),
-            p("b", "f").value().unwrap()
-        ));
-        assert_eq!(p("c", "f").value(), Some(&Value::Float(2.0)));
-        assert_eq!(
-            p("b", "c").value(),
-            Some(&Value::Triple(BaseType::Color, [1.0, 0.0, 1.0]))
-        );
-        assert_ne!(p("a", "c").value(), p("b", "c").value());
-    }
-
-    #[test]
-    fn decl_words() {
-        let d = split_decl("reference struct manifold").unwrap();
-        assert!(d.reference);
-        assert_eq!((d.type_word, d.name), (Some("struct"), "manifold"));
-        let d = split_decl("float[2] PixelFilterWidth").unwrap();
-        assert_eq!((d.type_word, d.array), (Some("float"), Some("2")));
-        let d = split_decl("uniform float [3]  x").unwrap();
-        assert_eq!(
-            (d.class, d.type_word, d.array),
-            (Some("uniform"), Some("float"), Some("3"))
-        );
-        let d = split_decl("diffuseGain").unwrap();
-        assert_eq!((d.type_word, d.name), (None, "diffuseGain"));
-        let d = split_decl("reference x").unwrap();
-        assert_eq!((d.reference, d.type_word), (true, None));
-        let d = split_decl("foo bar float x").unwrap();
-        assert_eq!(d.extra, vec!["foo", "bar"]);
-        assert!(split_decl("  ").is_none());
-    }
-
-    #[test]
-    fn compatible_types() {
-        let f = Type::scalar(BaseType::Float);
-        let i = Type::scalar(BaseType::Int);
-        let f2 = Type::parse_decl("float2");
-        let int_dyn = Type {
-            base: BaseType::Int,
-            array: ArraySpec::Dynamic,
-        };
-        let int1 = Type {
-            base: BaseType::Int,
-            array: ArraySpec::Fixed(1),
-        };
-        assert!(types_compatible(&f, &f));
-        assert!(!types_compatible(&f, &i));
-        assert!(!types_compatible(&f, &f2));
-        assert!(types_compatible(&int1, &int_dyn));
-        assert!(types_compatible(&int1, &i));
-        assert!(types_compatible(
-            &Type::scalar(BaseType::Struct(None)),
-            &Type::scalar(BaseType::Struct(Some("manifold".into())))
-        ));
-    }
-
-    #[test]
-    fn int_parsing() {
-        let mut notes = Vec::new();
-        let mut note = |s: String| notes.push(s);
-        assert_eq!(parse_int("7", &mut note), Some(7));
-        assert_eq!(parse_int("1.", &mut note), Some(1));
-        assert_eq!(parse_int("1e2", &mut note), Some(100));
-        assert_eq!(parse_int("99999999999", &mut note), Some(i32::MAX));
-        assert_eq!(parse_int("1.5", &mut note), None);
-        assert_eq!(notes.len(), 2);
     }
 }

@@ -51,6 +51,7 @@ fn too_large_message(size: u64, limit: u64, at_least: bool) -> String {
 }
 
 /// `bytes` in the largest binary unit that keeps it at least 1 (`64 MiB`, `1.5 GiB`).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn human_size(bytes: u64) -> String {
     const UNITS: [&str; 4] = ["KiB", "MiB", "GiB", "TiB"];
     if bytes < 1024 {
@@ -126,6 +127,7 @@ pub(crate) fn open_regular(path: &Path) -> Result<(File, u64), ReadError> {
 }
 
 /// Read the regular file `path` (symlinks followed) if it holds at most `limit` bytes.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
     let (file, len) = open_regular(path)?;
     if len > limit {
@@ -155,69 +157,4 @@ pub fn read_stream(reader: impl Read, limit: u64) -> Result<Vec<u8>, ReadError> 
         });
     }
     Ok(bytes)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_read_as_people_write_them() {
-        assert_eq!(human_size(12), "12 B");
-        assert_eq!(human_size(64 << 20), "64 MiB");
-        assert_eq!(human_size((64 << 20) + 1), "64.0 MiB");
-        assert_eq!(human_size(3 << 29), "1.5 GiB");
-    }
-
-    #[test]
-    fn an_endless_stream_stops_at_the_limit() {
-        let err = read_stream(io::repeat(0), 1000).unwrap_err();
-        assert!(matches!(
-            err,
-            ReadError::TooLarge {
-                size: 1000,
-                limit: 1000,
-                at_least: true
-            }
-        ));
-        assert_eq!(
-            err.to_string(),
-            "more than the limit of 1000 B (1000 bytes)",
-            "{err}"
-        );
-        assert_eq!(read_stream(&[7u8; 1000][..], 1000).unwrap().len(), 1000);
-    }
-
-    #[test]
-    fn only_regular_files_within_the_limit_are_read() {
-        let dir = std::env::temp_dir().join(format!("vstructc-source-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let f = dir.join("f");
-        std::fs::write(&f, [1u8; 100]).unwrap();
-        assert_eq!(read_regular_file(&f, 100).unwrap().len(), 100);
-        let err = read_regular_file(&f, 99).unwrap_err();
-        assert!(
-            matches!(err, ReadError::TooLarge { size: 100, .. }),
-            "{err}"
-        );
-        let err = read_regular_file(&dir, 99).unwrap_err();
-        assert!(
-            matches!(err, ReadError::NotRegular { kind: "a folder" }),
-            "{err}"
-        );
-        #[cfg(unix)]
-        {
-            let err = read_regular_file(Path::new("/dev/zero"), 99).unwrap_err();
-            assert!(
-                matches!(
-                    err,
-                    ReadError::NotRegular {
-                        kind: "a character device"
-                    }
-                ),
-                "{err}"
-            );
-        }
-        let _ = std::fs::remove_dir_all(&dir);
-    }
 }

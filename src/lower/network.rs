@@ -115,6 +115,7 @@ pub fn lower_terminal(
 }
 
 /// LW030 for every placeholder (a connection into a head) that survived resolution.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn report_placeholders(net: &Network, registry: &Registry, diags: &mut Diagnostics) {
     for id in net.nodes_sorted() {
         let Some(tables) = registry.tables(net[id].shader()) else {

@@ -14,6 +14,7 @@ const ELLIPSIS: usize = 95;
 /// Rows of each glyph, top first; bit 4 is the leftmost column. Characters 32 (space) to
 /// 126 (`~`) in order, then `…`.
 #[rustfmt::skip]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 static GLYPHS: [[u8; GLYPH_H]; 96] = [
     [0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00], // ' '
     [0x04, 0x04, 0x04, 0x04, 0x04, 0x00, 0x04, 0x00], // '!'
@@ -126,6 +127,7 @@ fn glyph_index(c: char) -> usize {
 /// a `scale × scale` square. Text wider than the box (less a margin of `scale` pixels on
 /// each side) is cut and ends with `…`.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) struct Label {
     glyphs: Vec<usize>,
     /// Left edge of the text in the box.
@@ -134,7 +136,14 @@ pub(crate) struct Label {
 }
 
 impl Label {
+    /// The glyphs drawn, as indices into the font.
+    #[cfg(feature = "testkit")]
+    pub fn glyphs(&self) -> &[usize] {
+        &self.glyphs
+    }
+
     /// Lay out `text` in a box `width` pixels wide at `scale` (at least 1).
+    #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn fit(text: &str, width: usize, scale: usize) -> Label {
         let scale = scale.max(1);
         let advance = ADVANCE * scale;
@@ -156,12 +165,14 @@ impl Label {
     }
 
     /// Height of the text in pixels.
+    #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn height(&self) -> usize {
         GLYPH_H * self.scale
     }
 
     /// Whether pixel `(x, y)` of the text (`y` from the top of the glyphs, below
     /// [`Label::height`]; `x` from the left of the box) is ink.
+    #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn ink(&self, x: usize, y: usize) -> bool {
         let advance = ADVANCE * self.scale;
         let Some(dx) = x.checked_sub(self.x0) else {
@@ -175,69 +186,5 @@ impl Label {
             return false;
         };
         col < GLYPH_W && row < GLYPH_H && GLYPHS[g][row] >> (GLYPH_W - 1 - col) & 1 == 1
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The text as rows of `#` and `.` (one character per pixel).
-    fn art(l: &Label, width: usize) -> Vec<String> {
-        (0..l.height())
-            .map(|y| {
-                (0..width)
-                    .map(|x| if l.ink(x, y) { '#' } else { '.' })
-                    .collect()
-            })
-            .collect()
-    }
-
-    #[test]
-    fn glyphs_are_drawn_at_their_place() {
-        // "Hi" in a box 13 wide: 11 pixels of text centred, one column either side.
-        let l = Label::fit("Hi", 13, 1);
-        assert_eq!(
-            art(&l, 13),
-            [
-                ".#...#...#...",
-                ".#...#.......",
-                ".#...#..##...",
-                ".#####...#...",
-                ".#...#...#...",
-                ".#...#...#...",
-                ".#...#..###..",
-                ".............",
-            ]
-        );
-        // Scale 2 doubles every pixel.
-        let big = Label::fit("Hi", 26, 2);
-        let small = art(&l, 13);
-        let doubled: Vec<String> = small
-            .iter()
-            .flat_map(|r| {
-                let d: String = r.chars().flat_map(|c| [c, c]).collect();
-                [d.clone(), d]
-            })
-            .collect();
-        assert_eq!(art(&big, 26), doubled);
-    }
-
-    #[test]
-    fn long_text_ends_with_an_ellipsis_inside_the_box() {
-        // A box of 32 pixels holds 5 glyphs (5 × 6 − 1 = 29 pixels within a margin of 1).
-        assert_eq!(Label::fit("abcde", 32, 1).glyphs.len(), 5);
-        let cut = Label::fit("abcdefgh", 32, 1);
-        assert_eq!(cut, Label::fit("abcd…", 32, 1));
-        assert!((0..8).all(|y| !cut.ink(0, y) && !cut.ink(31, y)));
-        // Other characters show as `?`; every glyph differs from every other.
-        assert_eq!(Label::fit("é", 32, 1), Label::fit("?", 32, 1));
-        for (a, ga) in GLYPHS.iter().enumerate() {
-            for (b, gb) in GLYPHS.iter().enumerate().skip(a + 1) {
-                assert_ne!(ga, gb, "glyphs {a} and {b}");
-            }
-        }
-        // A box too narrow for one glyph draws nothing.
-        assert!(Label::fit("abc", 4, 1).glyphs.is_empty());
     }
 }

@@ -24,6 +24,7 @@ fn reserved(name: &str) -> bool {
 }
 
 /// `name` without one trailing element index (`colors[2]` → `colors`).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn without_index(name: &str) -> Option<&str> {
     let open = name.strip_suffix(']')?.rfind('[')?;
     let digits = &name[open + 1..name.len() - 1];
@@ -317,18 +318,5 @@ impl<'a> Checker<'a> {
             };
             self.out.push(d.with_node(first.handle()));
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn element_names_count_as_their_array() {
-        assert_eq!(without_index("colors[2]"), Some("colors"));
-        assert_eq!(without_index("colors[]"), None);
-        assert_eq!(without_index("colors[x]"), None);
-        assert_eq!(without_index("colors"), None);
     }
 }

@@ -21,8 +21,8 @@ use crate::types::Value;
 use rustc_hash::FxHashMap as HashMap;
 use std::sync::Arc;
 
-mod check;
-mod plan;
+// Definition checks and decision plans: public under `testkit` for their unit tests.
+testkit_mods!(check, plan);
 pub use check::check_definitions;
 use plan::{Decision, DecisionCache, Plan, Verdict};
 

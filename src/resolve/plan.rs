@@ -22,6 +22,7 @@ use std::sync::Arc;
 
 /// A list of parameter names to find in nodes, with their hashes and an index by hash.
 #[derive(Default)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) struct NameSet {
     names: Vec<(Arc<str>, u64)>,
     /// Positions in `names` of the first occurrence of each name, by [`name_hash`].
@@ -32,6 +33,7 @@ pub(super) struct NameSet {
 
 impl NameSet {
     /// Adds `name` unless it is in the set already.
+    #[cfg_attr(feature = "testkit", visibility::make(pub))]
     fn insert(&mut self, name: Arc<str>) {
         if !self.contains(&name) {
             self.push(name);
@@ -47,6 +49,7 @@ impl NameSet {
 
     /// Appends `name`, even if it is in the set already (positions must stay aligned with
     /// the caller's list); the index keeps the first occurrence.
+    #[cfg_attr(feature = "testkit", visibility::make(pub))]
     fn push(&mut self, name: Arc<str>) {
         let hash = name_hash(&name);
         let seen = self.contains(&name);
@@ -60,10 +63,10 @@ impl NameSet {
         }
     }
 
-    /// The number of names.
-    #[cfg(test)]
-    fn len(&self) -> usize {
-        self.names.len()
+    /// The names and their hashes, in the set's order.
+    #[cfg(feature = "testkit")]
+    pub fn names(&self) -> impl Iterator<Item = &(Arc<str>, u64)> {
+        self.names.iter()
     }
 
     /// Where each name is among `node`'s parameters, in the set's order. A node with fewer
@@ -96,6 +99,7 @@ impl NameSet {
 }
 
 /// How one input head's members meet one output head's members.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) struct Plan {
     /// Distinguishes plans in the decision cache.
     pub id: usize,
@@ -109,6 +113,7 @@ pub(super) struct Plan {
 }
 
 /// One member of the input head.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) struct PlannedMember {
     /// The index of the name it matched by and the upstream output member; `None` when the
     /// upstream head has no counterpart.
@@ -152,6 +157,7 @@ impl Plan {
 /// What expanding a member comes down to, when that is simple enough to do without the
 /// general path (which builds the explain story and every diagnostic).
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) enum Verdict {
     /// Nothing happens: the conditional chose `ignore` and reported nothing.
     Ignore,
@@ -168,6 +174,7 @@ pub(super) enum Verdict {
 
 /// The conditionals' verdicts for one expansion.
 #[derive(Default)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) struct Decision {
     /// Per member of the plan: the choice of its conditional when it was evaluated ahead.
     pub choices: Vec<Option<KnownChoice>>,
@@ -182,10 +189,12 @@ pub(super) struct Decision {
 
 /// At most this many decisions are kept: a scene whose upstream states never repeat would
 /// otherwise keep one per expansion. Past the bound, decisions are computed and dropped.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 const MAX_CACHED: usize = 4096;
 
 /// Decisions by (plan, upstream definition, upstream state).
 #[derive(Default)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) struct DecisionCache {
     table: HashTable<Cached>,
     /// Scratch: the state being looked up.
@@ -203,6 +212,7 @@ struct Cached {
 }
 
 /// A look-up that missed: what [`DecisionCache::insert`] needs to store the decision.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(super) struct Miss {
     hash: u64,
     plan: usize,
@@ -210,6 +220,12 @@ pub(super) struct Miss {
 }
 
 impl DecisionCache {
+    /// The number of decisions kept.
+    #[cfg(feature = "testkit")]
+    pub fn cached(&self) -> usize {
+        self.table.len()
+    }
+
     /// The cached decision of `plan` for `upstream` in its current state, else what to
     /// insert it under. `def` identifies U's definition (its address; 0 for none).
     pub fn lookup(
@@ -259,6 +275,7 @@ impl DecisionCache {
 /// Appends what a conditional can observe of one parameter of U: whether it exists, is
 /// connected and has a value, and the value bit for bit (so `-0.0` and `0.0`, which compare
 /// equal, are still different states).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn encode_param(out: &mut Vec<u8>, param: Option<&Param>) {
     let Some(p) = param else {
         out.push(0);
@@ -286,123 +303,5 @@ fn encode_param(out: &mut Vec<u8>, param: Option<&Param>) {
             let len = u32::try_from(out.len() - start - 4).unwrap_or(u32::MAX);
             out[start..start + 4].copy_from_slice(&len.to_le_bytes());
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn encoded(value: Option<Value>, connected: bool) -> Vec<u8> {
-        let mut net = Network::new();
-        let up = net.add_node("up", "PxrFractal");
-        let n = net.add_node("n", "PxrLayer");
-        if let Some(v) = value {
-            net.set_param(n, "p", v);
-        }
-        if connected {
-            net.connect(n, "p", up, "resultF");
-        }
-        let mut out = Vec::new();
-        let param = net[n].param("p");
-        encode_param(&mut out, param);
-        out
-    }
-
-    #[test]
-    fn states_a_conditional_can_tell_apart_encode_differently() {
-        let states = [
-            encoded(None, false),
-            encoded(None, true),
-            encoded(Some(Value::Int(1)), false),
-            encoded(Some(Value::Int(1)), true),
-            encoded(Some(Value::Int(0)), false),
-            encoded(Some(Value::Float(0.0)), false),
-            encoded(Some(Value::Float(-0.0)), false),
-            encoded(Some(Value::Float(1.0)), false),
-            encoded(Some(Value::Str("1".into())), false),
-            encoded(Some(Value::Str("10".into())), false),
-            encoded(Some(Value::Token("1".into())), false),
-            encoded(Some(Value::Bool(true)), false),
-        ];
-        for (i, a) in states.iter().enumerate() {
-            for b in &states[i + 1..] {
-                assert_ne!(a, b);
-            }
-        }
-        assert_eq!(
-            encoded(Some(Value::Int(7)), true),
-            encoded(Some(Value::Int(7)), true)
-        );
-    }
-
-    #[test]
-    fn scanning_and_looking_up_find_the_same_slots() {
-        let mut net = Network::new();
-        let n = net.add_node("n", "PxrLayer");
-        let mut set = NameSet::default();
-        for name in ["a", "b", "c", "d", "e", "b"] {
-            set.insert(Arc::from(name));
-        }
-        assert_eq!(set.len(), 5);
-        let mut repeated = NameSet::default();
-        for name in ["a", "b", "a"] {
-            repeated.push(Arc::from(name));
-        }
-        assert_eq!(repeated.len(), 3);
-        let mut other = Network::new();
-        let m = other.add_node("m", "PxrLayer");
-        other.set_param(m, "a", Value::Int(0));
-        let mut slots = Vec::new();
-        repeated.find_in(&other, m, &mut slots);
-        assert_eq!(
-            slots,
-            [
-                Slot::At(0),
-                Slot::Missing {
-                    hash: name_hash("b")
-                },
-                Slot::At(0)
-            ],
-            "both occurrences found"
-        );
-        let mut scanned = Vec::new();
-        let mut looked_up = Vec::new();
-        for (k, name) in ["x", "d", "y", "a", "z", "w", "v"].into_iter().enumerate() {
-            net.set_param(n, name, Value::Int(k as i32));
-            set.find_in(&net, n, &mut scanned);
-            let by_lookup = set.names.iter().map(|(m, h)| net.slot_of(n, m, *h));
-            looked_up.clear();
-            looked_up.extend(by_lookup);
-            assert_eq!(scanned, looked_up, "after adding {name}");
-        }
-        assert_eq!(scanned[0], Slot::At(3));
-        assert_eq!(scanned[3], Slot::At(1));
-    }
-
-    #[test]
-    fn the_cache_is_bounded() {
-        let mut cache = DecisionCache::default();
-        let mut reads = NameSet::default();
-        reads.insert(Arc::from("p"));
-        let plan = Plan {
-            id: 0,
-            members: Vec::new(),
-            properties: NameSet::default(),
-            reads,
-        };
-        let mut net = Network::new();
-        let n = net.add_node("n", "PxrLayer");
-        for i in 0..MAX_CACHED as i32 + 10 {
-            net.set_param(n, "p", Value::Int(i));
-            let miss = cache
-                .lookup(&plan, 0, &net, n)
-                .err()
-                .expect("a new state misses");
-            cache.insert(miss, Arc::new(Decision::default()));
-        }
-        assert_eq!(cache.table.len(), MAX_CACHED);
-        net.set_param(n, "p", Value::Int(3));
-        assert!(cache.lookup(&plan, 0, &net, n).is_ok());
     }
 }

@@ -12,3 +12,13 @@ mod eval;
 mod info;
 mod render;
 mod snippets;
+mod unit;
+
+/// The binary's source snippets, compiled here for their unit tests (`unit::snippet`): the
+/// binary is not built as a test target, so its helpers are checked from this one.
+#[path = "../../src/bin/vstructc/cli/snippet.rs"]
+#[allow(
+    dead_code,
+    reason = "the rendering entry points are the binary's; the unit tests reach only the helpers"
+)]
+mod snippet;

@@ -10,4 +10,5 @@ mod fixtures;
 mod grammar;
 mod props;
 mod snapshot;
+mod unit;
 mod vectors;

@@ -19,3 +19,4 @@ mod rib_examples;
 mod rib_fixtures;
 mod rib_reader;
 mod rib_writer;
+mod unit;

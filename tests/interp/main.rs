@@ -25,3 +25,4 @@ mod soa;
 mod soa_kernels;
 mod uniform;
 mod uniform_materials;
+mod unit;

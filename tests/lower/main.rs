@@ -11,3 +11,4 @@ mod models;
 mod network;
 mod pxr;
 mod snapshot;
+mod unit;

@@ -14,3 +14,4 @@ mod registry_search;
 mod registry_tables;
 mod rules;
 mod scale;
+mod unit;

@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 /// What a token is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) enum TokKind {
     /// `[A-Za-z_][A-Za-z0-9_]*`: a request name.
     Ident,
@@ -29,12 +30,19 @@ pub(crate) enum TokKind {
 
 /// One token: kind, byte span, position of its first character, and the line it ends on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) struct Token {
+    /// What the token is.
     pub kind: TokKind,
+    /// Byte offset of its first byte.
     pub start: usize,
+    /// Byte offset past its last byte.
     pub end: usize,
+    /// Line of its first character (from 1).
     pub line: u32,
+    /// Column of its first character (from 1).
     pub col: u32,
+    /// Line of its last character.
     pub end_line: u32,
     /// For strings: true if the content contains a backslash (needs decoding).
     pub escaped: bool,
@@ -84,6 +92,7 @@ pub(crate) fn is_space(b: u8) -> bool {
 }
 
 /// The tokenizer state: position, line and column (in characters) of the next byte.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) struct Lexer<'a> {
     src: &'a [u8],
     pos: usize,
@@ -328,6 +337,7 @@ fn is_known_escape(e: u8, quote: u8) -> bool {
 
 /// The decoded content of a string token (quotes removed, escapes applied). Invalid UTF-8 is
 /// replaced by U+FFFD.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn decode_string(src: &[u8], t: &Token) -> String {
     decode_str(src, t).into_owned()
 }
@@ -383,119 +393,4 @@ pub(crate) fn decode_str<'s>(src: &'s [u8], t: &Token) -> Cow<'s, str> {
         }
     }
     Cow::Owned(String::from_utf8_lossy(&out).into_owned())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn lex(src: &str) -> (Vec<(TokKind, String)>, Diagnostics) {
-        let mut d = Diagnostics::new();
-        let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
-        let mut out = Vec::new();
-        while let Some(t) = lx.next_token(&mut d).unwrap() {
-            let text = if t.kind == TokKind::Str {
-                decode_string(src.as_bytes(), &t)
-            } else {
-                String::from_utf8_lossy(lx.bytes(&t)).into_owned()
-            };
-            out.push((t.kind, text));
-        }
-        (out, d)
-    }
-
-    #[test]
-    fn numbers_in_every_form() {
-        for n in [
-            "0.",
-            "1.",
-            "-0",
-            "9.99999968e+37",
-            "3.04999995",
-            ".8",
-            "+2",
-            "1e5",
-            "-1.5E-3",
-        ] {
-            let (toks, _) = lex(n);
-            assert_eq!(toks, vec![(TokKind::Number, n.to_string())], "{n}");
-        }
-    }
-
-    #[test]
-    fn number_then_identifier_splits() {
-        let (toks, _) = lex("[1 2]Sphere");
-        let kinds: Vec<_> = toks.iter().map(|t| t.0).collect();
-        assert_eq!(
-            kinds,
-            [
-                TokKind::Open,
-                TokKind::Number,
-                TokKind::Number,
-                TokKind::Close,
-                TokKind::Ident
-            ]
-        );
-    }
-
-    #[test]
-    fn string_escapes() {
-        let (toks, d) = lex(r#""a\"b\\c\n\t\101\q" "x\
-y""#);
-        assert_eq!(toks[0].1, "a\"b\\c\n\tAq");
-        assert_eq!(toks[1].1, "xy");
-        assert_eq!(d.count("RB010"), 1);
-        let rb010 = d.with_code("RB010").next().unwrap();
-        assert_eq!(rb010.location.as_ref().map(|l| l.column), Some(17));
-    }
-
-    #[test]
-    fn single_quotes_are_info_or_strict_error() {
-        let (toks, d) = lex("['object']");
-        assert_eq!(toks[1], (TokKind::Str, "object".into()));
-        assert_eq!(d.count("RB011"), 1);
-        let mut d = Diagnostics::new();
-        let mut lx = Lexer::new(b"'x'", "t".into(), true);
-        let err = lx.next_token(&mut d).unwrap_err();
-        assert_eq!(err.code(), Some("RB011"));
-    }
-
-    #[test]
-    fn positions_count_characters() {
-        let src = "# é comment\n  Pattern \"é\" x";
-        let mut d = Diagnostics::new();
-        let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
-        let c = lx.next_token(&mut d).unwrap().unwrap();
-        assert_eq!((c.kind, c.line, c.col), (TokKind::Comment, 1, 1));
-        let p = lx.next_token(&mut d).unwrap().unwrap();
-        assert_eq!((p.line, p.col), (2, 3));
-        let s = lx.next_token(&mut d).unwrap().unwrap();
-        assert_eq!((s.line, s.col), (2, 11));
-        let x = lx.next_token(&mut d).unwrap().unwrap();
-        assert_eq!((x.line, x.col), (2, 15));
-    }
-
-    #[test]
-    fn errors() {
-        let mut d = Diagnostics::new();
-        let mut lx = Lexer::new(b"  \"abc", "t".into(), false);
-        assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB003"));
-        let mut lx = Lexer::new(b"a {", "t".into(), false);
-        lx.next_token(&mut d).unwrap();
-        let e = lx.next_token(&mut d).unwrap_err();
-        assert_eq!(e.code(), Some("RB004"));
-        assert_eq!(e.diagnostic().unwrap().location.as_ref().unwrap().column, 3);
-        let mut lx = Lexer::new(b"a \xff", "t".into(), false);
-        lx.next_token(&mut d).unwrap();
-        let e = lx.next_token(&mut d).unwrap_err();
-        assert_eq!(e.code(), Some("RB002"));
-        assert!(e.to_string().contains("offset 2"));
-        // Bytes >= 0x80 inside strings and comments are fine.
-        let mut lx = Lexer::new("\"\u{e9}\" # \u{e9}".as_bytes(), "t".into(), false);
-        assert!(lx.next_token(&mut d).unwrap().is_some());
-        assert!(lx.next_token(&mut d).unwrap().is_some());
-        // A lone sign is not a number.
-        let mut lx = Lexer::new(b"- 1", "t".into(), false);
-        assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB004"));
-    }
 }

@@ -58,8 +58,9 @@ use glam::{Vec2, Vec3};
 
 mod compile;
 mod lanes;
+// The lobe packs: public under `testkit` for their unit tests.
+testkit_mods!(packs);
 mod leaf;
-mod packs;
 mod plan;
 mod prepare;
 mod prepared;

@@ -38,7 +38,7 @@ impl ColorChoice {
     }
 
     /// Whether to colour, given the `NO_COLOR` variable and whether the output is a terminal.
-    fn colours(self, no_color: Option<&std::ffi::OsStr>, terminal: bool) -> bool {
+    pub(crate) fn colours(self, no_color: Option<&std::ffi::OsStr>, terminal: bool) -> bool {
         match self {
             ColorChoice::Always => true,
             ColorChoice::Never => false,
@@ -67,13 +67,13 @@ pub fn remember(name: &str, text: &[u8]) {
 }
 
 /// A source text and the byte offset where each of its lines starts.
-struct Source {
+pub(crate) struct Source {
     text: Arc<str>,
     line_starts: Vec<usize>,
 }
 
 impl Source {
-    fn new(text: Arc<str>) -> Source {
+    pub(crate) fn new(text: Arc<str>) -> Source {
         let line_starts = std::iter::once(0)
             .chain(newlines(&text).map(|i| i + 1))
             .collect();
@@ -81,7 +81,7 @@ impl Source {
     }
 
     /// Line `line` (1-based) without its line ending, if there is one.
-    fn line(&self, line: u32) -> Option<&str> {
+    pub(crate) fn line(&self, line: u32) -> Option<&str> {
         let i = (line as usize).checked_sub(1)?;
         let start = *self.line_starts.get(i)?;
         let end = self
@@ -140,12 +140,12 @@ fn load(name: &str) -> Option<Arc<str>> {
 }
 
 /// Characters of a long source line shown on each side of the column.
-const LINE_CONTEXT: usize = MAX_HUMAN_LINE / 2;
+pub(crate) const LINE_CONTEXT: usize = MAX_HUMAN_LINE / 2;
 
 /// The part of `line` shown (at most [`LINE_CONTEXT`] characters each side of the 1-based
 /// character `column`) and the byte range marked in it: `width` characters from the column
 /// (at least one; an empty range just past the end of the line).
-fn window(line: &str, column: u32, width: usize) -> (String, std::ops::Range<usize>) {
+pub(crate) fn window(line: &str, column: u32, width: usize) -> (String, std::ops::Range<usize>) {
     let col = (column.max(1) - 1) as usize;
     let first = col.saturating_sub(LINE_CONTEXT);
     let cut_head = first > 0;
@@ -281,7 +281,7 @@ pub fn render(d: &Diagnostic, sources: &mut Sources, colour: bool) -> String {
 }
 
 /// `line` without its ANSI escape sequences (`ESC [ … letter`).
-fn without_escapes(line: &str) -> String {
+pub(crate) fn without_escapes(line: &str) -> String {
     let mut out = String::new();
     let mut chars = line.chars();
     while let Some(c) = chars.next() {
@@ -314,52 +314,4 @@ fn anstyle_info() -> annotate_snippets::renderer::Style {
     annotate_snippets::renderer::AnsiColor::BrightBlue
         .on_default()
         .bold()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn window_marks_the_column_and_cuts_long_lines() {
-        let (s, r) = window("abc def", 5, 3);
-        assert_eq!((s.as_str(), r), ("abc def", 4..7));
-        let (s, r) = window("abc", 4, 1);
-        assert_eq!((s.as_str(), r), ("abc", 3..3));
-        let (s, r) = window("\t\tx = 1", 3, 1);
-        assert_eq!((s.as_str(), r), ("        x = 1", 8..9));
-        let long = "x".repeat(10 * LINE_CONTEXT);
-        let (s, r) = window(&long, 5 * LINE_CONTEXT as u32, 1);
-        assert!(s.chars().count() <= 2 * LINE_CONTEXT + 3);
-        assert!(s.starts_with('…') && s.ends_with('…'));
-        assert_eq!(&s[r], "x");
-    }
-
-    #[test]
-    fn lines_are_found_without_their_line_ending() {
-        let s = Source::new(Arc::from("a\r\nb\n"));
-        assert_eq!(s.line(1), Some("a"));
-        assert_eq!(s.line(2), Some("b"));
-        assert_eq!(s.line(3), Some(""));
-        assert_eq!(s.line(4), None);
-        assert_eq!(s.line(0), None);
-        assert_eq!(Source::new(Arc::from("x")).line(1), Some("x"));
-    }
-
-    #[test]
-    fn auto_colours_a_terminal_unless_no_color_is_set() {
-        use std::ffi::OsStr;
-        let auto = ColorChoice::Auto;
-        assert!(auto.colours(None, true));
-        assert!(auto.colours(Some(OsStr::new("")), true));
-        assert!(!auto.colours(Some(OsStr::new("1")), true));
-        assert!(!auto.colours(None, false));
-        assert!(ColorChoice::Always.colours(Some(OsStr::new("1")), false));
-        assert!(!ColorChoice::Never.colours(None, true));
-    }
-
-    #[test]
-    fn escapes_are_removed() {
-        assert_eq!(without_escapes("\x1b[1m\x1b[94m|\x1b[0m"), "|");
-    }
 }

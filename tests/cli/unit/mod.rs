@@ -1,0 +1,3 @@
+//! Unit tests of the command line's internals (its modules compiled into this binary).
+
+mod snippet;

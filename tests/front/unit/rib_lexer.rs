@@ -1,0 +1,114 @@
+//! Unit tests of `front::rib::lexer` (`src/front/rib/lexer.rs`).
+
+use vstructc::diag::Diagnostics;
+use vstructc::front::rib::lexer::*;
+
+fn lex(src: &str) -> (Vec<(TokKind, String)>, Diagnostics) {
+    let mut d = Diagnostics::new();
+    let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+    let mut out = Vec::new();
+    while let Some(t) = lx.next_token(&mut d).unwrap() {
+        let text = if t.kind == TokKind::Str {
+            decode_string(src.as_bytes(), &t)
+        } else {
+            String::from_utf8_lossy(lx.bytes(&t)).into_owned()
+        };
+        out.push((t.kind, text));
+    }
+    (out, d)
+}
+
+#[test]
+fn numbers_in_every_form() {
+    for n in [
+        "0.",
+        "1.",
+        "-0",
+        "9.99999968e+37",
+        "3.04999995",
+        ".8",
+        "+2",
+        "1e5",
+        "-1.5E-3",
+    ] {
+        let (toks, _) = lex(n);
+        assert_eq!(toks, vec![(TokKind::Number, n.to_string())], "{n}");
+    }
+}
+
+#[test]
+fn number_then_identifier_splits() {
+    let (toks, _) = lex("[1 2]Sphere");
+    let kinds: Vec<_> = toks.iter().map(|t| t.0).collect();
+    assert_eq!(
+        kinds,
+        [
+            TokKind::Open,
+            TokKind::Number,
+            TokKind::Number,
+            TokKind::Close,
+            TokKind::Ident
+        ]
+    );
+}
+
+#[test]
+fn string_escapes() {
+    let (toks, d) = lex(r#""a\"b\\c\n\t\101\q" "x\
+y""#);
+    assert_eq!(toks[0].1, "a\"b\\c\n\tAq");
+    assert_eq!(toks[1].1, "xy");
+    assert_eq!(d.count("RB010"), 1);
+    let rb010 = d.with_code("RB010").next().unwrap();
+    assert_eq!(rb010.location.as_ref().map(|l| l.column), Some(17));
+}
+
+#[test]
+fn single_quotes_are_info_or_strict_error() {
+    let (toks, d) = lex("['object']");
+    assert_eq!(toks[1], (TokKind::Str, "object".into()));
+    assert_eq!(d.count("RB011"), 1);
+    let mut d = Diagnostics::new();
+    let mut lx = Lexer::new(b"'x'", "t".into(), true);
+    let err = lx.next_token(&mut d).unwrap_err();
+    assert_eq!(err.code(), Some("RB011"));
+}
+
+#[test]
+fn positions_count_characters() {
+    let src = "# é comment\n  Pattern \"é\" x";
+    let mut d = Diagnostics::new();
+    let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+    let c = lx.next_token(&mut d).unwrap().unwrap();
+    assert_eq!((c.kind, c.line, c.col), (TokKind::Comment, 1, 1));
+    let p = lx.next_token(&mut d).unwrap().unwrap();
+    assert_eq!((p.line, p.col), (2, 3));
+    let s = lx.next_token(&mut d).unwrap().unwrap();
+    assert_eq!((s.line, s.col), (2, 11));
+    let x = lx.next_token(&mut d).unwrap().unwrap();
+    assert_eq!((x.line, x.col), (2, 15));
+}
+
+#[test]
+fn errors() {
+    let mut d = Diagnostics::new();
+    let mut lx = Lexer::new(b"  \"abc", "t".into(), false);
+    assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB003"));
+    let mut lx = Lexer::new(b"a {", "t".into(), false);
+    lx.next_token(&mut d).unwrap();
+    let e = lx.next_token(&mut d).unwrap_err();
+    assert_eq!(e.code(), Some("RB004"));
+    assert_eq!(e.diagnostic().unwrap().location.as_ref().unwrap().column, 3);
+    let mut lx = Lexer::new(b"a \xff", "t".into(), false);
+    lx.next_token(&mut d).unwrap();
+    let e = lx.next_token(&mut d).unwrap_err();
+    assert_eq!(e.code(), Some("RB002"));
+    assert!(e.to_string().contains("offset 2"));
+    // Bytes >= 0x80 inside strings and comments are fine.
+    let mut lx = Lexer::new("\"\u{e9}\" # \u{e9}".as_bytes(), "t".into(), false);
+    assert!(lx.next_token(&mut d).unwrap().is_some());
+    assert!(lx.next_token(&mut d).unwrap().is_some());
+    // A lone sign is not a number.
+    let mut lx = Lexer::new(b"- 1", "t".into(), false);
+    assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB004"));
+}

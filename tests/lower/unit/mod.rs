@@ -1,0 +1,3 @@
+//! Unit tests of the library's internals for this stage (reached through the `testkit` feature).
+
+mod program;
