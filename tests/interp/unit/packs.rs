@@ -3,7 +3,9 @@
 use vstructc::glam::Vec3;
 use vstructc::interp::material::ActiveLobe;
 use vstructc::interp::material::packs::*;
-use vstructc::ir::MAX_LOBES;
+use vstructc::ir::MaterialIr;
+
+const MAX_LOBES: usize = MaterialIr::MAX_LOBES;
 
 /// The packs' members and the lone lobes of `keys`, each list in plan order.
 fn plan(keys: &[Option<u8>]) -> (Vec<Vec<u8>>, Vec<u8>) {
