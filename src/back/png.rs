@@ -14,6 +14,7 @@ use glam::Vec3;
 use std::io::{self, Write};
 
 /// The sRGB transfer function of one linear value, clamped to [0, 1].
+#[cfg(any(feature = "png", feature = "testkit"))]
 pub(crate) fn srgb_encode(x: f32) -> f32 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     if x <= 0.003_130_8 {
@@ -24,6 +25,7 @@ pub(crate) fn srgb_encode(x: f32) -> f32 {
 }
 
 /// One linear colour as 8-bit sRGB.
+#[cfg(any(feature = "png", feature = "testkit"))]
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn srgb8(c: Vec3) -> [u8; 3] {
     c.to_array()
