@@ -124,7 +124,7 @@ fn colour_is_emitted_with_always_and_never_with_never() {
     assert!(!auto.contains('\u{1b}'), "{auto}");
     assert_eq!(auto, never);
     // Without escapes, the coloured report says the same.
-    let stripped = strip_escapes(&always);
+    let stripped = crate::snippet::without_escapes(&always);
     assert_eq!(stripped, never);
 }
 
@@ -140,21 +140,4 @@ fn no_color_is_respected_in_auto_mode_only() {
     };
     assert!(!run("auto").contains('\u{1b}'));
     assert!(run("always").contains('\u{1b}'));
-}
-
-fn strip_escapes(s: &str) -> String {
-    let mut out = String::new();
-    let mut chars = s.chars();
-    while let Some(c) = chars.next() {
-        if c == '\u{1b}' {
-            for d in chars.by_ref() {
-                if d.is_ascii_alphabetic() {
-                    break;
-                }
-            }
-        } else {
-            out.push(c);
-        }
-    }
-    out
 }
