@@ -3,6 +3,22 @@
 from os import PathLike
 from typing import Any, Optional, Sequence, Union, final
 
+__all__ = [
+    "__version__",
+    "Error",
+    "InputError",
+    "LimitError",
+    "Diagnostic",
+    "Registry",
+    "Network",
+    "Material",
+    "Image",
+    "resolve",
+    "compile",
+    "explain",
+    "default_limits",
+]
+
 __version__: str
 
 _Value = Union[int, float, str, bool, tuple[float, ...], list[Any]]
@@ -185,12 +201,12 @@ class Material:
     def name(self) -> str: ...
     @property
     def recipe(self) -> str: ...
-    def lobes(self, wo: _Vec3 = (0.0, 0.0, 1.0)) -> list[dict[str, Any]]:
-        """kind, label, weight per lobe."""
+    def lobes(self, wo: Optional[_Vec3] = None) -> list[dict[str, Any]]:
+        """kind, label, weight per lobe; wo None: along the normal."""
     def eval(self, wo: _Vec3, wi: _Vec3) -> dict[str, Any]:
         """total (f·cos, r g b), pdf, lobes."""
-    def albedo(self, wo: _Vec3 = (0.0, 0.0, 1.0)) -> dict[str, _Vec3]:
-        """reflect, transmit."""
+    def albedo(self, wo: Optional[_Vec3] = None) -> dict[str, _Vec3]:
+        """reflect, transmit; wo None: along the normal."""
     def sample(self, wo: _Vec3, u: _Vec3) -> Optional[dict[str, Any]]:
         """wi, weight (f·cos / pdf), pdf, delta, lobe; None when no energy."""
     def render(

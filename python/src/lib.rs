@@ -1309,15 +1309,15 @@ fn rgb(c: Vec3) -> (f32, f32, f32) {
 
 #[pymethods]
 impl Material {
-    /// The lobes that survive prepare for the view `wo` (default: along the normal,
-    /// μ_o = 1): dicts of kind, label and weight (r, g, b).
-    #[pyo3(signature = (wo=(0.0, 0.0, 1.0)))]
+    /// The lobes that survive prepare for the view `wo` (None: along the normal, μ_o = 1):
+    /// dicts of kind, label and weight (r, g, b).
+    #[pyo3(signature = (wo=None))]
     fn lobes<'py>(
         &self,
         py: Python<'py>,
-        wo: (f32, f32, f32),
+        wo: Option<(f32, f32, f32)>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let wo = dir(wo, "wo")?;
+        let wo = dir(wo.unwrap_or((0.0, 0.0, 1.0)), "wo")?;
         let m = &self.inner;
         let rows = guarded(|| {
             let p = m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, wo));
@@ -1394,10 +1394,15 @@ impl Material {
         Ok(d)
     }
 
-    /// Directional albedo for view `wo`: a dict of reflect and transmit, each (r, g, b).
-    #[pyo3(signature = (wo=(0.0, 0.0, 1.0)))]
-    fn albedo<'py>(&self, py: Python<'py>, wo: (f32, f32, f32)) -> PyResult<Bound<'py, PyDict>> {
-        let wo = dir(wo, "wo")?;
+    /// Directional albedo for view `wo` (None: along the normal): a dict of reflect and
+    /// transmit, each (r, g, b).
+    #[pyo3(signature = (wo=None))]
+    fn albedo<'py>(
+        &self,
+        py: Python<'py>,
+        wo: Option<(f32, f32, f32)>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let wo = dir(wo.unwrap_or((0.0, 0.0, 1.0)), "wo")?;
         let m = &self.inner;
         let a = guarded(|| m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, wo)).albedo())
             .map_err(|msg| error_msg(py, msg))?;

@@ -83,9 +83,16 @@ def test_adding_a_handle_again_changes_its_shader(reg):
 # --- Materials --------------------------------------------------------------------------
 
 
-def test_sample(reg):
-    m = vstructc.compile(built(reg), reg)[0]
+def layered(repo, reg):
+    """The layered example's material: a diffuse, a specular and a clear coat lobe."""
+    text = (repo / "examples" / "layered.rib").read_bytes()
+    return vstructc.compile(vstructc.Network.from_rib(text, reg), reg)[0]
+
+
+def test_sample(repo, reg):
+    m = layered(repo, reg)
     lobes = m.lobes()
+    assert len(lobes) == 3
     seen = set()
     n = 8
     for i in range(n):
@@ -277,3 +284,10 @@ def test_a_panic_becomes_an_error():
     with pytest.raises(vstructc.Error):
         hook("again")
     assert vstructc.Registry().shaders()
+
+
+def test_view_defaults_to_the_normal(repo, reg):
+    m = layered(repo, reg)
+    assert m.lobes() == m.lobes(wo=(0, 0, 1)) == m.lobes(None)
+    assert m.albedo() == m.albedo(wo=(0, 0, 2))
+    assert m.lobes(wo=(1, 0, 0.2)) != m.lobes()  # the view matters
