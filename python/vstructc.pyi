@@ -3,10 +3,32 @@
 from os import PathLike
 from typing import Any, Optional, Sequence, Union, final
 
+__all__ = [
+    "__version__",
+    "Error",
+    "InputError",
+    "LimitError",
+    "Diagnostic",
+    "Registry",
+    "Network",
+    "Material",
+    "Image",
+    "resolve",
+    "compile",
+    "explain",
+    "default_limits",
+]
+
 __version__: str
 
 _Value = Union[int, float, str, bool, tuple[float, ...], list[Any]]
 _Vec3 = tuple[float, float, float]
+_Limits = dict[str, int]
+
+def default_limits() -> dict[str, int]:
+    """The default bounds by name (definition_file_bytes, network_file_bytes, nodes,
+    connections_per_input, params_per_node, expr_terms, expr_depth, preview_pixels); every
+    `limits=` argument takes a dict of some of them."""
 
 class Error(Exception):
     """A vstructc error; `.diagnostics` holds the diagnostics that explain it."""
@@ -61,6 +83,7 @@ class Registry:
         embedded: bool = True,
         prefer: str = "oso",
         env: bool = False,
+        limits: Optional[_Limits] = None,
     ) -> Registry: ...
     def shaders(self) -> list[str]:
         """Every shader id on the search path, sorted."""
@@ -81,10 +104,22 @@ class Network:
 
     def __new__(cls, registry: Optional[Registry] = None) -> Network: ...
     @staticmethod
-    def from_rib(text: Union[str, bytes], registry: Registry, name: str = "<rib>") -> Network:
-        """Reads RIB; raises vstructc.Error on malformed text."""
+    def from_rib(
+        text: Union[str, bytes],
+        registry: Registry,
+        name: str = "<rib>",
+        strict: bool = False,
+        limits: Optional[_Limits] = None,
+    ) -> Network:
+        """Reads RIB; raises vstructc.Error on malformed text. strict: single-quoted
+        strings are an error (RB011)."""
     @staticmethod
-    def from_json(text: Union[str, bytes], registry: Registry, name: str = "<json>") -> Network:
+    def from_json(
+        text: Union[str, bytes],
+        registry: Registry,
+        name: str = "<json>",
+        limits: Optional[_Limits] = None,
+    ) -> Network:
         """Reads vstructc's JSON form; raises vstructc.Error on malformed text."""
     @property
     def diagnostics(self) -> list[Diagnostic]:
@@ -93,12 +128,20 @@ class Network:
     def resolved(self) -> bool:
         """True once resolved and not changed since (add_node, set_param, connect clear it)."""
     def add_node(self, handle: str, shader: str, kind: Optional[str] = None) -> None:
-        """kind: pattern, bxdf, displace, light, lightfilter (default: the definition's)."""
+        """kind: pattern, bxdf, displace, light, lightfilter (default: the definition's).
+        A handle added again is a new version of it (this changes a node's shader)."""
     def set_param(
         self, handle: str, name: str, value: _Value, type: Optional[str] = None
     ) -> None:
         """The type comes from `type`, else the definition, else the value."""
     def connect(self, down: str, input: str, up: str, output: str) -> None: ...
+    def disconnect(
+        self, down: str, input: str, up: Optional[str] = None, output: Optional[str] = None
+    ) -> int:
+        """Removes the connections of down.input (from `up`, from `up.output`); returns
+        how many."""
+    def remove_param(self, handle: str, name: str) -> None:
+        """Removes the value and the connections of handle.name."""
     def add_material(
         self, name: str, surface: Optional[str] = None, displacement: Optional[str] = None
     ) -> None: ...
@@ -120,6 +163,9 @@ def resolve(
     registry: Registry,
     conditions: bool = True,
     ext: Optional[Sequence[str]] = None,
+    verbose: bool = False,
+    drop_unresolved: bool = False,
+    limits: Optional[_Limits] = None,
 ) -> list[Diagnostic]:
     """Expands every vstruct connection of `network` in place; returns the diagnostics."""
 
@@ -130,8 +176,22 @@ def compile(
     conditions: bool = True,
     ext: Optional[Sequence[str]] = None,
     diagnostics: Optional[list[Diagnostic]] = None,
+    verbose: bool = False,
+    drop_unresolved: bool = False,
+    limits: Optional[_Limits] = None,
 ) -> list[Material]:
     """Compiles the materials (resolving first when the network is not resolved)."""
+
+def explain(
+    network: Network,
+    registry: Registry,
+    handle: str,
+    input: str,
+    conditions: bool = True,
+    ext: Optional[Sequence[str]] = None,
+) -> dict[str, Any]:
+    """The story of handle.input: the `vstructc explain --json` document's fields (origin,
+    value, connections, location, events, upstream, ...). Resolves a copy of `network`."""
 
 @final
 class Material:
@@ -141,13 +201,17 @@ class Material:
     def name(self) -> str: ...
     @property
     def recipe(self) -> str: ...
-    def lobes(self, wo: _Vec3 = (0.0, 0.0, 1.0)) -> list[dict[str, Any]]:
-        """kind, label, weight per lobe."""
+    def lobes(self, wo: Optional[_Vec3] = None) -> list[dict[str, Any]]:
+        """kind, label, weight per lobe; wo None: along the normal."""
     def eval(self, wo: _Vec3, wi: _Vec3) -> dict[str, Any]:
         """total (f·cos, r g b), pdf, lobes."""
-    def albedo(self, wo: _Vec3 = (0.0, 0.0, 1.0)) -> dict[str, _Vec3]:
-        """reflect, transmit."""
-    def render(self, size: int = 256, furnace: bool = False) -> Image: ...
+    def albedo(self, wo: Optional[_Vec3] = None) -> dict[str, _Vec3]:
+        """reflect, transmit; wo None: along the normal."""
+    def sample(self, wo: _Vec3, u: _Vec3) -> Optional[dict[str, Any]]:
+        """wi, weight (f·cos / pdf), pdf, delta, lobe; None when no energy."""
+    def render(
+        self, size: int = 256, furnace: bool = False, limits: Optional[_Limits] = None
+    ) -> Image: ...
 
 @final
 class Image:

@@ -5,6 +5,12 @@
 //! Every call into the library runs under [`guarded`]: a panic becomes `vstructc.Error`
 //! instead of crossing into Python. Long calls (reading a network, resolving, compiling,
 //! rendering, writing) release the GIL.
+//!
+//! Test hook: built with the cargo feature `test-hooks` (CI builds the module with it
+//! through `MATURIN_PEP517_ARGS="--features test-hooks"`), the module has a private
+//! `_panic_for_test(message)` that panics inside [`guarded`], so the tests can show that a
+//! panic arrives as `vstructc.Error`. A default build (`pip install ./python`) has no such
+//! function.
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyKeyError, PyTypeError, PyValueError};
@@ -22,10 +28,13 @@ use vstructc::front::{NetFormat, ReadOptions, read_network};
 use vstructc::glam::Vec3;
 use vstructc::interp::ShadingPoint;
 use vstructc::interp::preview::{PreviewOptions, render_ball};
+use vstructc::limits::Limits;
 use vstructc::network::{NoDefinitions, NodeId, ParamTypes, RequestKind};
 use vstructc::pipeline::Lowering;
 use vstructc::registry::{Prefer, RegistryOptions};
 use vstructc::{ArraySpec, BaseType, Diagnostics, Type, Value};
+
+mod story;
 
 create_exception!(
     vstructc,
@@ -91,6 +100,70 @@ fn lib_error(py: Python<'_>, e: vstructc::Error) -> PyErr {
 /// `vstructc.Error` with `message` and no diagnostics (a caught panic, a write failure).
 fn error_msg(py: Python<'_>, message: String) -> PyErr {
     raise_with::<Error>(py, message, Vec::new())
+}
+
+/// The names and values of `limits` as a dict.
+fn limits_to_py<'py>(py: Python<'py>, limits: &Limits) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, value) in limit_fields(limits) {
+        d.set_item(name, value)?;
+    }
+    Ok(d)
+}
+
+fn limit_fields(l: &Limits) -> [(&'static str, u64); 8] {
+    [
+        ("definition_file_bytes", l.definition_file_bytes),
+        ("network_file_bytes", l.network_file_bytes),
+        ("nodes", l.nodes),
+        ("connections_per_input", l.connections_per_input),
+        ("params_per_node", l.params_per_node),
+        ("expr_terms", l.expr_terms),
+        ("expr_depth", l.expr_depth),
+        ("preview_pixels", l.preview_pixels),
+    ]
+}
+
+/// The defaults with the bounds named in `given` replaced (None: the defaults). An unknown
+/// name is a ValueError.
+fn limits_from(given: Option<&Bound<'_, PyDict>>) -> PyResult<Limits> {
+    let mut limits = Limits::default();
+    let Some(given) = given else {
+        return Ok(limits);
+    };
+    for (k, v) in given.iter() {
+        let name: String = k.extract()?;
+        let value: u64 = v
+            .extract()
+            .map_err(|_| PyTypeError::new_err(format!("the limit {name} is a non-negative int")))?;
+        let slot = match name.as_str() {
+            "definition_file_bytes" => &mut limits.definition_file_bytes,
+            "network_file_bytes" => &mut limits.network_file_bytes,
+            "nodes" => &mut limits.nodes,
+            "connections_per_input" => &mut limits.connections_per_input,
+            "params_per_node" => &mut limits.params_per_node,
+            "expr_terms" => &mut limits.expr_terms,
+            "expr_depth" => &mut limits.expr_depth,
+            "preview_pixels" => &mut limits.preview_pixels,
+            _ => {
+                let names: Vec<&str> = limit_fields(&limits).iter().map(|f| f.0).collect();
+                return Err(PyValueError::new_err(format!(
+                    "no limit {name:?}; the limits are {}",
+                    names.join(", ")
+                )));
+            }
+        };
+        *slot = value;
+    }
+    Ok(limits)
+}
+
+/// The default bounds on sizes and counts, by name (definition_file_bytes,
+/// network_file_bytes, nodes, connections_per_input, params_per_node, expr_terms, expr_depth,
+/// preview_pixels). Functions taking `limits=` accept a dict of some of these names.
+#[pyfunction]
+fn default_limits(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    limits_to_py(py, &Limits::default())
 }
 
 // ---------------------------------------------------------------------------------------
@@ -409,16 +482,19 @@ fn prop_to_py<'py>(py: Python<'py>, p: &vstructc::model::Property) -> PyResult<B
 impl Registry {
     /// A registry searching `paths` (files or folders) first, then VSTRUCTC_ARGS_PATH when
     /// `env` is true, then the embedded definitions when `embedded` is true. `prefer` is
-    /// "oso" (default) or "args": which wins when one shader has both.
+    /// "oso" (default) or "args": which wins when one shader has both. `limits` (a dict, see
+    /// default_limits()) bounds definition files (definition_file_bytes, params_per_node).
     #[new]
-    #[pyo3(signature = (paths=None, embedded=true, prefer="oso", env=false))]
+    #[pyo3(signature = (paths=None, embedded=true, prefer="oso", env=false, limits=None))]
     fn new(
         py: Python<'_>,
         paths: Option<Vec<PathBuf>>,
         embedded: bool,
         prefer: &str,
         env: bool,
+        limits: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
+        let limits = limits_from(limits)?;
         let prefer = match prefer {
             "oso" => Prefer::Oso,
             "args" => Prefer::Args,
@@ -433,6 +509,7 @@ impl Registry {
             use_env: env,
             use_embedded: embedded,
             prefer,
+            limits,
             ..RegistryOptions::default()
         };
         let inner = py
@@ -584,6 +661,7 @@ impl Network {
         registry: &Bound<'_, Registry>,
         name: &str,
         format: NetFormat,
+        read_options: &ReadOptions,
     ) -> PyResult<Network> {
         let text = Text::extract(text)?;
         let reg = registry.try_borrow()?;
@@ -592,16 +670,7 @@ impl Network {
         let mut diags = Diagnostics::new();
         let read = py
             .detach(|| {
-                guarded(|| {
-                    read_network(
-                        name,
-                        bytes,
-                        format,
-                        types,
-                        &ReadOptions::default(),
-                        &mut diags,
-                    )
-                })
+                guarded(|| read_network(name, bytes, format, types, read_options, &mut diags))
             })
             .map_err(|m| error_msg(py, m))?;
         // Unknown shaders are reported by resolution (VS020) for every input form.
@@ -656,29 +725,42 @@ impl Network {
 
     /// Reads a network from RIB text (str or bytes). Raises vstructc.Error on malformed
     /// text; warnings are in `.diagnostics`. to_rib() writes every byte outside the shading
-    /// networks back unchanged.
+    /// networks back unchanged. `strict=True` makes single-quoted strings an error (RB011)
+    /// instead of an info; `limits` (a dict, see default_limits()) bounds the text's size,
+    /// nodes, parameters and connections.
     #[staticmethod]
-    #[pyo3(signature = (text, registry, name="<rib>"))]
+    #[pyo3(signature = (text, registry, name="<rib>", strict=false, limits=None))]
     fn from_rib(
         py: Python<'_>,
         text: &Bound<'_, PyAny>,
         registry: &Bound<'_, Registry>,
         name: &str,
+        strict: bool,
+        limits: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Network> {
-        Network::read(py, text, registry, name, NetFormat::Rib)
+        let options = ReadOptions {
+            strict_rib: strict,
+            limits: limits_from(limits)?,
+        };
+        Network::read(py, text, registry, name, NetFormat::Rib, &options)
     }
 
     /// Reads a network from vstructc's JSON form (str or bytes). Raises vstructc.Error on
-    /// malformed text; warnings are in `.diagnostics`.
+    /// malformed text; warnings are in `.diagnostics`. `limits` as in from_rib().
     #[staticmethod]
-    #[pyo3(signature = (text, registry, name="<json>"))]
+    #[pyo3(signature = (text, registry, name="<json>", limits=None))]
     fn from_json(
         py: Python<'_>,
         text: &Bound<'_, PyAny>,
         registry: &Bound<'_, Registry>,
         name: &str,
+        limits: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Network> {
-        Network::read(py, text, registry, name, NetFormat::Json)
+        let options = ReadOptions {
+            strict_rib: false,
+            limits: limits_from(limits)?,
+        };
+        Network::read(py, text, registry, name, NetFormat::Json, &options)
     }
 
     /// The reader's diagnostics (warnings and infos) of a network read from text.
@@ -700,7 +782,11 @@ impl Network {
 
     /// Adds node `handle` of shader `shader`. `kind` is "pattern", "bxdf", "displace",
     /// "light" or "lightfilter"; by default the definition's kind when the network has a
-    /// registry, else "pattern". A handle added again is a new version of it.
+    /// registry, else "pattern". A handle added again is a new version of it, as a RIB
+    /// redefinition is: this is how a node's shader is changed. Later add_node, set_param,
+    /// connect and add_material calls and the lookups by handle reach the new version;
+    /// connections made before keep the old one (reconnect them), and both versions are
+    /// written.
     #[pyo3(signature = (handle, shader, kind=None))]
     fn add_node(
         &mut self,
@@ -779,6 +865,48 @@ impl Network {
         let u = self.node(up)?;
         self.net.connect(d, input, u, output);
         self.resolved = false;
+        Ok(())
+    }
+
+    /// Removes connections of input `input` of node `down`: all of them, or with `up` only
+    /// those from node `up` (and with `output` only those from that output). Returns how
+    /// many were removed.
+    #[pyo3(signature = (down, input, up=None, output=None))]
+    fn disconnect(
+        &mut self,
+        down: &str,
+        input: &str,
+        up: Option<&str>,
+        output: Option<&str>,
+    ) -> PyResult<usize> {
+        let d = self.node(down)?;
+        let u = up.map(|h| self.node(h)).transpose()?;
+        let links = self.net.connections(d, input).to_vec();
+        let before = links.len();
+        let keep: Vec<_> = links
+            .into_iter()
+            .filter(|l| {
+                let from_up = u.is_none_or(|u| l.upstream_node() == Some(u));
+                let from_output = output.is_none_or(|o| l.output() == Some(o));
+                !(from_up && from_output)
+            })
+            .collect();
+        let removed = before - keep.len();
+        if removed > 0 {
+            self.net.set_connections(d, input, keep);
+            self.resolved = false;
+        }
+        Ok(removed)
+    }
+
+    /// Removes parameter `name` of node `handle`: its value and its connections (it is then
+    /// not written). Nothing happens when the node has no such parameter.
+    fn remove_param(&mut self, handle: &str, name: &str) -> PyResult<()> {
+        let node = self.node(handle)?;
+        if self.net[node].param(name).is_some() {
+            self.net.remove_param(node, name);
+            self.resolved = false;
+        }
         Ok(())
     }
 
@@ -914,17 +1042,46 @@ impl Network {
     }
 }
 
+/// The options resolve() and compile() share (the library pipeline's).
+struct Options {
+    resolve: vstructc::resolve::ResolveOptions,
+    drop_unresolved: bool,
+}
+
 fn resolve_options(
     conditions: bool,
     ext: Option<Vec<String>>,
-) -> PyResult<vstructc::resolve::ResolveOptions> {
+    verbose: bool,
+    drop_unresolved: bool,
+    limits: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Options> {
     let extensions = Extensions::from_names(ext.unwrap_or_default())
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    Ok(vstructc::resolve::ResolveOptions {
-        conditions,
-        extensions,
-        ..Default::default()
+    Ok(Options {
+        resolve: vstructc::resolve::ResolveOptions {
+            conditions,
+            extensions,
+            verbose,
+            limits: limits_from(limits)?,
+            ..Default::default()
+        },
+        drop_unresolved,
     })
+}
+
+/// Deletes every connection still on an input head after resolution (the VS010
+/// placeholders), as the command's `--drop-unresolved` does.
+fn drop_unresolved(net: &mut vstructc::network::Network, registry: &vstructc::registry::Registry) {
+    for node in net.nodes_sorted() {
+        let Some(tables) = registry.tables(net[node].shader()) else {
+            continue;
+        };
+        for input in net.connected_inputs(node) {
+            if tables.is_input_head(&input) {
+                net.clear_connections(node, &input);
+            }
+        }
+    }
 }
 
 /// Resolves in place; returns the diagnostics (the registry's and resolution's, sorted,
@@ -933,7 +1090,7 @@ fn resolve_in_place(
     py: Python<'_>,
     net: &mut Network,
     registry: &Bound<'_, Registry>,
-    options: &vstructc::resolve::ResolveOptions,
+    options: &Options,
 ) -> PyResult<Diagnostics> {
     let reg = registry.try_borrow()?;
     let r = &reg.inner;
@@ -941,7 +1098,10 @@ fn resolve_in_place(
     let (res, mut diags) = py
         .detach(|| {
             guarded(|| {
-                let res = vstructc::resolve::resolve(n, r, options);
+                let res = vstructc::resolve::resolve(n, r, &options.resolve);
+                if options.drop_unresolved && res.limit.is_none() {
+                    drop_unresolved(n, r);
+                }
                 (res, r.diagnostics())
             })
         })
@@ -965,17 +1125,25 @@ fn resolve_in_place(
 
 /// Expands every vstruct connection of `network` in place, exactly as hdPrman does, and
 /// returns the diagnostics (registry's and resolution's). `conditions=False` ignores the
-/// vstruct conditionals; `ext` names opt-in extensions ("all" for every one).
+/// vstruct conditionals; `ext` names opt-in extensions ("all" for every one); `verbose`
+/// also reports notes (VS021); `drop_unresolved` deletes the connections still on input
+/// heads afterwards (the VS010 placeholders) instead of keeping them; `limits` (a dict, see
+/// default_limits()) bounds nodes, parameters per node and connections per input: beyond
+/// one, the network is left as it was and LimitError is raised.
 #[pyfunction]
-#[pyo3(signature = (network, registry, conditions=true, ext=None))]
+#[pyo3(signature = (network, registry, conditions=true, ext=None, verbose=false, drop_unresolved=false, limits=None))]
+#[allow(clippy::too_many_arguments)]
 fn resolve(
     py: Python<'_>,
     network: &Bound<'_, Network>,
     registry: &Bound<'_, Registry>,
     conditions: bool,
     ext: Option<Vec<String>>,
+    verbose: bool,
+    drop_unresolved: bool,
+    limits: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Vec<Diagnostic>> {
-    let options = resolve_options(conditions, ext)?;
+    let options = resolve_options(conditions, ext, verbose, drop_unresolved, limits)?;
     let mut net = network.try_borrow_mut()?;
     let diags = resolve_in_place(py, &mut net, registry, &options)?;
     Ok(diag_list(diags))
@@ -984,9 +1152,11 @@ fn resolve(
 /// Compiles the materials of `network` for the interpreter (resolving it in place first
 /// when it has not been resolved). `material` selects one material by name or terminal
 /// handle. A material that cannot be compiled is left out with an error diagnostic; when
-/// `diagnostics` is a list, every diagnostic is appended to it.
+/// `diagnostics` is a list, every diagnostic is appended to it. The resolution options are
+/// resolve()'s, used when compile resolves.
 #[pyfunction]
-#[pyo3(signature = (network, registry, material=None, conditions=true, ext=None, diagnostics=None))]
+#[pyo3(signature = (network, registry, material=None, conditions=true, ext=None, diagnostics=None, verbose=false, drop_unresolved=false, limits=None))]
+#[allow(clippy::too_many_arguments)]
 fn compile(
     py: Python<'_>,
     network: &Bound<'_, Network>,
@@ -995,8 +1165,11 @@ fn compile(
     conditions: bool,
     ext: Option<Vec<String>>,
     diagnostics: Option<&Bound<'_, PyList>>,
+    verbose: bool,
+    drop_unresolved: bool,
+    limits: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Vec<Material>> {
-    let options = resolve_options(conditions, ext)?;
+    let options = resolve_options(conditions, ext, verbose, drop_unresolved, limits)?;
     let mut net = network.try_borrow_mut()?;
     let mut diags = if net.resolved {
         Diagnostics::new()
@@ -1040,6 +1213,69 @@ fn compile(
         .collect())
 }
 
+/// The story of input `input` of node `handle`: where its value comes from and every
+/// decision resolution makes about it, followed upstream. A dict with the fields of the
+/// `vstructc explain --json` document (node, shader, input, origin, value, connections,
+/// location, events, upstream, toldAbove, truncated; each event: head, upstreamNode,
+/// upstreamHead, matchedOutput, matchedName, conditional, action, reads, outcome, written,
+/// reason); values are {"type": ..., "value": ...} dicts as there. `network` is not
+/// changed: a copy is resolved (so explain a network before resolving it). Raises KeyError
+/// for an unknown node, and ValueError for an input the node's definition does not declare.
+#[pyfunction]
+#[pyo3(signature = (network, registry, handle, input, conditions=true, ext=None))]
+fn explain<'py>(
+    py: Python<'py>,
+    network: &Bound<'py, Network>,
+    registry: &Bound<'py, Registry>,
+    handle: &str,
+    input: &str,
+    conditions: bool,
+    ext: Option<Vec<String>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut options = resolve_options(conditions, ext, false, false, None)?.resolve;
+    options.record_events = true;
+    let net = network.try_borrow()?;
+    let node = net.node(handle)?;
+    let reg = registry.try_borrow()?;
+    let r = &reg.inner;
+    if let Some(def) = r.definition(net.net[node].shader())
+        && def.input(input).is_none()
+        && net.net[node].param(input).is_none()
+    {
+        return Err(PyValueError::new_err(format!(
+            "`{handle}` ({}) has no input `{input}`",
+            def.id
+        )));
+    }
+    let source = &net.net;
+    let (copy, res) = py
+        .detach(|| {
+            guarded(|| {
+                let mut copy = source.clone();
+                let res = vstructc::resolve::resolve(&mut copy, r, &options);
+                (copy, res)
+            })
+        })
+        .map_err(|m| error_msg(py, m))?;
+    if let Some(limit) = res.limit {
+        return Err(raise_with::<LimitError>(
+            py,
+            limit.to_string(),
+            res.diagnostics.into_vec(),
+        ));
+    }
+    let mut teller = story::Teller::new(&copy, r, &res.events);
+    let (story, ..) = teller.story(py, node, input, usize::MAX, 0)?;
+    Ok(story)
+}
+
+/// Panics inside the guard (a test of the guard; built only with the `test-hooks` feature).
+#[cfg(feature = "test-hooks")]
+#[pyfunction]
+fn _panic_for_test(py: Python<'_>, message: &str) -> PyResult<()> {
+    guarded(|| -> () { panic!("{message}") }).map_err(|m| error_msg(py, m))
+}
+
 // ---------------------------------------------------------------------------------------
 // Materials and images
 // ---------------------------------------------------------------------------------------
@@ -1073,15 +1309,15 @@ fn rgb(c: Vec3) -> (f32, f32, f32) {
 
 #[pymethods]
 impl Material {
-    /// The lobes that survive prepare for the view `wo` (default: along the normal,
-    /// μ_o = 1): dicts of kind, label and weight (r, g, b).
-    #[pyo3(signature = (wo=(0.0, 0.0, 1.0)))]
+    /// The lobes that survive prepare for the view `wo` (None: along the normal, μ_o = 1):
+    /// dicts of kind, label and weight (r, g, b).
+    #[pyo3(signature = (wo=None))]
     fn lobes<'py>(
         &self,
         py: Python<'py>,
-        wo: (f32, f32, f32),
+        wo: Option<(f32, f32, f32)>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let wo = dir(wo, "wo")?;
+        let wo = dir(wo.unwrap_or((0.0, 0.0, 1.0)), "wo")?;
         let m = &self.inner;
         let rows = guarded(|| {
             let p = m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, wo));
@@ -1158,10 +1394,15 @@ impl Material {
         Ok(d)
     }
 
-    /// Directional albedo for view `wo`: a dict of reflect and transmit, each (r, g, b).
-    #[pyo3(signature = (wo=(0.0, 0.0, 1.0)))]
-    fn albedo<'py>(&self, py: Python<'py>, wo: (f32, f32, f32)) -> PyResult<Bound<'py, PyDict>> {
-        let wo = dir(wo, "wo")?;
+    /// Directional albedo for view `wo` (None: along the normal): a dict of reflect and
+    /// transmit, each (r, g, b).
+    #[pyo3(signature = (wo=None))]
+    fn albedo<'py>(
+        &self,
+        py: Python<'py>,
+        wo: Option<(f32, f32, f32)>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let wo = dir(wo.unwrap_or((0.0, 0.0, 1.0)), "wo")?;
         let m = &self.inner;
         let a = guarded(|| m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, wo)).albedo())
             .map_err(|msg| error_msg(py, msg))?;
@@ -1171,12 +1412,59 @@ impl Material {
         Ok(d)
     }
 
+    /// Samples a light direction for view `wo` with the random numbers `u` (three numbers in
+    /// [0, 1): the first picks a lobe, the other two drive its sampling), as a renderer does
+    /// (one-sample MIS over the lobes). A dict of wi (the direction, unit), weight (f·cos /
+    /// pdf, r g b), pdf, delta (a specular direction: pdf is then the probability of the
+    /// choice) and lobe (the index in lobes(wo), or None for straight transparency); None
+    /// when the material absorbs everything or the sample carries no energy.
+    #[pyo3(signature = (wo, u))]
+    fn sample<'py>(
+        &self,
+        py: Python<'py>,
+        wo: (f32, f32, f32),
+        u: (f32, f32, f32),
+    ) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let wo = dir(wo, "wo")?;
+        let u = [u.0, u.1, u.2];
+        if !u.iter().all(|x| (0.0..1.0).contains(x)) {
+            return Err(PyValueError::new_err("u holds three numbers in [0, 1)"));
+        }
+        let m = &self.inner;
+        let s = guarded(|| {
+            m.prepare(&ShadingPoint::new(Vec3::Z, Vec3::X, wo))
+                .sample(u)
+        })
+        .map_err(|msg| error_msg(py, msg))?;
+        let Some(s) = s else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("wi", rgb(s.l))?;
+        d.set_item("weight", rgb(s.weight))?;
+        d.set_item("pdf", s.pdf)?;
+        d.set_item("delta", s.delta)?;
+        d.set_item(
+            "lobe",
+            (s.lobe != vstructc::interp::TRANSPARENCY_LOBE).then_some(s.lobe),
+        )?;
+        Ok(Some(d))
+    }
+
     /// Renders the material ball, `size` × `size` pixels, lit by one light and a dim
     /// environment; `furnace=True` renders a white furnace (no light, environment 1).
-    #[pyo3(signature = (size=256, furnace=false))]
-    fn render(&self, py: Python<'_>, size: usize, furnace: bool) -> PyResult<Image> {
+    /// `limits` (a dict, see default_limits()) bounds the pixels (preview_pixels).
+    #[pyo3(signature = (size=256, furnace=false, limits=None))]
+    fn render(
+        &self,
+        py: Python<'_>,
+        size: usize,
+        furnace: bool,
+        limits: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Image> {
         let mut opts = PreviewOptions {
             size,
+            limits: limits_from(limits)?,
             ..PreviewOptions::default()
         };
         if furnace {
@@ -1186,7 +1474,12 @@ impl Material {
         let img = py
             .detach(|| guarded(|| render_ball(m, &opts, &|_| {})))
             .map_err(|msg| error_msg(py, msg))?
-            .map_err(|e| error_msg(py, e.to_string()))?;
+            .map_err(|e| match &e {
+                vstructc::interp::preview::PreviewError::TooLarge { exceeded, .. } => {
+                    raise_with::<LimitError>(py, e.to_string(), vec![exceeded.to_diagnostic()])
+                }
+                _ => error_msg(py, e.to_string()),
+            })?;
         Ok(Image { inner: img })
     }
 
@@ -1294,5 +1587,9 @@ fn vstructc_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Image>()?;
     m.add_function(wrap_pyfunction!(resolve, m)?)?;
     m.add_function(wrap_pyfunction!(compile, m)?)?;
+    m.add_function(wrap_pyfunction!(explain, m)?)?;
+    m.add_function(wrap_pyfunction!(default_limits, m)?)?;
+    #[cfg(feature = "test-hooks")]
+    m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     Ok(())
 }
