@@ -648,7 +648,7 @@ impl Diagnostics {
 /// How many items [`join_bounded`] names at each end of a long list.
 pub(crate) const LIST_ENDS: usize = 3;
 
-/// The items of a list of `len` joined with `, `, naming at most [`LIST_ENDS`] at each end
+/// The items of a list of `len` joined with `, `, naming at most `LIST_ENDS` (3) at each end
 /// of a longer list and the number left out between them; `item(i)` is called only for the
 /// items named, so a message about a list of 100,000 nodes costs what one about 6 does.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]

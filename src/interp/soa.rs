@@ -3,7 +3,7 @@
 //! (branches become selects), so the compiler autovectorises the loops.
 //!
 //! Here: the lanes type [`Vec3x`], the standalone batched GGX dielectric reflection lobe
-//! (the spec's batched anchor), and [`Kernel`], the enum over the per-family kernels the
+//! (the spec's batched anchor), and `Kernel`, the enum over the per-family kernels the
 //! batched material path runs per lobe slot, with the accumulation helpers they share. The
 //! kernels themselves live with their families (`leaves/<family>/soa.rs`: Lambert,
 //! Oren–Nayar/EON, GGX conductor and dielectric reflection, Ward, sheen CK and LTC); other
@@ -88,7 +88,7 @@ impl<const W: usize> Vec3x<W> {
 /// parameters per lane.
 ///
 /// A standalone kernel tuned for throughput (for the single-lobe throughput budget): it does not
-/// rescale the half vector as [`GgxView::core`] does, so when V and L are nearly opposite
+/// rescale the half vector as [`GgxView::core`](super::ggx::GgxView::core) does, so when V and L are nearly opposite
 /// within about 1e-6 of the horizon (`|V + L|²` below about 1e-12) its powers of `|H|`
 /// underflow and the lane is NaN. Rescaling costs about 10 % here; the
 /// material path's kernels do rescale.

@@ -183,7 +183,7 @@ pub(super) struct Decision {
     /// Per member of the plan: true if the member writes or connects something (so it adds a
     /// parameter to a node that does not have it yet).
     pub adds: Vec<bool>,
-    /// The VS015 reports of each conditional that had some, by [`super::memo_key`].
+    /// The VS015 reports of each conditional that had some, by `memo_key`.
     pub reports: HashMap<usize, Vec<ComparisonReport>>,
 }
 

@@ -1,5 +1,5 @@
 //! The interpreter API over a whole material: compile a
-//! [`MaterialIr`] once into a [`Material`], then [`Material::prepare`] per (point, view) and
+//! [`MaterialIr`](crate::ir::MaterialIr) once into a [`Material`], then [`Material::prepare`] per (point, view) and
 //! [`Prepared::eval`] / [`Prepared::sample`] / [`Prepared::albedo`] per light direction.
 //!
 //! # The compile step

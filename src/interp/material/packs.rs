@@ -1,9 +1,9 @@
-//! Lobe packs: the scalar [`Prepared::eval`]'s lobes of one family evaluated together, one
+//! Lobe packs: the scalar [`Prepared::eval`](super::Prepared::eval)'s lobes of one family evaluated together, one
 //! lobe per SIMD lane.
 //!
 //! A whole lobe is the interpreter's instruction. When several
 //! surviving lobes of a prepared point belong to one family that has a batched kernel
-//! ([`Kernel`], the kernels of the batched path), the end of `prepare` puts up to
+//! (`Kernel`, the kernels of the batched path), the end of `prepare` puts up to
 //! [`PACK_LANES`] of them in one kernel with the lane axis running over lobes instead of
 //! points, and `eval` runs that kernel once with the same L in every lane: ref10's three
 //! Ward lobes become one instruction, its two GGX dielectrics another. The kernels compute
