@@ -1264,9 +1264,7 @@ fn explain<'py>(
             res.diagnostics.into_vec(),
         ));
     }
-    let mut teller = story::Teller::new(&copy, r, &res.events);
-    let (story, ..) = teller.story(py, node, input, usize::MAX, 0)?;
-    Ok(story)
+    story::story_dict(py, &res.story(&copy, r, node, input))
 }
 
 /// Panics inside the guard (a test of the guard; built only with the `test-hooks` feature).

@@ -23,8 +23,10 @@ use std::sync::Arc;
 
 // Definition checks and decision plans: public under `testkit` for their unit tests.
 testkit_mods!(check, plan);
+mod story;
 pub use check::check_definitions;
 use plan::{Decision, DecisionCache, Plan, Verdict};
+pub use story::{Story, StoryEvent, StoryRead};
 
 /// Options of one resolution run.
 #[derive(Debug, Clone)]
@@ -36,7 +38,7 @@ pub struct ResolveOptions {
     pub extensions: Extensions,
     /// Also report `note` diagnostics (VS021: a downstream member without counterpart).
     pub verbose: bool,
-    /// Record one [`MemberEvent`] per member decision (used by `vstructc explain`).
+    /// Record one [`MemberEvent`] per member decision (for [`Resolution::story`]).
     pub record_events: bool,
     /// Bounds the network must meet before it is resolved ([`Network::check_limits`]: nodes,
     /// parameters per node, connections per input). A network beyond them is not resolved:
@@ -111,7 +113,23 @@ pub enum Outcome {
     NoCounterpart,
 }
 
-/// The story of one downstream member during resolution (for `vstructc explain`).
+impl Outcome {
+    /// The outcome as one word: `connected`, `ignored`, `written`, `not-applied`,
+    /// `direct-connection-wins`, `unparsable` or `no-counterpart`.
+    pub fn word(&self) -> &'static str {
+        match self {
+            Outcome::Connected => "connected",
+            Outcome::Ignored => "ignored",
+            Outcome::Written(_) => "written",
+            Outcome::NotApplied(_) => "not-applied",
+            Outcome::DirectConnectionWins => "direct-connection-wins",
+            Outcome::Unparsable => "unparsable",
+            Outcome::NoCounterpart => "no-counterpart",
+        }
+    }
+}
+
+/// One member decision during resolution ([`Resolution::story`] tells stories from them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MemberEvent {
     /// Downstream node.

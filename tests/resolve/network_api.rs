@@ -158,3 +158,64 @@ fn graph_view_matches_links() {
     let closure = net.material_nodes(0);
     assert_eq!(closure.len(), 4);
 }
+
+/// The library tells the story of an input as `vstructc explain` does: a member the
+/// lacquer layer's conditional wrote is `written`, its conditional read a value resolution
+/// wrote earlier (told in turn), and that one's read ends at the authored value with its
+/// line in the file.
+#[test]
+fn a_resolution_tells_the_story_of_a_written_member() {
+    use vstructc::registry::Registry;
+    use vstructc::resolve::{Outcome, ResolveOptions, resolve};
+    let registry = Registry::embedded();
+    let text = std::fs::read("examples/chain.rib").expect("the bundled example");
+    let mut diags = Diagnostics::new();
+    let mut net = parse_rib(
+        &text,
+        "chain.rib",
+        &registry,
+        &RibOptions::default(),
+        &mut diags,
+    )
+    .expect("the example parses");
+    let options = ResolveOptions {
+        record_events: true,
+        ..ResolveOptions::default()
+    };
+    let res = resolve(&mut net, &registry, &options);
+    let finished = net.find("finished").expect("the example's last mixer");
+    let story = res.story(&net, &registry, finished, "baselayer_enableDiffuse");
+    assert_eq!(
+        (story.origin, story.value.clone()),
+        ("written", Some(Value::Int(1)))
+    );
+    assert_eq!(
+        story.events[0].event.outcome,
+        Outcome::Written(Value::Int(1))
+    );
+    let read = &story.events[0].reads[0];
+    assert_eq!(
+        (read.param.as_str(), read.origin),
+        ("baselayer_enableDiffuse", "written")
+    );
+    let earlier = read.story.as_deref().expect("the story of the value read");
+    let origin = &earlier.events[0].reads[0];
+    assert_eq!(
+        (earlier.events[0].upstream_node.as_str(), origin.origin),
+        ("paint", "authored")
+    );
+    assert_eq!(origin.location.as_ref().map(|l| l.line), Some(14));
+
+    // Without recorded events, only the final origin is told.
+    let mut again = parse_rib(
+        &text,
+        "chain.rib",
+        &registry,
+        &RibOptions::default(),
+        &mut diags,
+    )
+    .expect("the example parses");
+    let res = resolve(&mut again, &registry, &ResolveOptions::default());
+    let story = res.story(&again, &registry, finished, "baselayer_enableDiffuse");
+    assert!(story.events.is_empty());
+}

@@ -14,14 +14,11 @@ use super::CommonOptions;
 use super::input::{ReadInput, read};
 use super::json::{self, LocationDoc, TypedValue};
 use serde::Serialize;
-use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vstructc::diag::did_you_mean;
-use vstructc::network::{Network, NodeId};
-use vstructc::registry::Registry;
-use vstructc::resolve::{MemberEvent, Outcome, ReadSource, resolve};
+use vstructc::resolve::{Outcome, StoryEvent, resolve};
 
 /// Arguments of `vstructc explain`.
 #[derive(Debug, clap::Args)]
@@ -38,9 +35,6 @@ pub struct ExplainArgs {
     #[arg(long)]
     pub json: bool,
 }
-
-/// How deep a story follows values upstream before it stops.
-const MAX_DEPTH: usize = 16;
 
 /// The story of one input (the `--json` document, and nested in it).
 #[derive(Debug, Serialize)]
@@ -135,220 +129,62 @@ pub struct ReadDoc {
     pub story: Option<Box<Story>>,
 }
 
-/// Builds stories over one resolved network.
-struct Teller<'a> {
-    net: &'a Network,
-    registry: &'a Registry,
-    events: &'a [MemberEvent],
-    /// The indexes of the events about each `(node, member)`, in order.
-    by_member: HashMap<(NodeId, &'a str), Vec<usize>>,
-    told: HashSet<(NodeId, String)>,
+impl Story {
+    /// The document of the library's story.
+    fn of(s: &vstructc::resolve::Story) -> Story {
+        Story {
+            node: s.node.clone(),
+            shader: s.shader.clone(),
+            input: s.input.clone(),
+            origin: s.origin,
+            value: s.value.as_ref().map(TypedValue::of),
+            connections: s
+                .connections
+                .iter()
+                .map(|(node, output)| LinkDoc {
+                    node: node.clone(),
+                    output: output.clone(),
+                })
+                .collect(),
+            location: s.location.as_ref().map(LocationDoc::of),
+            events: s.events.iter().map(EventDoc::of).collect(),
+            upstream: s.upstream.iter().map(Story::of).collect(),
+            told_above: s.told_above,
+            truncated: s.truncated,
+        }
+    }
 }
 
-impl Teller<'_> {
-    fn name(&self, n: NodeId) -> String {
-        self.net[n].display_name()
-    }
-
-    /// Indexes of the events about `node.input` before `before`.
-    fn events_of(&self, node: NodeId, input: &str, before: usize) -> Vec<usize> {
-        self.by_member
-            .get(&(node, input))
-            .map(|v| v.iter().copied().take_while(|&i| i < before).collect())
-            .unwrap_or_default()
-    }
-
-    /// The story of `node.input` as it stood after the events before `before`.
-    fn story(&mut self, node: NodeId, input: &str, before: usize, depth: usize) -> Story {
-        let n = &self.net[node];
-        let param = n.param(input);
-        let mine = self.events_of(node, input, before);
-        let written = mine
-            .iter()
-            .rev()
-            .find_map(|&i| match &self.events[i].outcome {
-                Outcome::Written(v) => Some(v.clone()),
-                _ => None,
-            });
-        let resolved = mine
-            .iter()
-            .any(|&i| self.events[i].outcome == Outcome::Connected);
-        let connections: Vec<LinkDoc> = param
-            .map(|p| p.connections())
-            .unwrap_or_default()
-            .iter()
-            .map(|l| LinkDoc {
-                node: l
-                    .upstream_node()
-                    .map(|u| self.name(u))
-                    .or_else(|| l.missing_handle().map(str::to_string))
-                    .unwrap_or_default(),
-                output: l.output().map(str::to_string),
-            })
-            .collect();
-        let default = || {
-            self.registry
-                .definition(n.shader())
-                .and_then(|d| d.input(input).and_then(|p| p.default.clone()))
-        };
-        let location = param
-            .and_then(|p| n.param_location(p))
-            .map(|l| LocationDoc::of(&l));
-        let (origin, value, location) = if resolved && !connections.is_empty() {
-            ("resolved", None, None)
-        } else if let Some(v) = written {
-            ("written", Some(v), None)
-        } else if !connections.is_empty() {
-            ("connected", None, location)
-        } else if let Some(v) = param.and_then(|p| p.value()) {
-            ("authored", Some(v.clone()), location)
-        } else if let Some(v) = default() {
-            ("default", Some(v), None)
-        } else {
-            ("none", None, None)
-        };
-        let mut story = Story {
-            node: self.name(node),
-            shader: n.shader().to_string(),
-            input: input.to_string(),
-            origin,
-            value: value.as_ref().map(TypedValue::of),
-            connections,
-            location,
-            events: Vec::new(),
-            upstream: Vec::new(),
-            told_above: false,
-            truncated: false,
-        };
-        if depth > MAX_DEPTH {
-            story.truncated = true;
-            return story;
-        }
-        if !self.told.insert((node, input.to_string())) {
-            story.told_above = true;
-            return story;
-        }
-        story.events = mine.iter().map(|&i| self.event(i, depth)).collect();
-        if matches!(origin, "resolved" | "connected") {
-            story.upstream = self.carried(node, input, before, depth);
-        }
-        story
-    }
-
-    /// The stories of the upstream inputs carried by the member outputs `node.input` is
-    /// connected to: inputs of the same member name that have a value or connection.
-    fn carried(&mut self, node: NodeId, input: &str, before: usize, depth: usize) -> Vec<Story> {
-        let links: Vec<(NodeId, String)> = self
-            .net
-            .connections(node, input)
-            .iter()
-            .filter_map(|l| Some((l.upstream_node()?, l.output()?.to_string())))
-            .collect();
-        let mut out = Vec::new();
-        for (up, output) in links {
-            let shader = self.net[up].shader().to_string();
-            let Some(tables) = self.registry.tables(&shader) else {
-                continue;
-            };
-            let names: Vec<String> = tables
-                .output_heads()
-                .flat_map(|h| tables.members_out(h).iter())
-                .filter(|m| *m.property == *output)
-                .flat_map(|m| m.names.iter().cloned())
-                .collect();
-            let mut inputs: Vec<String> = Vec::new();
-            for name in &names {
-                if self
-                    .registry
-                    .definition(&shader)
-                    .is_some_and(|d| d.input(name).is_some())
-                {
-                    inputs.push(name.clone());
-                }
-                for h in tables.input_heads() {
-                    for m in tables.members_in(h) {
-                        if m.names.iter().any(|n| n == name) {
-                            inputs.push(m.property.to_string());
-                        }
-                    }
-                }
-            }
-            let mut seen = HashSet::new();
-            inputs.retain(|i| seen.insert(i.clone()));
-            for i in inputs {
-                let s = self.story(up, &i, before, depth + 1);
-                if s.told_above || !s.events.is_empty() || !matches!(s.origin, "default" | "none") {
-                    out.push(s);
-                } else {
-                    // A default the output merely carries is no part of the story.
-                    self.told.remove(&(up, i));
-                }
-            }
-        }
-        out
-    }
-
-    fn event(&mut self, i: usize, depth: usize) -> EventDoc {
-        let e = &self.events[i];
-        let reads = e
-            .reads
-            .iter()
-            .map(|r| {
-                let (origin, value) = match &r.source {
-                    ReadSource::Authored(v) => ("authored", Some(v.clone())),
-                    ReadSource::Default(v) => ("default", Some(v.clone())),
-                    ReadSource::NoValue => ("none", None),
-                    ReadSource::Undeclared => ("undeclared", None),
-                };
-                // A value resolution wrote earlier reads as authored: tell its story.
-                let wrote = origin == "authored"
-                    && self
-                        .events_of(e.upstream, &r.param, i)
-                        .iter()
-                        .any(|&j| matches!(self.events[j].outcome, Outcome::Written(_)));
-                let (origin, location, story) = if wrote {
-                    let s = self.story(e.upstream, &r.param, i, depth + 1);
-                    ("written", None, Some(Box::new(s)))
-                } else {
-                    let location = (origin == "authored")
-                        .then(|| {
-                            let up = &self.net[e.upstream];
-                            up.param_location(up.param(&r.param)?)
-                        })
-                        .flatten()
-                        .map(|l| LocationDoc::of(&l));
-                    (origin, location, None)
-                };
-                ReadDoc {
-                    node: self.name(e.upstream),
-                    param: r.param.clone(),
-                    origin,
-                    value: value.as_ref().map(TypedValue::of),
-                    connected: r.connected,
-                    location,
-                    story,
-                }
-            })
-            .collect();
-        let (outcome, written, reason) = match &e.outcome {
-            Outcome::Connected => ("connected", None, None),
-            Outcome::Ignored => ("ignored", None, None),
-            Outcome::Written(v) => ("written", Some(TypedValue::of(v)), None),
-            Outcome::NotApplied(why) => ("not-applied", None, Some(why.clone())),
-            Outcome::DirectConnectionWins => ("direct-connection-wins", None, None),
-            Outcome::Unparsable => ("unparsable", None, None),
-            Outcome::NoCounterpart => ("no-counterpart", None, None),
+impl EventDoc {
+    fn of(se: &StoryEvent) -> EventDoc {
+        let e = &se.event;
+        let (written, reason) = match &e.outcome {
+            Outcome::Written(v) => (Some(TypedValue::of(v)), None),
+            Outcome::NotApplied(why) => (None, Some(why.clone())),
+            _ => (None, None),
         };
         EventDoc {
             head: e.head.clone(),
-            upstream_node: self.name(e.upstream),
+            upstream_node: se.upstream_node.clone(),
             upstream_head: e.upstream_head.clone(),
             matched_output: e.matched.as_ref().map(|m| m.0.clone()),
             matched_name: e.matched.as_ref().map(|m| m.1.clone()),
             conditional: e.expression.clone(),
             action: e.action.clone(),
-            reads,
-            outcome,
+            reads: se
+                .reads
+                .iter()
+                .map(|r| ReadDoc {
+                    node: se.upstream_node.clone(),
+                    param: r.param.clone(),
+                    origin: r.origin,
+                    value: r.value.as_ref().map(TypedValue::of),
+                    connected: r.connected,
+                    location: r.location.as_ref().map(LocationDoc::of),
+                    story: r.story.as_deref().map(|s| Box::new(Story::of(s))),
+                })
+                .collect(),
+            outcome: e.outcome.word(),
             written,
             reason,
         }
@@ -394,21 +230,7 @@ pub fn run(args: &ExplainArgs, common: &CommonOptions) -> ExitCode {
         ));
     }
     let res = resolve(&mut network, &registry, &options);
-    let mut by_member: HashMap<(NodeId, &str), Vec<usize>> = HashMap::new();
-    for (i, e) in res.events.iter().enumerate() {
-        by_member
-            .entry((e.node, e.member.as_str()))
-            .or_default()
-            .push(i);
-    }
-    let mut teller = Teller {
-        net: &network,
-        registry: &registry,
-        events: &res.events,
-        by_member,
-        told: HashSet::new(),
-    };
-    let story = teller.story(node, input, usize::MAX, 0);
+    let story = Story::of(&res.story(&network, &registry, node, input));
     if args.json {
         return json::print(&story, common);
     }
@@ -507,7 +329,8 @@ pub fn render_story(s: &mut String, story: &Story, indent: usize) {
     if story.truncated {
         let _ = writeln!(
             s,
-            "{pad}{summary}: the story goes on upstream (more than {MAX_DEPTH} steps)"
+            "{pad}{summary}: the story goes on upstream (more than {} steps)",
+            vstructc::resolve::Story::MAX_DEPTH
         );
         return;
     }
