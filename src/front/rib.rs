@@ -36,7 +36,9 @@ use crate::network::{
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
-use rustc_hash::{FxHashMap, FxHashSet};
+use hashbrown::HashTable;
+use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
+use std::hash::Hasher;
 use smallvec::SmallVec;
 use std::borrow::Cow;
 use std::ops::Range;
@@ -135,8 +137,8 @@ pub fn parse_rib(
         src: bytes,
         types: &types,
         net: Network::new(),
-        decls: FxHashMap::default(),
-        values: FxHashMap::default(),
+        decls: HashTable::new(),
+        values: HashTable::new(),
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
@@ -450,10 +452,13 @@ struct Assembler<'a, 't> {
     /// Declarations read before, per shader and decl token (as written): a scene repeats
     /// the same few declarations on thousands of nodes, and their parameters share one name
     /// and one [`Decl`]. Only declarations that were read without a diagnostic are kept, so
-    /// a hit reports nothing, exactly as reading them again would.
-    decls: FxHashMap<Box<str>, FxHashMap<Box<[u8]>, SharedDecl>>,
-    /// Short values read before without a diagnostic, per declaration and value text.
-    values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
+    /// a hit reports nothing, exactly as reading them again would. One table keyed by the
+    /// address of the network's shared shader id and the token's bytes: one hash and one
+    /// comparison of bytes per parameter.
+    decls: HashTable<Remembered<SharedDecl>>,
+    /// Short values read before without a diagnostic, keyed by the address of their
+    /// (remembered) declaration and the value's text.
+    values: HashTable<Remembered<Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), shared by
@@ -463,6 +468,44 @@ struct Assembler<'a, 't> {
 
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
 type SharedDecl = (Arc<str>, Arc<Decl>);
+
+/// An entry of [`Assembler::decls`] or [`Assembler::values`]: the address of what it belongs
+/// to (a shared shader id or declaration, alive until the file is read), the text as written,
+/// its [`remembered_hash`], and what was read from it.
+struct Remembered<T> {
+    owner: usize,
+    text: Box<[u8]>,
+    hash: u64,
+    shared: T,
+}
+
+/// The hash of an owner's address and a text, for [`Remembered`] entries.
+fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
+    let mut h = FxHasher::default();
+    h.write_usize(owner);
+    h.write(text);
+    h.finish()
+}
+
+/// The entry of `table` for `owner` and `text`, if remembered.
+fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
+    let hash = remembered_hash(owner, text);
+    table
+        .find(hash, |e| e.hash == hash && e.owner == owner && *e.text == *text)
+        .map(|e| &e.shared)
+}
+
+/// Remember `shared` for `owner` and `text` (not remembered yet).
+fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
+    let hash = remembered_hash(owner, text);
+    let entry = Remembered {
+        owner,
+        text: Box::from(text),
+        hash,
+        shared,
+    };
+    table.insert_unique(hash, entry, |e| e.hash);
+}
 
 /// At most this many distinct values are remembered for sharing while a file is read.
 const MAX_SHARED_VALUES: usize = 1 << 16;
@@ -547,6 +590,8 @@ impl<'a> Assembler<'a, '_> {
             };
         let (shader, _) = header_string("shader name", &mut i)?;
         let (handle, handle_tok) = header_string("handle", &mut i)?;
+        // The network's copy: its address keys the declarations read for this shader.
+        let shader = self.net.shared_shader(&shader);
         let mut end = handle_tok.end;
 
         // One parameter per occurrence, built in place; the rare later duplicates are taken
@@ -678,7 +723,7 @@ impl<'a> Assembler<'a, '_> {
         self.add_node(
             kind,
             &handle,
-            &shader,
+            shader,
             location,
             params,
             NodeSource {
@@ -711,7 +756,7 @@ impl<'a> Assembler<'a, '_> {
         &mut self,
         kind: RequestKind,
         handle: &str,
-        shader: &str,
+        shader: Arc<str>,
         location: Location,
         mut params: Vec<Param>,
         mut source: NodeSource,
@@ -731,7 +776,6 @@ impl<'a> Assembler<'a, '_> {
             }
             params = kept;
         }
-        let shader = self.net.shared_shader(shader);
         let mut node = Node::new_shared(handle, shader, kind);
         node.set_raw_params(params);
         node.set_origin(Some(location), Some(source));
@@ -741,7 +785,7 @@ impl<'a> Assembler<'a, '_> {
 
     fn read_param(
         &mut self,
-        shader: &str,
+        shader: &Arc<str>,
         raw: RawParam<'_>,
         diags: &mut Diagnostics,
     ) -> Result<Param, Error> {
@@ -776,7 +820,7 @@ impl<'a> Assembler<'a, '_> {
         let value = 'value: {
             // A value seen before is shared without looking at its elements.
             if remembered {
-                if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
+                if let Some(v) = recall(&self.values, key, text) {
                     break 'value v.clone();
                 }
             }
@@ -791,10 +835,7 @@ impl<'a> Assembler<'a, '_> {
                 && self.shared_values < MAX_SHARED_VALUES
             {
                 self.shared_values += 1;
-                self.values
-                    .entry(key)
-                    .or_default()
-                    .insert(Box::from(text), v.clone());
+                remember(&mut self.values, key, text, v.clone());
             }
             v
         };
@@ -824,15 +865,17 @@ impl<'a> Assembler<'a, '_> {
     /// [`Assembler::decls`]).
     fn declaration(
         &mut self,
-        shader: &str,
+        shared_shader: &Arc<str>,
         decl_tok: &Token,
         location: &At<'_>,
         diags: &mut Diagnostics,
     ) -> Result<(Arc<str>, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
-        if let Some((name, decl)) = self.decls.get(shader).and_then(|m| m.get(raw)) {
+        let owner = shared_shader.as_ptr() as usize;
+        if let Some((name, decl)) = recall(&self.decls, owner, raw) {
             return Ok((name.clone(), decl.clone(), true));
         }
+        let shader: &str = shared_shader;
         let before = diags.len();
         let decl_text = decode_string(self.src, decl_tok);
         let Some(words) = split_decl(&decl_text) else {
@@ -870,12 +913,7 @@ impl<'a> Assembler<'a, '_> {
         if diags.len() != before {
             return Ok((name, decl, false));
         }
-        if !self.decls.contains_key(shader) {
-            self.decls.insert(Box::from(shader), FxHashMap::default());
-        }
-        if let Some(m) = self.decls.get_mut(shader) {
-            m.insert(Box::from(raw), (name.clone(), decl.clone()));
-        }
+        remember(&mut self.decls, owner, raw, (name.clone(), decl.clone()));
         Ok((name, decl, true))
     }
 
