@@ -35,12 +35,12 @@ use crate::network::{
     ParamAt, ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
-use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
 use hashbrown::HashTable;
+use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
 use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
-use std::hash::Hasher;
 use smallvec::SmallVec;
 use std::borrow::Cow;
+use std::hash::Hasher;
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -138,7 +138,7 @@ pub fn parse_rib(
         types: &types,
         net: Network::new(),
         decls: HashTable::new(),
-        values: HashTable::new(),
+        values: FxHashMap::default(),
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
@@ -456,9 +456,10 @@ struct Assembler<'a, 't> {
     /// address of the network's shared shader id and the token's bytes: one hash and one
     /// comparison of bytes per parameter.
     decls: HashTable<Remembered<SharedDecl>>,
-    /// Short values read before without a diagnostic, keyed by the address of their
-    /// (remembered) declaration and the value's text.
-    values: HashTable<Remembered<Arc<Value>>>,
+    /// Short values read before without a diagnostic, per declaration (its address) and value
+    /// text. (Per declaration rather than in one table: the values of one declaration stay
+    /// few, and tens of thousands of them in one table cost more memory than they save time.)
+    values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), shared by
@@ -469,13 +470,11 @@ struct Assembler<'a, 't> {
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
 type SharedDecl = (Arc<str>, Arc<Decl>);
 
-/// An entry of [`Assembler::decls`] or [`Assembler::values`]: the address of what it belongs
-/// to (a shared shader id or declaration, alive until the file is read), the text as written,
-/// its [`remembered_hash`], and what was read from it.
+/// An entry of [`Assembler::decls`]: the address of the shared shader id it belongs to (alive
+/// until the file is read), the decl token as written, and what was read from it.
 struct Remembered<T> {
     owner: usize,
     text: Box<[u8]>,
-    hash: u64,
     shared: T,
 }
 
@@ -491,7 +490,7 @@ fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
 fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
     let hash = remembered_hash(owner, text);
     table
-        .find(hash, |e| e.hash == hash && e.owner == owner && *e.text == *text)
+        .find(hash, |e| e.owner == owner && *e.text == *text)
         .map(|e| &e.shared)
 }
 
@@ -501,10 +500,9 @@ fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], 
     let entry = Remembered {
         owner,
         text: Box::from(text),
-        hash,
         shared,
     };
-    table.insert_unique(hash, entry, |e| e.hash);
+    table.insert_unique(hash, entry, |e| remembered_hash(e.owner, &e.text));
 }
 
 /// At most this many distinct values are remembered for sharing while a file is read.
@@ -820,7 +818,7 @@ impl<'a> Assembler<'a, '_> {
         let value = 'value: {
             // A value seen before is shared without looking at its elements.
             if remembered {
-                if let Some(v) = recall(&self.values, key, text) {
+                if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
                     break 'value v.clone();
                 }
             }
@@ -835,7 +833,10 @@ impl<'a> Assembler<'a, '_> {
                 && self.shared_values < MAX_SHARED_VALUES
             {
                 self.shared_values += 1;
-                remember(&mut self.values, key, text, v.clone());
+                self.values
+                    .entry(key)
+                    .or_default()
+                    .insert(Box::from(text), v.clone());
             }
             v
         };
