@@ -587,9 +587,7 @@ fn push_value_type(t: &mut Vec<u8>, v: &Value) {
 fn push_value(t: &mut Vec<u8>, v: &Value) {
     match v {
         // The usual values of a resolved scene: no intermediate string.
-        Value::Int(i) => {
-            let _ = write!(t, "[{i}]");
-        }
+        Value::Int(i) => push_int_value(t, *i),
         Value::Float(x) => {
             let _ = write!(t, "[{}]", saturate_f32(*x));
         }
@@ -687,6 +685,28 @@ fn push_elements(v: &Value, out: &mut String) {
 #[cfg(any(test, feature = "testkit"))]
 pub fn quote(s: &str) -> String {
     format!("\"{}\"", escape(s))
+}
+
+/// Appends `[i]` (the usual int value of a resolved scene) without the formatting machinery.
+fn push_int_value(t: &mut Vec<u8>, i: i32) {
+    let mut digits = [0u8; 11];
+    let mut k = digits.len();
+    let mut n = i.unsigned_abs();
+    loop {
+        k -= 1;
+        digits[k] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    if i < 0 {
+        k -= 1;
+        digits[k] = b'-';
+    }
+    t.push(b'[');
+    t.extend_from_slice(&digits[k..]);
+    t.push(b']');
 }
 
 /// `s` as the content of a RIB string: quotes and backslashes escaped, newline and tab as

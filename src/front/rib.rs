@@ -35,10 +35,12 @@ use crate::network::{
     ParamAt, ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
+use hashbrown::HashTable;
 use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
 use smallvec::SmallVec;
 use std::borrow::Cow;
+use std::hash::Hasher;
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -135,7 +137,7 @@ pub fn parse_rib(
         src: bytes,
         types: &types,
         net: Network::new(),
-        decls: FxHashMap::default(),
+        decls: HashTable::new(),
         values: FxHashMap::default(),
         shared_values: 0,
         outputs: FxHashMap::default(),
@@ -450,9 +452,13 @@ struct Assembler<'a, 't> {
     /// Declarations read before, per shader and decl token (as written): a scene repeats
     /// the same few declarations on thousands of nodes, and their parameters share one name
     /// and one [`Decl`]. Only declarations that were read without a diagnostic are kept, so
-    /// a hit reports nothing, exactly as reading them again would.
-    decls: FxHashMap<Box<str>, FxHashMap<Box<[u8]>, SharedDecl>>,
-    /// Short values read before without a diagnostic, per declaration and value text.
+    /// a hit reports nothing, exactly as reading them again would. One table keyed by the
+    /// address of the network's shared shader id and the token's bytes: one hash and one
+    /// comparison of bytes per parameter.
+    decls: HashTable<Remembered<SharedDecl>>,
+    /// Short values read before without a diagnostic, per declaration (its address) and value
+    /// text. (Per declaration rather than in one table: the values of one declaration stay
+    /// few, and tens of thousands of them in one table cost more memory than they save time.)
     values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
@@ -463,6 +469,41 @@ struct Assembler<'a, 't> {
 
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
 type SharedDecl = (Arc<str>, Arc<Decl>);
+
+/// An entry of [`Assembler::decls`]: the address of the shared shader id it belongs to (alive
+/// until the file is read), the decl token as written, and what was read from it.
+struct Remembered<T> {
+    owner: usize,
+    text: Box<[u8]>,
+    shared: T,
+}
+
+/// The hash of an owner's address and a text, for [`Remembered`] entries.
+fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
+    let mut h = FxHasher::default();
+    h.write_usize(owner);
+    h.write(text);
+    h.finish()
+}
+
+/// The entry of `table` for `owner` and `text`, if remembered.
+fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
+    let hash = remembered_hash(owner, text);
+    table
+        .find(hash, |e| e.owner == owner && *e.text == *text)
+        .map(|e| &e.shared)
+}
+
+/// Remember `shared` for `owner` and `text` (not remembered yet).
+fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
+    let hash = remembered_hash(owner, text);
+    let entry = Remembered {
+        owner,
+        text: Box::from(text),
+        shared,
+    };
+    table.insert_unique(hash, entry, |e| remembered_hash(e.owner, &e.text));
+}
 
 /// At most this many distinct values are remembered for sharing while a file is read.
 const MAX_SHARED_VALUES: usize = 1 << 16;
@@ -547,6 +588,8 @@ impl<'a> Assembler<'a, '_> {
             };
         let (shader, _) = header_string("shader name", &mut i)?;
         let (handle, handle_tok) = header_string("handle", &mut i)?;
+        // The network's copy: its address keys the declarations read for this shader.
+        let shader = self.net.shared_shader(&shader);
         let mut end = handle_tok.end;
 
         // One parameter per occurrence, built in place; the rare later duplicates are taken
@@ -678,7 +721,7 @@ impl<'a> Assembler<'a, '_> {
         self.add_node(
             kind,
             &handle,
-            &shader,
+            shader,
             location,
             params,
             NodeSource {
@@ -711,7 +754,7 @@ impl<'a> Assembler<'a, '_> {
         &mut self,
         kind: RequestKind,
         handle: &str,
-        shader: &str,
+        shader: Arc<str>,
         location: Location,
         mut params: Vec<Param>,
         mut source: NodeSource,
@@ -731,7 +774,6 @@ impl<'a> Assembler<'a, '_> {
             }
             params = kept;
         }
-        let shader = self.net.shared_shader(shader);
         let mut node = Node::new_shared(handle, shader, kind);
         node.set_raw_params(params);
         node.set_origin(Some(location), Some(source));
@@ -741,7 +783,7 @@ impl<'a> Assembler<'a, '_> {
 
     fn read_param(
         &mut self,
-        shader: &str,
+        shader: &Arc<str>,
         raw: RawParam<'_>,
         diags: &mut Diagnostics,
     ) -> Result<Param, Error> {
@@ -824,15 +866,17 @@ impl<'a> Assembler<'a, '_> {
     /// [`Assembler::decls`]).
     fn declaration(
         &mut self,
-        shader: &str,
+        shared_shader: &Arc<str>,
         decl_tok: &Token,
         location: &At<'_>,
         diags: &mut Diagnostics,
     ) -> Result<(Arc<str>, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
-        if let Some((name, decl)) = self.decls.get(shader).and_then(|m| m.get(raw)) {
+        let owner = shared_shader.as_ptr() as usize;
+        if let Some((name, decl)) = recall(&self.decls, owner, raw) {
             return Ok((name.clone(), decl.clone(), true));
         }
+        let shader: &str = shared_shader;
         let before = diags.len();
         let decl_text = decode_string(self.src, decl_tok);
         let Some(words) = split_decl(&decl_text) else {
@@ -870,12 +914,7 @@ impl<'a> Assembler<'a, '_> {
         if diags.len() != before {
             return Ok((name, decl, false));
         }
-        if !self.decls.contains_key(shader) {
-            self.decls.insert(Box::from(shader), FxHashMap::default());
-        }
-        if let Some(m) = self.decls.get_mut(shader) {
-            m.insert(Box::from(raw), (name.clone(), decl.clone()));
-        }
+        remember(&mut self.decls, owner, raw, (name.clone(), decl.clone()));
         Ok((name, decl, true))
     }
 

@@ -2,9 +2,10 @@
 //!
 //! Tokens are produced one at a time; the parser keeps only the tokens of the shading request
 //! it is reading, so pass-through requests (geometry with millions of numbers) cost no memory.
-//! String contents are decoded on demand ([`decode_string`], [`decode_str`]). Comments and
-//! strings are scanned with `memchr`, and lines and columns are counted over whole tokens
-//! rather than byte by byte.
+//! String contents are decoded on demand ([`decode_string`], [`decode_str`]). Short plain
+//! strings (ASCII, no escape, no line break) are scanned eight bytes at a time and move only
+//! the column; comments and other strings are scanned with `memchr`, and their lines and
+//! columns are counted over whole tokens rather than byte by byte.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use std::borrow::Cow;
@@ -200,8 +201,19 @@ impl<'a> Lexer<'a> {
                 };
             }
             b'"' | b'\'' => {
-                let (end, escaped) = self.scan_string(start, b, diags)?;
-                self.advance_to(end);
+                let escaped = match plain_string_end(self.src, start, b) {
+                    // One character per byte and no line break: only the column moves.
+                    Some(end) => {
+                        self.col += (end - start) as u32;
+                        self.pos = end;
+                        false
+                    }
+                    None => {
+                        let (end, escaped) = self.scan_string(start, b, diags)?;
+                        self.advance_to(end);
+                        escaped
+                    }
+                };
                 tok.kind = TokKind::Str;
                 tok.escaped = escaped;
                 if b == b'\'' {
@@ -324,6 +336,42 @@ impl<'a> Lexer<'a> {
         }
         (line, col)
     }
+}
+
+/// Strings are looked at eight bytes at a time for at most this many bytes
+/// ([`plain_string_end`]).
+const SHORT_STRING: usize = 64;
+
+/// The bytes of `w` equal to `b` (each such byte's high bit set, no other bit).
+fn bytes_equal(w: u64, b: u8) -> u64 {
+    const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+    let x = w ^ (0x0101_0101_0101_0101 * u64::from(b));
+    // A byte of `x` is zero exactly when adding 0x7f to its low seven bits leaves its high
+    // bit clear and its own high bit is clear (no carry crosses bytes).
+    !(((x & LOW7).wrapping_add(LOW7)) | x) & !LOW7
+}
+
+/// The end (after the closing quote `q`) of the string starting at `start`, when it is
+/// plain: within [`SHORT_STRING`] bytes, ASCII, with no backslash and no line break. Then
+/// its columns are its bytes and it needs no decoding. `None` otherwise (the caller scans it
+/// in full). Nearly every string of a scene (decls, handles, connections) is plain, and a
+/// vector search, a line count and a character count each cost more than such a string.
+fn plain_string_end(src: &[u8], start: usize, q: u8) -> Option<usize> {
+    let mut i = start + 1;
+    while i - start <= SHORT_STRING {
+        let chunk: [u8; 8] = src.get(i..i + 8)?.try_into().ok()?;
+        let w = u64::from_le_bytes(chunk);
+        let stop = bytes_equal(w, q)
+            | bytes_equal(w, b'\\')
+            | bytes_equal(w, b'\n')
+            | (w & 0x8080_8080_8080_8080);
+        if stop != 0 {
+            let at = i + (stop.trailing_zeros() / 8) as usize;
+            return (src[at] == q).then_some(at + 1);
+        }
+        i += 8;
+    }
+    None
 }
 
 /// Escapes that need no RB010: `\n \r \t \b \f \\ \"`, octal digits, backslash-newline, and

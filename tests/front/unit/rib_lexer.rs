@@ -112,3 +112,49 @@ fn errors() {
     let mut lx = Lexer::new(b"- 1", "t".into(), false);
     assert_eq!(lx.next_token(&mut d).unwrap_err().code(), Some("RB004"));
 }
+
+/// Line and column (characters, from 1) of byte offset `at` of `src`, counted naively.
+fn naive_position(src: &str, at: usize) -> (u32, u32) {
+    let before = &src[..at];
+    let line = 1 + before.matches('\n').count() as u32;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, 1 + src[line_start..at].chars().count() as u32)
+}
+
+#[test]
+fn strings_of_every_length_and_content_keep_positions() {
+    // Plain ASCII strings take a shortcut (eight bytes at a time, columns = bytes); a string
+    // with a line break, a non-ASCII character or an escape anywhere, a long one, or one near
+    // the end of the input does not. Every shape must give the same token ends and positions.
+    for len in 0usize..80 {
+        for special in [None, Some("é"), Some("\n"), Some("\\\""), Some("'")] {
+            for at in [0, len / 2, len.saturating_sub(1)] {
+                let mut body: String = "ab_:1".chars().cycle().take(len).collect();
+                if let Some(s) = special {
+                    body.insert_str(at.min(body.len()), s);
+                }
+                for (q, tail) in [('"', " x"), ('"', ""), ('\'', " x")] {
+                    if q == '\'' && special == Some("'") {
+                        continue;
+                    }
+                    let src = format!("  {q}{body}{q}{tail}");
+                    let mut d = Diagnostics::new();
+                    let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+                    let s = lx.next_token(&mut d).unwrap().unwrap();
+                    assert_eq!((s.kind, s.start, s.end), (TokKind::Str, 2, 4 + body.len()));
+                    assert_eq!((s.line, s.col), (1, 3));
+                    assert_eq!(s.end_line, naive_position(&src, s.end - 1).0, "{src:?}");
+                    assert_eq!(s.escaped, body.contains('\\'), "{src:?}");
+                    match lx.next_token(&mut d).unwrap() {
+                        Some(x) => {
+                            assert_eq!(x.kind, TokKind::Ident);
+                            let at = src.len() - 1;
+                            assert_eq!((x.line, x.col), naive_position(&src, at), "{src:?}");
+                        }
+                        None => assert!(tail.is_empty()),
+                    }
+                }
+            }
+        }
+    }
+}

@@ -31,6 +31,12 @@ fn value_type_text(v: &Value) -> String {
 fn pushed_values_are_formatted_values() {
     for v in [
         Value::Int(-7),
+        Value::Int(0),
+        Value::Int(9),
+        Value::Int(10),
+        Value::Int(-10),
+        Value::Int(i32::MAX),
+        Value::Int(i32::MIN),
         Value::Float(0.1),
         Value::Float(1.0),
         Value::Float(f32::INFINITY),
@@ -83,4 +89,21 @@ fn fits() {
 fn escapes() {
     assert_eq!(escape("tab\there"), "tab\\there");
     assert_eq!(escape("\u{7f}é"), "\\177é");
+}
+
+#[test]
+fn only_strings_with_a_special_byte_are_escaped() {
+    // Every ASCII byte (and a two-byte character) at every position of strings up to 20
+    // bytes: the word-at-a-time check must agree with the byte-by-byte rule.
+    let special = |c: char| c < ' ' || c == '\u{7f}' || c == '"' || c == '\\';
+    for len in 0usize..20 {
+        for at in 0..len.max(1) {
+            for c in (0u8..0x80).map(char::from).chain(['é']) {
+                let mut s: String = "name_x".chars().cycle().take(len).collect();
+                s.insert(at.min(s.len()), c);
+                let borrowed = matches!(escape(&s), std::borrow::Cow::Borrowed(_));
+                assert_eq!(borrowed, !special(c), "{s:?}");
+            }
+        }
+    }
 }

@@ -126,8 +126,13 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
             stream_output(output, |out| write_rib(source, network, &ran.registry, out))
         }
     };
-    match written {
+    let status = match written {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => report_error(&e, common),
-    }
+    };
+    // The process ends here: the operating system takes back the input, the network and the
+    // registry at once. Dropping a resolved scene's millions of parameters one by one took
+    // a tenth of the command's time.
+    std::mem::forget(ran);
+    status
 }
