@@ -345,6 +345,55 @@ fn target(out: &mut String, link: &Link, paths: &Paths) -> Option<(NodeId, Strin
     up.map(|u| (u, output))
 }
 
+/// [`write_usda`], then the layer in `openusd`'s binary encoding `format` (`usdc`, or `usdz`:
+/// a zip package holding one `usdc` layer).
+#[cfg(feature = "usd")]
+fn write_binary(
+    net: &Network,
+    types: &dyn ParamTypes,
+    format: &str,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let mut text = Vec::new();
+    write_usda(net, types, &mut text)?;
+    let stage = crate::front::usd::open_stage("<written>.usda", &text)
+        .map_err(|why| io::Error::other(format!("the written layer does not read back: {why}")))?;
+    let encoder = openusd::sdf::LayerRegistry::find_by_id(format)
+        .ok_or_else(|| io::Error::other(format!("no `{format}` encoder")))?;
+    let mut bytes = io::Cursor::new(Vec::new());
+    encoder
+        .write(stage.root_layer().data(), &mut bytes)
+        .map_err(|e| io::Error::other(format!("{e:#}")))?;
+    out.write_all(bytes.get_ref())
+}
+
+/// [`write_usda`] in the binary `usdc` encoding (feature `usd`).
+///
+/// ```
+/// use vstructc::back::usd::write_usdc;
+/// use vstructc::network::{Network, RequestKind};
+/// use vstructc::registry::Registry;
+///
+/// let mut net = Network::new();
+/// let s = net.add_node_of_kind("ball", "PxrSurface", RequestKind::Bxdf);
+/// let m = net.add_material("ball");
+/// net.set_terminal(m, "surface", s, None);
+/// let mut out = Vec::new();
+/// write_usdc(&net, &Registry::embedded(), &mut out).unwrap();
+/// assert!(out.starts_with(b"PXR-USDC"));
+/// ```
+#[cfg(feature = "usd")]
+pub fn write_usdc(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) -> io::Result<()> {
+    write_binary(net, types, "usdc", out)
+}
+
+/// [`write_usda`] as a `usdz` package: a zip archive holding the layer in the `usdc`
+/// encoding (feature `usd`).
+#[cfg(feature = "usd")]
+pub fn write_usdz(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) -> io::Result<()> {
+    write_binary(net, types, "usdz", out)
+}
+
 /// Write the resolved network `net` as a `usda` layer (see the module documentation), with
 /// the declared types of `types` (a [`crate::registry::Registry`]).
 ///

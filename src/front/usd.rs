@@ -614,8 +614,9 @@ fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<V
     })
 }
 
-/// Open the stage and run `f` on it, turning an `openusd` failure or panic into US001.
-fn open_stage(name: &str, bytes: &[u8]) -> Result<usd::Stage, String> {
+/// Open the stage whose root layer is `bytes`; an `openusd` failure or panic is the reason
+/// as text.
+pub(crate) fn open_stage(name: &str, bytes: &[u8]) -> Result<usd::Stage, String> {
     let root_path = root_name(name, bytes);
     let inner = ar::DefaultResolver::new();
     let root = ar::Resolver::create_identifier(&inner, &root_path, None);

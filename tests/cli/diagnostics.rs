@@ -198,20 +198,39 @@ fn the_output_extension_picks_the_output_format() {
         stderr(&out)
     );
     assert!(!conflict.exists());
-    let usdc = dir.path().join("out.usdc");
+    // `.usdc` and `.usdz` give the binary encodings, which read back as the text does.
+    let usda_text = vstructc(&["resolve", "examples/chain.rib", "--format", "usda"]).stdout;
+    for ext in ["usdc", "usdz"] {
+        let bin = dir.path().join(format!("out.{ext}"));
+        let out = vstructc(&["resolve", "examples/chain.rib", "-o", bin.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let bytes = std::fs::read(&bin).unwrap();
+        let magic: &[u8] = if ext == "usdc" {
+            b"PXR-USDC"
+        } else {
+            b"PK\x03\x04"
+        };
+        assert!(bytes.starts_with(magic), "{ext}");
+        let again = vstructc(&["resolve", bin.to_str().unwrap(), "--format", "usda"]);
+        assert_eq!(again.status.code(), Some(0), "{}", stderr(&again));
+        assert_eq!(again.stdout, usda_text, "{ext}");
+    }
+    let conflict = dir.path().join("out2.usdc");
     let out = vstructc(&[
         "resolve",
         "examples/chain.rib",
+        "--format",
+        "json",
         "-o",
-        usdc.to_str().unwrap(),
+        conflict.to_str().unwrap(),
     ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(
-        stderr(&out).contains("binary USD output is not supported yet"),
+        stderr(&out).contains("conflicts with the output file's extension `.usdc`"),
         "{}",
         stderr(&out)
     );
-    assert!(!usdc.exists());
+    assert!(!conflict.exists());
     let usda = dir.path().join("out.usda");
     let out = vstructc(&[
         "resolve",
