@@ -256,6 +256,19 @@ fn the_writer_types_inputs_as_declared() {
     }
     // Resolved: the vstruct head's placeholder is gone.
     assert!(!text.contains("inputs:inputMaterial"), "{text}");
+    // An int given for a declared float is written as the float the definition declares;
+    // a parameter the definition does not declare keeps its own type.
+    let mut net = Network::new();
+    let s = net.add_node_of_kind("s", "PxrSurface", vstructc::network::RequestKind::Bxdf);
+    net.set_param(s, "diffuseGain", vstructc::Value::Int(1));
+    net.set_param(s, "madeUp", vstructc::Value::Int(2));
+    let m = net.add_material("m");
+    net.set_terminal(m, "surface", s, None);
+    let mut usda = Vec::new();
+    write_usda(&net, &reg, &mut usda).unwrap();
+    let text = String::from_utf8(usda).unwrap();
+    assert!(text.contains("float inputs:diffuseGain = 1\n"), "{text}");
+    assert!(text.contains("int inputs:madeUp = 2\n"), "{text}");
 }
 
 /// Handles that are not USD identifiers are made into prim names, distinct ones kept
