@@ -346,8 +346,11 @@ fn target(out: &mut String, link: &Link, paths: &Paths) -> Option<(NodeId, Strin
 }
 
 /// [`write_usda`], then the layer in `openusd`'s binary encoding `format` (`usdc`, or `usdz`:
-/// a zip package holding one `usdc` layer).
-#[cfg(feature = "usd")]
+/// a zip package holding one `usdc` layer). For the crate's tests and benchmarks only
+/// (`testkit`): Pixar's USD rejects the crate files `openusd` 0.6 writes ("invalid children in
+/// primChildren"), so the command line does not offer binary output.
+#[cfg(all(feature = "usd", feature = "testkit"))]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn write_binary(
     net: &Network,
     types: &dyn ParamTypes,
@@ -365,33 +368,6 @@ fn write_binary(
         .write(stage.root_layer().data(), &mut bytes)
         .map_err(|e| io::Error::other(format!("{e:#}")))?;
     out.write_all(bytes.get_ref())
-}
-
-/// [`write_usda`] in the binary `usdc` encoding (feature `usd`).
-///
-/// ```
-/// use vstructc::back::usd::write_usdc;
-/// use vstructc::network::{Network, RequestKind};
-/// use vstructc::registry::Registry;
-///
-/// let mut net = Network::new();
-/// let s = net.add_node_of_kind("ball", "PxrSurface", RequestKind::Bxdf);
-/// let m = net.add_material("ball");
-/// net.set_terminal(m, "surface", s, None);
-/// let mut out = Vec::new();
-/// write_usdc(&net, &Registry::embedded(), &mut out).unwrap();
-/// assert!(out.starts_with(b"PXR-USDC"));
-/// ```
-#[cfg(feature = "usd")]
-pub fn write_usdc(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) -> io::Result<()> {
-    write_binary(net, types, "usdc", out)
-}
-
-/// [`write_usda`] as a `usdz` package: a zip archive holding the layer in the `usdc`
-/// encoding (feature `usd`).
-#[cfg(feature = "usd")]
-pub fn write_usdz(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) -> io::Result<()> {
-    write_binary(net, types, "usdz", out)
 }
 
 /// Write the resolved network `net` as a `usda` layer (see the module documentation), with

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use vstructc::back::json::write_json_to;
 use vstructc::back::rib::write_rib;
-use vstructc::back::usd::{write_usda, write_usdc, write_usdz};
+use vstructc::back::usd::write_usda;
 use vstructc::front::NetFormat;
 use vstructc::pipeline::Lowering;
 
@@ -20,9 +20,9 @@ pub struct ResolveArgs {
     /// `enableConditions = false`).
     #[arg(long)]
     pub no_conditions: bool,
-    /// Output format (default: the extension of `-o` when it is `.rib`, `.json` or a USD one,
-    /// else the input's: USD input gives usda text). `-o` ending in `.usdc` or `.usdz` writes
-    /// that binary encoding; a `-o` extension naming another format is a usage error.
+    /// Output format (default: the extension of `-o` when it is `.rib`, `.json` or `.usda`,
+    /// else the input's: USD input gives usda text). A `-o` extension naming another format
+    /// is a usage error; binary `.usdc`/`.usdz` output is not supported yet.
     #[arg(long, value_parser = format_parser())]
     pub format: Option<NetFormat>,
     /// The resolved network as JSON (the JSON network form): the same as `--format json`,
@@ -54,7 +54,13 @@ pub fn output_format(
     let by_ext = match ext.as_deref() {
         Some("rib") => Some(NetFormat::Rib),
         Some("json") => Some(NetFormat::Json),
-        Some("usda" | "usd" | "usdc" | "usdz") => Some(NetFormat::Usd),
+        Some("usda" | "usd") => Some(NetFormat::Usd),
+        Some(e @ ("usdc" | "usdz")) => {
+            return Err(format!(
+                "`.{e}` output: binary USD output is not supported yet (use .usda, .rib or \
+                 .json)"
+            ));
+        }
         Some("mtlx") => {
             return Err(
                 "`.mtlx` output: MaterialX output is not supported (use .rib, .json or .usda)"
@@ -115,17 +121,7 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     }
     let (loaded, network) = (&ran.loaded, &ran.output.network);
     let output = args.output.as_deref();
-    let binary = output
-        .and_then(|p| p.extension())
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
     let written = match format.unwrap_or(loaded.format) {
-        NetFormat::Usd if binary.as_deref() == Some("usdc") => {
-            stream_output(output, |out| write_usdc(network, &ran.registry, out))
-        }
-        NetFormat::Usd if binary.as_deref() == Some("usdz") => {
-            stream_output(output, |out| write_usdz(network, &ran.registry, out))
-        }
         NetFormat::Json => stream_output(output, |out| write_json_to(network, out)),
         NetFormat::Usd => stream_output(output, |out| write_usda(network, &ran.registry, out)),
         NetFormat::Rib => {
