@@ -134,18 +134,16 @@ fn paths(net: &Network) -> Paths {
     for (i, m) in net.materials().iter().enumerate() {
         let mp = unique(format!("/Materials/{}", identifier(&m.name)));
         for id in net.material_nodes(i) {
-            if !nodes.contains_key(&id) {
-                let p = unique(format!("{mp}/{}", identifier(&node_name(net, id))));
-                nodes.insert(id, p);
-            }
+            nodes
+                .entry(id)
+                .or_insert_with(|| unique(format!("{mp}/{}", identifier(&node_name(net, id)))));
         }
         materials.push(mp);
     }
     for &id in &ids {
-        if !nodes.contains_key(&id) {
-            let p = unique(format!("/Materials/{}", identifier(&node_name(net, id))));
-            nodes.insert(id, p);
-        }
+        nodes
+            .entry(id)
+            .or_insert_with(|| unique(format!("/Materials/{}", identifier(&node_name(net, id)))));
     }
     Paths { nodes, materials }
 }

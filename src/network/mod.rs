@@ -1119,6 +1119,7 @@ impl Network {
     }
 
     /// Set where node `id` was defined (crate-internal: the USD reader).
+    #[cfg(feature = "usd")]
     pub(crate) fn set_node_location(&mut self, id: NodeId, location: Location) {
         self.graph[id].location = Some(location);
     }
