@@ -153,7 +153,7 @@ pub struct Location {
     pub line: u32,
     /// 1-based column (in characters); 0 when unknown.
     pub column: u32,
-    /// RFC 6901 JSON Pointer, for JSON inputs.
+    /// RFC 6901 JSON Pointer, for JSON inputs; the prim or property path, for USD inputs.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pointer: Option<String>,
 }

@@ -1,5 +1,5 @@
 //! The whole way from a network's text to closure IR, or to compiled materials, in one call:
-//! read (RIB or JSON), resolve, optionally delete the placeholders that stayed unresolved,
+//! read (RIB, JSON or USD), resolve, optionally delete the placeholders that stayed unresolved,
 //! report the ones lowering will ignore, pick the material terminals and lower them.
 //!
 //! The `vstructc` commands `resolve`, `compile`, `render` and `eval` are [`run`] plus

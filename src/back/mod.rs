@@ -1,4 +1,4 @@
-//! Back ends: writers for RIB ([`rib`]), JSON ([`json`]), Graphviz dot ([`dot`]) and images
+//! Back ends: writers for RIB ([`rib`]), JSON ([`json`]), USD ([`usd`]), Graphviz dot ([`dot`]) and images
 //! ([`png`]: PNG and PFM), and [`output`]: how any of them reaches a file or standard output
 //! safely.
 
@@ -7,3 +7,4 @@ pub mod json;
 pub mod output;
 pub mod png;
 pub mod rib;
+pub mod usd;

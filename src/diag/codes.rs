@@ -57,7 +57,7 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ("IO002", "the PNG encoder failed"),
     (
         "IO003",
-        "the input is in a format vstructc recognises but does not read: USD (`.usda`, `.usdc`, `.usdz`, or their signatures) or MaterialX (`.mtlx`, or XML with a `<materialx>` root); the message names it",
+        "the input is in a format vstructc recognises but does not read: MaterialX (`.mtlx`, or XML with a `<materialx>` root), or USD in a library built without its `usd` feature; the message names it",
     ),
     (
         "IR001",
@@ -221,6 +221,30 @@ pub(super) const CODES: &[(&str, &str)] = &[
     (
         "RG004",
         "an entry named like a definition file is a FIFO, a device or a socket: not read (an error for an explicit path)",
+    ),
+    (
+        "US001",
+        "the USD stage cannot be opened or composed (a layer that is not USD, a malformed layer, an unreadable file); the message gives `openusd`'s reason",
+    ),
+    (
+        "US002",
+        "a composition problem (an unresolvable reference, payload or sublayer: the prims it would bring are missing), or a connection or terminal to a prim that is not a Shader on the stage; the connection is kept dangling",
+    ),
+    (
+        "US003",
+        "a Shader without `info:id`, or implemented otherwise (`info:implementationSource` is `sourceAsset` or `sourceCode`); kept as a node of unknown type",
+    ),
+    (
+        "US004",
+        "inputs with time samples: the default values are used (one warning per stage, naming the first such input and their number)",
+    ),
+    (
+        "US005",
+        "a connection to a NodeGraph or Material port that is neither connected nor given a value, or that passes 64 ports (a cycle); left out",
+    ),
+    (
+        "US006",
+        "a value of a type vstructc does not read (quaternions, 2×2 and 3×3 matrices, dictionaries, …) or that cannot be read; the parameter is left out",
     ),
     (
         "VS001",

@@ -1,5 +1,5 @@
 //! Front ends: readers that turn files into definitions ([`args`], [`oso`]) and networks
-//! ([`rib`], [`json`]), and [`source`]: reading their bytes from files and streams within
+//! ([`rib`], [`json`], `usd`), and [`source`]: reading their bytes from files and streams within
 //! bounds. [`read_network`] reads a network in either format ([`NetFormat`]).
 
 pub mod args;
@@ -7,6 +7,8 @@ pub mod json;
 pub mod oso;
 pub mod rib;
 pub mod source;
+#[cfg(feature = "usd")]
+pub mod usd;
 
 use crate::diag::{Diagnostics, Error};
 use crate::limits::Limits;
@@ -19,6 +21,8 @@ pub enum NetFormat {
     Rib,
     /// The JSON network form ([`json`]).
     Json,
+    /// A USD stage: `.usda`, `.usdc` or `.usdz` (`front::usd`, feature `usd`).
+    Usd,
 }
 
 impl NetFormat {
@@ -46,19 +50,21 @@ impl NetFormat {
     }
 }
 
-/// [`NetFormat::detect`], but a format that vstructc recognises and does not read is an
-/// error (IO003) that names it: USD (`.usda`, `.usdc`, `.usdz`, or their `#usda`,
-/// `PXR-USDC` and zip signatures) and MaterialX (`.mtlx`, or XML whose root is
-/// `<materialx>`), instead of the RIB reader's complaint about its first character.
+/// [`NetFormat::detect`], but USD is recognised too, and a format that vstructc recognises
+/// and does not read is an error (IO003) that names it, instead of the RIB reader's complaint
+/// about its first character. USD is `.usda`, `.usdc`, `.usdz`, `.usd`, or the `#usda`,
+/// `PXR-USDC` and zip signatures; it is [`NetFormat::Usd`], or IO003 when the library is
+/// built without its `usd` feature. MaterialX (`.mtlx`, or XML whose root is `<materialx>`)
+/// is IO003.
 ///
 /// ```
 /// use vstructc::front::{NetFormat, detect_format};
 /// assert_eq!(detect_format("a.rib", b"Bxdf").unwrap(), NetFormat::Rib);
-/// let e = detect_format("look.usda", b"#usda 1.0\n").unwrap_err();
-/// assert_eq!(e.code(), Some("IO003"));
-/// assert!(e.to_string().contains("USD input is not supported yet"), "{e}");
-/// assert!(detect_format("<stdin>", b"  #usda 1.0").is_err());
-/// assert!(detect_format("<stdin>", b"PXR-USDC").is_err());
+/// # #[cfg(feature = "usd")] {
+/// assert_eq!(detect_format("look.usda", b"#usda 1.0\n").unwrap(), NetFormat::Usd);
+/// assert_eq!(detect_format("<stdin>", b"  #usda 1.0").unwrap(), NetFormat::Usd);
+/// assert_eq!(detect_format("<stdin>", b"PXR-USDC").unwrap(), NetFormat::Usd);
+/// # }
 /// let e = detect_format("<stdin>", b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\">").unwrap_err();
 /// assert!(e.to_string().contains("MaterialX"), "{e}");
 /// ```
@@ -82,9 +88,12 @@ pub fn detect_format(name: &str, bytes: &[u8]) -> Result<NetFormat, Error> {
             .into())
     };
     if let Some(what) = usd {
+        if cfg!(feature = "usd") {
+            return Ok(NetFormat::Usd);
+        }
         return unsupported(format!(
-            "USD input is not supported yet ({what}); vstructc reads RIB and the JSON network \
-             form"
+            "USD input ({what}) needs vstructc built with its `usd` feature; this build reads \
+             RIB and the JSON network form"
         ));
     }
     let materialx = if ext.as_deref() == Some("mtlx") {
@@ -96,8 +105,8 @@ pub fn detect_format(name: &str, bytes: &[u8]) -> Result<NetFormat, Error> {
     };
     if let Some(what) = materialx {
         return unsupported(format!(
-            "MaterialX input is not supported ({what}); vstructc reads RIB and the JSON \
-             network form"
+            "MaterialX input is not supported ({what}); vstructc reads RIB, the JSON network \
+             form and USD"
         ));
     }
     Ok(NetFormat::detect(name, bytes))
@@ -112,8 +121,8 @@ pub struct ReadOptions {
     pub limits: Limits,
 }
 
-/// Read a network in `format` from `bytes` (named `name` in diagnostics): the RIB or the
-/// JSON reader, with the parameter types of `types` (a [`crate::registry::Registry`]).
+/// Read a network in `format` from `bytes` (named `name` in diagnostics): the RIB, JSON or
+/// USD reader, with the parameter types of `types` (a [`crate::registry::Registry`]).
 /// Reader warnings go to `diags`; an error stops the read.
 pub fn read_network(
     name: &str,
@@ -124,6 +133,15 @@ pub fn read_network(
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
     match format {
+        #[cfg(feature = "usd")]
+        NetFormat::Usd => usd::parse_usd(bytes, name, types, &options.limits, diags),
+        #[cfg(not(feature = "usd"))]
+        NetFormat::Usd => Err(crate::diag::Diagnostic::error(
+            "IO003",
+            "USD input needs vstructc built with its `usd` feature",
+        )
+        .at(crate::diag::Location::file(name))
+        .into()),
         NetFormat::Json => json::parse_json_limited(bytes, name, types, &options.limits, diags),
         NetFormat::Rib => rib::parse_rib(
             bytes,

@@ -1118,6 +1118,12 @@ impl Network {
         self.graph[id].kind = kind;
     }
 
+    /// Set where node `id` was defined (crate-internal: the USD reader).
+    #[cfg(feature = "usd")]
+    pub(crate) fn set_node_location(&mut self, id: NodeId, location: Location) {
+        self.graph[id].location = Some(location);
+    }
+
     /// The node `id`, or `None` if it is not in this network.
     pub fn get(&self, id: NodeId) -> Option<&Node> {
         self.graph.node_weight(id)

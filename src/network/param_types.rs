@@ -68,6 +68,14 @@ pub trait ParamTypes {
         None
     }
 
+    /// The request kind `shader`'s definition states (`Bxdf` for a bxdf, `Displace` for a
+    /// displacement shader, …), or `None` when unknown. Readers without request keywords
+    /// (USD) and writers that need them (RIB) use it. Defaults to `None`.
+    fn shader_kind(&self, shader: &str) -> Option<crate::network::RequestKind> {
+        let _ = shader;
+        None
+    }
+
     /// True if `input` is an input head (a vstruct placeholder input) of `shader`. Defaults
     /// to "declared type is `Vstruct`", which is what the registry's head normalisation gives.
     fn is_input_head(&self, shader: &str, input: &str) -> bool {

@@ -2,7 +2,7 @@
 //! RIB writer ([`crate::network::ParamTypes`]).
 
 use super::Registry;
-use crate::network::ParamTypes;
+use crate::network::{ParamTypes, RequestKind};
 use crate::types::Type;
 
 impl ParamTypes for Registry {
@@ -20,6 +20,17 @@ impl ParamTypes for Registry {
 
     fn input_position(&self, shader: &str, input: &str) -> Option<usize> {
         self.indexed(shader)?.input_position(input)
+    }
+
+    fn shader_kind(&self, shader: &str) -> Option<RequestKind> {
+        Some(match self.definition(shader)?.kind.as_str() {
+            "bxdf" | "surface" | "volume" => RequestKind::Bxdf,
+            "displace" | "displacement" | "displacementShader" => RequestKind::Displace,
+            "light" => RequestKind::Light,
+            "lightFilter" | "lightfilter" => RequestKind::LightFilter,
+            "pattern" => RequestKind::Pattern,
+            _ => return None,
+        })
     }
 
     fn is_input_head(&self, shader: &str, input: &str) -> bool {

@@ -444,7 +444,7 @@ fn every_flag_is_checked_before_the_input_is_read() {
             "eval", "--wo", "0,0,1", "--wi", "0,0,1", "--input", "x=", missing,
         ],
         &["eval", "--wo", "0,0", "--wi", "0,0,1", missing],
-        &["resolve", "-o", "out.usda", missing],
+        &["resolve", "--format", "rib", "-o", "out.usdc", missing],
         &["resolve", "--json", "-o", "out.rib", missing],
         &["resolve", "--ext", "nested", missing],
         &["compile", "--ext", "bogus", missing],

@@ -106,7 +106,7 @@ fn files(files: &[(&str, &[u8])]) -> tempfile::TempDir {
 }
 
 #[test]
-fn usd_and_materialx_inputs_are_named_not_misread() {
+fn usd_inputs_are_read_and_materialx_is_named_not_misread() {
     let dir = files(&[
         ("look.usda", b"#usda 1.0\n(\n)\ndef Material \"red\" {}\n"),
         ("look.usdc", b"PXR-USDC\0\0\0\0"),
@@ -119,8 +119,18 @@ fn usd_and_materialx_inputs_are_named_not_misread() {
             b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\"/>\n",
         ),
     ]);
+    // A USD text layer is read (by extension and, from standard input, by its signature).
+    let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
+        .args(["resolve", "look.usda"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("#usda 1.0"), "{text}");
+    assert!(text.contains("def Material \"red\""), "{text}");
     let mut shown = Vec::new();
-    for name in ["look.usda", "look.usdc", "red.mtlx", "red.xml"] {
+    for name in ["look.usdc", "red.mtlx", "red.xml"] {
         let path = dir.path().join(name);
         for format in ["human", "json"] {
             let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
@@ -136,11 +146,7 @@ fn usd_and_materialx_inputs_are_named_not_misread() {
         assert!(path.exists());
     }
     let text = shown.concat();
-    assert_eq!(
-        text.matches("USD input is not supported yet").count(),
-        4,
-        "{text}"
-    );
+    assert_eq!(text.matches("US001").count(), 2, "{text}");
     assert_eq!(
         text.matches("MaterialX input is not supported").count(),
         4,
@@ -192,10 +198,48 @@ fn the_output_extension_picks_the_output_format() {
         stderr(&out)
     );
     assert!(!conflict.exists());
-    let usd = dir.path().join("out.usda");
-    let out = vstructc(&["resolve", "examples/chain.rib", "-o", usd.to_str().unwrap()]);
+    // Binary USD output is refused before the input is read.
+    for ext in ["usdc", "usdz"] {
+        let bin = dir.path().join(format!("out.{ext}"));
+        let out = vstructc(&["resolve", "examples/chain.rib", "-o", bin.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains("binary USD output is not supported yet"),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!bin.exists());
+    }
+    let conflict = dir.path().join("out2.usda");
+    let out = vstructc(&[
+        "resolve",
+        "examples/chain.rib",
+        "--format",
+        "json",
+        "-o",
+        conflict.to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(!usd.exists());
+    assert!(
+        stderr(&out).contains("conflicts with the output file's extension `.usda`"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!conflict.exists());
+    let usda = dir.path().join("out.usda");
+    let out = vstructc(&[
+        "resolve",
+        "examples/chain.rib",
+        "-o",
+        usda.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        std::fs::read_to_string(&usda)
+            .unwrap()
+            .contains("def Material \"car\""),
+        "a USD layer was written"
+    );
     let jpg = dir.path().join("ball.jpg");
     let out = vstructc(&["render", "examples/chain.rib", "-o", jpg.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));

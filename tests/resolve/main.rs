@@ -15,3 +15,4 @@ mod registry_tables;
 mod rules;
 mod scale;
 mod unit;
+mod usd;

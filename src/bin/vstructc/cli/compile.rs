@@ -1,5 +1,5 @@
 //! `vstructc compile [--args DIR]... [--emit ir|lobes|dot] [--material NAME] INPUT`: read a
-//! RIB or JSON network, resolve it (a no-op when it holds no placeholders), lower each
+//! RIB, JSON or USD network, resolve it (a no-op when it holds no placeholders), lower each
 //! material (or only `--material`) and print its IR, flat lobe list or closure tree.
 //!
 //! The lobe list's numeric weights use the interpreter's albedo tables
@@ -33,7 +33,7 @@ pub enum Emit {
 /// Arguments of `vstructc compile`.
 #[derive(Debug, clap::Args)]
 pub struct CompileArgs {
-    /// The network: a RIB or JSON file, or `-` for standard input.
+    /// The network: a RIB, JSON or USD file, or `-` for standard input.
     pub input: PathBuf,
     /// What to print.
     #[arg(long, value_enum, default_value_t = Emit::Ir)]

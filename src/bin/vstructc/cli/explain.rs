@@ -26,7 +26,7 @@ pub struct ExplainArgs {
     /// The input to explain, as `HANDLE.INPUT` (the handle may contain dots; the input is
     /// the text after the last dot).
     pub target: String,
-    /// The network: a RIB or JSON file, or `-` for standard input.
+    /// The network: a RIB, JSON or USD file, or `-` for standard input.
     pub input: PathBuf,
     /// Explain as if `--no-conditions` were given.
     #[arg(long)]

@@ -1,5 +1,5 @@
 //! What the commands share: the registry and resolution options of the common options,
-//! reading a network input (RIB or JSON, a file or `-` for standard input) and running the
+//! reading a network input (RIB, JSON or USD, a file or `-` for standard input) and running the
 //! library's pipeline on it, and writing output (files by [`vstructc::back::output`]'s
 //! rules, or standard output).
 
@@ -25,9 +25,11 @@ pub fn format_parser() -> impl clap::builder::TypedValueParser<Value = NetFormat
     PossibleValuesParser::new([
         PossibleValue::new("rib").help("RenderMan RIB"),
         PossibleValue::new("json").help("The JSON network form (see docs/inputs-and-outputs.md)"),
+        PossibleValue::new("usda").help("A USD text layer of Material and Shader prims"),
     ])
     .map(|s| match s.as_str() {
         "json" => NetFormat::Json,
+        "usda" => NetFormat::Usd,
         _ => NetFormat::Rib,
     })
 }

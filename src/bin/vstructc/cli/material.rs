@@ -12,7 +12,7 @@ use vstructc::pipeline::Lowering;
 /// Options shared by `render` and `eval`: which input and material, and external inputs.
 #[derive(Debug, Clone, clap::Args)]
 pub struct MaterialArgs {
-    /// The network: a RIB or JSON file, or `-` for standard input.
+    /// The network: a RIB, JSON or USD file, or `-` for standard input.
     pub input: PathBuf,
     /// Only this material (material name or terminal node handle).
     #[arg(long, value_name = "HANDLE")]

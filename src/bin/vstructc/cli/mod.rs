@@ -180,7 +180,7 @@ pub enum Command {
     /// Parse one conditional expression and print its desugared form or diagnostics.
     #[command(after_help = EXIT_STATUS)]
     Expr(expr::ExprArgs),
-    /// Expand the vstruct connections of a network (RIB or JSON) and write it back.
+    /// Expand the vstruct connections of a network (RIB, JSON or USD) and write it back.
     #[command(after_help = EXIT_STATUS)]
     Resolve(resolve::ResolveArgs),
     /// Tell where one input's value comes from (authored, default, written by resolution).

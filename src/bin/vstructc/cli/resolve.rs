@@ -6,20 +6,23 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use vstructc::back::json::write_json_to;
 use vstructc::back::rib::write_rib;
+use vstructc::back::usd::write_usda;
 use vstructc::front::NetFormat;
 use vstructc::pipeline::Lowering;
 
 /// Arguments of `vstructc resolve`.
 #[derive(Debug, clap::Args)]
 pub struct ResolveArgs {
-    /// The network to resolve: a RIB or JSON file, or `-` for standard input.
+    /// The network to resolve: a RIB, JSON or USD (`.usda`, `.usdc`, `.usdz`) file, or `-`
+    /// for standard input.
     pub input: PathBuf,
     /// Connect every matched member without evaluating conditionals (the reference's
     /// `enableConditions = false`).
     #[arg(long)]
     pub no_conditions: bool,
-    /// Output format (default: the extension of `-o` when it is `.rib` or `.json`, else the
-    /// input's). A `-o` extension naming the other format is a usage error.
+    /// Output format (default: the extension of `-o` when it is `.rib`, `.json` or `.usda`,
+    /// else the input's: USD input gives usda text). A `-o` extension naming another format
+    /// is a usage error; binary `.usdc`/`.usdz` output is not supported yet.
     #[arg(long, value_parser = format_parser())]
     pub format: Option<NetFormat>,
     /// The resolved network as JSON (the JSON network form): the same as `--format json`,
@@ -51,14 +54,17 @@ pub fn output_format(
     let by_ext = match ext.as_deref() {
         Some("rib") => Some(NetFormat::Rib),
         Some("json") => Some(NetFormat::Json),
-        Some(e @ ("usda" | "usdc" | "usdz" | "usd")) => {
+        Some("usda" | "usd") => Some(NetFormat::Usd),
+        Some(e @ ("usdc" | "usdz")) => {
             return Err(format!(
-                "`.{e}` output: USD output is not supported yet (use .rib or .json)"
+                "`.{e}` output: binary USD output is not supported yet (use .usda, .rib or \
+                 .json)"
             ));
         }
         Some("mtlx") => {
             return Err(
-                "`.mtlx` output: MaterialX output is not supported (use .rib or .json)".into(),
+                "`.mtlx` output: MaterialX output is not supported (use .rib, .json or .usda)"
+                    .into(),
             );
         }
         _ => None,
@@ -66,12 +72,13 @@ pub fn output_format(
     let name = |f: NetFormat| match f {
         NetFormat::Rib => "rib",
         NetFormat::Json => "json",
+        NetFormat::Usd => "usda",
     };
     match (format, by_ext) {
         (Some(f), Some(e)) if f != e => Err(format!(
             "--format {} conflicts with the output file's extension `.{}`",
             name(f),
-            name(e)
+            ext.as_deref().unwrap_or(name(e))
         )),
         (Some(f), _) => Ok(Some(f)),
         (None, e) => Ok(e),
@@ -116,12 +123,13 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     let output = args.output.as_deref();
     let written = match format.unwrap_or(loaded.format) {
         NetFormat::Json => stream_output(output, |out| write_json_to(network, out)),
+        NetFormat::Usd => stream_output(output, |out| write_usda(network, &ran.registry, out)),
         NetFormat::Rib => {
             // Streamed: the untouched parts of a large scene are copied from the source
             // straight into the output file.
             let source = match loaded.format {
                 NetFormat::Rib => loaded.bytes.as_slice(),
-                NetFormat::Json => &[],
+                NetFormat::Json | NetFormat::Usd => &[],
             };
             stream_output(output, |out| write_rib(source, network, &ran.registry, out))
         }

@@ -1,0 +1,795 @@
+//! USD reader (feature `usd`): the RenderMan materials of a USD stage (`.usda`, `.usdc`,
+//! `.usdz`) as a [`Network`], read through the pure-Rust `openusd` crate with composition
+//! (sublayers, references, payloads, variant selections, inherits).
+//!
+//! Every `Shader` prim becomes a node whose handle is its prim path and whose type is its
+//! `info:id`; every `Material` prim becomes a material whose nodes are the shaders beneath
+//! it (nested node graphs included), reached by a terminal or not. Authored `inputs:NAME`
+//! values become parameters, typed as the definition declares them when the value fits
+//! (else as USD typed them); `inputs:NAME.connect` targets become connections, followed
+//! through the inputs and outputs of `NodeGraph` and `Material` prims to the shader output
+//! that feeds them. The Material's `outputs:ri:surface`, `outputs:ri:displacement` and
+//! `outputs:ri:volume` (or, when it has no `ri:` output, `outputs:surface` and
+//! `outputs:displacement`) are its terminals. Order does not matter: a connection binds to
+//! its prim wherever the prim is.
+//!
+//! Diagnostics name the file and the prim or property path (in [`Location::pointer`]);
+//! `openusd` keeps no line numbers, so USD diagnostics have none.
+
+use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::limits::{Limit, Limits};
+use crate::network::{
+    Link, Material, MaterialNodes, Network, NodeId, ParamTypes, RequestKind, Terminal,
+};
+use crate::types::{BaseType, Type, Value};
+use openusd::{ar, sdf, usd};
+use rustc_hash::FxHashMap;
+use std::io::{self, Read};
+use std::sync::Arc;
+
+/// How many NodeGraph or Material inputs and outputs a connection is followed through
+/// before it is reported as a cycle (US005).
+const MAX_HOPS: usize = 64;
+
+/// Serves the root layer from the bytes already read (so standard input works and the file
+/// is read once) and everything it refers to from the file system, anchored at the root's
+/// folder.
+struct MemResolver {
+    inner: ar::DefaultResolver,
+    root: String,
+    bytes: Arc<Vec<u8>>,
+}
+
+impl MemResolver {
+    /// The packaged path inside the root, when `path` is `root[inner]`.
+    fn in_root_package<'a>(&self, path: &'a str) -> Option<&'a str> {
+        path.strip_prefix(self.root.as_str())?
+            .strip_prefix('[')?
+            .strip_suffix(']')
+    }
+
+    fn root_entry(&self, inner: &str) -> io::Result<Vec<u8>> {
+        let mut archive = zip::ZipArchive::new(io::Cursor::new(self.bytes.as_slice()))
+            .map_err(io::Error::other)?;
+        let mut entry = archive.by_name(inner).map_err(io::Error::other)?;
+        let mut out = Vec::new();
+        entry.read_to_end(&mut out)?;
+        Ok(out)
+    }
+}
+
+impl ar::Resolver for MemResolver {
+    fn create_identifier(&self, asset_path: &str, anchor: Option<&ar::ResolvedPath>) -> String {
+        self.inner.create_identifier(asset_path, anchor)
+    }
+
+    fn resolve(&self, asset_path: &str) -> Option<ar::ResolvedPath> {
+        if asset_path == self.root {
+            return Some(ar::ResolvedPath::new(asset_path));
+        }
+        if let Some(inner) = self.in_root_package(asset_path) {
+            return self
+                .root_entry(inner)
+                .ok()
+                .map(|_| ar::ResolvedPath::new(asset_path));
+        }
+        self.inner.resolve(asset_path)
+    }
+
+    fn resolve_for_new_asset(&self, asset_path: &str) -> Option<ar::ResolvedPath> {
+        self.inner.resolve_for_new_asset(asset_path)
+    }
+
+    fn open_asset(&self, resolved: &ar::ResolvedPath) -> io::Result<Box<dyn ar::Asset>> {
+        let path = resolved.to_string_lossy();
+        if path == self.root {
+            return Ok(Box::new(io::Cursor::new(self.bytes.as_ref().clone())));
+        }
+        if let Some(inner) = self.in_root_package(&path) {
+            return Ok(Box::new(io::Cursor::new(self.root_entry(inner)?)));
+        }
+        self.inner.open_asset(resolved)
+    }
+
+    fn get_modification_timestamp(
+        &self,
+        asset_path: &str,
+        resolved: &ar::ResolvedPath,
+    ) -> Option<std::time::SystemTime> {
+        if resolved.to_string_lossy().starts_with(self.root.as_str()) {
+            return None;
+        }
+        self.inner.get_modification_timestamp(asset_path, resolved)
+    }
+}
+
+/// The USD flavour of `bytes` by signature: `usda`, `usdc` or `usdz`.
+fn flavour(bytes: &[u8]) -> &'static str {
+    if bytes.starts_with(b"PXR-USDC") {
+        "usdc"
+    } else if bytes.starts_with(b"PK\x03\x04") {
+        "usdz"
+    } else {
+        "usda"
+    }
+}
+
+/// The root layer's name for `openusd`: `name` when its extension is a USD one, else `name`
+/// with the extension its content calls for (standard input, or a file named otherwise).
+fn root_name(name: &str, bytes: &[u8]) -> String {
+    let ext = std::path::Path::new(name)
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("usda" | "usdc" | "usdz") => name.to_string(),
+        // `.usd` is either encoding: name it by its signature.
+        _ => format!("{name}.{}", flavour(bytes)),
+    }
+}
+
+/// The prim kinds the reader cares about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PrimKind {
+    Material,
+    NodeGraph,
+    Shader,
+}
+
+/// Reading state: the stage, the prims it holds and where findings go.
+struct Reader<'a> {
+    stage: usd::Stage,
+    file: Arc<str>,
+    types: &'a dyn ParamTypes,
+    diags: &'a mut Diagnostics,
+    kinds: FxHashMap<String, PrimKind>,
+    nodes: FxHashMap<String, NodeId>,
+    net: Network,
+    /// Attributes with time samples (reported once, US004).
+    sampled: Vec<String>,
+}
+
+impl Reader<'_> {
+    fn at(&self, path: &str) -> Location {
+        Location {
+            file: self.file.clone(),
+            line: 0,
+            column: 0,
+            pointer: Some(path.to_string()),
+        }
+    }
+
+    fn warn(&mut self, code: &'static str, path: &str, message: String) {
+        let d = Diagnostic::warning(code, message).at(self.at(path));
+        self.diags.push(d);
+    }
+
+    fn kind_of(&self, prim: &usd::Prim) -> Option<PrimKind> {
+        let t = prim.type_name().ok()??;
+        match t.as_str() {
+            "Material" => Some(PrimKind::Material),
+            "NodeGraph" => Some(PrimKind::NodeGraph),
+            "Shader" => Some(PrimKind::Shader),
+            _ => None,
+        }
+    }
+
+    /// A token or string attribute's default value.
+    fn text_attr(&self, prim: &usd::Prim, name: &str) -> Option<String> {
+        match prim.attribute(name).get::<sdf::Value>().ok()?? {
+            sdf::Value::Token(t) => Some(t.as_str().to_string()),
+            sdf::Value::String(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The node type of shader `prim`: its `info:id`, or a marker of what it has instead
+    /// (US003).
+    fn shader_id(&mut self, prim: &usd::Prim, path: &str) -> String {
+        let source = self.text_attr(prim, "info:implementationSource");
+        match source.as_deref() {
+            None | Some("id") => match self.text_attr(prim, "info:id") {
+                Some(id) if !id.is_empty() => id,
+                _ => {
+                    self.warn(
+                        "US003",
+                        path,
+                        format!("Shader `{path}` has no `info:id`; kept as a node of unknown type"),
+                    );
+                    "(no info:id)".to_string()
+                }
+            },
+            Some(other) => {
+                self.warn(
+                    "US003",
+                    path,
+                    format!(
+                        "Shader `{path}` is implemented by `{other}`, not by an `info:id`; \
+                         kept as a node of unknown type"
+                    ),
+                );
+                format!("({other})")
+            }
+        }
+    }
+
+    /// What feeds connection target `target`: shader outputs (prim path, output name),
+    /// values authored on NodeGraph or Material inputs, or targets that are not a shader's.
+    fn sources(&mut self, target: &sdf::Path, from: &str, out: &mut Vec<Source>, hops: usize) {
+        let Some((prim, prop)) = target.split_property() else {
+            out.push(Source::Missing(target.as_str().to_string(), None));
+            return;
+        };
+        let prim_path = prim.as_str().to_string();
+        let prop = prop.to_string();
+        let base = prop
+            .strip_prefix("outputs:")
+            .or_else(|| prop.strip_prefix("inputs:"))
+            .unwrap_or(&prop)
+            .to_string();
+        match self.kinds.get(&prim_path).copied() {
+            Some(PrimKind::Shader) => out.push(Source::Output(prim_path, base)),
+            Some(PrimKind::NodeGraph | PrimKind::Material) => {
+                if hops >= MAX_HOPS {
+                    self.warn(
+                        "US005",
+                        from,
+                        format!(
+                            "connection through `{target}` passes {MAX_HOPS} node-graph ports \
+                             (a cycle?); left out"
+                        ),
+                    );
+                    return;
+                }
+                let attr = self.stage.attribute(target.clone());
+                let targets = attr.connections().unwrap_or_default();
+                if targets.is_empty() {
+                    match attr.get::<sdf::Value>() {
+                        Ok(Some(v)) => out.push(Source::Value(v, target.as_str().to_string())),
+                        _ => self.warn(
+                            "US005",
+                            from,
+                            format!(
+                                "connection to `{target}`, a node-graph port that is neither \
+                                 connected nor given a value; left out"
+                            ),
+                        ),
+                    }
+                }
+                for t in targets {
+                    self.sources(&t, from, out, hops + 1);
+                }
+            }
+            None => out.push(Source::Missing(prim_path, Some(base))),
+        }
+    }
+
+    /// Read the inputs of shader `path` into node `id`.
+    fn read_inputs(&mut self, path: &str, id: NodeId) {
+        let prim = self.stage.prim(path);
+        let shader = self.net[id].shader().to_string();
+        let Ok(attrs) = prim.attributes() else {
+            return;
+        };
+        for attr in attrs {
+            let apath = attr.path().as_str().to_string();
+            let Some((_, name)) = attr.path().split_property() else {
+                continue;
+            };
+            let Some(input) = name.strip_prefix("inputs:") else {
+                continue;
+            };
+            let input = input.to_string();
+            if attr.num_time_samples().unwrap_or(0) > 0 {
+                self.sampled.push(apath.clone());
+            }
+            let declared = self.types.input_type(&shader, &input);
+            let targets = attr.connections().unwrap_or_default();
+            if targets.is_empty() {
+                let usd_type = attr
+                    .type_name()
+                    .ok()
+                    .flatten()
+                    .map(|t| t.as_str().to_string())
+                    .unwrap_or_default();
+                match attr.get::<sdf::Value>() {
+                    Ok(Some(v)) => {
+                        self.set_value(id, &input, &v, declared.as_ref(), &usd_type, &apath)
+                    }
+                    Ok(None) => {}
+                    Err(e) => self.warn(
+                        "US006",
+                        &apath,
+                        format!("the value of `{apath}` cannot be read: {e}; left out"),
+                    ),
+                }
+                continue;
+            }
+            let mut sources = Vec::new();
+            for t in &targets {
+                self.sources(t, &apath, &mut sources, 0);
+            }
+            for s in sources {
+                match s {
+                    Source::Output(prim, output) => {
+                        let up = self.nodes[&prim];
+                        self.net.connect(id, &input, up, &output);
+                    }
+                    Source::Value(v, from) => {
+                        self.set_value(id, &input, &v, declared.as_ref(), "", &from);
+                    }
+                    Source::Missing(prim, output) => {
+                        self.warn(
+                            "US002",
+                            &apath,
+                            format!(
+                                "`{apath}` is connected to `{prim}`, which is not a Shader on \
+                                 the stage; kept as a dangling connection"
+                            ),
+                        );
+                        self.net
+                            .push_link(id, &input, Link::missing(&prim, output.as_deref()));
+                    }
+                }
+            }
+        }
+    }
+
+    fn set_value(
+        &mut self,
+        id: NodeId,
+        input: &str,
+        v: &sdf::Value,
+        declared: Option<&Type>,
+        usd_type: &str,
+        at: &str,
+    ) {
+        match to_value(v, declared, usd_type) {
+            Some(value) => {
+                self.net.set_param(id, input, value);
+            }
+            None => self.warn(
+                "US006",
+                at,
+                format!(
+                    "`{at}` has a value of a type vstructc does not read ({}); left out",
+                    if usd_type.is_empty() {
+                        value_kind(v)
+                    } else {
+                        usd_type
+                    }
+                ),
+            ),
+        }
+    }
+
+    /// The terminals of Material `path`: `outputs:ri:*`, else the universal outputs.
+    fn terminals(&mut self, path: &str) -> Vec<Terminal> {
+        let prim = self.stage.prim(path);
+        let read = |this: &mut Self, names: &[(&str, &str)]| -> Vec<Terminal> {
+            let mut out = Vec::new();
+            for &(attr_name, terminal) in names {
+                let attr = prim.attribute(attr_name);
+                let targets = attr.connections().unwrap_or_default();
+                let apath = format!("{path}.{attr_name}");
+                let mut sources = Vec::new();
+                for t in &targets {
+                    this.sources(t, &apath, &mut sources, 0);
+                }
+                if let Some(s) = sources.into_iter().next() {
+                    let link = match s {
+                        Source::Output(prim, _) => Link::node(this.nodes[&prim], None),
+                        Source::Missing(prim, _) => {
+                            this.warn(
+                                "US002",
+                                &apath,
+                                format!(
+                                    "`{apath}` is connected to `{prim}`, which is not a Shader \
+                                     on the stage; kept as a dangling terminal"
+                                ),
+                            );
+                            Link::missing(&prim, None)
+                        }
+                        Source::Value(..) => continue,
+                    };
+                    out.push(Terminal {
+                        name: terminal.to_string(),
+                        link,
+                    });
+                }
+            }
+            out
+        };
+        let ri = read(
+            self,
+            &[
+                ("outputs:ri:surface", "surface"),
+                ("outputs:ri:displacement", "displacement"),
+                ("outputs:ri:volume", "volume"),
+            ],
+        );
+        if !ri.is_empty() {
+            return ri;
+        }
+        read(
+            self,
+            &[
+                ("outputs:surface", "surface"),
+                ("outputs:displacement", "displacement"),
+                ("outputs:volume", "volume"),
+            ],
+        )
+    }
+}
+
+/// What feeds a connection.
+enum Source {
+    /// A shader's output: prim path, output name.
+    Output(String, String),
+    /// A value authored on a node-graph input, and that input's path.
+    Value(sdf::Value, String),
+    /// A prim that is not a shader on the stage, and the output named.
+    Missing(String, Option<String>),
+}
+
+/// A short name for the variant of `v`, for messages.
+fn value_kind(v: &sdf::Value) -> &'static str {
+    match v {
+        sdf::Value::Quath(_) | sdf::Value::Quatf(_) | sdf::Value::Quatd(_) => "quaternion",
+        sdf::Value::Dictionary(_) => "dictionary",
+        sdf::Value::Matrix2d(_) | sdf::Value::Matrix3d(_) => "matrix2d/matrix3d",
+        _ => "unsupported",
+    }
+}
+
+/// `x` as an `f32`, saturated to the finite range.
+fn sat(x: f64) -> f32 {
+    (x as f32).clamp(f32::MIN, f32::MAX)
+}
+
+/// The triple type a USD type name asks for.
+fn triple_base(usd_type: &str) -> BaseType {
+    let t = usd_type.trim_end_matches("[]");
+    if t.starts_with("normal") {
+        BaseType::Normal
+    } else if t.starts_with("point") {
+        BaseType::Point
+    } else if t.starts_with("vector") {
+        BaseType::Vector
+    } else {
+        BaseType::Color
+    }
+}
+
+/// A USD value as a vstructc value, typed as `declared` says when it fits.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<Value> {
+    use sdf::Value as V;
+    let base = declared.map(|t| &t.base);
+    let int = |i: i64| -> Value {
+        match base {
+            Some(BaseType::Float) => Value::Float(i as f32),
+            Some(BaseType::Bool) => Value::Bool(i != 0),
+            _ => Value::Int(i.clamp(i32::MIN as i64, i32::MAX as i64) as i32),
+        }
+    };
+    let float = |x: f64| -> Value {
+        match base {
+            Some(BaseType::Int) if x.fract() == 0.0 && x.abs() <= i32::MAX as f64 => {
+                Value::Int(x as i32)
+            }
+            _ => Value::Float(sat(x)),
+        }
+    };
+    let text = |s: &str, usd: BaseType| -> Value {
+        match base.unwrap_or(&usd) {
+            BaseType::Token => Value::Token(s.to_string()),
+            BaseType::Asset => Value::Asset(s.to_string()),
+            _ => Value::Str(s.to_string()),
+        }
+    };
+    let triple = |f: [f32; 3]| -> Value {
+        let b = match base {
+            Some(b) if b.is_triple() => b.clone(),
+            _ => triple_base(usd_type),
+        };
+        match declared {
+            Some(t) if t.base == BaseType::Float && t.is_array() => Value::Array(
+                BaseType::Float,
+                f.iter().map(|&x| Value::Float(x)).collect(),
+            ),
+            _ => Value::Triple(b, f),
+        }
+    };
+    let floats = |xs: Vec<f64>| -> Value {
+        Value::Array(
+            BaseType::Float,
+            xs.into_iter().map(|x| Value::Float(sat(x))).collect(),
+        )
+    };
+    let d3 = |x: [f64; 3]| x.map(sat);
+    let arr = |b: BaseType, items: Vec<Value>| Value::Array(b, items);
+    Some(match v {
+        V::Bool(b) => match base {
+            Some(BaseType::Bool) | None => Value::Bool(*b),
+            _ => int(i64::from(*b)),
+        },
+        V::Int(i) => int(i64::from(*i)),
+        V::Uint(i) => int(i64::from(*i)),
+        V::Uchar(i) => int(i64::from(*i)),
+        V::Int64(i) => int(*i),
+        V::Uint64(i) => int(i64::try_from(*i).unwrap_or(i64::MAX)),
+        V::Float(x) => float(f64::from(*x)),
+        V::Double(x) => float(*x),
+        V::Half(x) => float(f64::from(x.to_f32())),
+        V::String(s) => text(s, BaseType::String),
+        V::Token(t) => text(t.as_str(), BaseType::Token),
+        V::AssetPath(a) => text(&a.authored_path, BaseType::Asset),
+        V::Vec3f(x) => triple([x.x, x.y, x.z]),
+        V::Vec3d(x) => triple(d3([x.x, x.y, x.z])),
+        V::Vec3h(x) => triple([x.x.to_f32(), x.y.to_f32(), x.z.to_f32()]),
+        V::Vec2f(x) => floats(vec![f64::from(x.x), f64::from(x.y)]),
+        V::Vec2d(x) => floats(vec![x.x, x.y]),
+        V::Vec4f(x) => match base {
+            Some(BaseType::HPoint) => Value::HPoint([x.x, x.y, x.z, x.w]),
+            _ => floats(
+                vec![x.x, x.y, x.z, x.w]
+                    .into_iter()
+                    .map(f64::from)
+                    .collect(),
+            ),
+        },
+        V::Vec4d(x) => match base {
+            Some(BaseType::HPoint) => Value::HPoint([x.x, x.y, x.z, x.w].map(sat)),
+            _ => floats(vec![x.x, x.y, x.z, x.w]),
+        },
+        V::Matrix4d(m) => {
+            let mut out = [0.0f32; 16];
+            for (o, x) in out.iter_mut().zip(m.0.iter()) {
+                *o = sat(*x);
+            }
+            Value::Matrix(out)
+        }
+        V::BoolVec(xs) => arr(
+            BaseType::Int,
+            xs.iter().map(|&b| Value::Int(i32::from(b))).collect(),
+        ),
+        V::IntVec(xs) => match base {
+            Some(BaseType::Float) => arr(
+                BaseType::Float,
+                xs.iter().map(|&i| Value::Float(i as f32)).collect(),
+            ),
+            _ => arr(BaseType::Int, xs.iter().map(|&i| Value::Int(i)).collect()),
+        },
+        V::FloatVec(xs) => floats(xs.iter().map(|&x| f64::from(x)).collect()),
+        V::DoubleVec(xs) => floats(xs.clone()),
+        V::StringVec(xs) => {
+            let b = base.cloned().unwrap_or(BaseType::String);
+            arr(b.clone(), xs.iter().map(|s| text(s, b.clone())).collect())
+        }
+        V::TokenVec(xs) => {
+            let b = base.cloned().unwrap_or(BaseType::Token);
+            arr(
+                b.clone(),
+                xs.iter().map(|s| text(s.as_str(), b.clone())).collect(),
+            )
+        }
+        V::AssetPathVec(xs) => arr(
+            BaseType::Asset,
+            xs.iter()
+                .map(|a| text(&a.authored_path, BaseType::Asset))
+                .collect(),
+        ),
+        V::Vec3fVec(xs) => {
+            let b = match base {
+                Some(b) if b.is_triple() => b.clone(),
+                _ => triple_base(usd_type),
+            };
+            arr(
+                b.clone(),
+                xs.iter()
+                    .map(|x| Value::Triple(b.clone(), [x.x, x.y, x.z]))
+                    .collect(),
+            )
+        }
+        V::Vec3dVec(xs) => {
+            let b = match base {
+                Some(b) if b.is_triple() => b.clone(),
+                _ => triple_base(usd_type),
+            };
+            arr(
+                b.clone(),
+                xs.iter()
+                    .map(|x| Value::Triple(b.clone(), d3([x.x, x.y, x.z])))
+                    .collect(),
+            )
+        }
+        V::Vec2fVec(xs) => arr(
+            BaseType::Float,
+            xs.iter()
+                .flat_map(|x| [Value::Float(x.x), Value::Float(x.y)])
+                .collect(),
+        ),
+        _ => return None,
+    })
+}
+
+/// Open the stage whose root layer is `bytes`; an `openusd` failure or panic is the reason
+/// as text.
+pub(crate) fn open_stage(name: &str, bytes: &[u8]) -> Result<usd::Stage, String> {
+    let root_path = root_name(name, bytes);
+    let inner = ar::DefaultResolver::new();
+    let root = ar::Resolver::create_identifier(&inner, &root_path, None);
+    let resolver = MemResolver {
+        inner,
+        root: root.clone(),
+        bytes: Arc::new(bytes.to_vec()),
+    };
+    let opened = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        usd::Stage::builder().resolver(resolver).open(&root)
+    }));
+    match opened {
+        Ok(Ok(stage)) => Ok(stage),
+        Ok(Err(e)) => Err(format!("{e:#}")),
+        Err(_) => Err("the USD library failed on this input".to_string()),
+    }
+}
+
+/// Read the materials of the USD stage whose root layer is `bytes` (named `name` in
+/// diagnostics; references and sublayers are found relative to it), with the parameter
+/// types of `types`. A stage that cannot be opened is an error (US001); composition
+/// problems (an unresolvable reference or sublayer, US002), shaders without `info:id`
+/// (US003), ignored time samples (US004), dangling or cyclic connections (US002, US005)
+/// and values of types vstructc does not read (US006) are warnings in `diags`.
+///
+/// ```
+/// use vstructc::Diagnostics;
+/// use vstructc::front::usd::parse_usd;
+/// use vstructc::limits::Limits;
+/// use vstructc::registry::Registry;
+///
+/// let text = br#"#usda 1.0
+/// def Material "M" {
+///     token outputs:ri:surface.connect = </M/S.outputs:out>
+///     def Shader "S" {
+///         uniform token info:id = "PxrSurface"
+///         color3f inputs:diffuseColor = (0.8, 0.2, 0.2)
+///         token outputs:out
+///     }
+/// }
+/// "#;
+/// let mut diags = Diagnostics::new();
+/// let net = parse_usd(text, "look.usda", &Registry::embedded(), &Limits::default(), &mut diags)
+///     .unwrap();
+/// let s = net.find("/M/S").unwrap();
+/// assert_eq!(net[s].shader(), "PxrSurface");
+/// assert_eq!(net.materials()[0].name, "/M");
+/// ```
+pub fn parse_usd(
+    bytes: &[u8],
+    name: &str,
+    types: &dyn ParamTypes,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+) -> Result<Network, Error> {
+    let file: Arc<str> = Arc::from(name);
+    limits
+        .check(Limit::NetworkFileBytes, bytes.len() as u64)
+        .map_err(|e| e.at(Location::file(file.clone())))?;
+    let stage = open_stage(name, bytes).map_err(|why| {
+        Error::from(
+            Diagnostic::error("US001", format!("cannot open the USD stage: {why}"))
+                .at(Location::file(file.clone())),
+        )
+    })?;
+    let mut reader = Reader {
+        stage,
+        file: file.clone(),
+        types,
+        diags,
+        kinds: FxHashMap::default(),
+        nodes: FxHashMap::default(),
+        net: Network::new(),
+        sampled: Vec::new(),
+    };
+    let walked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read_stage(&mut reader)));
+    let outcome = match walked {
+        Ok(r) => r,
+        Err(_) => Err(Error::from(
+            Diagnostic::error("US001", "the USD library failed while composing the stage")
+                .at(Location::file(file.clone())),
+        )),
+    };
+    outcome?;
+    let net = reader.net;
+    net.check_limits(limits)?;
+    Ok(net)
+}
+
+/// The walk: prims, nodes, materials, inputs, composition errors.
+fn read_stage(r: &mut Reader<'_>) -> Result<(), Error> {
+    let mut paths = Vec::new();
+    r.stage
+        .traverse(usd::PrimPredicate::DEFAULT, |p| paths.push(p.clone()))
+        .map_err(|e| {
+            Error::from(
+                Diagnostic::error("US001", format!("cannot traverse the USD stage: {e:#}"))
+                    .at(Location::file(r.file.clone())),
+            )
+        })?;
+    // Depth-first order: a material comes before its shaders.
+    let mut shaders = Vec::new();
+    let mut materials: Vec<(String, Vec<NodeId>)> = Vec::new();
+    for p in &paths {
+        let prim = r.stage.prim(p.clone());
+        let Some(kind) = r.kind_of(&prim) else {
+            continue;
+        };
+        r.kinds.insert(p.as_str().to_string(), kind);
+        match kind {
+            PrimKind::Material => materials.push((p.as_str().to_string(), Vec::new())),
+            PrimKind::Shader => shaders.push(p.clone()),
+            PrimKind::NodeGraph => {}
+        }
+    }
+    for p in &shaders {
+        let path = p.as_str().to_string();
+        let prim = r.stage.prim(p.clone());
+        let shader = r.shader_id(&prim, &path);
+        let kind = r.types.shader_kind(&shader).unwrap_or(RequestKind::Pattern);
+        let id = r.net.add_node_of_kind(&path, &shader, kind);
+        r.net.set_node_location(id, r.at(&path));
+        r.nodes.insert(path.clone(), id);
+        // The nearest enclosing Material owns the shader.
+        let owner = p
+            .strict_ancestors()
+            .find(|a| r.kinds.get(a.as_str()) == Some(&PrimKind::Material));
+        if let Some(owner) = owner
+            && let Some(m) = materials.iter_mut().find(|(n, _)| n == owner.as_str())
+        {
+            m.1.push(id);
+        }
+    }
+    for p in &shaders {
+        let path = p.as_str().to_string();
+        let id = r.nodes[&path];
+        r.read_inputs(&path, id);
+    }
+    for (name, ids) in materials {
+        let terminals = r.terminals(&name);
+        for t in &terminals {
+            if let Some(id) = t.link.upstream_node()
+                && r.types.shader_kind(r.net[id].shader()).is_none()
+            {
+                r.net
+                    .set_node_kind(id, RequestKind::from_terminal_name(&t.name));
+            }
+        }
+        let location = Some(r.at(&name));
+        r.net.materials_mut().push(Material {
+            name,
+            terminals,
+            nodes: MaterialNodes::Explicit(ids),
+            primvars: Vec::new(),
+            location,
+        });
+    }
+    if !r.sampled.is_empty() {
+        let first = r.sampled[0].clone();
+        let n = r.sampled.len();
+        r.warn(
+            "US004",
+            &first,
+            format!(
+                "time samples ignored on {n} input(s) (first: `{first}`); the default values \
+                 are used"
+            ),
+        );
+    }
+    for e in r.stage.composition_errors() {
+        let d = Diagnostic::warning("US002", format!("composition: {e}"))
+            .at(Location::file(r.file.clone()));
+        r.diags.push(d);
+    }
+    Ok(())
+}

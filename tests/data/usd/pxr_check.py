@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""Opt-in check that Pixar's own USD library reads what vstructc writes.
+
+    python3 -m venv /tmp/usd-core && /tmp/usd-core/bin/pip install usd-core
+    cargo build
+    /tmp/usd-core/bin/python tests/data/usd/pxr_check.py [target/debug/vstructc]
+
+The script writes a small layered look with Pixar's USD (`pxr`), resolves it with vstructc
+into `.usda`, and opens the result with Pixar's USD: every Shader keeps
+its `info:id`, every connection reaches an existing shader output, the member connections
+resolution made are there, and the Material's `outputs:ri:surface` leads to the surface.
+It exits with status 0 when every check holds. Not part of `cargo test`: usd-core is a
+large download.
+"""
+
+import os
+import subprocess
+import sys
+import tempfile
+
+from pxr import Gf, Sdf, Usd, UsdShade
+
+
+def write_look(path):
+    """Two PxrLayers mixed into a PxrLayerSurface, wired by vstruct heads only."""
+    stage = Usd.Stage.CreateNew(path)
+    material = UsdShade.Material.Define(stage, "/Looks/ball")
+
+    def shader(name, shader_id):
+        s = UsdShade.Shader.Define(stage, "/Looks/ball/" + name)
+        s.CreateIdAttr(shader_id)
+        return s
+
+    base = shader("base", "PxrLayer")
+    base.CreateInput("enableDiffuse", Sdf.ValueTypeNames.Int).Set(1)
+    base.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(0.2, 0.5, 0.2))
+    coat = shader("coat", "PxrLayer")
+    coat.CreateInput("enableClearcoat", Sdf.ValueTypeNames.Int).Set(1)
+    coat.CreateInput("clearcoatGain", Sdf.ValueTypeNames.Float).Set(1.0)
+    mixer = shader("mixer", "PxrLayerMixer")
+    out_type = Sdf.ValueTypeNames.Token
+    mixer.CreateInput("baselayer", out_type).ConnectToSource(
+        base.ConnectableAPI(), "pxrMaterialOut")
+    mixer.CreateInput("layer1", out_type).ConnectToSource(
+        coat.ConnectableAPI(), "pxrMaterialOut")
+    mixer.CreateInput("layer1Enabled", Sdf.ValueTypeNames.Int).Set(1)
+    mixer.CreateInput("layer1Mask", Sdf.ValueTypeNames.Float).Set(0.5)
+    surface = shader("surface", "PxrLayerSurface")
+    surface.CreateInput("inputMaterial", out_type).ConnectToSource(
+        mixer.ConnectableAPI(), "pxrMaterialOut")
+    surface.CreateOutput("out", out_type)
+    material.CreateSurfaceOutput("ri").ConnectToSource(surface.ConnectableAPI(), "out")
+    stage.GetRootLayer().Save()
+
+
+def check(path):
+    """Problems found in the resolved stage at `path`, as text."""
+    problems = []
+    stage = Usd.Stage.Open(path)
+    if not stage:
+        return ["Pixar's USD cannot open " + path]
+    shaders = {}
+    for prim in stage.Traverse():
+        if prim.GetTypeName() == "Shader":
+            shaders[str(prim.GetPath())] = UsdShade.Shader(prim)
+    if len(shaders) != 4:
+        problems.append("%d shaders, not 4" % len(shaders))
+    member_links = 0
+    for name, s in shaders.items():
+        if not s.GetShaderId():
+            problems.append(name + " has no info:id")
+        for inp in s.GetInputs():
+            sources, invalid = inp.GetConnectedSources()
+            if invalid:
+                problems.append("%s.%s has invalid sources" % (name, inp.GetBaseName()))
+            for src in sources:
+                upstream = str(src.source.GetPrim().GetPath())
+                if upstream not in shaders:
+                    problems.append("%s.%s comes from %s" % (name, inp.GetBaseName(), upstream))
+                if "_" in inp.GetBaseName() or src.sourceName.startswith("pxrMaterialOut_"):
+                    member_links += 1
+    if member_links == 0:
+        problems.append("no member connections: the output is not resolved")
+    material = UsdShade.Material(stage.GetPrimAtPath("/Looks/ball"))
+    if not material:
+        problems.append("no Material at /Looks/ball")
+    else:
+        source = material.ComputeSurfaceSource("ri")[0]
+        if not source or str(source.GetPath()) != "/Looks/ball/surface":
+            problems.append("outputs:ri:surface does not lead to /Looks/ball/surface")
+    return problems
+
+
+def main():
+    vstructc = sys.argv[1] if len(sys.argv) > 1 else "target/debug/vstructc"
+    failed = False
+    with tempfile.TemporaryDirectory() as tmp:
+        look = os.path.join(tmp, "look.usda")
+        write_look(look)
+        for ext in ["usda"]:
+            out = os.path.join(tmp, "resolved." + ext)
+            run = subprocess.run([vstructc, "resolve", look, "-o", out],
+                                 capture_output=True, text=True)
+            if run.returncode != 0:
+                print("%s: vstructc failed:\n%s" % (ext, run.stderr))
+                failed = True
+                continue
+            problems = check(out)
+            for p in problems:
+                print("%s: %s" % (ext, p))
+            failed = failed or bool(problems)
+            print("%s: %s" % (ext, "FAILED" if problems else "ok"))
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,426 @@
+//! USD: the corpus in `tests/data/usd/` resolves to exactly the member connections and
+//! values of the equivalent RIB (node handles compared by their last path component), with
+//! conditions on and off; RIB → usda → RIB and usda → resolve → usda → RIB keep every
+//! connection and value; the reader's diagnostics.
+
+use crate::common;
+
+use std::collections::BTreeMap;
+use vstructc::back::rib::write_rib_to_vec;
+use vstructc::back::usd::write_usda;
+use vstructc::front::rib::{RibOptions, parse_rib};
+use vstructc::front::usd::parse_usd;
+use vstructc::limits::Limits;
+use vstructc::network::Network;
+use vstructc::registry::Registry;
+use vstructc::resolve::{ResolveOptions, resolve};
+use vstructc::{Diagnostics, Severity};
+
+fn usd_dir() -> std::path::PathBuf {
+    common::repo_dir().join("tests/data/usd")
+}
+
+/// The last component of a prim path or a sanitised handle: the name both sides share.
+fn short(handle: &str) -> String {
+    handle.rsplit('/').next().unwrap_or(handle).to_string()
+}
+
+/// Every node's parameters (renderer `__` names left out): value and connections, with
+/// handles shortened.
+type Canon = BTreeMap<String, BTreeMap<String, (Option<String>, Vec<String>)>>;
+
+fn canon(net: &Network) -> Canon {
+    let mut out = Canon::new();
+    for id in net.nodes_sorted() {
+        let node = &net[id];
+        let mut params = BTreeMap::new();
+        for p in node.params_by_name() {
+            if p.name().starts_with("__") {
+                continue;
+            }
+            let links = p
+                .connections()
+                .iter()
+                .map(|l| {
+                    let up = match l.upstream_node() {
+                        Some(u) => short(net[u].handle()),
+                        None => format!("missing {}", l.missing_handle().unwrap_or("")),
+                    };
+                    format!("{up}:{}", l.output().unwrap_or(""))
+                })
+                .collect();
+            params.insert(
+                p.name().to_string(),
+                (p.value().map(|v| format!("{v:?}")), links),
+            );
+        }
+        let prev = out.insert(
+            format!("{} {}", short(node.handle()), node.shader()),
+            params,
+        );
+        assert!(prev.is_none(), "two nodes named {}", node.handle());
+    }
+    out
+}
+
+fn options(conditions: bool) -> ResolveOptions {
+    ResolveOptions {
+        conditions,
+        ..ResolveOptions::default()
+    }
+}
+
+fn read_rib(bytes: &[u8], name: &str, reg: &Registry) -> Network {
+    let mut diags = Diagnostics::new();
+    let net = parse_rib(bytes, name, reg, &RibOptions::default(), &mut diags).expect("RIB reads");
+    assert!(!diags.has_errors(), "{name}: {diags:#?}");
+    net
+}
+
+fn read_usd(bytes: &[u8], name: &str, reg: &Registry) -> (Network, Diagnostics) {
+    let mut diags = Diagnostics::new();
+    let net = parse_usd(bytes, name, reg, &Limits::default(), &mut diags)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    (net, diags)
+}
+
+fn resolved_rib(example: &str, reg: &Registry, conditions: bool) -> Network {
+    let path = common::repo_dir().join("examples").join(example);
+    let mut net = read_rib(&std::fs::read(&path).unwrap(), example, reg);
+    resolve(&mut net, reg, &options(conditions));
+    net
+}
+
+fn resolved_usd(file: &str, reg: &Registry, conditions: bool) -> Network {
+    let path = usd_dir().join(file);
+    let (mut net, diags) = read_usd(&std::fs::read(&path).unwrap(), path.to_str().unwrap(), reg);
+    assert!(
+        !diags.iter().any(|d| d.severity >= Severity::Warning),
+        "{file}: {diags:#?}"
+    );
+    let res = resolve(&mut net, reg, &options(conditions));
+    assert!(
+        !res.diagnostics
+            .iter()
+            .any(|d| d.severity >= Severity::Warning),
+        "{file}: {:#?}",
+        res.diagnostics
+    );
+    net
+}
+
+/// Each stage of the corpus and the bundled RIB example it is equivalent to.
+const PAIRS: &[(&str, &str)] = &[
+    ("chain.usda", "chain.rib"),
+    ("layered.usda", "layered.rib"),
+    ("override.usda", "override.rib"),
+    ("library_look.usda", "override.rib"),
+    ("variants.usda", "override.rib"),
+    ("nodegraph.usda", "layered.rib"),
+    ("layered.usdc", "layered.rib"),
+    ("layered.usdz", "layered.rib"),
+];
+
+#[test]
+fn each_stage_resolves_as_its_rib_does() {
+    let reg = Registry::embedded();
+    for conditions in [true, false] {
+        for &(usd, rib) in PAIRS {
+            let want = canon(&resolved_rib(rib, &reg, conditions));
+            let got = canon(&resolved_usd(usd, &reg, conditions));
+            assert_eq!(got, want, "{usd} vs {rib}, conditions {conditions}");
+        }
+    }
+}
+
+#[test]
+fn every_material_has_its_terminal_and_its_shaders() {
+    let reg = Registry::embedded();
+    let net = resolved_usd("nodegraph.usda", &reg, true);
+    assert_eq!(net.materials().len(), 1);
+    let m = &net.materials()[0];
+    assert_eq!(m.name, "/Looks/layeredMaterial");
+    assert_eq!(m.terminals.len(), 1);
+    assert_eq!(m.terminals[0].name, "surface");
+    let surface = m.terminals[0].link.upstream_node().unwrap();
+    assert_eq!(net[surface].handle(), "/Looks/layeredMaterial/surface");
+    assert_eq!(net[surface].kind(), vstructc::network::RequestKind::Bxdf);
+    // The shader inside the node graph belongs to the material too.
+    let mut members: Vec<String> = net
+        .material_nodes(0)
+        .into_iter()
+        .map(|id| net[id].handle().to_string())
+        .collect();
+    members.sort();
+    assert_eq!(
+        members,
+        [
+            "/Looks/layeredMaterial/coat/redCoat",
+            "/Looks/layeredMaterial/greenBase",
+            "/Looks/layeredMaterial/mixer",
+            "/Looks/layeredMaterial/surface",
+        ]
+    );
+}
+
+/// A shader under the material that no terminal reaches still belongs to it, and the
+/// universal `outputs:surface` is the terminal when no `ri:` output exists.
+#[test]
+fn unreached_shaders_belong_and_universal_terminals_are_read() {
+    let reg = Registry::embedded();
+    let text = br#"#usda 1.0
+def Material "M" {
+    token outputs:surface.connect = </M/S.outputs:out>
+    def Shader "Spare" {
+        uniform token info:id = "PxrLayer"
+        int inputs:enableDiffuse = 1
+    }
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        float inputs:diffuseGain = 0.5
+    }
+}
+"#;
+    let (net, diags) = read_usd(text, "m.usda", &reg);
+    assert!(diags.is_empty(), "{diags:#?}");
+    let m = &net.materials()[0];
+    assert_eq!(m.terminals[0].name, "surface");
+    assert_eq!(net.material_nodes(0).len(), 2);
+}
+
+#[test]
+fn rib_to_usda_to_rib_keeps_every_connection_and_value() {
+    let reg = Registry::embedded();
+    for example in ["chain.rib", "layered.rib", "override.rib"] {
+        for conditions in [true, false] {
+            let net = resolved_rib(example, &reg, conditions);
+            let want = canon(&net);
+            let mut usda = Vec::new();
+            write_usda(&net, &reg, &mut usda).unwrap();
+            let (back, diags) = read_usd(&usda, "out.usda", &reg);
+            assert!(diags.is_empty(), "{example}: {diags:#?}");
+            assert_eq!(canon(&back), want, "{example} → usda");
+            assert_eq!(back.materials().len(), net.materials().len());
+            let rib = write_rib_to_vec(&[], &back, &reg).unwrap();
+            let again = read_rib(&rib, "back.rib", &reg);
+            assert_eq!(canon(&again), want, "{example} → usda → RIB");
+        }
+    }
+}
+
+#[test]
+fn usda_to_resolved_usda_to_rib_keeps_every_connection_and_value() {
+    let reg = Registry::embedded();
+    for &(usd, _) in PAIRS {
+        let net = resolved_usd(usd, &reg, true);
+        let want = canon(&net);
+        let mut usda = Vec::new();
+        write_usda(&net, &reg, &mut usda).unwrap();
+        let text = String::from_utf8(usda.clone()).unwrap();
+        let (back, diags) = read_usd(&usda, "out.usda", &reg);
+        assert!(diags.is_empty(), "{usd}: {diags:#?}");
+        // Same prim paths.
+        let handles = |n: &Network| -> Vec<String> {
+            n.nodes_sorted()
+                .into_iter()
+                .map(|id| n[id].handle().to_string())
+                .collect()
+        };
+        assert_eq!(handles(&back), handles(&net), "{usd}:\n{text}");
+        assert_eq!(canon(&back), want, "{usd} → usda:\n{text}");
+        let rib = write_rib_to_vec(&[], &back, &reg).unwrap();
+        let again = read_rib(&rib, "back.rib", &reg);
+        assert_eq!(canon(&again), want, "{usd} → usda → RIB");
+    }
+}
+
+/// The writer types values as the definitions declare them (Sdr's mapping) and connects
+/// the terminal to the Bxdf's `outputs:out`.
+#[test]
+fn the_writer_types_inputs_as_declared() {
+    let reg = Registry::embedded();
+    let net = resolved_rib("override.rib", &reg, true);
+    let mut usda = Vec::new();
+    write_usda(&net, &reg, &mut usda).unwrap();
+    let text = String::from_utf8(usda).unwrap();
+    for line in [
+        "def Material \"plasticSurface\"",
+        "token outputs:ri:surface.connect = </Materials/plasticSurface/plasticSurface.outputs:out>",
+        "int inputs:enableDiffuse = 1",
+        "color3f inputs:diffuseColor = (0.8, 0.1, 0.1)",
+        "color3f inputs:diffuseColor.connect = </Materials/plasticSurface/tint.outputs:pxrMaterialOut_diffuseColor>",
+        "color3f outputs:pxrMaterialOut_diffuseColor",
+        "uniform token info:id = \"PxrSurface\"",
+    ] {
+        assert!(text.contains(line), "{line}:\n{text}");
+    }
+    // Resolved: the vstruct head's placeholder is gone.
+    assert!(!text.contains("inputs:inputMaterial"), "{text}");
+    // An int given for a declared float is written as the float the definition declares;
+    // a parameter the definition does not declare keeps its own type.
+    let mut net = Network::new();
+    let s = net.add_node_of_kind("s", "PxrSurface", vstructc::network::RequestKind::Bxdf);
+    net.set_param(s, "diffuseGain", vstructc::Value::Int(1));
+    net.set_param(s, "madeUp", vstructc::Value::Int(2));
+    let m = net.add_material("m");
+    net.set_terminal(m, "surface", s, None);
+    let mut usda = Vec::new();
+    write_usda(&net, &reg, &mut usda).unwrap();
+    let text = String::from_utf8(usda).unwrap();
+    assert!(text.contains("float inputs:diffuseGain = 1\n"), "{text}");
+    assert!(text.contains("int inputs:madeUp = 2\n"), "{text}");
+}
+
+/// Handles that are not USD identifiers are made into prim names, distinct ones kept
+/// distinct.
+#[test]
+fn handles_become_prim_names() {
+    let reg = Registry::embedded();
+    let rib = br#"Pattern "PxrLayer" "3 coat:a" "int enableDiffuse" [1]
+Pattern "PxrLayer" "3 coat-a" "int enableDiffuse" [0]
+Pattern "PxrLayerMixer" "mix" "reference vstruct baselayer" ["3 coat:a:pxrMaterialOut"]
+    "reference vstruct layer1" ["3 coat-a:pxrMaterialOut"]
+Bxdf "PxrLayerSurface" "my surface" "reference float inputMaterial" ["mix:pxrMaterialOut"]
+"#;
+    let net = read_rib(rib, "h.rib", &reg);
+    let mut usda = Vec::new();
+    write_usda(&net, &reg, &mut usda).unwrap();
+    let text = String::from_utf8(usda).unwrap();
+    assert!(text.contains("def Material \"my_surface\""), "{text}");
+    assert!(text.contains("def Shader \"_3_coat_a\""), "{text}");
+    assert!(text.contains("def Shader \"_3_coat_a_2\""), "{text}");
+    let (back, diags) = read_usd(text.as_bytes(), "h.usda", &reg);
+    assert!(diags.is_empty(), "{diags:#?}");
+    assert_eq!(back.node_count(), 4);
+    assert_eq!(canon(&back).len(), 4);
+}
+
+#[test]
+fn time_samples_give_the_default_and_one_warning() {
+    let reg = Registry::embedded();
+    let text = br#"#usda 1.0
+def Material "M" {
+    def Shader "L" {
+        uniform token info:id = "PxrLayer"
+        float inputs:diffuseGain = 0.25
+        float inputs:diffuseGain.timeSamples = { 1: 0.5, 2: 0.75 }
+        float inputs:specularGain.timeSamples = { 1: 0.5 }
+    }
+}
+"#;
+    let (net, diags) = read_usd(text, "t.usda", &reg);
+    let l = net.find("/M/L").unwrap();
+    assert_eq!(
+        net.value(l, "diffuseGain"),
+        Some(&vstructc::Value::Float(0.25))
+    );
+    assert_eq!(net.value(l, "specularGain"), None);
+    let w: Vec<_> = diags.iter().filter(|d| d.code == "US004").collect();
+    assert_eq!(w.len(), 1, "{diags:#?}");
+    assert!(w[0].message.contains("2 input(s)"), "{}", w[0].message);
+}
+
+#[test]
+fn shaders_without_an_id_are_kept_as_unknown_nodes() {
+    let reg = Registry::embedded();
+    let text = br#"#usda 1.0
+def Material "M" {
+    def Shader "Osl" {
+        uniform token info:implementationSource = "sourceAsset"
+        uniform asset info:osl:sourceAsset = @noise.osl@
+    }
+    def Shader "Bare" {
+    }
+}
+"#;
+    let (net, diags) = read_usd(text, "u.usda", &reg);
+    assert_eq!(net.node_count(), 2);
+    assert_eq!(net[net.find("/M/Osl").unwrap()].shader(), "(sourceAsset)");
+    let w: Vec<String> = diags
+        .iter()
+        .filter(|d| d.code == "US003")
+        .map(|d| d.to_string())
+        .collect();
+    assert_eq!(w.len(), 2, "{diags:#?}");
+    insta::assert_snapshot!(w.join("\n"));
+}
+
+#[test]
+fn dangling_connections_unknown_types_and_bad_references_are_warnings() {
+    let reg = Registry::embedded();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.usda");
+    let text = br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" (
+        references = @missing.usda@</Lib/S>
+    ) {
+        uniform token info:id = "PxrSurface"
+        color3f inputs:diffuseColor.connect = </Nowhere/X.outputs:c>
+        quatf inputs:diffuseGain = (1, 0, 0, 0)
+    }
+}
+"#;
+    std::fs::write(&path, text).unwrap();
+    let (net, diags) = read_usd(text, path.to_str().unwrap(), &reg);
+    let s = net.find("/M/S").unwrap();
+    let links = net.connections(s, "diffuseColor");
+    assert_eq!(links.len(), 1);
+    assert_eq!(links[0].missing_handle(), Some("/Nowhere/X"));
+    assert_eq!(net.value(s, "diffuseGain"), None);
+    let codes: Vec<&str> = diags.iter().map(|d| d.code.as_str()).collect();
+    assert!(codes.contains(&"US006"), "{diags:#?}");
+    let us002 = diags.iter().filter(|d| d.code == "US002").count();
+    assert!(
+        us002 >= 2,
+        "the dangling connection and the missing layer: {diags:#?}"
+    );
+    for d in diags.iter() {
+        assert!(d.location.is_some(), "{d:?}");
+    }
+}
+
+#[test]
+fn unreadable_stages_are_errors_not_panics() {
+    let reg = Registry::embedded();
+    for (name, bytes) in [
+        ("a.usda", &b"#usda 1.0\ndef Material \"M\" {"[..]),
+        ("b.usdc", &b"PXR-USDC\0\0\0\0"[..]),
+        ("c.usdz", &b"PK\x03\x04 not a zip"[..]),
+        (
+            "<stdin>",
+            &b"#usda 1.0\ndef Shader \"S\" { float inputs:x = }"[..],
+        ),
+    ] {
+        let mut diags = Diagnostics::new();
+        let e = parse_usd(bytes, name, &reg, &Limits::default(), &mut diags).unwrap_err();
+        assert_eq!(e.code(), Some("US001"), "{name}: {e}");
+    }
+}
+
+/// Standard input (no extension) and a package held only in memory read as files do.
+#[test]
+fn stages_read_from_memory() {
+    let reg = Registry::embedded();
+    let layered = std::fs::read(usd_dir().join("layered.usdz")).unwrap();
+    let (from_stdin, diags) = read_usd(&layered, "<stdin>", &reg);
+    assert!(diags.is_empty(), "{diags:#?}");
+    let (from_file, _) = read_usd(&layered, "somewhere/else.usdz", &reg);
+    assert_eq!(canon(&from_stdin), canon(&from_file));
+    assert_eq!(from_stdin.node_count(), 4);
+}
+
+/// `layered.usdc` and `layered.usdz` are `layered.usda` written by Pixar's USD
+/// (`make_binaries.py`).
+#[test]
+fn binary_corpus_files_are_the_layered_look() {
+    let dir = usd_dir();
+    let reg = Registry::embedded();
+    let want = canon(&resolved_usd("layered.usda", &reg, true));
+    for f in ["layered.usdc", "layered.usdz"] {
+        let bytes = std::fs::read(dir.join(f)).unwrap();
+        assert!(bytes.starts_with(b"PXR-USDC") || bytes.starts_with(b"PK\x03\x04"));
+        assert_eq!(canon(&resolved_usd(f, &reg, true)), want, "{f}");
+    }
+}
