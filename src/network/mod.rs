@@ -640,7 +640,7 @@ fn prefix_key(s: &str) -> u64 {
 /// in many nodes (resolution's members) compute it once and use the `*_hashed` look-ups.
 ///
 /// The hash is 32 bits repeated in both halves, so the name index can store it in 4 bytes
-/// and rebuild the full value when it grows ([`unfold`]).
+/// and rebuild the full value when it grows (`unfold`).
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) fn name_hash(name: &str) -> u64 {
     let h = FxBuildHasher.hash_one(name);
@@ -1498,7 +1498,7 @@ impl Network {
     }
 
     /// [`Network::set_param`] for a member whose position is known (see
-    /// [`Network::connect_slot`]).
+    /// `Network::connect_slot`).
     #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn set_slot(
         &mut self,

@@ -2,7 +2,7 @@
 //!
 //! Tokens are produced one at a time; the parser keeps only the tokens of the shading request
 //! it is reading, so pass-through requests (geometry with millions of numbers) cost no memory.
-//! String contents are decoded on demand ([`decode_string`], [`decode_str`]). Short plain
+//! String contents are decoded on demand ([`decode_string`], `decode_str`). Short plain
 //! strings (ASCII, no escape, no line break) are scanned eight bytes at a time and move only
 //! the column; comments and other strings are scanned with `memchr`, and their lines and
 //! columns are counted over whole tokens rather than byte by byte.
