@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Opt-in check that Pixar's own USD library reads what vstructc writes.
+"""Check that Pixar's own USD library reads what vstructc writes (run by `.ci/run`).
 
     python3 -m venv /tmp/usd-core && /tmp/usd-core/bin/pip install usd-core
     cargo build
@@ -10,7 +10,7 @@ into `.usda`, and opens the result with Pixar's USD: every Shader keeps
 its `info:id`, every connection reaches an existing shader output, the member connections
 resolution made are there, and the Material's `outputs:ri:surface` leads to the surface.
 It exits with status 0 when every check holds. Not part of `cargo test`: usd-core is a
-large download.
+large download, which CI's Python step makes.
 """
 
 import os
