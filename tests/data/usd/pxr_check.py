@@ -6,13 +6,15 @@
     /tmp/usd-core/bin/python tests/data/usd/pxr_check.py [target/debug/vstructc]
 
 The script writes a small layered look with Pixar's USD (`pxr`), resolves it with vstructc
-into `.usda`, and opens the result with Pixar's USD: every Shader keeps
-its `info:id`, every connection reaches an existing shader output, the member connections
-resolution made are there, and the Material's `outputs:ri:surface` leads to the surface.
+into `.usda`, and opens the result with Pixar's USD: every Shader keeps its `info:id`, the
+connections and input values Pixar's USD finds are exactly those of vstructc's JSON output of
+the same resolution (member connections included), and the Material's `outputs:ri:surface`
+leads to the surface.
 It exits with status 0 when every check holds. Not part of `cargo test`: usd-core is a
 large download, which CI's Python step makes.
 """
 
+import json
 import os
 import subprocess
 import sys
@@ -53,7 +55,22 @@ def write_look(path):
     stage.GetRootLayer().Save()
 
 
-def check(path):
+def expected(vstructc, look):
+    """The connections and authored input names vstructc's own JSON output of the same
+    resolution holds: {(node, input, upstream node, upstream output)}, {(node, input)}."""
+    run = subprocess.run([vstructc, "resolve", look, "--format", "json"],
+                         capture_output=True, text=True, check=True)
+    links, values = set(), set()
+    for material in json.loads(run.stdout)["materials"].values():
+        for handle, node in material["nodes"].items():
+            for name, sources in node["inputConnections"].items():
+                for src in sources:
+                    links.add((handle, name, src["upstreamNode"], src["upstreamOutputName"]))
+            values.update((handle, name) for name in node["parameters"])
+    return links, values
+
+
+def check(path, want_links, want_values):
     """Problems found in the resolved stage at `path`, as text."""
     problems = []
     stage = Usd.Stage.Open(path)
@@ -65,7 +82,7 @@ def check(path):
             shaders[str(prim.GetPath())] = UsdShade.Shader(prim)
     if len(shaders) != 4:
         problems.append("%d shaders, not 4" % len(shaders))
-    member_links = 0
+    links, values = set(), set()
     for name, s in shaders.items():
         if not s.GetShaderId():
             problems.append(name + " has no info:id")
@@ -77,10 +94,17 @@ def check(path):
                 upstream = str(src.source.GetPrim().GetPath())
                 if upstream not in shaders:
                     problems.append("%s.%s comes from %s" % (name, inp.GetBaseName(), upstream))
-                if "_" in inp.GetBaseName() or src.sourceName.startswith("pxrMaterialOut_"):
-                    member_links += 1
-    if member_links == 0:
+                links.add((name, inp.GetBaseName(), upstream, src.sourceName))
+            if not sources and inp.Get() is not None:
+                values.add((name, inp.GetBaseName()))
+    if not any("_" in link[1] for link in links):
         problems.append("no member connections: the output is not resolved")
+    for link in sorted(want_links - links):
+        problems.append("missing connection %s.%s <- %s.%s" % link)
+    for link in sorted(links - want_links):
+        problems.append("unexpected connection %s.%s <- %s.%s" % link)
+    for value in sorted(want_values ^ values):
+        problems.append("value of %s.%s differs in presence" % value)
     material = UsdShade.Material(stage.GetPrimAtPath("/Looks/ball"))
     if not material:
         problems.append("no Material at /Looks/ball")
@@ -105,7 +129,7 @@ def main():
                 print("%s: vstructc failed:\n%s" % (ext, run.stderr))
                 failed = True
                 continue
-            problems = check(out)
+            problems = check(out, *expected(vstructc, look))
             for p in problems:
                 print("%s: %s" % (ext, p))
             failed = failed or bool(problems)
