@@ -267,8 +267,9 @@ impl Reader<'_> {
         }
     }
 
-    /// The attributes of prim `path`, in composed order.
-    fn attributes(&self, path: &sdf::Path) -> Vec<sdf::Path> {
+    /// The `inputs:` attributes of prim `path` in composed order: each one's path and
+    /// input name.
+    fn inputs(&self, path: &sdf::Path) -> Vec<(sdf::Path, String)> {
         match self.flat {
             Some(data) => {
                 let names = match data.try_field(path, "propertyChildren") {
@@ -279,18 +280,33 @@ impl Reader<'_> {
                     _ => Vec::new(),
                 };
                 let mut seen = rustc_hash::FxHashSet::default();
-                names
-                    .into_iter()
-                    .filter(|n| seen.insert(n.clone()))
-                    .filter_map(|n| path.append_property(n).ok())
-                    .filter(|p| data.spec_type(p) == Some(sdf::SpecType::Attribute))
-                    .collect()
+                let mut out = Vec::new();
+                for n in names {
+                    let Some(input) = n.as_str().strip_prefix("inputs:") else {
+                        continue;
+                    };
+                    if !seen.insert(input.to_string()) {
+                        continue;
+                    }
+                    if let Ok(p) = path.append_property(n.as_str())
+                        && data.spec_type(&p) == Some(sdf::SpecType::Attribute)
+                    {
+                        out.push((p, input.to_string()));
+                    }
+                }
+                out
             }
             None => self
                 .stage
                 .and_then(|stage| stage.prim(path.clone()).attributes().ok())
-                .map(|attrs| attrs.iter().map(|a| a.path().clone()).collect())
-                .unwrap_or_default(),
+                .unwrap_or_default()
+                .into_iter()
+                .filter_map(|a| {
+                    let input = a.path().split_property()?.1.strip_prefix("inputs:")?;
+                    let input = input.to_string();
+                    Some((a.path().clone(), input))
+                })
+                .collect(),
         }
     }
 
@@ -387,15 +403,8 @@ impl Reader<'_> {
     /// Read the inputs of shader `path` into node `id`.
     fn read_inputs(&mut self, path: &sdf::Path, id: NodeId) {
         let shader = self.net[id].shader().to_string();
-        for attr in self.attributes(path) {
+        for (attr, input) in self.inputs(path) {
             let apath = attr.as_str().to_string();
-            let Some((_, name)) = attr.split_property() else {
-                continue;
-            };
-            let Some(input) = name.strip_prefix("inputs:") else {
-                continue;
-            };
-            let input = input.to_string();
             if self.time_samples(&attr) > 0 {
                 self.sampled.push(apath.clone());
             }
