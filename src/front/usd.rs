@@ -13,6 +13,9 @@
 //! `outputs:displacement`) are its terminals. Order does not matter: a connection binds to
 //! its prim wherever the prim is.
 //!
+//! A `.usda` or `.usdc` root layer in which nothing composes is read from its specs
+//! directly, without composing a stage; the result is the same, and it is much faster.
+//!
 //! Diagnostics name the file and the prim or property path (in [`Location::pointer`]);
 //! `openusd` keeps no line numbers, so USD diagnostics have none.
 
