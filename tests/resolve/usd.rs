@@ -504,6 +504,43 @@ over "Nothing" {
 }
 "#;
     inputs.push(("arcs.usda".to_string(), arcs.to_vec()));
+    // A class and an over, with nothing else that composes: composed.
+    let overs = br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        token outputs:out
+    }
+}
+class "C" {
+    def Shader "T" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+over "O" {
+    def Shader "U" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+"#;
+    inputs.push(("overs.usda".to_string(), overs.to_vec()));
+    // An inactive prim alone: composed.
+    let inactive = br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        token outputs:out
+    }
+}
+def Scope "Off" (active = false) {
+    def Shader "V" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+"#;
+    inputs.push(("inactive.usda".to_string(), inactive.to_vec()));
     let mut alone = Vec::new();
     for (name, bytes) in &inputs {
         if reads_layer_alone(bytes, name) {
