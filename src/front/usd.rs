@@ -929,13 +929,18 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
     // Depth-first order: a material comes before its shaders.
     let mut shaders = Vec::new();
     let mut materials: Vec<(String, Vec<NodeId>)> = Vec::new();
+    // Each material's place in `materials`, by prim path.
+    let mut material_at: FxHashMap<String, usize> = FxHashMap::default();
     for p in paths {
         let Some(kind) = r.kind_of(p) else {
             continue;
         };
         r.kinds.insert(p.as_str().to_string(), kind);
         match kind {
-            PrimKind::Material => materials.push((p.as_str().to_string(), Vec::new())),
+            PrimKind::Material => {
+                material_at.insert(p.as_str().to_string(), materials.len());
+                materials.push((p.as_str().to_string(), Vec::new()));
+            }
             PrimKind::Shader => shaders.push(p.clone()),
             PrimKind::NodeGraph => {}
         }
@@ -952,9 +957,9 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
             .strict_ancestors()
             .find(|a| r.kinds.get(a.as_str()) == Some(&PrimKind::Material));
         if let Some(owner) = owner
-            && let Some(m) = materials.iter_mut().find(|(n, _)| n == owner.as_str())
+            && let Some(&m) = material_at.get(owner.as_str())
         {
-            m.1.push(id);
+            materials[m].1.push(id);
         }
     }
     for p in &shaders {
