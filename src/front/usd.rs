@@ -766,6 +766,29 @@ fn mem_resolver(name: &str, bytes: &[u8]) -> (MemResolver, String) {
     (resolver, root)
 }
 
+/// Whether usda text `bytes` may hold something that composes, so that reading it alone
+/// would be parsing it twice: a word that only composition arcs, variants, prim states and
+/// layer metadata use, `over "` or `class `. A false alarm only means the stage is
+/// composed; a miss, that the text is parsed twice.
+fn may_compose(bytes: &[u8]) -> bool {
+    const WORDS: [&[u8]; 10] = [
+        b"subLayers",
+        b"references",
+        b"payload",
+        b"inherits",
+        b"specializes",
+        b"variant",
+        b"active",
+        b"instanceable",
+        b"relocates",
+        b"Order",
+    ];
+    WORDS
+        .iter()
+        .chain([b"over \"".as_slice(), b"class "].iter())
+        .any(|w| memchr::memmem::find(bytes, w).is_some())
+}
+
 /// The root layer `bytes` (a `.usda` or `.usdc`, named so and holding that encoding) read
 /// alone, with its prims in traversal order, when nothing in it composes
 /// ([`flat_prims`]); else nothing, and the stage is composed instead.
@@ -843,8 +866,9 @@ fn parse_usd_composed(
     read_usd(bytes, name, types, limits, diags, false)
 }
 
-/// Whether [`parse_usd`] reads root layer `bytes` named `name` alone, without composing
-/// a stage (nothing in the layer composes).
+/// Whether nothing in root layer `bytes` named `name` composes, so that [`parse_usd`] may
+/// read it alone, without composing a stage (a `.usda` whose text suggests composition
+/// is composed without asking).
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 #[allow(dead_code)]
 fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
@@ -864,7 +888,9 @@ fn read_usd(
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    let flat = direct.then(|| open_flat(name, bytes)).flatten();
+    let flat = (direct && !(flavour(bytes) == "usda" && may_compose(bytes)))
+        .then(|| open_flat(name, bytes))
+        .flatten();
     let stage = match flat {
         Some(_) => None,
         None => Some(open_stage(name, bytes).map_err(|why| {
