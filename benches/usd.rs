@@ -3,8 +3,8 @@
 //!
 //! `usd/rib/1000` reads and resolves the generated layered scene from RIB; `usd/usdc/1000`
 //! and `usd/usda/1000` the same network written by vstructc's USD writer (the `usdc` form
-//! encoded by `openusd`), read back through `openusd` (stage composition included) and
-//! resolved. Wall-clock time.
+//! encoded by `openusd`), read back through `openusd` and resolved (nothing in these layers
+//! composes, so the reader takes each root layer's specs as they are). Wall-clock time.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;

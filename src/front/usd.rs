@@ -13,6 +13,9 @@
 //! `outputs:displacement`) are its terminals. Order does not matter: a connection binds to
 //! its prim wherever the prim is.
 //!
+//! A `.usda` or `.usdc` root layer in which nothing composes is read from its specs
+//! directly, without composing a stage; the result is the same, and it is much faster.
+//!
 //! Diagnostics name the file and the prim or property path (in [`Location::pointer`]);
 //! `openusd` keeps no line numbers, so USD diagnostics have none.
 
@@ -138,7 +141,12 @@ enum PrimKind {
 
 /// Reading state: the stage, the prims it holds and where findings go.
 struct Reader<'a> {
-    stage: usd::Stage,
+    /// The composed stage, or nothing when `flat` is read instead.
+    stage: Option<&'a usd::Stage>,
+    /// The root layer's specs, when nothing in that layer composes (see [`flat_prims`]):
+    /// read directly, they are what the composed stage would give, without composing
+    /// each prim.
+    flat: Option<&'a dyn sdf::AbstractData>,
     file: Arc<str>,
     types: &'a dyn ParamTypes,
     diags: &'a mut Diagnostics,
@@ -164,8 +172,18 @@ impl Reader<'_> {
         self.diags.push(d);
     }
 
-    fn kind_of(&self, prim: &usd::Prim) -> Option<PrimKind> {
-        let t = prim.type_name().ok()??;
+    fn kind_of(&self, prim: &sdf::Path) -> Option<PrimKind> {
+        let t = match self.flat {
+            Some(data) => match data
+                .try_field(prim, sdf::FieldKey::TypeName.as_str())
+                .ok()??
+            {
+                std::borrow::Cow::Borrowed(sdf::Value::Token(t)) => t.clone(),
+                std::borrow::Cow::Owned(sdf::Value::Token(t)) => t,
+                _ => return None,
+            },
+            None => self.stage?.prim(prim.clone()).type_name().ok()??,
+        };
         match t.as_str() {
             "Material" => Some(PrimKind::Material),
             "NodeGraph" => Some(PrimKind::NodeGraph),
@@ -174,9 +192,131 @@ impl Reader<'_> {
         }
     }
 
+    /// Attribute `path`'s default value, as the stage composes it.
+    fn default_value(&self, path: &sdf::Path) -> Result<Option<sdf::Value>, String> {
+        if let Some(data) = self.flat {
+            match data
+                .try_field(path, sdf::FieldKey::Default.as_str())
+                .map_err(|e| e.to_string())?
+            {
+                None => return Ok(None),
+                // The stage would resolve asset paths too; the reader keeps only the
+                // authored path, which resolution leaves as it is.
+                Some(v) => match v.as_ref() {
+                    sdf::Value::ValueBlock => return Ok(None),
+                    _ => return Ok(Some(v.into_owned())),
+                },
+            }
+        }
+        match self.stage {
+            Some(stage) => stage
+                .attribute(path.clone())
+                .get::<sdf::Value>()
+                .map_err(|e| e.to_string()),
+            None => Ok(None),
+        }
+    }
+
+    /// The targets of attribute `path`'s connections, as the stage composes them.
+    fn connections(&self, path: &sdf::Path) -> Vec<sdf::Path> {
+        match self.flat {
+            Some(data) => match data.try_field(path, sdf::FieldKey::ConnectionPaths.as_str()) {
+                Ok(Some(v)) => match v.as_ref() {
+                    sdf::Value::PathListOp(op) => op.compose_over(&[]),
+                    _ => Vec::new(),
+                },
+                _ => Vec::new(),
+            },
+            None => self
+                .stage
+                .and_then(|stage| stage.attribute(path.clone()).connections().ok())
+                .unwrap_or_default(),
+        }
+    }
+
+    /// How many time samples attribute `path` has.
+    fn time_samples(&self, path: &sdf::Path) -> usize {
+        match self.flat {
+            Some(data) => match data.try_field(path, sdf::FieldKey::TimeSamples.as_str()) {
+                Ok(Some(v)) => match v.as_ref() {
+                    sdf::Value::TimeSamples(t) => t.len(),
+                    _ => 0,
+                },
+                _ => 0,
+            },
+            None => self
+                .stage
+                .and_then(|stage| stage.attribute(path.clone()).num_time_samples().ok())
+                .unwrap_or(0),
+        }
+    }
+
+    /// Attribute `path`'s USD type name, or nothing.
+    fn value_type(&self, path: &sdf::Path) -> String {
+        match self.flat {
+            Some(data) => match data.try_field(path, sdf::FieldKey::TypeName.as_str()) {
+                Ok(Some(v)) => match v.as_ref() {
+                    sdf::Value::Token(t) => t.as_str().to_string(),
+                    sdf::Value::String(t) => t.clone(),
+                    _ => String::new(),
+                },
+                _ => String::new(),
+            },
+            None => self
+                .stage
+                .and_then(|stage| stage.attribute(path.clone()).type_name().ok().flatten())
+                .map(|t| t.as_str().to_string())
+                .unwrap_or_default(),
+        }
+    }
+
+    /// The `inputs:` attributes of prim `path` in composed order: each one's path and
+    /// input name.
+    fn inputs(&self, path: &sdf::Path) -> Vec<(sdf::Path, String)> {
+        match self.flat {
+            Some(data) => {
+                let names = match data.try_field(path, "propertyChildren") {
+                    Ok(Some(v)) => match v.into_owned() {
+                        sdf::Value::TokenVec(names) => names,
+                        _ => Vec::new(),
+                    },
+                    _ => Vec::new(),
+                };
+                let mut seen = rustc_hash::FxHashSet::default();
+                let mut out = Vec::new();
+                for n in names {
+                    let Some(input) = n.as_str().strip_prefix("inputs:") else {
+                        continue;
+                    };
+                    if !seen.insert(input.to_string()) {
+                        continue;
+                    }
+                    if let Ok(p) = path.append_property(n.as_str())
+                        && data.spec_type(&p) == Some(sdf::SpecType::Attribute)
+                    {
+                        out.push((p, input.to_string()));
+                    }
+                }
+                out
+            }
+            None => self
+                .stage
+                .and_then(|stage| stage.prim(path.clone()).attributes().ok())
+                .unwrap_or_default()
+                .into_iter()
+                .filter_map(|a| {
+                    let input = a.path().split_property()?.1.strip_prefix("inputs:")?;
+                    let input = input.to_string();
+                    Some((a.path().clone(), input))
+                })
+                .collect(),
+        }
+    }
+
     /// A token or string attribute's default value.
-    fn text_attr(&self, prim: &usd::Prim, name: &str) -> Option<String> {
-        match prim.attribute(name).get::<sdf::Value>().ok()?? {
+    fn text_attr(&self, prim: &sdf::Path, name: &str) -> Option<String> {
+        let path = prim.append_property(name).ok()?;
+        match self.default_value(&path).ok()?? {
             sdf::Value::Token(t) => Some(t.as_str().to_string()),
             sdf::Value::String(s) => Some(s),
             _ => None,
@@ -185,7 +325,7 @@ impl Reader<'_> {
 
     /// The node type of shader `prim`: its `info:id`, or a marker of what it has instead
     /// (US003).
-    fn shader_id(&mut self, prim: &usd::Prim, path: &str) -> String {
+    fn shader_id(&mut self, prim: &sdf::Path, path: &str) -> String {
         let source = self.text_attr(prim, "info:implementationSource");
         match source.as_deref() {
             None | Some("id") => match self.text_attr(prim, "info:id") {
@@ -241,10 +381,9 @@ impl Reader<'_> {
                     );
                     return;
                 }
-                let attr = self.stage.attribute(target.clone());
-                let targets = attr.connections().unwrap_or_default();
+                let targets = self.connections(target);
                 if targets.is_empty() {
-                    match attr.get::<sdf::Value>() {
+                    match self.default_value(target) {
                         Ok(Some(v)) => out.push(Source::Value(v, target.as_str().to_string())),
                         _ => self.warn(
                             "US005",
@@ -265,34 +404,18 @@ impl Reader<'_> {
     }
 
     /// Read the inputs of shader `path` into node `id`.
-    fn read_inputs(&mut self, path: &str, id: NodeId) {
-        let prim = self.stage.prim(path);
+    fn read_inputs(&mut self, path: &sdf::Path, id: NodeId) {
         let shader = self.net[id].shader().to_string();
-        let Ok(attrs) = prim.attributes() else {
-            return;
-        };
-        for attr in attrs {
-            let apath = attr.path().as_str().to_string();
-            let Some((_, name)) = attr.path().split_property() else {
-                continue;
-            };
-            let Some(input) = name.strip_prefix("inputs:") else {
-                continue;
-            };
-            let input = input.to_string();
-            if attr.num_time_samples().unwrap_or(0) > 0 {
+        for (attr, input) in self.inputs(path) {
+            let apath = attr.as_str().to_string();
+            if self.time_samples(&attr) > 0 {
                 self.sampled.push(apath.clone());
             }
             let declared = self.types.input_type(&shader, &input);
-            let targets = attr.connections().unwrap_or_default();
+            let targets = self.connections(&attr);
             if targets.is_empty() {
-                let usd_type = attr
-                    .type_name()
-                    .ok()
-                    .flatten()
-                    .map(|t| t.as_str().to_string())
-                    .unwrap_or_default();
-                match attr.get::<sdf::Value>() {
+                let usd_type = self.value_type(&attr);
+                match self.default_value(&attr) {
                     Ok(Some(v)) => {
                         self.set_value(id, &input, &v, declared.as_ref(), &usd_type, &apath)
                     }
@@ -365,12 +488,14 @@ impl Reader<'_> {
 
     /// The terminals of Material `path`: `outputs:ri:*`, else the universal outputs.
     fn terminals(&mut self, path: &str) -> Vec<Terminal> {
-        let prim = self.stage.prim(path);
+        let prim = sdf::Path::from(path);
         let read = |this: &mut Self, names: &[(&str, &str)]| -> Vec<Terminal> {
             let mut out = Vec::new();
             for &(attr_name, terminal) in names {
-                let attr = prim.attribute(attr_name);
-                let targets = attr.connections().unwrap_or_default();
+                let targets = match prim.append_property(attr_name) {
+                    Ok(attr) => this.connections(&attr),
+                    Err(_) => Vec::new(),
+                };
                 let apath = format!("{path}.{attr_name}");
                 let mut sources = Vec::new();
                 for t in &targets {
@@ -617,14 +742,7 @@ fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<V
 /// Open the stage whose root layer is `bytes`; an `openusd` failure or panic is the reason
 /// as text.
 pub(crate) fn open_stage(name: &str, bytes: &[u8]) -> Result<usd::Stage, String> {
-    let root_path = root_name(name, bytes);
-    let inner = ar::DefaultResolver::new();
-    let root = ar::Resolver::create_identifier(&inner, &root_path, None);
-    let resolver = MemResolver {
-        inner,
-        root: root.clone(),
-        bytes: Arc::new(bytes.to_vec()),
-    };
+    let (resolver, root) = mem_resolver(name, bytes);
     let opened = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         usd::Stage::builder().resolver(resolver).open(&root)
     }));
@@ -633,6 +751,65 @@ pub(crate) fn open_stage(name: &str, bytes: &[u8]) -> Result<usd::Stage, String>
         Ok(Err(e)) => Err(format!("{e:#}")),
         Err(_) => Err("the USD library failed on this input".to_string()),
     }
+}
+
+/// The resolver that serves root layer `bytes` named `name`, and the root's identifier.
+fn mem_resolver(name: &str, bytes: &[u8]) -> (MemResolver, String) {
+    let root_path = root_name(name, bytes);
+    let inner = ar::DefaultResolver::new();
+    let root = ar::Resolver::create_identifier(&inner, &root_path, None);
+    let resolver = MemResolver {
+        inner,
+        root: root.clone(),
+        bytes: Arc::new(bytes.to_vec()),
+    };
+    (resolver, root)
+}
+
+/// Whether usda text `bytes` may hold something that composes, so that reading it alone
+/// would be parsing it twice: a word that only composition arcs, variants, prim states and
+/// layer metadata use, `over "` or `class `. A false alarm only means the stage is
+/// composed; a miss, that the text is parsed twice.
+fn may_compose(bytes: &[u8]) -> bool {
+    const WORDS: [&[u8]; 10] = [
+        b"subLayers",
+        b"references",
+        b"payload",
+        b"inherits",
+        b"specializes",
+        b"variant",
+        b"active",
+        b"instanceable",
+        b"relocates",
+        b"Order",
+    ];
+    WORDS
+        .iter()
+        .chain([b"over \"".as_slice(), b"class "].iter())
+        .any(|w| memchr::memmem::find(bytes, w).is_some())
+}
+
+/// The root layer `bytes` (a `.usda` or `.usdc`, named so and holding that encoding) read
+/// alone, with its prims in traversal order, when nothing in it composes
+/// ([`flat_prims`]); else nothing, and the stage is composed instead.
+fn open_flat(name: &str, bytes: &[u8]) -> Option<(sdf::LayerData, Vec<sdf::Path>)> {
+    let (resolver, root) = mem_resolver(name, bytes);
+    let ext = root.rsplit('.').next()?.to_ascii_lowercase();
+    if ext != flavour(bytes) {
+        return None;
+    }
+    let resolved = ar::ResolvedPath::new(&root);
+    let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let data = match ext.as_str() {
+            "usdc" => sdf::FileFormat::read(&openusd::usdc::UsdcFileFormat, &resolver, &resolved),
+            "usda" => sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved),
+            _ => return None,
+        }
+        .ok()?;
+        let prims = flat_prims(data.as_ref())?;
+        Some((data, prims))
+    }));
+    read.ok().flatten()
 }
 
 /// Read the materials of the USD stage whose root layer is `bytes` (named `name` in
@@ -672,18 +849,64 @@ pub fn parse_usd(
     limits: &Limits,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
+    read_usd(bytes, name, types, limits, diags, true)
+}
+
+/// [`parse_usd`] through the composed stage always, never reading the root layer alone:
+/// what the direct reading of a layer that does not compose must equal.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+#[allow(dead_code)]
+fn parse_usd_composed(
+    bytes: &[u8],
+    name: &str,
+    types: &dyn ParamTypes,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+) -> Result<Network, Error> {
+    read_usd(bytes, name, types, limits, diags, false)
+}
+
+/// Whether nothing in root layer `bytes` named `name` composes, so that [`parse_usd`] may
+/// read it alone, without composing a stage (a `.usda` whose text suggests composition
+/// is composed without asking).
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+#[allow(dead_code)]
+fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
+    open_flat(name, bytes).is_some()
+}
+
+/// [`parse_usd`], reading the root layer alone when `direct` and nothing in it composes.
+fn read_usd(
+    bytes: &[u8],
+    name: &str,
+    types: &dyn ParamTypes,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+    direct: bool,
+) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(name);
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    let stage = open_stage(name, bytes).map_err(|why| {
-        Error::from(
-            Diagnostic::error("US001", format!("cannot open the USD stage: {why}"))
-                .at(Location::file(file.clone())),
-        )
-    })?;
+    let flat = (direct && !(flavour(bytes) == "usda" && may_compose(bytes)))
+        .then(|| open_flat(name, bytes))
+        .flatten();
+    let stage = match flat {
+        Some(_) => None,
+        None => Some(open_stage(name, bytes).map_err(|why| {
+            Error::from(
+                Diagnostic::error("US001", format!("cannot open the USD stage: {why}"))
+                    .at(Location::file(file.clone())),
+            )
+        })?),
+    };
+    let (flat, prims) = match &flat {
+        Some((data, prims)) => (Some(data.as_ref()), Some(prims.as_slice())),
+        None => (None, None),
+    };
     let mut reader = Reader {
-        stage,
+        stage: stage.as_ref(),
+        flat,
         file: file.clone(),
         types,
         diags,
@@ -692,7 +915,9 @@ pub fn parse_usd(
         net: Network::new(),
         sampled: Vec::new(),
     };
-    let walked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read_stage(&mut reader)));
+    let walked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        read_stage(&mut reader, prims)
+    }));
     let outcome = match walked {
         Ok(r) => r,
         Err(_) => Err(Error::from(
@@ -707,35 +932,48 @@ pub fn parse_usd(
 }
 
 /// The walk: prims, nodes, materials, inputs, composition errors.
-fn read_stage(r: &mut Reader<'_>) -> Result<(), Error> {
-    let mut paths = Vec::new();
-    r.stage
-        .traverse(usd::PrimPredicate::DEFAULT, |p| paths.push(p.clone()))
-        .map_err(|e| {
-            Error::from(
-                Diagnostic::error("US001", format!("cannot traverse the USD stage: {e:#}"))
-                    .at(Location::file(r.file.clone())),
-            )
-        })?;
+/// `prims` are the prims of the flat layer, in traversal order, when it is read.
+fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Error> {
+    let traversed;
+    let paths = match (prims, r.stage) {
+        (Some(paths), _) => paths,
+        (None, None) => &[],
+        (None, Some(stage)) => {
+            let mut paths = Vec::new();
+            stage
+                .traverse(usd::PrimPredicate::DEFAULT, |p| paths.push(p.clone()))
+                .map_err(|e| {
+                    Error::from(
+                        Diagnostic::error("US001", format!("cannot traverse the USD stage: {e:#}"))
+                            .at(Location::file(r.file.clone())),
+                    )
+                })?;
+            traversed = paths;
+            &traversed
+        }
+    };
     // Depth-first order: a material comes before its shaders.
     let mut shaders = Vec::new();
     let mut materials: Vec<(String, Vec<NodeId>)> = Vec::new();
-    for p in &paths {
-        let prim = r.stage.prim(p.clone());
-        let Some(kind) = r.kind_of(&prim) else {
+    // Each material's place in `materials`, by prim path.
+    let mut material_at: FxHashMap<String, usize> = FxHashMap::default();
+    for p in paths {
+        let Some(kind) = r.kind_of(p) else {
             continue;
         };
         r.kinds.insert(p.as_str().to_string(), kind);
         match kind {
-            PrimKind::Material => materials.push((p.as_str().to_string(), Vec::new())),
+            PrimKind::Material => {
+                material_at.insert(p.as_str().to_string(), materials.len());
+                materials.push((p.as_str().to_string(), Vec::new()));
+            }
             PrimKind::Shader => shaders.push(p.clone()),
             PrimKind::NodeGraph => {}
         }
     }
     for p in &shaders {
         let path = p.as_str().to_string();
-        let prim = r.stage.prim(p.clone());
-        let shader = r.shader_id(&prim, &path);
+        let shader = r.shader_id(p, &path);
         let kind = r.types.shader_kind(&shader).unwrap_or(RequestKind::Pattern);
         let id = r.net.add_node_of_kind(&path, &shader, kind);
         r.net.set_node_location(id, r.at(&path));
@@ -745,15 +983,14 @@ fn read_stage(r: &mut Reader<'_>) -> Result<(), Error> {
             .strict_ancestors()
             .find(|a| r.kinds.get(a.as_str()) == Some(&PrimKind::Material));
         if let Some(owner) = owner
-            && let Some(m) = materials.iter_mut().find(|(n, _)| n == owner.as_str())
+            && let Some(&m) = material_at.get(owner.as_str())
         {
-            m.1.push(id);
+            materials[m].1.push(id);
         }
     }
     for p in &shaders {
-        let path = p.as_str().to_string();
-        let id = r.nodes[&path];
-        r.read_inputs(&path, id);
+        let id = r.nodes[p.as_str()];
+        r.read_inputs(p, id);
     }
     for (name, ids) in materials {
         let terminals = r.terminals(&name);
@@ -786,10 +1023,80 @@ fn read_stage(r: &mut Reader<'_>) -> Result<(), Error> {
             ),
         );
     }
-    for e in r.stage.composition_errors() {
+    for e in r
+        .stage
+        .map(usd::Stage::composition_errors)
+        .unwrap_or_default()
+    {
         let d = Diagnostic::warning("US002", format!("composition: {e}"))
             .at(Location::file(r.file.clone()));
         r.diags.push(d);
     }
     Ok(())
+}
+
+/// The prims of a stage whose only layer is `data`, in the stage's traversal order, when
+/// nothing in the layer composes: every prim is a `def` whose only fields are its type,
+/// children, properties and metadata that changes nothing the reader reads. Anything else
+/// (an arc, a variant set, an `over` or `class`, `active`, `instanceable`, child or
+/// property reordering, sublayers or relocates on the layer) gives nothing, and the
+/// composed stage is read instead.
+fn flat_prims(data: &dyn sdf::AbstractData) -> Option<Vec<sdf::Path>> {
+    const ROOT_CHANGES: [&str; 5] = [
+        "subLayers",
+        "subLayerOffsets",
+        "layerRelocates",
+        "relocates",
+        "expressionVariables",
+    ];
+    const PRIM_KEEPS: [&str; 10] = [
+        "specifier",
+        "typeName",
+        "primChildren",
+        "propertyChildren",
+        "kind",
+        "documentation",
+        "comment",
+        "customData",
+        "displayName",
+        "hidden",
+    ];
+    let root = sdf::Path::abs_root();
+    let fields = data.list_fields(&root)?;
+    if fields.iter().any(|f| ROOT_CHANGES.contains(&f.as_str())) {
+        return None;
+    }
+    let children = |path: &sdf::Path| -> Option<Vec<sdf::Path>> {
+        match data.try_field(path, "primChildren").ok()? {
+            None => Some(Vec::new()),
+            Some(v) => match v.as_ref() {
+                sdf::Value::TokenVec(names) => names
+                    .iter()
+                    .map(|n| path.append_path(n.as_str()).ok())
+                    .collect(),
+                _ => None,
+            },
+        }
+    };
+    let mut out = Vec::new();
+    let mut stack: Vec<sdf::Path> = children(&root)?;
+    stack.reverse();
+    while let Some(path) = stack.pop() {
+        if data.spec_type(&path) != Some(sdf::SpecType::Prim) {
+            return None;
+        }
+        let fields = data.list_fields(&path)?;
+        if fields.iter().any(|f| !PRIM_KEEPS.contains(&f.as_str())) {
+            return None;
+        }
+        match data.try_field(&path, "specifier").ok()?.as_deref() {
+            Some(sdf::Value::Specifier(sdf::Specifier::Def)) => {}
+            _ => return None,
+        }
+        let mut kids = children(&path)?;
+        kids.reverse();
+        stack.extend(kids);
+        out.push(path);
+    }
+    Some(out)
 }

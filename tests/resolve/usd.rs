@@ -7,9 +7,10 @@ use crate::common;
 
 use std::collections::BTreeMap;
 use vstructc::back::rib::write_rib_to_vec;
+use vstructc::back::usd::write_binary;
 use vstructc::back::usd::write_usda;
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::front::usd::parse_usd;
+use vstructc::front::usd::{parse_usd, parse_usd_composed, reads_layer_alone};
 use vstructc::limits::Limits;
 use vstructc::network::Network;
 use vstructc::registry::Registry;
@@ -423,4 +424,150 @@ fn binary_corpus_files_are_the_layered_look() {
         assert!(bytes.starts_with(b"PXR-USDC") || bytes.starts_with(b"PK\x03\x04"));
         assert_eq!(canon(&resolved_usd(f, &reg, true)), want, "{f}");
     }
+}
+
+/// A layer that composes nothing is read directly, without composing a stage; that reading
+/// gives exactly the network and diagnostics the composed stage gives. Layers with
+/// sublayers, references, variants, overs or classes are composed.
+#[test]
+fn layers_read_alone_match_the_composed_stage() {
+    let reg = Registry::embedded();
+    let mut inputs: Vec<(String, Vec<u8>)> = Vec::new();
+    for name in [
+        "chain.usda",
+        "layered.usda",
+        "layered.usdc",
+        "layered.usdz",
+        "nodegraph.usda",
+        "override.usda",
+        "library_look.usda",
+        "variants.usda",
+    ] {
+        let path = usd_dir().join(name);
+        let bytes = std::fs::read(&path).unwrap();
+        inputs.push((path.to_str().unwrap().to_string(), bytes));
+    }
+    for example in ["chain.rib", "layered.rib", "override.rib"] {
+        let path = common::repo_dir().join("examples").join(example);
+        let net = read_rib(&std::fs::read(&path).unwrap(), example, &reg);
+        let mut usda = Vec::new();
+        write_usda(&net, &reg, &mut usda).unwrap();
+        inputs.push((format!("{example}.usda"), usda));
+        let mut usdc = Vec::new();
+        write_binary(&net, &reg, "usdc", &mut usdc).unwrap();
+        inputs.push((format!("{example}.usdc"), usdc));
+    }
+    // Time samples, a value block, an asset, a dangling connection, a shader without an
+    // id, a node-graph port with a value: read alone too.
+    let odd = br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/G.outputs:out>
+    def NodeGraph "G" {
+        token outputs:out.connect = </M/S.outputs:out>
+        float inputs:k = 2
+    }
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        float inputs:specularRoughness.timeSamples = { 1: 0.1, 2: 0.2 }
+        float inputs:presence = None
+        asset inputs:diffuseColorTexture = @tex.png@
+        float inputs:diffuseGain.connect = </M/G.inputs:k>
+        color3f inputs:diffuseColor.connect = </Nowhere.outputs:resultRGB>
+        token outputs:out
+    }
+    def Shader "N" {
+        token outputs:out
+    }
+}
+"#;
+    inputs.push(("odd.usda".to_string(), odd.to_vec()));
+    // An inactive prim, a class inherited by a material, an over: composed.
+    let arcs = br#"#usda 1.0
+class Material "Base" {
+    token outputs:ri:surface.connect = </Base/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        token outputs:out
+    }
+}
+def Material "M" (inherits = </Base>) {
+}
+def Material "Off" (active = false) {
+    def Shader "T" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+over "Nothing" {
+    def Shader "U" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+"#;
+    inputs.push(("arcs.usda".to_string(), arcs.to_vec()));
+    // A class and an over, with nothing else that composes: composed.
+    let overs = br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        token outputs:out
+    }
+}
+class "C" {
+    def Shader "T" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+over "O" {
+    def Shader "U" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+"#;
+    inputs.push(("overs.usda".to_string(), overs.to_vec()));
+    // An inactive prim alone: composed.
+    let inactive = br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        token outputs:out
+    }
+}
+def Scope "Off" (active = false) {
+    def Shader "V" {
+        uniform token info:id = "PxrSurface"
+    }
+}
+"#;
+    inputs.push(("inactive.usda".to_string(), inactive.to_vec()));
+    let mut alone = Vec::new();
+    for (name, bytes) in &inputs {
+        if reads_layer_alone(bytes, name) {
+            alone.push(name.rsplit('/').next().unwrap().to_string());
+        }
+        let mut d1 = Diagnostics::new();
+        let direct = parse_usd(bytes, name, &reg, &Limits::default(), &mut d1).unwrap();
+        let mut d2 = Diagnostics::new();
+        let composed = parse_usd_composed(bytes, name, &reg, &Limits::default(), &mut d2).unwrap();
+        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
+        assert_eq!(d1, d2, "{name}");
+    }
+    assert_eq!(
+        alone,
+        [
+            "chain.usda",
+            "layered.usda",
+            "layered.usdc",
+            "nodegraph.usda",
+            "override.usda",
+            "chain.rib.usda",
+            "chain.rib.usdc",
+            "layered.rib.usda",
+            "layered.rib.usdc",
+            "override.rib.usda",
+            "override.rib.usdc",
+            "odd.usda",
+        ]
+    );
 }
