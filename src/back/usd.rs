@@ -225,6 +225,18 @@ fn value_type(v: &Value, declared: Option<&Type>) -> Type {
     if fits { d.clone() } else { value_type(v, None) }
 }
 
+/// `(x, y, …)`: a USD tuple of floats.
+fn float_tuple(out: &mut String, f: &[f32]) {
+    out.push('(');
+    for (i, x) in f.iter().enumerate() {
+        if i > 0 {
+            out.push_str(", ");
+        }
+        float(out, *x);
+    }
+    out.push(')');
+}
+
 fn float(out: &mut String, x: f32) {
     let _ = write!(out, "{x}");
 }
@@ -265,26 +277,8 @@ fn scalar(out: &mut String, v: &Value, base: &BaseType) {
             out.push_str(&s.replace('@', "\\@"));
             out.push('@');
         }
-        Value::Triple(_, f) => {
-            out.push('(');
-            for (i, x) in f.iter().enumerate() {
-                if i > 0 {
-                    out.push_str(", ");
-                }
-                float(out, *x);
-            }
-            out.push(')');
-        }
-        Value::HPoint(f) => {
-            out.push('(');
-            for (i, x) in f.iter().enumerate() {
-                if i > 0 {
-                    out.push_str(", ");
-                }
-                float(out, *x);
-            }
-            out.push(')');
-        }
+        Value::Triple(_, f) => float_tuple(out, f),
+        Value::HPoint(f) => float_tuple(out, f),
         Value::Matrix(m) => {
             out.push('(');
             for r in 0..4 {

@@ -854,9 +854,8 @@ pub fn parse_usd(
 
 /// [`parse_usd`] through the composed stage always, never reading the root layer alone:
 /// what the direct reading of a layer that does not compose must equal.
-#[cfg_attr(feature = "testkit", visibility::make(pub))]
-#[allow(dead_code)]
-fn parse_usd_composed(
+#[cfg(feature = "testkit")]
+pub fn parse_usd_composed(
     bytes: &[u8],
     name: &str,
     types: &dyn ParamTypes,
@@ -869,9 +868,8 @@ fn parse_usd_composed(
 /// Whether nothing in root layer `bytes` named `name` composes, so that [`parse_usd`] may
 /// read it alone, without composing a stage (a `.usda` whose text suggests composition
 /// is composed without asking).
-#[cfg_attr(feature = "testkit", visibility::make(pub))]
-#[allow(dead_code)]
-fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
+#[cfg(feature = "testkit")]
+pub fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
     open_flat(name, bytes).is_some()
 }
 
