@@ -58,9 +58,6 @@ pub struct PipelineOptions {
     pub resolve: ResolveOptions,
     /// RIB: single-quoted strings are an error (RB011) instead of an info.
     pub strict_rib: bool,
-    /// Delete every connection still on an input head after resolution (the VS010
-    /// placeholders) instead of keeping it.
-    pub drop_unresolved: bool,
     /// Which materials to lower.
     pub lowering: Lowering,
 }
@@ -101,9 +98,6 @@ pub fn run(
     diags.extend(read_diags.into_iter().filter(|d| d.code != "RB019"));
     let mut network = network?;
     let res = resolve(&mut network, registry, &options.resolve);
-    if options.drop_unresolved {
-        drop_unresolved(&mut network, registry);
-    }
     diags.extend(registry.diagnostics());
     diags.extend(res.diagnostics);
     let materials = match options.lowering {
@@ -181,19 +175,4 @@ pub fn compile(
         }
     }
     Ok(out)
-}
-
-/// Delete every connection still on an input head after resolution (the VS010
-/// placeholders).
-pub(crate) fn drop_unresolved(network: &mut Network, registry: &Registry) {
-    for node in network.nodes_sorted() {
-        let Some(tables) = registry.tables(network[node].shader()) else {
-            continue;
-        };
-        for input in network.connected_inputs(node) {
-            if tables.is_input_head(&input) {
-                network.clear_connections(node, &input);
-            }
-        }
-    }
 }

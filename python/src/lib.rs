@@ -1042,46 +1042,23 @@ impl Network {
     }
 }
 
-/// The options resolve() and compile() share (the library pipeline's).
-struct Options {
-    resolve: vstructc::resolve::ResolveOptions,
-    drop_unresolved: bool,
-}
-
 fn resolve_options(
     conditions: bool,
     ext: Option<Vec<String>>,
     verbose: bool,
     drop_unresolved: bool,
     limits: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Options> {
+) -> PyResult<vstructc::resolve::ResolveOptions> {
     let extensions = Extensions::from_names(ext.unwrap_or_default())
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    Ok(Options {
-        resolve: vstructc::resolve::ResolveOptions {
-            conditions,
-            extensions,
-            verbose,
-            limits: limits_from(limits)?,
-            ..Default::default()
-        },
+    Ok(vstructc::resolve::ResolveOptions {
+        conditions,
+        extensions,
+        verbose,
         drop_unresolved,
+        limits: limits_from(limits)?,
+        ..Default::default()
     })
-}
-
-/// Deletes every connection still on an input head after resolution (the VS010
-/// placeholders), as the command's `--drop-unresolved` does.
-fn drop_unresolved(net: &mut vstructc::network::Network, registry: &vstructc::registry::Registry) {
-    for node in net.nodes_sorted() {
-        let Some(tables) = registry.tables(net[node].shader()) else {
-            continue;
-        };
-        for input in net.connected_inputs(node) {
-            if tables.is_input_head(&input) {
-                net.clear_connections(node, &input);
-            }
-        }
-    }
 }
 
 /// Resolves in place; returns the diagnostics (the registry's and resolution's, sorted,
@@ -1090,7 +1067,7 @@ fn resolve_in_place(
     py: Python<'_>,
     net: &mut Network,
     registry: &Bound<'_, Registry>,
-    options: &Options,
+    options: &vstructc::resolve::ResolveOptions,
 ) -> PyResult<Diagnostics> {
     let reg = registry.try_borrow()?;
     let r = &reg.inner;
@@ -1098,10 +1075,7 @@ fn resolve_in_place(
     let (res, mut diags) = py
         .detach(|| {
             guarded(|| {
-                let res = vstructc::resolve::resolve(n, r, &options.resolve);
-                if options.drop_unresolved && res.limit.is_none() {
-                    drop_unresolved(n, r);
-                }
+                let res = vstructc::resolve::resolve(n, r, options);
                 (res, r.diagnostics())
             })
         })
@@ -1232,7 +1206,7 @@ fn explain<'py>(
     conditions: bool,
     ext: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut options = resolve_options(conditions, ext, false, false, None)?.resolve;
+    let mut options = resolve_options(conditions, ext, false, false, None)?;
     options.record_events = true;
     let net = network.try_borrow()?;
     let node = net.node(handle)?;

@@ -689,23 +689,8 @@ pub fn quote(s: &str) -> String {
 
 /// Appends `[i]` (the usual int value of a resolved scene) without the formatting machinery.
 fn push_int_value(t: &mut Vec<u8>, i: i32) {
-    let mut digits = [0u8; 11];
-    let mut k = digits.len();
-    let mut n = i.unsigned_abs();
-    loop {
-        k -= 1;
-        digits[k] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
-    }
-    if i < 0 {
-        k -= 1;
-        digits[k] = b'-';
-    }
     t.push(b'[');
-    t.extend_from_slice(&digits[k..]);
+    t.extend_from_slice(itoa::Buffer::new().format(i).as_bytes());
     t.push(b']');
 }
 

@@ -18,7 +18,7 @@
 //! to the terminal node's `outputs:out`, or to the output the terminal names.
 
 use crate::network::{Link, Network, NodeId, ParamTypes};
-use crate::types::{ArraySpec, BaseType, Type, Value};
+use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::fmt::Write as _;
 use std::io::{self, Write};
@@ -237,8 +237,10 @@ fn float_tuple(out: &mut String, f: &[f32]) {
     out.push(')');
 }
 
+/// `x` as its shortest text; a non-finite value (possible in a network built in code) is
+/// written saturated ([`saturate_f32`]), as every writer writes it.
 fn float(out: &mut String, x: f32) {
-    let _ = write!(out, "{x}");
+    out.push_str(&format_f32(saturate_f32(x)));
 }
 
 fn string(out: &mut String, s: &str) {
@@ -337,6 +339,62 @@ fn target(out: &mut String, link: &Link, paths: &Paths) -> Option<(NodeId, Strin
     up.map(|u| (u, output))
 }
 
+/// Records that upstream node `up`'s output `o` is connected to, so its prim declares it.
+fn declare_output(outputs: &mut FxHashMap<NodeId, Vec<String>>, up: NodeId, o: String) {
+    let list = outputs.entry(up).or_default();
+    if !list.contains(&o) {
+        list.push(o);
+    }
+}
+
+/// The lines of node `id`'s Shader prim: its `info:id`, its values and its connections
+/// (the upstream outputs they use are recorded in `outputs`).
+fn node_body(
+    net: &Network,
+    types: &dyn ParamTypes,
+    paths: &Paths,
+    id: NodeId,
+    outputs: &mut FxHashMap<NodeId, Vec<String>>,
+) -> String {
+    let node = &net[id];
+    let shader = node.shader();
+    let mut body = String::new();
+    body.push_str("uniform token info:id = ");
+    string(&mut body, shader);
+    body.push('\n');
+    for p in node.params_by_name() {
+        let declared = types.input_type(shader, p.name());
+        if let Some(v) = p.value() {
+            let t = value_type(v, declared.as_ref());
+            let _ = write!(body, "{} inputs:{} = ", usd_type(&t), p.name());
+            value(&mut body, v, &t);
+            body.push('\n');
+        }
+        let links = p.connections();
+        if links.is_empty() {
+            continue;
+        }
+        let t = declared.unwrap_or_else(|| Type::scalar(BaseType::Token));
+        let _ = write!(body, "{} inputs:{}.connect = ", usd_type(&t), p.name());
+        if links.len() > 1 {
+            body.push('[');
+        }
+        for (i, l) in links.iter().enumerate() {
+            if i > 0 {
+                body.push_str(", ");
+            }
+            if let Some((up, o)) = target(&mut body, l, paths) {
+                declare_output(outputs, up, o);
+            }
+        }
+        if links.len() > 1 {
+            body.push(']');
+        }
+        body.push('\n');
+    }
+    body
+}
+
 /// [`write_usda`], then the layer in `openusd`'s binary encoding `format` (`usdc`, or `usdz`:
 /// a zip package holding one `usdc` layer). For the crate's tests and benchmarks only
 /// (`testkit`): Pixar's USD rejects the crate files `openusd` 0.6 writes ("invalid children in
@@ -397,60 +455,19 @@ pub fn write_usda(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) ->
         tree.prims[at].node = Some(id);
     }
     // Node bodies first: they tell which outputs each upstream prim must declare.
-    let mut bodies: FxHashMap<NodeId, String> = FxHashMap::default();
     let mut outputs: FxHashMap<NodeId, Vec<String>> = FxHashMap::default();
-    let used = |outputs: &mut FxHashMap<NodeId, Vec<String>>, up: NodeId, o: String| {
-        let list = outputs.entry(up).or_default();
-        if !list.contains(&o) {
-            list.push(o);
-        }
-    };
-    for id in net.nodes_sorted() {
-        let node = &net[id];
-        let shader = node.shader();
-        let mut body = String::new();
-        body.push_str("uniform token info:id = ");
-        string(&mut body, shader);
-        body.push('\n');
-        for p in node.params_by_name() {
-            let declared = types.input_type(shader, p.name());
-            if let Some(v) = p.value() {
-                let t = value_type(v, declared.as_ref());
-                let _ = write!(body, "{} inputs:{} = ", usd_type(&t), p.name());
-                value(&mut body, v, &t);
-                body.push('\n');
-            }
-            let links = p.connections();
-            if links.is_empty() {
-                continue;
-            }
-            let t = declared.unwrap_or_else(|| Type::scalar(BaseType::Token));
-            let _ = write!(body, "{} inputs:{}.connect = ", usd_type(&t), p.name());
-            if links.len() > 1 {
-                body.push('[');
-            }
-            for (i, l) in links.iter().enumerate() {
-                if i > 0 {
-                    body.push_str(", ");
-                }
-                if let Some((up, o)) = target(&mut body, l, &paths) {
-                    used(&mut outputs, up, o);
-                }
-            }
-            if links.len() > 1 {
-                body.push(']');
-            }
-            body.push('\n');
-        }
-        bodies.insert(id, body);
-    }
+    let bodies: FxHashMap<NodeId, String> = net
+        .nodes_sorted()
+        .into_iter()
+        .map(|id| (id, node_body(net, types, &paths, id, &mut outputs)))
+        .collect();
     let mut material_bodies = Vec::new();
     for m in net.materials() {
         let mut body = String::new();
         for t in &m.terminals {
             let _ = write!(body, "token outputs:ri:{}.connect = ", t.name);
             if let Some((up, o)) = target(&mut body, &t.link, &paths) {
-                used(&mut outputs, up, o);
+                declare_output(&mut outputs, up, o);
             }
             body.push('\n');
         }

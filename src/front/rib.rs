@@ -455,7 +455,7 @@ struct Assembler<'a, 't> {
     /// a hit reports nothing, exactly as reading them again would. One table keyed by the
     /// address of the network's shared shader id and the token's bytes: one hash and one
     /// comparison of bytes per parameter.
-    decls: HashTable<Remembered<SharedDecl>>,
+    decls: HashTable<Remembered>,
     /// Short values read before without a diagnostic, per declaration (its address) and value
     /// text. (Per declaration rather than in one table: the values of one declaration stay
     /// few, and tens of thousands of them in one table cost more memory than they save time.)
@@ -472,10 +472,10 @@ type SharedDecl = (Arc<str>, Arc<Decl>);
 
 /// An entry of [`Assembler::decls`]: the address of the shared shader id it belongs to (alive
 /// until the file is read), the decl token as written, and what was read from it.
-struct Remembered<T> {
+struct Remembered {
     owner: usize,
     text: Box<[u8]>,
-    shared: T,
+    shared: SharedDecl,
 }
 
 /// The hash of an owner's address and a text, for [`Remembered`] entries.
@@ -487,7 +487,11 @@ fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
 }
 
 /// The entry of `table` for `owner` and `text`, if remembered.
-fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
+fn recall<'t>(
+    table: &'t HashTable<Remembered>,
+    owner: usize,
+    text: &[u8],
+) -> Option<&'t SharedDecl> {
     let hash = remembered_hash(owner, text);
     table
         .find(hash, |e| e.owner == owner && *e.text == *text)
@@ -495,7 +499,7 @@ fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8])
 }
 
 /// Remember `shared` for `owner` and `text` (not remembered yet).
-fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
+fn remember(table: &mut HashTable<Remembered>, owner: usize, text: &[u8], shared: SharedDecl) {
     let hash = remembered_hash(owner, text);
     let entry = Remembered {
         owner,

@@ -24,7 +24,7 @@ use crate::limits::{Limit, Limits};
 use crate::network::{
     Link, Material, MaterialNodes, Network, NodeId, ParamTypes, RequestKind, Terminal,
 };
-use crate::types::{BaseType, Type, Value};
+use crate::types::{BaseType, Type, Value, saturate_f32};
 use openusd::{ar, sdf, usd};
 use rustc_hash::FxHashMap;
 use std::io::{self, Read};
@@ -567,9 +567,9 @@ fn value_kind(v: &sdf::Value) -> &'static str {
     }
 }
 
-/// `x` as an `f32`, saturated to the finite range.
+/// `x` as an `f32`, saturated to the finite range ([`saturate_f32`]).
 fn sat(x: f64) -> f32 {
-    (x as f32).clamp(f32::MIN, f32::MAX)
+    saturate_f32(x as f32)
 }
 
 /// The triple type a USD type name asks for.
@@ -613,11 +613,13 @@ fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<V
             _ => Value::Str(s.to_string()),
         }
     };
+    // The triple type: the declared one when it is a triple, else the one USD names.
+    let triple_type = || match base {
+        Some(b) if b.is_triple() => b.clone(),
+        _ => triple_base(usd_type),
+    };
     let triple = |f: [f32; 3]| -> Value {
-        let b = match base {
-            Some(b) if b.is_triple() => b.clone(),
-            _ => triple_base(usd_type),
-        };
+        let b = triple_type();
         match declared {
             Some(t) if t.base == BaseType::Float && t.is_array() => Value::Array(
                 BaseType::Float,
@@ -706,10 +708,7 @@ fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<V
                 .collect(),
         ),
         V::Vec3fVec(xs) => {
-            let b = match base {
-                Some(b) if b.is_triple() => b.clone(),
-                _ => triple_base(usd_type),
-            };
+            let b = triple_type();
             arr(
                 b.clone(),
                 xs.iter()
@@ -718,10 +717,7 @@ fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<V
             )
         }
         V::Vec3dVec(xs) => {
-            let b = match base {
-                Some(b) if b.is_triple() => b.clone(),
-                _ => triple_base(usd_type),
-            };
+            let b = triple_type();
             arr(
                 b.clone(),
                 xs.iter()

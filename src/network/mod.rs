@@ -613,20 +613,6 @@ impl Slot {
     }
 }
 
-/// `n` in decimal, written into `buf` (no allocation).
-fn itoa(mut n: usize, buf: &mut [u8; 20]) -> &str {
-    let mut i = buf.len();
-    loop {
-        i -= 1;
-        buf[i] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
-    }
-    std::str::from_utf8(&buf[i..]).unwrap_or("0")
-}
-
 /// The first eight bytes of `s` as a big-endian number, zero-padded: comparing two of these
 /// orders strings as comparing their first eight bytes does.
 fn prefix_key(s: &str) -> u64 {
@@ -1079,7 +1065,7 @@ impl Network {
         node.version = version as u32;
         node.key.truncate(node.handle_len);
         node.key.push('#');
-        node.key.push_str(itoa(version, &mut [0; 20]));
+        node.key.push_str(itoa::Buffer::new().format(version));
         match self.shaders.get(&*node.shader) {
             Some(shared) => node.shader = shared.clone(),
             None => {

@@ -40,6 +40,9 @@ pub struct ResolveOptions {
     pub verbose: bool,
     /// Record one [`MemberEvent`] per member decision (for [`Resolution::story`]).
     pub record_events: bool,
+    /// Delete every connection still on an input head after resolution (the VS010
+    /// placeholders) instead of keeping it.
+    pub drop_unresolved: bool,
     /// Bounds the network must meet before it is resolved ([`Network::check_limits`]: nodes,
     /// parameters per node, connections per input). A network beyond them is not resolved:
     /// [`Resolution::limit`] says which bound, and an LM001 error is among the diagnostics.
@@ -53,6 +56,7 @@ impl Default for ResolveOptions {
             extensions: Extensions::none(),
             verbose: false,
             record_events: false,
+            drop_unresolved: false,
             limits: Limits::default(),
         }
     }
@@ -199,7 +203,24 @@ pub fn resolve(net: &mut Network, registry: &Registry, options: &ResolveOptions)
     r.remove_head_values();
     let out = r.out;
     net.restore_edges();
+    if options.drop_unresolved {
+        drop_unresolved(net, registry);
+    }
     out
+}
+
+/// Delete every connection still on an input head (the VS010 placeholders).
+fn drop_unresolved(net: &mut Network, registry: &Registry) {
+    for node in net.nodes_sorted() {
+        let Some(tables) = registry.tables(net[node].shader()) else {
+            continue;
+        };
+        for input in net.connected_inputs(node) {
+            if tables.is_input_head(&input) {
+                net.clear_connections(node, &input);
+            }
+        }
+    }
 }
 
 /// One node under resolution on the work stack.

@@ -77,7 +77,10 @@ Bxdf "PxrLayerSurface" "surface" "reference vstruct inputMaterial" ["mixer:pxrMa
     assert_eq!(diags.count("LW030"), 1, "{diags:#?}");
 
     let dropped = PipelineOptions {
-        drop_unresolved: true,
+        resolve: ResolveOptions {
+            drop_unresolved: true,
+            ..ResolveOptions::default()
+        },
         ..all.clone()
     };
     let (out, diags) = run_with(&dropped);

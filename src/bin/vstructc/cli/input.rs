@@ -72,8 +72,7 @@ pub fn resolve_options(
         conditions: !no_conditions,
         extensions,
         verbose: common.verbose,
-        record_events: false,
-        limits: Default::default(),
+        ..ResolveOptions::default()
     })
 }
 
@@ -269,11 +268,11 @@ pub fn run_pipeline(
     lowering: Lowering,
     common: &CommonOptions,
 ) -> Result<Ran, ExitCode> {
-    let (resolve, registry, loaded) = start(input, no_conditions, common)?;
+    let (mut resolve, registry, loaded) = start(input, no_conditions, common)?;
+    resolve.drop_unresolved = drop_unresolved;
     let options = PipelineOptions {
         resolve,
         strict_rib,
-        drop_unresolved,
         lowering,
     };
     let mut diags = Diagnostics::new();
