@@ -1418,7 +1418,7 @@ impl Material {
         d.set_item("delta", s.delta)?;
         d.set_item(
             "lobe",
-            (s.lobe != vstructc::interp::TRANSPARENCY_LOBE).then_some(s.lobe),
+            (s.lobe != vstructc::interp::Sample::TRANSPARENCY_LOBE).then_some(s.lobe),
         )?;
         Ok(Some(d))
     }

@@ -23,7 +23,7 @@ use std::fmt;
 use std::ops::Range;
 
 /// A byte span in the expression text.
-pub type Span = Range<usize>;
+pub(crate) type Span = Range<usize>;
 
 /// A parameter name as written, with its span. Names of predicates may be keywords
 /// (`connect == 1`); names may carry an array suffix (`arr[2]`).
@@ -596,9 +596,15 @@ impl fmt::Display for Statement {
     }
 }
 
-/// An indented, line-per-node dump of a statement with spans, used by `vstructc expr` and
-/// the snapshot tests.
-pub fn dump(stmt: &Statement) -> String {
+impl Statement {
+    /// An indented, line-per-node dump of the statement with spans, used by `vstructc expr`
+    /// and the snapshot tests.
+    pub fn dump(&self) -> String {
+        dump(self)
+    }
+}
+
+fn dump(stmt: &Statement) -> String {
     let mut out = String::new();
     line(&mut out, 0, &format!("Statement {}", span_text(&stmt.span)));
     dump_action(&mut out, 1, "action", &stmt.action);

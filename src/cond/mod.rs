@@ -35,10 +35,8 @@ mod lexer;
 mod parser;
 
 pub(crate) use action::{CopyOutcome, CopyRejection, SetRejection, copy_value, set_value};
-pub use ast::dump;
 pub use ast::{
-    Action, ActionKind, ElseIf, Expr, ExprKind, IsTest, Literal, LiteralKind, Param, Span,
-    Statement,
+    Action, ActionKind, ElseIf, Expr, ExprKind, IsTest, Literal, LiteralKind, Param, Statement,
 };
 pub use error::ParseError;
 pub(crate) use error::render_caret;
@@ -58,7 +56,7 @@ pub mod internals {
         CopyOutcome, CopyPlan, CopyRejection, SetRejection, SetValue, convert, copy_plan,
         copy_value, set_value, truncate_to_i32,
     };
-    pub use super::ast::{dump, quote_for, split_index};
+    pub use super::ast::{quote_for, split_index};
     pub use super::error::{location_in, render_caret};
     pub use super::eval::evaluate_expr;
     pub use super::lexer::{Keyword, Token, TokenKind, next_token};
@@ -76,8 +74,9 @@ pub fn parse_with(text: &str, ext: &Extensions) -> Result<Statement, ParseError>
     parser::parse_statement(text, ext)
 }
 
-/// [`parse_with`] within `limits` (expression terms and parenthesis depth).
-pub fn parse_limited(
+/// [`parse_with`] within `limits` (expression terms and parenthesis depth): the registry's
+/// entry, which reads definitions within the caller's limits.
+pub(crate) fn parse_limited(
     text: &str,
     ext: &Extensions,
     limits: &crate::limits::Limits,

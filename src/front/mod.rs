@@ -26,16 +26,58 @@ pub enum NetFormat {
 }
 
 impl NetFormat {
-    /// The format of `bytes` read from `name`: by the extension (`.json`, `.rib`), else by
-    /// the first non-blank byte (`{` is JSON, anything else RIB).
+    /// The format of `bytes` read from `name`, by the extension, else by the content. USD is
+    /// `.usda`, `.usdc`, `.usdz`, `.usd`, or the `#usda`, `PXR-USDC` and zip signatures; it is
+    /// [`NetFormat::Usd`], or IO003 when the library is built without its `usd` feature.
+    /// MaterialX (`.mtlx`, or XML whose root is `<materialx>`) is IO003, which names the
+    /// format, instead of the RIB reader's complaint about its first character. Otherwise
+    /// `.json` and `.rib` decide, else the first non-blank byte: `{` is JSON, anything else
+    /// RIB.
     ///
     /// ```
     /// use vstructc::front::NetFormat;
-    /// assert_eq!(NetFormat::detect("scene.rib", b"{"), NetFormat::Rib);
-    /// assert_eq!(NetFormat::detect("<stdin>", b"  {\"materials\": {}}"), NetFormat::Json);
-    /// assert_eq!(NetFormat::detect("<stdin>", b"Bxdf"), NetFormat::Rib);
+    /// assert_eq!(NetFormat::detect("a.rib", b"Bxdf").unwrap(), NetFormat::Rib);
+    /// assert_eq!(NetFormat::detect("scene.rib", b"{").unwrap(), NetFormat::Rib);
+    /// assert_eq!(NetFormat::detect("<stdin>", b"  {\"materials\": {}}").unwrap(), NetFormat::Json);
+    /// # #[cfg(feature = "usd")] {
+    /// assert_eq!(NetFormat::detect("look.usda", b"#usda 1.0\n").unwrap(), NetFormat::Usd);
+    /// assert_eq!(NetFormat::detect("<stdin>", b"  #usda 1.0").unwrap(), NetFormat::Usd);
+    /// assert_eq!(NetFormat::detect("<stdin>", b"PXR-USDC").unwrap(), NetFormat::Usd);
+    /// # }
+    /// let e = NetFormat::detect("<stdin>", b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\">").unwrap_err();
+    /// assert!(e.to_string().contains("MaterialX"), "{e}");
     /// ```
-    pub fn detect(name: &str, bytes: &[u8]) -> NetFormat {
+    pub fn detect(name: &str, bytes: &[u8]) -> Result<NetFormat, Error> {
+        let ext = std::path::Path::new(name)
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let head = &bytes[..bytes.len().min(1024)];
+        let unsupported = |message: String| -> Result<NetFormat, Error> {
+            Err(crate::diag::Diagnostic::error("IO003", message)
+                .at(crate::diag::Location::file(name))
+                .into())
+        };
+        if let Some(what) = usd_signature(ext.as_deref(), head) {
+            if cfg!(feature = "usd") {
+                return Ok(NetFormat::Usd);
+            }
+            return unsupported(format!(
+                "USD input ({what}) needs vstructc built with its `usd` feature; this build reads \
+                 RIB and the JSON network form"
+            ));
+        }
+        if let Some(what) = materialx_signature(ext.as_deref(), head) {
+            return unsupported(format!(
+                "MaterialX input is not supported ({what}); vstructc reads RIB, the JSON network \
+                 form and USD"
+            ));
+        }
+        Ok(NetFormat::rib_or_json(name, bytes))
+    }
+
+    /// RIB or JSON: by the extension (`.json`, `.rib`), else by the first non-blank byte.
+    fn rib_or_json(name: &str, bytes: &[u8]) -> NetFormat {
         match std::path::Path::new(name)
             .extension()
             .and_then(|e| e.to_str())
@@ -50,66 +92,30 @@ impl NetFormat {
     }
 }
 
-/// [`NetFormat::detect`], but USD is recognised too, and a format that vstructc recognises
-/// and does not read is an error (IO003) that names it, instead of the RIB reader's complaint
-/// about its first character. USD is `.usda`, `.usdc`, `.usdz`, `.usd`, or the `#usda`,
-/// `PXR-USDC` and zip signatures; it is [`NetFormat::Usd`], or IO003 when the library is
-/// built without its `usd` feature. MaterialX (`.mtlx`, or XML whose root is `<materialx>`)
-/// is IO003.
-///
-/// ```
-/// use vstructc::front::{NetFormat, detect_format};
-/// assert_eq!(detect_format("a.rib", b"Bxdf").unwrap(), NetFormat::Rib);
-/// # #[cfg(feature = "usd")] {
-/// assert_eq!(detect_format("look.usda", b"#usda 1.0\n").unwrap(), NetFormat::Usd);
-/// assert_eq!(detect_format("<stdin>", b"  #usda 1.0").unwrap(), NetFormat::Usd);
-/// assert_eq!(detect_format("<stdin>", b"PXR-USDC").unwrap(), NetFormat::Usd);
-/// # }
-/// let e = detect_format("<stdin>", b"<?xml version=\"1.0\"?>\n<materialx version=\"1.38\">").unwrap_err();
-/// assert!(e.to_string().contains("MaterialX"), "{e}");
-/// ```
-pub fn detect_format(name: &str, bytes: &[u8]) -> Result<NetFormat, Error> {
-    let ext = std::path::Path::new(name)
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let head = &bytes[..bytes.len().min(1024)];
-    let text = head.trim_ascii_start();
-    let usd = match ext.as_deref() {
+/// How a USD input shows itself (lower-case extension, first bytes), in words.
+fn usd_signature(ext: Option<&str>, head: &[u8]) -> Option<String> {
+    match ext {
         Some(e @ ("usda" | "usdc" | "usdz" | "usd")) => Some(format!("`.{e}`")),
-        _ if text.starts_with(b"#usda") => Some("USD text (`#usda`)".to_string()),
-        _ if bytes.starts_with(b"PXR-USDC") => Some("binary USD (`PXR-USDC`)".to_string()),
-        _ if bytes.starts_with(b"PK\x03\x04") => Some("a zip archive, as USDZ is".to_string()),
-        _ => None,
-    };
-    let unsupported = |message: String| -> Result<NetFormat, Error> {
-        Err(crate::diag::Diagnostic::error("IO003", message)
-            .at(crate::diag::Location::file(name))
-            .into())
-    };
-    if let Some(what) = usd {
-        if cfg!(feature = "usd") {
-            return Ok(NetFormat::Usd);
+        _ if head.trim_ascii_start().starts_with(b"#usda") => {
+            Some("USD text (`#usda`)".to_string())
         }
-        return unsupported(format!(
-            "USD input ({what}) needs vstructc built with its `usd` feature; this build reads \
-             RIB and the JSON network form"
-        ));
+        _ if head.starts_with(b"PXR-USDC") => Some("binary USD (`PXR-USDC`)".to_string()),
+        _ if head.starts_with(b"PK\x03\x04") => Some("a zip archive, as USDZ is".to_string()),
+        _ => None,
     }
-    let materialx = if ext.as_deref() == Some("mtlx") {
+}
+
+/// How a MaterialX input shows itself (lower-case extension, first bytes), in words.
+fn materialx_signature(ext: Option<&str>, head: &[u8]) -> Option<&'static str> {
+    if ext == Some("mtlx") {
         Some("`.mtlx`")
-    } else if text.starts_with(b"<") && memchr::memmem::find(head, b"<materialx").is_some() {
+    } else if head.trim_ascii_start().starts_with(b"<")
+        && memchr::memmem::find(head, b"<materialx").is_some()
+    {
         Some("XML with a `<materialx>` root")
     } else {
         None
-    };
-    if let Some(what) = materialx {
-        return unsupported(format!(
-            "MaterialX input is not supported ({what}); vstructc reads RIB, the JSON network \
-             form and USD"
-        ));
     }
-    Ok(NetFormat::detect(name, bytes))
 }
 
 /// How [`read_network`] reads.

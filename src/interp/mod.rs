@@ -56,7 +56,7 @@ pub use frame::Frame;
 pub use lobe::Sides;
 pub use material::{
     ActiveLobe, Albedo, Eval, LeafInfo, Material, PrepareOptions, Prepared, Sample, Scratch,
-    ShadingPoint, TRANSPARENCY_LOBE, TableAlbedo,
+    ShadingPoint, TableAlbedo,
 };
 pub use math::Rgb;
 

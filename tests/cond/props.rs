@@ -206,7 +206,7 @@ fn check_any_input(text: &str) -> Result<(), TestCaseError> {
                 let again = cond::parse_with(&printed, &ext)
                     .map_err(|e| TestCaseError::fail(format!("{printed:?}: {e}")))?;
                 prop_assert!(again.same_as(&stmt), "{:?} -> {:?}", text, printed);
-                let _ = cond::dump(&stmt);
+                let _ = stmt.dump();
                 let up = MapUpstream::new()
                     .input("x", Some(Value::Int(1)))
                     .set("y", Value::Str("a".into()));

@@ -131,7 +131,7 @@ fn ast_snapshot(text: &str, ext: &Extensions) -> String {
     format!(
         "input: {text:?}\nextensions: [{names}]\ndesugared: {stmt}\nparams: {:?}\n\n{}",
         stmt.param_names(),
-        cond::dump(&stmt)
+        stmt.dump()
     )
 }
 

@@ -210,7 +210,8 @@ fn the_parser_reports_the_exceeded_bound_typed() {
         ..Limits::default()
     };
     let text = "connect if a == 1 and b == 1 and c == 1";
-    let e = vstructc::cond::parse_limited(text, &Extensions::none(), &limits).unwrap_err();
+    let e = vstructc::cond::internals::parse_statement_limited(text, &Extensions::none(), &limits)
+        .unwrap_err();
     let limit = e.limit.expect("typed limit");
     assert_eq!(
         (limit.limit, limit.value, limit.max),
@@ -218,7 +219,14 @@ fn the_parser_reports_the_exceeded_bound_typed() {
     );
     // The caret is on the third term.
     assert_eq!(&text[e.span.clone()], "c");
-    assert!(vstructc::cond::parse_limited(text, &Extensions::none(), &Limits::default()).is_ok());
+    assert!(
+        vstructc::cond::internals::parse_statement_limited(
+            text,
+            &Extensions::none(),
+            &Limits::default()
+        )
+        .is_ok()
+    );
 }
 
 /// A network built in code (no reader involved) meets the same bounds in resolution, which

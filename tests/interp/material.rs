@@ -7,7 +7,7 @@
 
 use glam::{Vec2, Vec3};
 use vstructc::diag::{Diagnostics, Error};
-use vstructc::interp::material::{PrepareOptions, TRANSPARENCY_LOBE};
+use vstructc::interp::material::PrepareOptions;
 use vstructc::interp::reference::{self, dielectric_r, lambert, mul, ref10_ir};
 use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
@@ -346,7 +346,7 @@ fn sample_pdf_weight_and_mean_agree_with_eval_and_albedo() {
                         (s.weight - w).abs().max_element() <= 1e-4 * w.max_element().max(1e-3),
                         "{name}: weight"
                     );
-                } else if s.lobe == TRANSPARENCY_LOBE {
+                } else if s.lobe == Sample::TRANSPARENCY_LOBE {
                     assert_eq!(s.l, -p.view());
                 }
                 let w = s.weight.as_dvec3();
@@ -598,7 +598,7 @@ fn transparency_and_emission_accumulate_and_sample() {
     assert_eq!(p.lobes().len(), 1, "transparency is not a lobe");
     // u[0] past every lobe interval chooses straight transmission.
     let s = p.sample([0.999, 0.5, 0.5]).expect("transmission");
-    assert_eq!(s.lobe, TRANSPARENCY_LOBE);
+    assert_eq!(s.lobe, Sample::TRANSPARENCY_LOBE);
     assert!(s.delta);
     assert_eq!(s.l, -v);
     assert!((s.weight * s.pdf - p.transparency()).abs().max_element() < 1e-6);

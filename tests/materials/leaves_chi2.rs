@@ -428,13 +428,41 @@ fn consistency(name: &str, p: &PreparedLobe, tol: f32, seed: u64) -> Vec<String>
     errs
 }
 
+/// The suite's runs are split into this many tests, so that the test harness runs them on
+/// every core; the Šidák level stays the one over every run of the suite.
+const PARTS: usize = 4;
+
 #[test]
-fn chi2_every_sampled_leaf() {
+fn chi2_every_sampled_leaf_part_1() {
+    chi2_sampled_leaves(0);
+}
+
+#[test]
+fn chi2_every_sampled_leaf_part_2() {
+    chi2_sampled_leaves(1);
+}
+
+#[test]
+fn chi2_every_sampled_leaf_part_3() {
+    chi2_sampled_leaves(2);
+}
+
+#[test]
+fn chi2_every_sampled_leaf_part_4() {
+    chi2_sampled_leaves(3);
+}
+
+/// The χ² and consistency checks of the cases whose index is `part` modulo [`PARTS`].
+fn chi2_sampled_leaves(part: usize) {
     let cases = cases();
     let k = cases.len() * VIEWS;
     let level = sidak(0.01, k);
     let mut failures = Vec::new();
-    for (ci, c) in cases.iter().enumerate() {
+    let in_part = cases
+        .iter()
+        .enumerate()
+        .filter(|(ci, _)| ci % PARTS == part);
+    for (ci, c) in in_part {
         for (vi, v) in views(c, 1000 + ci as u64).into_iter().enumerate() {
             let p = c.lobe.prepare(v, Sides::Front);
             let label = format!("{} (view {vi}: {v})", c.name);

@@ -37,7 +37,7 @@
 //! * `Transparent` leaves are not lobes (they do not count toward `MAX_LOBES`, and are not in
 //!   [`Prepared::lobes`] or [`Prepared::albedo`]), but `sample` does choose straight
 //!   transmission (`L = −V`, weight `τ/p`) with probability `lum(τ)/Σ`, reported with
-//!   lobe index [`TRANSPARENCY_LOBE`]. The mean of sample weights is therefore
+//!   lobe index [`Sample::TRANSPARENCY_LOBE`]. The mean of sample weights is therefore
 //!   `albedo().reflect + albedo().transmit_radiance + transparency()`.
 //! * External inputs are packed 3 floats per colour/vector slot and 1 per scalar slot, in
 //!   slot order ([`Material::input_layout`]); a slot that lies (even partly) beyond the end of
@@ -74,9 +74,6 @@ pub use prepare::Scratch;
 use prepare::{clean, sat};
 pub use prepared::{ActiveLobe, Prepared};
 
-/// The lobe index [`Sample::lobe`] reports for straight transmission through `Transparent`
-/// leaves.
-pub const TRANSPARENCY_LOBE: u8 = u8::MAX;
 
 /// Default of [`PrepareOptions::drop_threshold`].
 pub(crate) const DEFAULT_DROP_THRESHOLD: f32 = 1e-6;
@@ -157,8 +154,14 @@ pub struct Sample {
     pub pdf: f32,
     /// True for a delta direction (specular, straight transmission).
     pub delta: bool,
-    /// Index of the chosen lobe in [`Prepared::lobes`], or [`TRANSPARENCY_LOBE`].
+    /// Index of the chosen lobe in [`Prepared::lobes`], or [`Sample::TRANSPARENCY_LOBE`].
     pub lobe: u8,
+}
+
+impl Sample {
+    /// The lobe index [`Sample::lobe`] reports for straight transmission through
+    /// `Transparent` leaves.
+    pub const TRANSPARENCY_LOBE: u8 = u8::MAX;
 }
 
 /// Directional albedo of a prepared material or lobe, split by hemisphere.

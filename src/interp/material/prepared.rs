@@ -2,7 +2,7 @@
 //! emission and transparency.
 
 use super::packs;
-use super::{Albedo, Eval, Sample, TRANSPARENCY_LOBE};
+use super::{Albedo, Eval, Sample};
 use crate::interp::diffuse::Lambert;
 use crate::interp::frame::Frame;
 use crate::interp::lobe::{Lobe, PreparedLobe, Sides};
@@ -367,7 +367,7 @@ impl Prepared {
             weight: self.transparency / p,
             pdf: p,
             delta: true,
-            lobe: TRANSPARENCY_LOBE,
+            lobe: Sample::TRANSPARENCY_LOBE,
         })
     }
 

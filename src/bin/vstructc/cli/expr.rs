@@ -59,7 +59,7 @@ pub fn run(args: &ExprArgs, common: &CommonOptions) -> ExitCode {
                 });
                 pretty(&doc) + "\n"
             } else {
-                format!("{stmt}\n\n{}", cond::dump(&stmt))
+                format!("{stmt}\n\n{}", stmt.dump())
             };
             match print(out) {
                 Ok(()) => ExitCode::SUCCESS,

@@ -12,7 +12,7 @@ use vstructc::cond::Extensions;
 use vstructc::diag::{Diagnostics, Error, Location};
 use vstructc::front::args::ArgsOptions;
 use vstructc::front::source::{ReadError, read_stream};
-use vstructc::front::{NetFormat, ReadOptions, detect_format, read_network};
+use vstructc::front::{NetFormat, ReadOptions, read_network};
 use vstructc::limits::{Limit, LimitExceeded, Limits};
 use vstructc::network::Network;
 use vstructc::pipeline::{self, Lowering, PipelineOptions, PipelineOutput};
@@ -91,7 +91,7 @@ pub struct LoadedInput {
 /// first non-blank byte; USD and MaterialX are recognised and refused (IO003).
 pub fn load_input(path: &Path) -> Result<LoadedInput, Error> {
     let (name, bytes) = read_bytes(path)?;
-    let format = detect_format(&name, &bytes)?;
+    let format = NetFormat::detect(&name, &bytes)?;
     Ok(LoadedInput {
         name,
         bytes,
