@@ -1,4 +1,6 @@
-//! USD writer: a network as one flattened `usda` layer of `Material` and `Shader` prims.
+//! USD writer: a network as one flattened `usda` layer of `Material` and `Shader` prims, or,
+//! for a network read from USD, as an override layer over its input holding only what
+//! resolution changed ([`UsdMode`]).
 //!
 //! Prim paths: a network read from USD keeps its prim paths (a node's handle and a
 //! material's name are prim paths). Any other network (RIB, JSON, built in code) gets one
@@ -8,7 +10,7 @@
 //! identifier by replacing every character other than ASCII letters, digits and `_` with
 //! `_` and prefixing `_` to a leading digit; a name already taken gets `_2`, `_3`, ….
 //! Prims between a Material and its shaders are written as `NodeGraph`s, other ancestors as
-//! `Scope`s.
+//! `Scope`s, unless [`UsdMode::FlattenFrom`] gives the stage whose types they keep.
 //!
 //! Inputs: every parameter with a value (typed as the definition declares it, by Sdr's
 //! mapping: `color` → `color3f`, `vstruct` → `token`, `float[2]` → `float2`, …; the value's

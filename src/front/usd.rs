@@ -13,6 +13,9 @@
 //! `outputs:displacement`) are its terminals. Order does not matter: a connection binds to
 //! its prim wherever the prim is.
 //!
+//! The inputs read are the parameters' source: resolution's edits to them are changes
+//! ([`crate::network::ParamChange`]), which is what the USD writer's override layer writes.
+//!
 //! A `.usda` or `.usdc` root layer in which nothing composes is read from its specs
 //! directly, without composing a stage; the result is the same, and it is much faster.
 //!
