@@ -83,6 +83,7 @@ fn check_over(args: &ResolveArgs, format: Option<NetFormat>) -> Result<(), Strin
     Ok(())
 }
 
+/// The name `--format` gives format `f`.
 fn format_name(f: NetFormat) -> &'static str {
     match f {
         NetFormat::Rib => "rib",
@@ -149,12 +150,11 @@ pub fn output_format(
         }
         _ => None,
     };
-    let name = format_name;
     match (format, by_ext) {
         (Some(f), Some(e)) if f != e => Err(format!(
             "--format {} conflicts with the output file's extension `.{}`",
-            name(f),
-            ext.as_deref().unwrap_or(name(e))
+            format_name(f),
+            ext.as_deref().unwrap_or(format_name(e))
         )),
         (Some(f), _) => Ok(Some(f)),
         (None, e) => Ok(e),
@@ -195,19 +195,14 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
         Ok(ran) => ran,
         Err(status) => return status,
     };
-    let status = super::report(&ran.diags, common);
-    if status != ExitCode::SUCCESS {
-        return status;
-    }
-    let (loaded, network) = (&ran.loaded, &ran.output.network);
-    let output = args.output.as_deref();
+    // The override layer sublayers the input: found before the run's diagnostics are shown.
     let over = args.usd_mode == UsdModeArg::Over;
-    if over && loaded.format != NetFormat::Usd {
+    if over && ran.loaded.format != NetFormat::Usd {
         eprintln_quiet!(
             "error: --usd-mode over needs a USD input, which the override layer sublayers; \
              `{}` is {}",
-            loaded.name,
-            match loaded.format {
+            ran.loaded.name,
+            match ran.loaded.format {
                 NetFormat::Rib => "RIB",
                 NetFormat::Json => "JSON",
                 NetFormat::Usd => "USD",
@@ -216,6 +211,12 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
         std::mem::forget(ran);
         return ExitCode::from(2);
     }
+    let status = super::report(&ran.diags, common);
+    if status != ExitCode::SUCCESS {
+        return status;
+    }
+    let (loaded, network) = (&ran.loaded, &ran.output.network);
+    let output = args.output.as_deref();
     let sublayer = if over {
         sublayer_path(&args.input, output)
     } else {
