@@ -443,8 +443,9 @@ fn node_body(
 
 /// The lines of node `id`'s `over` in an override layer: only the inputs resolution changed
 /// ([`ParamChange`]). A value set is written typed as in the flattened layer; a connection
-/// set or changed as an explicit list; a value that replaced a connection with an empty
-/// connection list (`.connect = None`) beside it; a parameter read from the input and
+/// set or changed as an explicit list; a value that replaced an authored value or connection
+/// with an empty connection list (`.connect = None`) beside it, since [`ParamChange`] does
+/// not tell which it replaced; a parameter read from the input and
 /// removed (a vstruct head) as a blocked value (`= None`) and an empty connection list, which
 /// compose to no value and no connection.
 fn over_body(
