@@ -9,7 +9,7 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use vstructc::Diagnostics;
-use vstructc::back::usd::{write_binary, write_usda};
+use vstructc::back::usd::{UsdMode, write_binary, write_usda};
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::front::usd::parse_usd;
 use vstructc::limits::Limits;
@@ -28,7 +28,7 @@ fn bench(c: &mut Criterion) {
     let mut diags = Diagnostics::new();
     let net = parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap();
     let mut usda = Vec::new();
-    write_usda(&net, &reg, &mut usda).unwrap();
+    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
     let mut usdc = Vec::new();
     write_binary(&net, &reg, "usdc", &mut usdc).unwrap();
     let mut group = c.benchmark_group("usd");

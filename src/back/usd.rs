@@ -1,4 +1,6 @@
-//! USD writer: a network as one flattened `usda` layer of `Material` and `Shader` prims.
+//! USD writer: a network as one flattened `usda` layer of `Material` and `Shader` prims, or,
+//! for a network read from USD, as an override layer over its input holding only what
+//! resolution changed ([`UsdMode`]).
 //!
 //! Prim paths: a network read from USD keeps its prim paths (a node's handle and a
 //! material's name are prim paths). Any other network (RIB, JSON, built in code) gets one
@@ -8,7 +10,7 @@
 //! identifier by replacing every character other than ASCII letters, digits and `_` with
 //! `_` and prefixing `_` to a leading digit; a name already taken gets `_2`, `_3`, ….
 //! Prims between a Material and its shaders are written as `NodeGraph`s, other ancestors as
-//! `Scope`s.
+//! `Scope`s, unless [`UsdMode::FlattenFrom`] gives the stage whose types they keep.
 //!
 //! Inputs: every parameter with a value (typed as the definition declares it, by Sdr's
 //! mapping: `color` → `color3f`, `vstruct` → `token`, `float[2]` → `float2`, …; the value's
@@ -17,7 +19,7 @@
 //! Terminals connect the Material's `outputs:ri:surface` (`ri:displacement`, `ri:volume`)
 //! to the terminal node's `outputs:out`, or to the output the terminal names.
 
-use crate::network::{Link, Network, NodeId, ParamTypes};
+use crate::network::{Link, Network, NodeId, ParamChange, ParamTypes};
 use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::fmt::Write as _;
@@ -45,10 +47,14 @@ fn identifier(name: &str) -> String {
 #[derive(Default)]
 struct Prim {
     name: String,
+    /// The absolute prim path.
+    path: String,
     children: Vec<usize>,
     by_name: FxHashMap<String, usize>,
     node: Option<NodeId>,
     material: Option<usize>,
+    /// The prim's properties, one per line, unindented.
+    lines: String,
 }
 
 /// The prim tree: index 0 is the pseudo-root.
@@ -62,8 +68,10 @@ impl Tree {
             return i;
         }
         let i = self.prims.len();
+        let path = format!("{}/{name}", self.prims[parent].path);
         self.prims.push(Prim {
             name: name.to_string(),
+            path,
             ..Prim::default()
         });
         self.prims[parent].children.push(i);
@@ -85,6 +93,8 @@ impl Tree {
 struct Paths {
     nodes: FxHashMap<NodeId, String>,
     materials: Vec<String>,
+    /// The network was read from USD: its handles and material names are the prim paths.
+    from_usd: bool,
 }
 
 /// A valid absolute prim path: `/`-separated identifiers.
@@ -119,7 +129,11 @@ fn paths(net: &Network) -> Paths {
             nodes.insert(id, net[id].handle().to_string());
         }
         materials = net.materials().iter().map(|m| m.name.clone()).collect();
-        return Paths { nodes, materials };
+        return Paths {
+            nodes,
+            materials,
+            from_usd,
+        };
     }
     let mut taken: FxHashSet<String> = FxHashSet::default();
     let mut unique = |base: String| -> String {
@@ -145,7 +159,11 @@ fn paths(net: &Network) -> Paths {
             .entry(id)
             .or_insert_with(|| unique(format!("/Materials/{}", identifier(&node_name(net, id)))));
     }
-    Paths { nodes, materials }
+    Paths {
+        nodes,
+        materials,
+        from_usd,
+    }
 }
 
 /// The USD type name of a vstructc type (Sdr's mapping).
@@ -347,6 +365,48 @@ fn declare_output(outputs: &mut FxHashMap<NodeId, Vec<String>>, up: NodeId, o: S
     }
 }
 
+/// `T inputs:NAME = VALUE`: value `v` of input `name`, typed as `declared` says when it fits.
+fn value_line(body: &mut String, declared: Option<&Type>, name: &str, v: &Value) {
+    let t = value_type(v, declared);
+    let _ = write!(body, "{} inputs:{name} = ", usd_type(&t));
+    value(body, v, &t);
+    body.push('\n');
+}
+
+/// The type an input's connection (or its removal) is declared with: the declared one, else
+/// `token`.
+fn connect_type(declared: Option<&Type>) -> String {
+    usd_type(declared.unwrap_or(&Type::scalar(BaseType::Token)))
+}
+
+/// `T inputs:NAME.connect = <…>` (a list for several links); the upstream outputs used are
+/// recorded in `outputs`.
+fn connect_line(
+    body: &mut String,
+    declared: Option<&Type>,
+    name: &str,
+    links: &[Link],
+    paths: &Paths,
+    outputs: &mut FxHashMap<NodeId, Vec<String>>,
+) {
+    let _ = write!(body, "{} inputs:{name}.connect = ", connect_type(declared));
+    if links.len() > 1 {
+        body.push('[');
+    }
+    for (i, l) in links.iter().enumerate() {
+        if i > 0 {
+            body.push_str(", ");
+        }
+        if let Some((up, o)) = target(body, l, paths) {
+            declare_output(outputs, up, o);
+        }
+    }
+    if links.len() > 1 {
+        body.push(']');
+    }
+    body.push('\n');
+}
+
 /// The lines of node `id`'s Shader prim: its `info:id`, its values and its connections
 /// (the upstream outputs they use are recorded in `outputs`).
 fn node_body(
@@ -365,32 +425,80 @@ fn node_body(
     for p in node.params_by_name() {
         let declared = types.input_type(shader, p.name());
         if let Some(v) = p.value() {
-            let t = value_type(v, declared.as_ref());
-            let _ = write!(body, "{} inputs:{} = ", usd_type(&t), p.name());
-            value(&mut body, v, &t);
-            body.push('\n');
+            value_line(&mut body, declared.as_ref(), p.name(), v);
         }
-        let links = p.connections();
-        if links.is_empty() {
+        if p.is_connected() {
+            connect_line(
+                &mut body,
+                declared.as_ref(),
+                p.name(),
+                p.connections(),
+                paths,
+                outputs,
+            );
+        }
+    }
+    body
+}
+
+/// The lines of node `id`'s `over` in an override layer: only the inputs resolution changed
+/// ([`ParamChange`]). A value set is written typed as in the flattened layer; a connection
+/// set or changed as an explicit list; a value that replaced an authored value or connection
+/// with an empty connection list (`.connect = None`) beside it, since [`ParamChange`] does
+/// not tell which it replaced; a parameter read from the input and
+/// removed (a vstruct head) as a blocked value (`= None`) and an empty connection list, which
+/// compose to no value and no connection.
+fn over_body(
+    net: &Network,
+    types: &dyn ParamTypes,
+    paths: &Paths,
+    id: NodeId,
+    outputs: &mut FxHashMap<NodeId, Vec<String>>,
+) -> String {
+    let node = &net[id];
+    let shader = node.shader();
+    let mut params: Vec<&crate::network::Param> = node.all_params().iter().collect();
+    params.sort_by(|a, b| a.name().cmp(b.name()));
+    let mut body = String::new();
+    for p in params {
+        let name = p.name();
+        let change = p.change();
+        if change == ParamChange::Unchanged {
             continue;
         }
-        let t = declared.unwrap_or_else(|| Type::scalar(BaseType::Token));
-        let _ = write!(body, "{} inputs:{}.connect = ", usd_type(&t), p.name());
-        if links.len() > 1 {
-            body.push('[');
-        }
-        for (i, l) in links.iter().enumerate() {
-            if i > 0 {
-                body.push_str(", ");
+        let declared = types.input_type(shader, name);
+        let declared = declared.as_ref();
+        match change {
+            ParamChange::Unchanged => {}
+            ParamChange::Removed => {
+                if p.source_item().is_some() {
+                    let t = connect_type(declared);
+                    let _ = writeln!(body, "{t} inputs:{name} = None");
+                    let _ = writeln!(body, "{t} inputs:{name}.connect = None");
+                }
             }
-            if let Some((up, o)) = target(&mut body, l, paths) {
-                declare_output(outputs, up, o);
+            ParamChange::ValueReplaced => {
+                if let Some(v) = p.value() {
+                    value_line(&mut body, declared, name, v);
+                }
+                let _ = writeln!(
+                    body,
+                    "{} inputs:{name}.connect = None",
+                    connect_type(declared)
+                );
+            }
+            ParamChange::Connected => {
+                connect_line(&mut body, declared, name, p.connections(), paths, outputs);
+            }
+            ParamChange::Added => {
+                if let Some(v) = p.value() {
+                    value_line(&mut body, declared, name, v);
+                }
+                if p.is_connected() {
+                    connect_line(&mut body, declared, name, p.connections(), paths, outputs);
+                }
             }
         }
-        if links.len() > 1 {
-            body.push(']');
-        }
-        body.push('\n');
     }
     body
 }
@@ -408,7 +516,7 @@ fn write_binary(
     out: &mut dyn Write,
 ) -> io::Result<()> {
     let mut text = Vec::new();
-    write_usda(net, types, &mut text)?;
+    write_usda(net, types, UsdMode::Flatten, &mut text)?;
     let stage = crate::front::usd::open_stage("<written>.usda", &text)
         .map_err(|why| io::Error::other(format!("the written layer does not read back: {why}")))?;
     let encoder = openusd::sdf::LayerRegistry::find_by_id(format)
@@ -420,11 +528,48 @@ fn write_binary(
     out.write_all(bytes.get_ref())
 }
 
-/// Write the resolved network `net` as a `usda` layer (see the module documentation), with
-/// the declared types of `types` (a [`crate::registry::Registry`]).
+/// What [`write_usda`] writes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum UsdMode<'a> {
+    /// One flattened layer holding every material and shader (see the module
+    /// documentation); prims between a Material and its shaders are `NodeGraph`s, other
+    /// ancestors `Scope`s.
+    #[default]
+    Flatten,
+    /// [`UsdMode::Flatten`] for a network read from USD, whose prims other than materials
+    /// and shaders (node graphs, scopes, transforms, …) keep the types they have on the
+    /// stage it was read from: the root layer `bytes`, named `name` as it was for the reader
+    /// (its references and sublayers are found relative to it). A prim the stage does not
+    /// hold, or a library built without the `usd` feature, gets the types of
+    /// [`UsdMode::Flatten`].
+    FlattenFrom {
+        /// The root layer's name (a path).
+        name: &'a str,
+        /// The root layer's bytes.
+        bytes: &'a [u8],
+    },
+    /// An override layer for a network read from USD: its layer metadata sublayers the
+    /// input by the asset path `sublayer` (as written into the layer: relative to the
+    /// written layer's folder, or absolute), and it holds `over` prims only for what
+    /// resolution changed (see [`ParamChange`]): inputs set or connected, typed as in the
+    /// flattened layer, the upstream outputs they connect to, and parameters resolution
+    /// removed (vstruct heads) written as a blocked value and an empty connection list. A
+    /// node the input does not hold (one added in code) is a `def Shader` with all its
+    /// inputs. Nothing else is written: a network resolution did not change gives a layer
+    /// without prims. Resolution does not change terminals, so none are written. A network
+    /// whose handles are not prim paths (not read from USD) is an
+    /// [`io::ErrorKind::InvalidInput`] error.
+    Over {
+        /// The input's asset path.
+        sublayer: &'a str,
+    },
+}
+
+/// Write the resolved network `net` as a `usda` layer as `mode` asks (see the module
+/// documentation), with the declared types of `types` (a [`crate::registry::Registry`]).
 ///
 /// ```
-/// use vstructc::back::usd::write_usda;
+/// use vstructc::back::usd::{UsdMode, write_usda};
 /// use vstructc::network::{Network, RequestKind};
 /// use vstructc::registry::Registry;
 /// use vstructc::{BaseType, Value};
@@ -435,56 +580,191 @@ fn write_binary(
 /// let m = net.add_material("red ball");
 /// net.set_terminal(m, "surface", s, None);
 /// let mut out = Vec::new();
-/// write_usda(&net, &Registry::embedded(), &mut out).unwrap();
+/// write_usda(&net, &Registry::embedded(), UsdMode::Flatten, &mut out).unwrap();
 /// let text = String::from_utf8(out).unwrap();
 /// assert!(text.contains("def Material \"red_ball\""), "{text}");
 /// assert!(text.contains("color3f inputs:diffuseColor = (0.8, 0.2, 0.2)"), "{text}");
 /// assert!(text.contains("outputs:ri:surface.connect = </Materials/red_ball/ball.outputs:out>"));
 /// ```
-pub fn write_usda(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) -> io::Result<()> {
+pub fn write_usda(
+    net: &Network,
+    types: &dyn ParamTypes,
+    mode: UsdMode<'_>,
+    out: &mut dyn Write,
+) -> io::Result<()> {
     let paths = paths(net);
     let mut tree = Tree {
         prims: vec![Prim::default()],
     };
-    for (i, p) in paths.materials.iter().enumerate() {
-        let at = tree.at(p);
-        tree.prims[at].material = Some(i);
-    }
-    for id in net.nodes_sorted() {
-        let at = tree.at(&paths.nodes[&id]);
-        tree.prims[at].node = Some(id);
-    }
-    // Node bodies first: they tell which outputs each upstream prim must declare.
     let mut outputs: FxHashMap<NodeId, Vec<String>> = FxHashMap::default();
-    let bodies: FxHashMap<NodeId, String> = net
-        .nodes_sorted()
-        .into_iter()
-        .map(|id| (id, node_body(net, types, &paths, id, &mut outputs)))
-        .collect();
-    let mut material_bodies = Vec::new();
-    for m in net.materials() {
-        let mut body = String::new();
-        for t in &m.terminals {
-            let _ = write!(body, "token outputs:ri:{}.connect = ", t.name);
-            if let Some((up, o)) = target(&mut body, &t.link, &paths) {
-                declare_output(&mut outputs, up, o);
-            }
-            body.push('\n');
-        }
-        material_bodies.push(body);
-    }
     let mut text = String::with_capacity(1 << 16);
-    text.push_str("#usda 1.0\n(\n    doc = \"Written by vstructc\"\n)\n");
+    text.push_str("#usda 1.0\n(\n");
+    let kinds: FxHashMap<usize, String>;
+    if let UsdMode::Over { sublayer } = mode {
+        if !paths.from_usd {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "an override layer needs a network read from USD (its handles are the prim \
+                 paths it overrides)",
+            ));
+        }
+        text.push_str(
+            "    doc = \"Written by vstructc: what resolution changed in the layer below\"\n",
+        );
+        text.push_str("    subLayers = [\n        ");
+        asset(&mut text, sublayer);
+        text.push_str("\n    ]\n)\n");
+        // Nodes the input holds get their changes; nodes it does not hold, everything.
+        let mut fresh = FxHashSet::default();
+        for id in net.nodes_sorted() {
+            let read = net[id].location().is_some();
+            let body = if read {
+                over_body(net, types, &paths, id, &mut outputs)
+            } else {
+                fresh.insert(id);
+                node_body(net, types, &paths, id, &mut outputs)
+            };
+            if !body.is_empty() {
+                let at = tree.at(&paths.nodes[&id]);
+                tree.prims[at].node = Some(id);
+                tree.prims[at].lines = body;
+            }
+        }
+        for &id in outputs.keys() {
+            let at = tree.at(&paths.nodes[&id]);
+            tree.prims[at].node = Some(id);
+        }
+        declare_outputs(net, types, &mut tree, &outputs);
+        kinds = (0..tree.prims.len())
+            .map(|i| {
+                let head = match tree.prims[i].node {
+                    Some(id) if fresh.contains(&id) => "def Shader",
+                    _ => "over",
+                };
+                (i, head.to_string())
+            })
+            .collect();
+    } else {
+        text.push_str("    doc = \"Written by vstructc\"\n)\n");
+        for (i, p) in paths.materials.iter().enumerate() {
+            let at = tree.at(p);
+            tree.prims[at].material = Some(i);
+        }
+        for id in net.nodes_sorted() {
+            let at = tree.at(&paths.nodes[&id]);
+            tree.prims[at].node = Some(id);
+            tree.prims[at].lines = node_body(net, types, &paths, id, &mut outputs);
+        }
+        for (i, m) in net.materials().iter().enumerate() {
+            let at = tree.at(&paths.materials[i]);
+            let mut body = String::new();
+            for t in &m.terminals {
+                let _ = write!(body, "token outputs:ri:{}.connect = ", t.name);
+                if let Some((up, o)) = target(&mut body, &t.link, &paths) {
+                    declare_output(&mut outputs, up, o);
+                }
+                body.push('\n');
+            }
+            body.push_str(&tree.prims[at].lines);
+            tree.prims[at].lines = body;
+        }
+        declare_outputs(net, types, &mut tree, &outputs);
+        let source_types = match mode {
+            UsdMode::FlattenFrom { name, bytes } if paths.from_usd => {
+                let others: Vec<String> = tree.prims[1..]
+                    .iter()
+                    .filter(|p| p.material.is_none() && p.node.is_none())
+                    .map(|p| p.path.clone())
+                    .collect();
+                prim_types(name, bytes, &others)
+            }
+            _ => FxHashMap::default(),
+        };
+        kinds = flat_kinds(&tree, &source_types);
+    }
+    emit(&tree, &kinds, &mut text);
+    out.write_all(text.as_bytes())
+}
+
+/// `@path@`: a USD asset path.
+fn asset(out: &mut String, path: &str) {
+    out.push('@');
+    out.push_str(&path.replace('@', "\\@"));
+    out.push('@');
+}
+
+/// Adds to each upstream prim in `outputs` the declarations of the outputs connected to.
+fn declare_outputs(
+    net: &Network,
+    types: &dyn ParamTypes,
+    tree: &mut Tree,
+    outputs: &FxHashMap<NodeId, Vec<String>>,
+) {
+    for prim in &mut tree.prims {
+        let Some(id) = prim.node else { continue };
+        let shader = net[id].shader();
+        for o in outputs.get(&id).map_or(&[][..], Vec::as_slice) {
+            let t = types
+                .output_type(shader, o)
+                .unwrap_or_else(|| Type::scalar(BaseType::Token));
+            let _ = writeln!(prim.lines, "{} outputs:{o}", usd_type(&t));
+        }
+    }
+}
+
+/// The types of the prims `paths` on the stage whose root layer is `bytes`, named `name`
+/// (`""` for an untyped prim; a prim the stage does not hold is left out).
+#[cfg(feature = "usd")]
+fn prim_types(name: &str, bytes: &[u8], paths: &[String]) -> FxHashMap<String, String> {
+    crate::front::usd::prim_types(name, bytes, paths)
+}
+
+#[cfg(not(feature = "usd"))]
+fn prim_types(_: &str, _: &[u8], _: &[String]) -> FxHashMap<String, String> {
+    FxHashMap::default()
+}
+
+/// Each prim's `def` line head in a flattened layer: `def Material`, `def Shader`, the type
+/// the source stage gives (`def Xform`, or `def` for an untyped prim), else `def NodeGraph`
+/// inside a Material and `def Scope` outside.
+fn flat_kinds(tree: &Tree, source: &FxHashMap<String, String>) -> FxHashMap<usize, String> {
+    let mut kinds = FxHashMap::default();
+    let mut stack = vec![(0usize, false)];
+    while let Some((i, in_material)) = stack.pop() {
+        let prim = &tree.prims[i];
+        let head = if prim.material.is_some() {
+            "def Material".to_string()
+        } else if prim.node.is_some() {
+            "def Shader".to_string()
+        } else if let Some(t) = source.get(&prim.path) {
+            if t.is_empty() {
+                "def".to_string()
+            } else {
+                format!("def {t}")
+            }
+        } else if in_material {
+            "def NodeGraph".to_string()
+        } else {
+            "def Scope".to_string()
+        };
+        kinds.insert(i, head);
+        let inner = in_material || prim.material.is_some();
+        stack.extend(prim.children.iter().map(|&c| (c, inner)));
+    }
+    kinds
+}
+
+/// The prims of `tree` as usda text: each child of the pseudo-root with its `kinds` head,
+/// its lines, and its children, depth first.
+fn emit(tree: &Tree, kinds: &FxHashMap<usize, String>, text: &mut String) {
     struct Frame {
         prim: usize,
         next: usize,
-        in_material: bool,
         has_lines: bool,
     }
     let mut stack = vec![Frame {
         prim: 0,
         next: 0,
-        in_material: false,
         has_lines: true,
     }];
     while !stack.is_empty() {
@@ -504,43 +784,17 @@ pub fn write_usda(net: &Network, types: &dyn ParamTypes, out: &mut dyn Write) ->
             text.push('\n');
         }
         top.next += 1;
-        let in_material = top.in_material;
         let indent = "    ".repeat(depth);
         let prim = &tree.prims[c];
-        let kind = if prim.material.is_some() {
-            "Material"
-        } else if prim.node.is_some() {
-            "Shader"
-        } else if in_material {
-            "NodeGraph"
-        } else {
-            "Scope"
-        };
-        let _ = writeln!(text, "{indent}def {kind} \"{}\"\n{indent}{{", prim.name);
+        let _ = writeln!(text, "{indent}{} \"{}\"\n{indent}{{", kinds[&c], prim.name);
         let inner = "    ".repeat(depth + 1);
-        let mut lines = String::new();
-        if let Some(m) = prim.material {
-            lines.push_str(&material_bodies[m]);
-        }
-        if let Some(id) = prim.node {
-            lines.push_str(&bodies[&id]);
-            let shader = net[id].shader();
-            for o in outputs.get(&id).map_or(&[][..], Vec::as_slice) {
-                let t = types
-                    .output_type(shader, o)
-                    .unwrap_or_else(|| Type::scalar(BaseType::Token));
-                let _ = writeln!(lines, "{} outputs:{o}", usd_type(&t));
-            }
-        }
-        for l in lines.lines() {
+        for l in prim.lines.lines() {
             let _ = writeln!(text, "{inner}{l}");
         }
         stack.push(Frame {
             prim: c,
             next: 0,
-            in_material: in_material || prim.material.is_some(),
-            has_lines: !lines.is_empty(),
+            has_lines: !prim.lines.is_empty(),
         });
     }
-    out.write_all(text.as_bytes())
 }

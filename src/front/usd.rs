@@ -13,6 +13,9 @@
 //! `outputs:displacement`) are its terminals. Order does not matter: a connection binds to
 //! its prim wherever the prim is.
 //!
+//! The inputs read are the parameters' source: resolution's edits to them are changes
+//! ([`crate::network::ParamChange`]), which is what the USD writer's override layer writes.
+//!
 //! A `.usda` or `.usdc` root layer in which nothing composes is read from its specs
 //! directly, without composing a stage; the result is the same, and it is much faster.
 //!
@@ -22,7 +25,8 @@
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
-    Link, Material, MaterialNodes, Network, NodeId, ParamTypes, RequestKind, Terminal,
+    Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes, RequestKind,
+    Terminal,
 };
 use crate::types::{BaseType, Type, Value, saturate_f32};
 use openusd::{ar, sdf, usd};
@@ -403,22 +407,24 @@ impl Reader<'_> {
         }
     }
 
-    /// Read the inputs of shader `path` into node `id`.
-    fn read_inputs(&mut self, path: &sdf::Path, id: NodeId) {
-        let shader = self.net[id].shader().to_string();
+    /// The inputs of shader `path` (of type `shader`) as parameters read from the source,
+    /// with the connections to bind once every node exists: (parameter index, sources).
+    fn read_inputs(&mut self, path: &sdf::Path, shader: &str) -> (Vec<Param>, PendingLinks) {
+        let mut params: Vec<Param> = Vec::new();
+        let mut pending: PendingLinks = Vec::new();
         for (attr, input) in self.inputs(path) {
             let apath = attr.as_str().to_string();
             if self.time_samples(&attr) > 0 {
                 self.sampled.push(apath.clone());
             }
-            let declared = self.types.input_type(&shader, &input);
+            let declared = self.types.input_type(shader, &input);
             let targets = self.connections(&attr);
+            let mut value = None;
+            let mut links = Vec::new();
             if targets.is_empty() {
                 let usd_type = self.value_type(&attr);
                 match self.default_value(&attr) {
-                    Ok(Some(v)) => {
-                        self.set_value(id, &input, &v, declared.as_ref(), &usd_type, &apath)
-                    }
+                    Ok(Some(v)) => value = self.value(&v, declared.as_ref(), &usd_type, &apath),
                     Ok(None) => {}
                     Err(e) => self.warn(
                         "US006",
@@ -426,52 +432,64 @@ impl Reader<'_> {
                         format!("the value of `{apath}` cannot be read: {e}; left out"),
                     ),
                 }
-                continue;
-            }
-            let mut sources = Vec::new();
-            for t in &targets {
-                self.sources(t, &apath, &mut sources, 0);
-            }
-            for s in sources {
-                match s {
-                    Source::Output(prim, output) => {
-                        let up = self.nodes[&prim];
-                        self.net.connect(id, &input, up, &output);
-                    }
-                    Source::Value(v, from) => {
-                        self.set_value(id, &input, &v, declared.as_ref(), "", &from);
-                    }
-                    Source::Missing(prim, output) => {
-                        self.warn(
-                            "US002",
-                            &apath,
-                            format!(
-                                "`{apath}` is connected to `{prim}`, which is not a Shader on \
-                                 the stage; kept as a dangling connection"
-                            ),
-                        );
-                        self.net
-                            .push_link(id, &input, Link::missing(&prim, output.as_deref()));
+            } else {
+                let mut sources = Vec::new();
+                for t in &targets {
+                    self.sources(t, &apath, &mut sources, 0);
+                }
+                for s in sources {
+                    match s {
+                        Source::Output(prim, output) => links.push((prim, Some(output), false)),
+                        Source::Value(v, from) => {
+                            if let Some(v) = self.value(&v, declared.as_ref(), "", &from) {
+                                value = Some(v);
+                            }
+                        }
+                        Source::Missing(prim, output) => {
+                            self.warn(
+                                "US002",
+                                &apath,
+                                format!(
+                                    "`{apath}` is connected to `{prim}`, which is not a Shader \
+                                     on the stage; kept as a dangling connection"
+                                ),
+                            );
+                            links.push((prim, output, true));
+                        }
                     }
                 }
             }
+            if value.is_none() && links.is_empty() {
+                continue;
+            }
+            // A position as the source item: the parameter was read, so resolution's edits
+            // to it are changes ([`crate::network::ParamChange`]).
+            let index = params.len();
+            params.push(Param::from_source(
+                input,
+                value,
+                None,
+                ParamAt::Unknown,
+                Some(index as u32),
+            ));
+            if !links.is_empty() {
+                pending.push((index, links));
+            }
         }
+        (params, pending)
     }
 
-    fn set_value(
+    /// USD value `v` as a vstructc value, or a warning (US006) when its type is not read.
+    fn value(
         &mut self,
-        id: NodeId,
-        input: &str,
         v: &sdf::Value,
         declared: Option<&Type>,
         usd_type: &str,
         at: &str,
-    ) {
-        match to_value(v, declared, usd_type) {
-            Some(value) => {
-                self.net.set_param(id, input, value);
-            }
-            None => self.warn(
+    ) -> Option<Value> {
+        let value = to_value(v, declared, usd_type);
+        if value.is_none() {
+            self.warn(
                 "US006",
                 at,
                 format!(
@@ -482,8 +500,9 @@ impl Reader<'_> {
                         usd_type
                     }
                 ),
-            ),
+            );
         }
+        value
     }
 
     /// The terminals of Material `path`: `outputs:ri:*`, else the universal outputs.
@@ -546,6 +565,10 @@ impl Reader<'_> {
         )
     }
 }
+
+/// The connections of a shader's parameters, bound once every node exists: each
+/// parameter's index and its sources (prim path, output, whether the prim is not a shader).
+type PendingLinks = Vec<(usize, Vec<(String, Option<String>, bool)>)>;
 
 /// What feeds a connection.
 enum Source {
@@ -747,6 +770,56 @@ pub(crate) fn open_stage(name: &str, bytes: &[u8]) -> Result<usd::Stage, String>
         Ok(Err(e)) => Err(format!("{e:#}")),
         Err(_) => Err("the USD library failed on this input".to_string()),
     }
+}
+
+/// The types of the prims `paths` on the stage whose root layer is `bytes`, named `name` as
+/// for [`parse_usd`]: `""` for an untyped prim; a prim the stage does not hold, or a stage
+/// that does not open, gives nothing (crate-internal: the USD writer keeps these types).
+pub(crate) fn prim_types(name: &str, bytes: &[u8], paths: &[String]) -> FxHashMap<String, String> {
+    let mut out = FxHashMap::default();
+    if paths.is_empty() {
+        return out;
+    }
+    let looked_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let flat = (!(flavour(bytes) == "usda" && may_compose(bytes)))
+            .then(|| open_flat(name, bytes))
+            .flatten();
+        if let Some((data, _)) = &flat {
+            for p in paths {
+                let path = sdf::Path::from(p.as_str());
+                if data.spec_type(&path) != Some(sdf::SpecType::Prim) {
+                    continue;
+                }
+                let t = match data.try_field(&path, sdf::FieldKey::TypeName.as_str()) {
+                    Ok(Some(v)) => match v.as_ref() {
+                        sdf::Value::Token(t) => t.as_str().to_string(),
+                        _ => String::new(),
+                    },
+                    _ => String::new(),
+                };
+                out.insert(p.clone(), t);
+            }
+            return;
+        }
+        let Ok(stage) = open_stage(name, bytes) else {
+            return;
+        };
+        for p in paths {
+            let prim = stage.prim(sdf::Path::from(p.as_str()));
+            if !matches!(prim.specifier(), Ok(Some(_))) {
+                continue;
+            }
+            let t = prim.type_name().ok().flatten();
+            out.insert(
+                p.clone(),
+                t.map(|t| t.as_str().to_string()).unwrap_or_default(),
+            );
+        }
+    }));
+    if looked_up.is_err() {
+        out.clear();
+    }
+    out
 }
 
 /// The resolver that serves root layer `bytes` named `name`, and the root's identifier.
@@ -965,13 +1038,18 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
             PrimKind::NodeGraph => {}
         }
     }
+    let mut pending = Vec::with_capacity(shaders.len());
     for p in &shaders {
         let path = p.as_str().to_string();
         let shader = r.shader_id(p, &path);
         let kind = r.types.shader_kind(&shader).unwrap_or(RequestKind::Pattern);
-        let id = r.net.add_node_of_kind(&path, &shader, kind);
+        let (params, links) = r.read_inputs(p, &shader);
+        let mut node = Node::new_raw(&path, &shader, kind);
+        node.set_raw_params(params);
+        let id = r.net.insert_node(node);
         r.net.set_node_location(id, r.at(&path));
         r.nodes.insert(path.clone(), id);
+        pending.push((id, links));
         // The nearest enclosing Material owns the shader.
         let owner = p
             .strict_ancestors()
@@ -982,9 +1060,21 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
             materials[m].1.push(id);
         }
     }
-    for p in &shaders {
-        let id = r.nodes[p.as_str()];
-        r.read_inputs(p, id);
+    // Connections bind to their prims wherever they are: once every node exists.
+    for (id, links) in pending {
+        for (param, sources) in links {
+            let links = sources
+                .into_iter()
+                .map(|(prim, output, missing)| {
+                    if missing {
+                        Link::missing(&prim, output.as_deref())
+                    } else {
+                        Link::node(r.nodes[&prim], output.as_deref())
+                    }
+                })
+                .collect();
+            r.net.push_source_links(id, param, links);
+        }
     }
     for (name, ids) in materials {
         let terminals = r.terminals(&name);

@@ -250,3 +250,88 @@ fn the_output_extension_picks_the_output_format() {
     );
     assert!(!jpg.exists());
 }
+
+/// `--usd-mode over` writes an override layer that sublayers the input by a path relative to
+/// the output's folder and reads as the flattened output does; with a non-USD input, a
+/// non-usda output or standard input it is a usage error that writes nothing.
+#[test]
+fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in"), dir.path().join("out"));
+    std::fs::create_dir_all(&input).unwrap();
+    std::fs::create_dir_all(&output).unwrap();
+    let look = input.join("look.usda");
+    std::fs::copy("tests/data/usd/nodegraph.usda", &look).unwrap();
+    let (look, over, flat) = (
+        look.to_str().unwrap(),
+        output.join("over.usda"),
+        output.join("flat.usda"),
+    );
+    let out = vstructc(&[
+        "resolve",
+        look,
+        "--usd-mode",
+        "over",
+        "-o",
+        over.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&over).unwrap();
+    assert!(
+        text.contains("subLayers = [\n        @../in/look.usda@\n    ]"),
+        "{text}"
+    );
+    let out = vstructc(&["resolve", look, "-o", flat.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let json = |path: &std::path::Path| {
+        let out = vstructc(&["resolve", path.to_str().unwrap(), "--format", "json"]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        out.stdout
+    };
+    assert_eq!(json(&over), json(&flat));
+    // On standard output the path is relative to the current folder.
+    let out = vstructc(&[
+        "resolve",
+        "tests/data/usd/override.usda",
+        "--usd-mode",
+        "over",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("@tests/data/usd/override.usda@"), "{text}");
+    // Errors: exit 2, a message naming the problem, no output file.
+    let target = output.join("refused");
+    for (args, message) in [
+        (
+            vec!["examples/layered.rib", "-o", "refused.usda"],
+            "--usd-mode over needs a USD input",
+        ),
+        (
+            vec![look, "--format", "json", "-o", "refused.json"],
+            "the json output asked for is not usda",
+        ),
+        (
+            vec![look, "-o", "refused.rib"],
+            "the rib output asked for is not usda",
+        ),
+        (
+            vec![look, "--json", "-o", "refused.json"],
+            "--json is not usda",
+        ),
+        (
+            vec!["-", "-o", "refused.usda"],
+            "standard input cannot be sublayered",
+        ),
+    ] {
+        let file = args.last().unwrap().to_string();
+        let path = target.with_file_name(&file);
+        let path = path.to_str().unwrap();
+        let mut full = vec!["resolve", "--usd-mode", "over"];
+        full.extend(args[..args.len() - 1].iter().copied());
+        full.push(path);
+        let out = vstructc(&full);
+        assert_eq!(out.status.code(), Some(2), "{full:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(message), "{full:?}: {}", stderr(&out));
+        assert!(!std::path::Path::new(path).exists(), "{full:?}");
+    }
+}

@@ -206,7 +206,13 @@ fn writers_saturate_non_finite_values_built_in_code() {
     parse_json(json.as_bytes(), "w.json", &NoDefinitions, &mut d)
         .unwrap_or_else(|e| panic!("{e}\n{json}"));
     let mut usda = Vec::new();
-    vstructc::back::usd::write_usda(&net, &NoDefinitions, &mut usda).expect("writes");
+    vstructc::back::usd::write_usda(
+        &net,
+        &NoDefinitions,
+        vstructc::back::usd::UsdMode::Flatten,
+        &mut usda,
+    )
+    .expect("writes");
     let usda = String::from_utf8_lossy(&usda);
     let values = usda.replace("info:id", "");
     assert!(!values.contains("inf") && !values.contains("NaN"), "{usda}");

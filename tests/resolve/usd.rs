@@ -8,7 +8,7 @@ use crate::common;
 use std::collections::BTreeMap;
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::back::usd::write_binary;
-use vstructc::back::usd::write_usda;
+use vstructc::back::usd::{UsdMode, write_usda};
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::front::usd::{parse_usd, parse_usd_composed, reads_layer_alone};
 use vstructc::limits::Limits;
@@ -197,7 +197,7 @@ fn rib_to_usda_to_rib_keeps_every_connection_and_value() {
             let net = resolved_rib(example, &reg, conditions);
             let want = canon(&net);
             let mut usda = Vec::new();
-            write_usda(&net, &reg, &mut usda).unwrap();
+            write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
             let (back, diags) = read_usd(&usda, "out.usda", &reg);
             assert!(diags.is_empty(), "{example}: {diags:#?}");
             assert_eq!(canon(&back), want, "{example} → usda");
@@ -216,7 +216,7 @@ fn usda_to_resolved_usda_to_rib_keeps_every_connection_and_value() {
         let net = resolved_usd(usd, &reg, true);
         let want = canon(&net);
         let mut usda = Vec::new();
-        write_usda(&net, &reg, &mut usda).unwrap();
+        write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
         let text = String::from_utf8(usda.clone()).unwrap();
         let (back, diags) = read_usd(&usda, "out.usda", &reg);
         assert!(diags.is_empty(), "{usd}: {diags:#?}");
@@ -242,7 +242,7 @@ fn the_writer_types_inputs_as_declared() {
     let reg = Registry::embedded();
     let net = resolved_rib("override.rib", &reg, true);
     let mut usda = Vec::new();
-    write_usda(&net, &reg, &mut usda).unwrap();
+    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
     let text = String::from_utf8(usda).unwrap();
     for line in [
         "def Material \"plasticSurface\"",
@@ -266,7 +266,7 @@ fn the_writer_types_inputs_as_declared() {
     let m = net.add_material("m");
     net.set_terminal(m, "surface", s, None);
     let mut usda = Vec::new();
-    write_usda(&net, &reg, &mut usda).unwrap();
+    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
     let text = String::from_utf8(usda).unwrap();
     assert!(text.contains("float inputs:diffuseGain = 1\n"), "{text}");
     assert!(text.contains("int inputs:madeUp = 2\n"), "{text}");
@@ -285,7 +285,7 @@ Bxdf "PxrLayerSurface" "my surface" "reference float inputMaterial" ["mix:pxrMat
 "#;
     let net = read_rib(rib, "h.rib", &reg);
     let mut usda = Vec::new();
-    write_usda(&net, &reg, &mut usda).unwrap();
+    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
     let text = String::from_utf8(usda).unwrap();
     assert!(text.contains("def Material \"my_surface\""), "{text}");
     assert!(text.contains("def Shader \"_3_coat_a\""), "{text}");
@@ -451,7 +451,7 @@ fn layers_read_alone_match_the_composed_stage() {
         let path = common::repo_dir().join("examples").join(example);
         let net = read_rib(&std::fs::read(&path).unwrap(), example, &reg);
         let mut usda = Vec::new();
-        write_usda(&net, &reg, &mut usda).unwrap();
+        write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
         inputs.push((format!("{example}.usda"), usda));
         let mut usdc = Vec::new();
         write_binary(&net, &reg, "usdc", &mut usdc).unwrap();
@@ -570,4 +570,302 @@ def Scope "Off" (active = false) {
             "odd.usda",
         ]
     );
+}
+
+/// Materials as comparable text: name, terminals and the prim path each leads to.
+fn terminals(net: &Network) -> Vec<String> {
+    net.materials()
+        .iter()
+        .flat_map(|m| {
+            m.terminals.iter().map(move |t| {
+                let to = match t.link.upstream_node() {
+                    Some(id) => net[id].handle().to_string(),
+                    None => format!("missing {}", t.link.missing_handle().unwrap_or("")),
+                };
+                format!("{} {} {to}", m.name, t.name)
+            })
+        })
+        .collect()
+}
+
+fn handles(net: &Network) -> Vec<String> {
+    net.nodes_sorted()
+        .into_iter()
+        .map(|id| format!("{} {}", net[id].handle(), net[id].shader()))
+        .collect()
+}
+
+/// Resolves the stage at `path` and writes it flattened and as an override layer over
+/// `path` (sublayered by its absolute path, the layer written in `dir`); returns both read
+/// back, and the override layer's text.
+fn flat_and_over(
+    path: &std::path::Path,
+    reg: &Registry,
+    conditions: bool,
+    dir: &std::path::Path,
+) -> (Network, Network, String) {
+    let name = path.to_str().unwrap();
+    let (mut net, _) = read_usd(&std::fs::read(path).unwrap(), name, reg);
+    resolve(&mut net, reg, &options(conditions));
+    let mut flat = Vec::new();
+    write_usda(&net, reg, UsdMode::Flatten, &mut flat).unwrap();
+    let mut over = Vec::new();
+    write_usda(&net, reg, UsdMode::Over { sublayer: name }, &mut over).unwrap();
+    let over_path = dir.join("over.usda");
+    std::fs::write(&over_path, &over).unwrap();
+    let (flat_back, diags) = read_usd(&flat, "flat.usda", reg);
+    assert!(diags.is_empty(), "{name}: {diags:#?}");
+    let (over_back, diags) = read_usd(&over, over_path.to_str().unwrap(), reg);
+    let text = String::from_utf8(over).unwrap();
+    assert!(diags.is_empty(), "{name}: {diags:#?}\n{text}");
+    (flat_back, over_back, text)
+}
+
+/// The override layer composed with its input (through its sublayer) reads as exactly the
+/// network the flattened layer holds: same prims, values, connections and terminals, for
+/// every look of the corpus, conditions on and off.
+#[test]
+fn override_layers_compose_to_the_flattened_output() {
+    let reg = Registry::embedded();
+    let dir = tempfile::tempdir().unwrap();
+    for conditions in [true, false] {
+        for &(usd, _) in PAIRS {
+            let (flat, over, text) =
+                flat_and_over(&usd_dir().join(usd), &reg, conditions, dir.path());
+            let at = format!("{usd}, conditions {conditions}:\n{text}");
+            assert_eq!(handles(&over), handles(&flat), "{at}");
+            assert_eq!(canon(&over), canon(&flat), "{at}");
+            assert_eq!(terminals(&over), terminals(&flat), "{at}");
+            // Each look has vstruct heads to resolve: the layer overrides something.
+            assert!(text.contains("over \""), "{at}");
+            assert!(text.contains(".connect = None"), "{at}");
+        }
+    }
+}
+
+/// A look resolution does not change gives an override layer without prims; a look with
+/// untouched nodes and inputs gives a layer that does not mention them.
+#[test]
+fn override_layers_hold_only_what_resolution_changed() {
+    let reg = Registry::embedded();
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain.usda");
+    std::fs::write(
+        &plain,
+        br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        float inputs:diffuseGain = 0.5
+        color3f inputs:diffuseColor.connect = </M/T.outputs:resultRGB>
+        token outputs:out
+    }
+    def Shader "T" {
+        uniform token info:id = "PxrTexture"
+        asset inputs:filename = @wood.tex@
+        color3f outputs:resultRGB
+    }
+}
+"#,
+    )
+    .unwrap();
+    let (flat, over, text) = flat_and_over(&plain, &reg, true, dir.path());
+    assert!(!text.contains("over") && !text.contains("def"), "{text}");
+    assert!(text.contains("subLayers"), "{text}");
+    assert_eq!(canon(&over), canon(&flat));
+    // override.usda: the tint layer is untouched, and so are the surface's direct connection
+    // (it wins over the expansion) and the plastic layer's values; the surface's head is
+    // neutralised and its members connected.
+    let (flat, over, text) =
+        flat_and_over(&usd_dir().join("override.usda"), &reg, true, dir.path());
+    assert_eq!(canon(&over), canon(&flat));
+    for absent in [
+        "tint",
+        "inputs:diffuseColor",
+        "inputs:enableDiffuse",
+        "inputs:specularGain",
+        "info:id",
+        "outputs:ri:",
+        "def ",
+    ] {
+        assert!(!text.contains(absent), "{absent}:\n{text}");
+    }
+    for present in [
+        "over \"plasticSurface\"",
+        "token inputs:inputMaterial = None",
+        "token inputs:inputMaterial.connect = None",
+        "float inputs:diffuseGain.connect = </plasticSurface/plastic.outputs:pxrMaterialOut_diffuseGain>",
+        "float outputs:pxrMaterialOut_diffuseGain",
+    ] {
+        assert!(text.contains(present), "{present}:\n{text}");
+    }
+    // The layer sublayers the input by the path it was given.
+    let name = usd_dir().join("override.usda");
+    assert!(
+        text.contains(&format!("@{}@", name.to_str().unwrap())),
+        "{text}"
+    );
+}
+
+/// A resolved head whose input also holds a value (hidden by its connection) composes to
+/// nothing; a value that replaces an authored connection is written with an empty
+/// connection list, a connection that replaces an authored value as the connection alone,
+/// and a node the input does not hold in full; a network not read from USD has no override
+/// layer.
+#[test]
+fn override_layers_replace_values_connections_and_add_nodes() {
+    let reg = Registry::embedded();
+    let dir = tempfile::tempdir().unwrap();
+    let look = dir.path().join("look.usda");
+    std::fs::write(
+        &look,
+        br#"#usda 1.0
+def Material "M" {
+    token outputs:ri:surface.connect = </M/S.outputs:out>
+    def Shader "S" {
+        uniform token info:id = "PxrSurface"
+        float inputs:diffuseGain = 0.5
+        float inputs:presence = 0.5
+        color3f inputs:diffuseColor.connect = </M/T.outputs:resultRGB>
+        token inputs:inputMaterial = "a value the connection hides"
+        token inputs:inputMaterial.connect = </M/L.outputs:pxrMaterialOut>
+        token outputs:out
+    }
+    def Shader "T" {
+        uniform token info:id = "PxrTexture"
+        color3f outputs:resultRGB
+    }
+    def Shader "L" {
+        uniform token info:id = "PxrLayer"
+        int inputs:enableDiffuse = 1
+        token outputs:pxrMaterialOut
+    }
+}
+"#,
+    )
+    .unwrap();
+    let name = look.to_str().unwrap();
+    let (mut net, _) = read_usd(&std::fs::read(&look).unwrap(), name, &reg);
+    resolve(&mut net, &reg, &options(true));
+    let s = net.find("/M/S").unwrap();
+    let t = net.find("/M/T").unwrap();
+    net.clear_connections(s, "diffuseColor");
+    net.set_param(
+        s,
+        "diffuseColor",
+        vstructc::Value::Triple(vstructc::BaseType::Color, [0.1, 0.2, 0.3]),
+    );
+    net.connect(s, "presence", t, "resultR");
+    let n = net.add_node("/M/N", "PxrTexture");
+    net.set_param(n, "filename", vstructc::Value::Asset("n.tex".into()));
+    net.connect(s, "specularGain", n, "resultR");
+    let mut over = Vec::new();
+    write_usda(&net, &reg, UsdMode::Over { sublayer: name }, &mut over).unwrap();
+    let text = String::from_utf8(over.clone()).unwrap();
+    for present in [
+        "color3f inputs:diffuseColor = (0.1, 0.2, 0.3)",
+        "color3f inputs:diffuseColor.connect = None",
+        "float inputs:presence.connect = </M/T.outputs:resultR>",
+        "float inputs:diffuseGain.connect = </M/L.outputs:pxrMaterialOut_diffuseGain>",
+        "def Shader \"N\"",
+        "asset inputs:filename = @n.tex@",
+        "token inputs:inputMaterial = None",
+        "token inputs:inputMaterial.connect = None",
+    ] {
+        assert!(text.contains(present), "{present}:\n{text}");
+    }
+    assert!(!text.contains("inputs:diffuseGain = "), "{text}");
+    assert!(!text.contains("inputs:presence = "), "{text}");
+    let over_path = dir.path().join("over.usda");
+    std::fs::write(&over_path, &over).unwrap();
+    let (back, diags) = read_usd(&over, over_path.to_str().unwrap(), &reg);
+    assert!(diags.is_empty(), "{diags:#?}");
+    let mut flat = Vec::new();
+    write_usda(&net, &reg, UsdMode::Flatten, &mut flat).unwrap();
+    let (flat, _) = read_usd(&flat, "flat.usda", &reg);
+    assert_eq!(canon(&back), canon(&flat), "{text}");
+    // Not read from USD: an error, nothing written.
+    let rib = resolved_rib("override.rib", &reg, true);
+    let mut out = Vec::new();
+    let e = write_usda(&rib, &reg, UsdMode::Over { sublayer: "x.usda" }, &mut out).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+    assert!(out.is_empty());
+}
+
+/// The flattened layer of a network read from USD keeps the types the input gives the prims
+/// that are neither materials nor shaders: the NodeGraph wrapper, scopes, transforms,
+/// untyped prims.
+#[test]
+fn the_flattened_layer_keeps_the_input_prim_types() {
+    let reg = Registry::embedded();
+    let path = usd_dir().join("nodegraph.usda");
+    let bytes = std::fs::read(&path).unwrap();
+    let name = path.to_str().unwrap();
+    let (mut net, _) = read_usd(&bytes, name, &reg);
+    resolve(&mut net, &reg, &options(true));
+    let mut out = Vec::new();
+    write_usda(
+        &net,
+        &reg,
+        UsdMode::FlattenFrom {
+            name,
+            bytes: &bytes,
+        },
+        &mut out,
+    )
+    .unwrap();
+    let text = String::from_utf8(out).unwrap();
+    assert!(text.contains("def Scope \"Looks\""), "{text}");
+    assert!(text.contains("    def NodeGraph \"coat\""), "{text}");
+    let text_of = |usda: &[u8]| -> String {
+        let (mut net, _) = read_usd(usda, "t.usda", &reg);
+        resolve(&mut net, &reg, &options(true));
+        let mut out = Vec::new();
+        write_usda(
+            &net,
+            &reg,
+            UsdMode::FlattenFrom {
+                name: "t.usda",
+                bytes: usda,
+            },
+            &mut out,
+        )
+        .unwrap();
+        String::from_utf8(out).unwrap()
+    };
+    // Other types and an untyped prim, outside and inside the material.
+    let text = text_of(
+        br#"#usda 1.0
+def Xform "World" {
+    def "Looks" {
+        def Material "M" {
+            token outputs:ri:surface.connect = </World/Looks/M/G/S.outputs:out>
+            def Scope "G" {
+                def Shader "S" {
+                    uniform token info:id = "PxrSurface"
+                    token outputs:out
+                }
+            }
+        }
+    }
+}
+"#,
+    );
+    for head in [
+        "def Xform \"World\"",
+        "\n    def \"Looks\"",
+        "def Material \"M\"",
+        "def Scope \"G\"",
+        "def Shader \"S\"",
+    ] {
+        assert!(text.contains(head), "{head}:\n{text}");
+    }
+    // Without the input: the writer's own choice.
+    let (net, _) = read_usd(text.as_bytes(), "t.usda", &reg);
+    let mut out = Vec::new();
+    write_usda(&net, &reg, UsdMode::Flatten, &mut out).unwrap();
+    let plain = String::from_utf8(out).unwrap();
+    assert!(plain.contains("def Scope \"World\""), "{plain}");
+    assert!(plain.contains("def NodeGraph \"G\""), "{plain}");
 }

@@ -6,10 +6,14 @@
     /tmp/usd-core/bin/python tests/data/usd/pxr_check.py [target/debug/vstructc]
 
 The script writes a small layered look with Pixar's USD (`pxr`), resolves it with vstructc
-into `.usda`, and opens the result with Pixar's USD: every Shader keeps its `info:id`, the
-connections and input values Pixar's USD finds are exactly those of vstructc's JSON output of
-the same resolution (member connections included), and the Material's `outputs:ri:surface`
-leads to the surface.
+into `.usda`, both flattened and as an override layer (`--usd-mode over`), and opens each
+result with Pixar's USD (the override layer composed with the look it sublayers): every
+Shader keeps its `info:id`, the connections and input values Pixar's USD finds are exactly
+those of vstructc's JSON output of the same resolution (member connections included), and
+the Material's `outputs:ri:surface` leads to the surface. Then, for every look of the corpus
+beside this script (conditions on and off), Pixar's USD finds the same connections and input
+values in the override layer over the look as in the flattened output, and the flattened
+output gives every prim of the look it holds the look's prim type.
 It exits with status 0 when every check holds. Not part of `cargo test`: usd-core is a
 large download, which CI's Python step makes.
 """
@@ -115,25 +119,89 @@ def check(path, want_links, want_values):
     return problems
 
 
+def shading(path):
+    """What Pixar's USD finds on the stage at `path`: {(shader, input): the sorted shader
+    outputs that feed it or the text of its value, found as UsdShade's
+    GetValueProducingAttributes does (through node-graph interfaces)}, and {prim path:
+    type name}."""
+    stage = Usd.Stage.Open(path)
+    inputs, types = {}, {}
+    for prim in stage.Traverse():
+        types[str(prim.GetPath())] = prim.GetTypeName()
+        if prim.GetTypeName() != "Shader":
+            continue
+        name = str(prim.GetPath())
+        for inp in UsdShade.Shader(prim).GetInputs():
+            sources, values = [], []
+            for attr in inp.GetValueProducingAttributes():
+                if UsdShade.Output.IsOutput(attr):
+                    sources.append((str(attr.GetPrim().GetPath()), attr.GetBaseName()))
+                elif attr.Get() is not None:
+                    values.append(str(attr.Get()))
+            if sources or values:
+                inputs[(name, inp.GetBaseName())] = (sorted(sources), values)
+    return inputs, types
+
+def check_corpus(vstructc, tmp):
+    """Problems found comparing the override layer with the flattened output of every
+    corpus look, and the flattened output's prim types with the look's."""
+    problems = []
+    corpus = os.path.dirname(os.path.abspath(__file__))
+    looks = sorted(f for f in os.listdir(corpus)
+                   if f.endswith((".usda", ".usdc", ".usdz")) and f != "lib.usda")
+    for look in looks:
+        source = os.path.join(corpus, look)
+        for flags in [[], ["--no-conditions"]]:
+            at = "%s %s" % (look, " ".join(flags))
+            flat = os.path.join(tmp, "flat.usda")
+            over = os.path.join(tmp, "over.usda")
+            runs = [subprocess.run([vstructc, "resolve", source, "-o", out] + flags + mode,
+                                   capture_output=True, text=True)
+                    for out, mode in [(flat, []), (over, ["--usd-mode", "over"])]]
+            failed = [r.stderr for r in runs if r.returncode != 0]
+            if failed:
+                problems.append("%s: vstructc failed:\n%s" % (at, failed[0]))
+                continue
+            (flat_inputs, flat_types), (over_inputs, _) = shading(flat), shading(over)
+            look_inputs, look_types = shading(source)
+            if flat_inputs == look_inputs:
+                problems.append("%s: the output is the look: not resolved" % at)
+            for key in sorted(set(flat_inputs) | set(over_inputs)):
+                a, b = flat_inputs.get(key), over_inputs.get(key)
+                if a != b:
+                    problems.append("%s: %s.%s is %s flattened, %s in the override layer"
+                                    % (at, key[0], key[1], a, b))
+            for path, t in sorted(flat_types.items()):
+                if path in look_types and look_types[path] != t:
+                    problems.append("%s: %s is a %r, not the look's %r"
+                                    % (at, path, t, look_types[path]))
+    return problems
+
+
 def main():
     vstructc = sys.argv[1] if len(sys.argv) > 1 else "target/debug/vstructc"
     failed = False
     with tempfile.TemporaryDirectory() as tmp:
         look = os.path.join(tmp, "look.usda")
         write_look(look)
-        for ext in ["usda"]:
-            out = os.path.join(tmp, "resolved." + ext)
-            run = subprocess.run([vstructc, "resolve", look, "-o", out],
+        for mode in ["flatten", "over"]:
+            out = os.path.join(tmp, "resolved-%s.usda" % mode)
+            run = subprocess.run([vstructc, "resolve", look, "--usd-mode", mode, "-o", out],
                                  capture_output=True, text=True)
             if run.returncode != 0:
-                print("%s: vstructc failed:\n%s" % (ext, run.stderr))
+                print("%s: vstructc failed:\n%s" % (mode, run.stderr))
                 failed = True
                 continue
             problems = check(out, *expected(vstructc, look))
             for p in problems:
-                print("%s: %s" % (ext, p))
+                print("%s: %s" % (mode, p))
             failed = failed or bool(problems)
-            print("%s: %s" % (ext, "FAILED" if problems else "ok"))
+            print("%s: %s" % (mode, "FAILED" if problems else "ok"))
+        problems = check_corpus(vstructc, tmp)
+        for p in problems:
+            print("corpus: %s" % p)
+        failed = failed or bool(problems)
+        print("corpus: %s" % ("FAILED" if problems else "ok"))
     sys.exit(1 if failed else 0)
 
 

@@ -2,11 +2,11 @@
 
 use super::CommonOptions;
 use super::input::{format_parser, report_error, run_pipeline, stream_output};
-use std::path::PathBuf;
+use std::path::{Component, Path, PathBuf};
 use std::process::ExitCode;
 use vstructc::back::json::write_json_to;
 use vstructc::back::rib::write_rib;
-use vstructc::back::usd::write_usda;
+use vstructc::back::usd::{UsdMode, write_usda};
 use vstructc::front::NetFormat;
 use vstructc::pipeline::Lowering;
 
@@ -39,6 +39,87 @@ pub struct ResolveArgs {
     /// them unchanged.
     #[arg(long)]
     pub drop_unresolved: bool,
+    /// How USD output is written: `flatten`, one layer holding every material and shader at
+    /// the input's prim paths, or `over`, a small layer that sublayers the USD input file (by
+    /// a path relative to the output's folder) and overrides only what resolution changed.
+    #[arg(long, value_enum, default_value_t = UsdModeArg::Flatten)]
+    pub usd_mode: UsdModeArg,
+}
+
+/// The values of `--usd-mode`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum UsdModeArg {
+    /// A flattened layer of every material and shader.
+    #[default]
+    Flatten,
+    /// An override layer over the input: only what resolution changed.
+    Over,
+}
+
+/// Why `--usd-mode over` cannot be honoured before the input is read, if it cannot: it
+/// writes usda only, and it sublayers an input file.
+fn check_over(args: &ResolveArgs, format: Option<NetFormat>) -> Result<(), String> {
+    if args.usd_mode != UsdModeArg::Over {
+        return Ok(());
+    }
+    if args.json || format.is_some_and(|f| f != NetFormat::Usd) {
+        let asked = if args.json {
+            "--json".to_string()
+        } else {
+            format!(
+                "the {} output asked for",
+                format_name(format.unwrap_or(NetFormat::Rib))
+            )
+        };
+        return Err(format!(
+            "--usd-mode over writes a usda override layer; {asked} is not usda"
+        ));
+    }
+    if args.input.as_os_str() == "-" {
+        return Err(
+            "--usd-mode over sublayers the input file; standard input cannot be sublayered".into(),
+        );
+    }
+    Ok(())
+}
+
+/// The name `--format` gives format `f`.
+fn format_name(f: NetFormat) -> &'static str {
+    match f {
+        NetFormat::Rib => "rib",
+        NetFormat::Json => "json",
+        NetFormat::Usd => "usda",
+    }
+}
+
+/// The asset path by which a layer written to `output` (standard output: the current
+/// folder) refers to `input`: relative to the output's folder, `/`-separated; absolute when
+/// no relative path exists.
+fn sublayer_path(input: &Path, output: Option<&Path>) -> String {
+    let absolute = |p: &Path| {
+        p.canonicalize()
+            .or_else(|_| std::path::absolute(p))
+            .unwrap_or_else(|_| p.to_path_buf())
+    };
+    let folder = match output.filter(|o| o.as_os_str() != "-") {
+        Some(o) => match o.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        },
+        None => PathBuf::from("."),
+    };
+    let (from, to) = (absolute(&folder), absolute(input));
+    let text = |c: Component<'_>| c.as_os_str().to_string_lossy().into_owned();
+    let (f, t): (Vec<Component<'_>>, Vec<Component<'_>>) =
+        (from.components().collect(), to.components().collect());
+    // Different roots (another drive): no relative path.
+    if f.first() != t.first() {
+        return to.to_string_lossy().replace('\\', "/");
+    }
+    let common = f.iter().zip(&t).take_while(|(a, b)| a == b).count();
+    let mut parts: Vec<String> = vec!["..".to_string(); f.len() - common];
+    parts.extend(t[common..].iter().map(|&c| text(c)));
+    parts.join("/")
 }
 
 /// The output format `--format` and the extension of `-o` ask for (`None`: the input's), or
@@ -69,16 +150,11 @@ pub fn output_format(
         }
         _ => None,
     };
-    let name = |f: NetFormat| match f {
-        NetFormat::Rib => "rib",
-        NetFormat::Json => "json",
-        NetFormat::Usd => "usda",
-    };
     match (format, by_ext) {
         (Some(f), Some(e)) if f != e => Err(format!(
             "--format {} conflicts with the output file's extension `.{}`",
-            name(f),
-            ext.as_deref().unwrap_or(name(e))
+            format_name(f),
+            ext.as_deref().unwrap_or(format_name(e))
         )),
         (Some(f), _) => Ok(Some(f)),
         (None, e) => Ok(e),
@@ -104,6 +180,10 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if let Err(msg) = check_over(args, format) {
+        eprintln_quiet!("error: {msg}");
+        return ExitCode::from(2);
+    }
     let ran = match run_pipeline(
         &args.input,
         args.no_conditions,
@@ -115,15 +195,48 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
         Ok(ran) => ran,
         Err(status) => return status,
     };
+    // The override layer sublayers the input: found before the run's diagnostics are shown.
+    let over = args.usd_mode == UsdModeArg::Over;
+    if over && ran.loaded.format != NetFormat::Usd {
+        eprintln_quiet!(
+            "error: --usd-mode over needs a USD input, which the override layer sublayers; \
+             `{}` is {}",
+            ran.loaded.name,
+            match ran.loaded.format {
+                NetFormat::Rib => "RIB",
+                NetFormat::Json => "JSON",
+                NetFormat::Usd => "USD",
+            }
+        );
+        std::mem::forget(ran);
+        return ExitCode::from(2);
+    }
     let status = super::report(&ran.diags, common);
     if status != ExitCode::SUCCESS {
         return status;
     }
     let (loaded, network) = (&ran.loaded, &ran.output.network);
     let output = args.output.as_deref();
+    let sublayer = if over {
+        sublayer_path(&args.input, output)
+    } else {
+        String::new()
+    };
+    let mode = match (over, loaded.format) {
+        (true, _) => UsdMode::Over {
+            sublayer: &sublayer,
+        },
+        (false, NetFormat::Usd) => UsdMode::FlattenFrom {
+            name: &loaded.name,
+            bytes: &loaded.bytes,
+        },
+        (false, _) => UsdMode::Flatten,
+    };
     let written = match format.unwrap_or(loaded.format) {
         NetFormat::Json => stream_output(output, |out| write_json_to(network, out)),
-        NetFormat::Usd => stream_output(output, |out| write_usda(network, &ran.registry, out)),
+        NetFormat::Usd => {
+            stream_output(output, |out| write_usda(network, &ran.registry, mode, out))
+        }
         NetFormat::Rib => {
             // Streamed: the untouched parts of a large scene are copied from the source
             // straight into the output file.
