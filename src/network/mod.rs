@@ -628,9 +628,9 @@ pub struct Node {
     /// Indices into `params`, hashed by parameter name, once the node has more than
     /// [`SMALL_NODE`] parameters (fewer are scanned). Resolution looks parameters up by
     /// name several times per member; nodes such as PxrLayerMixer have hundreds of them.
-    /// (position in `params`, the name's hash folded to 32 bits): keeping the hash lets the
-    /// table grow without hashing every name again.
-    by_name: HashTable<(u32, u32)>,
+    /// Positions only (4 bytes an entry): the interned names keep their hashes, so the table
+    /// grows without hashing a name again.
+    by_name: HashTable<u32>,
     location: Option<Location>,
     source: Option<NodeSource>,
     dirty: bool,
@@ -756,8 +756,9 @@ impl Node {
         let params = &self.params;
         let mut by_name = HashTable::with_capacity(params.len() + additional);
         for (i, p) in params.iter().enumerate() {
-            let hash = p.name.name_hash();
-            by_name.insert_unique(hash, (i as u32, hash as u32), |&(_, h)| unfold(h));
+            by_name.insert_unique(p.name.name_hash(), i as u32, |&j| {
+                params[j as usize].name.name_hash()
+            });
         }
         self.by_name = by_name;
     }
@@ -874,8 +875,8 @@ impl Node {
             return params.iter().position(|p| &*p.name == name);
         }
         self.by_name
-            .find(hash, |&(i, _)| &*params[i as usize].name == name)
-            .map(|&(i, _)| i as usize)
+            .find(hash, |&i| &*params[i as usize].name == name)
+            .map(|&i| i as usize)
     }
 
     fn index_or_insert(&mut self, name: &str) -> usize {
@@ -892,8 +893,10 @@ impl Node {
         let was_indexed = self.indexed();
         self.params.push(Param::empty(name));
         if was_indexed {
-            self.by_name
-                .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
+            let params = &self.params;
+            self.by_name.insert_unique(hash, idx as u32, |&j| {
+                params[j as usize].name.name_hash()
+            });
         } else if self.indexed() {
             self.build_index(0);
         }
@@ -1283,7 +1286,9 @@ impl Network {
             n.params.reserve_exact(additional.max(n.params.len() / 4));
         }
         if n.indexed() {
-            n.by_name.reserve(additional, |&(_, h)| unfold(h));
+            let params = &n.params;
+            n.by_name
+                .reserve(additional, |&j| params[j as usize].name.name_hash());
         } else if n.params.len() + additional > SMALL_NODE {
             n.build_index(additional);
         }
