@@ -368,11 +368,31 @@ struct ParamSource {
     decl: Option<Arc<Decl>>,
     /// The index into [`NodeSource::items`]; [`NO_ORIGIN`] for none.
     origin: u32,
-    at: ParamAt,
-    /// The value was set or removed since the parameter was read.
-    value_touched: bool,
-    /// The connections were set or changed since the parameter was read.
-    links_touched: bool,
+    /// [`ParamAt`] as a kind ([`AT_UNKNOWN`], [`AT_LINE_COLUMN`], [`AT_JSON`]) in `flags`
+    /// and its line and column here: 24 bytes in all, for the hundreds of thousands of
+    /// parameters a large scene reads.
+    line: u32,
+    column: u32,
+    /// The `ParamAt` kind, [`VALUE_TOUCHED`] (the value was set or removed since the
+    /// parameter was read) and [`LINKS_TOUCHED`] (the connections were set or changed).
+    flags: u8,
+}
+
+const AT_UNKNOWN: u8 = 0;
+const AT_LINE_COLUMN: u8 = 1;
+const AT_JSON: u8 = 2;
+const AT_MASK: u8 = 3;
+const VALUE_TOUCHED: u8 = 4;
+const LINKS_TOUCHED: u8 = 8;
+
+impl ParamSource {
+    fn at(&self) -> ParamAt {
+        match self.flags & AT_MASK {
+            AT_LINE_COLUMN => ParamAt::LineColumn(self.line, self.column),
+            AT_JSON => ParamAt::JsonParameter,
+            _ => ParamAt::Unknown,
+        }
+    }
 }
 
 /// [`ParamSource::origin`] of a parameter not read from a RIB request.
@@ -433,12 +453,17 @@ impl Param {
             value,
             links: Links::new(),
             source: (decl.is_some() || at != ParamAt::Unknown || origin.is_some()).then(|| {
+                let (kind, line, column) = match at {
+                    ParamAt::Unknown => (AT_UNKNOWN, 0, 0),
+                    ParamAt::LineColumn(line, column) => (AT_LINE_COLUMN, line, column),
+                    ParamAt::JsonParameter => (AT_JSON, 0, 0),
+                };
                 Box::new(ParamSource {
                     decl,
                     origin: origin.unwrap_or(NO_ORIGIN),
-                    at,
-                    value_touched: false,
-                    links_touched: false,
+                    line,
+                    column,
+                    flags: kind,
                 })
             }),
         }
@@ -456,14 +481,14 @@ impl Param {
     /// source).
     fn touch_value(&mut self) {
         if let Some(s) = &mut self.source {
-            s.value_touched = true;
+            s.flags |= VALUE_TOUCHED;
         }
     }
 
     /// Record that the connections changed (see [`Param::touch_value`]).
     fn touch_links(&mut self) {
         if let Some(s) = &mut self.source {
-            s.links_touched = true;
+            s.flags |= LINKS_TOUCHED;
         }
     }
 
@@ -506,7 +531,7 @@ impl Param {
     /// The 1-based line and column of the parameter's declaration in its node's file, if it
     /// was read from RIB ([`Node::param_location`] gives the whole location).
     pub fn line_column(&self) -> Option<(u32, u32)> {
-        match self.source.as_ref()?.at {
+        match self.source.as_ref()?.at() {
             ParamAt::LineColumn(line, column) => Some((line, column)),
             ParamAt::Unknown | ParamAt::JsonParameter => None,
         }
@@ -536,10 +561,9 @@ impl Param {
         if self.source_item().is_none() {
             return ParamChange::Added;
         }
-        let (value_touched, links_touched) = self
-            .source
-            .as_ref()
-            .map_or((false, false), |s| (s.value_touched, s.links_touched));
+        let (value_touched, links_touched) = self.source.as_ref().map_or((false, false), |s| {
+            (s.flags & VALUE_TOUCHED != 0, s.flags & LINKS_TOUCHED != 0)
+        });
         if links_touched && !self.links.is_empty() {
             ParamChange::Connected
         } else if !self.links.is_empty() {
@@ -821,7 +845,7 @@ impl Node {
     /// ```
     pub fn param_location(&self, p: &Param) -> Option<Location> {
         let node = self.location.as_ref()?;
-        match p.source.as_ref()?.at {
+        match p.source.as_ref()?.at() {
             ParamAt::Unknown => None,
             ParamAt::LineColumn(line, column) => {
                 Some(Location::new(node.file.clone(), line, column))
@@ -894,9 +918,8 @@ impl Node {
         self.params.push(Param::empty(name));
         if was_indexed {
             let params = &self.params;
-            self.by_name.insert_unique(hash, idx as u32, |&j| {
-                params[j as usize].name.name_hash()
-            });
+            self.by_name
+                .insert_unique(hash, idx as u32, |&j| params[j as usize].name.name_hash());
         } else if self.indexed() {
             self.build_index(0);
         }
