@@ -306,13 +306,13 @@ impl Stream {
         names: &HashMap<NodeId, String>,
         level: usize,
     ) {
-        let node = match &link.upstream {
+        let node = match link.upstream() {
             Upstream::Node(id) => names
-                .get(id)
+                .get(&id)
                 .map(String::as_str)
-                .or_else(|| net.get(*id).map(|n| n.handle()))
+                .or_else(|| net.get(id).map(|n| n.handle()))
                 .unwrap_or(""),
-            Upstream::Missing(h) => &**h,
+            Upstream::Missing(h) => h,
         };
         let mut first = true;
         self.entry(&mut first, level, "upstreamNode");

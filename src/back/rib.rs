@@ -493,9 +493,9 @@ impl Writer<'_> {
     fn push_links(&self, text: &mut Vec<u8>, links: &[Link]) {
         text.push(b'[');
         for (i, l) in links.iter().enumerate() {
-            let handle = match &l.upstream {
-                Upstream::Node(id) => self.net.get(*id).map_or("", |n| n.handle()),
-                Upstream::Missing(h) => &**h,
+            let handle = match l.upstream() {
+                Upstream::Node(id) => self.net.get(id).map_or("", |n| n.handle()),
+                Upstream::Missing(h) => h,
             };
             if i > 0 {
                 text.push(b' ');

@@ -32,7 +32,7 @@ use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Links, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
-    ParamAt, ParamTypes, RequestKind, SourceParam, Terminal, Upstream,
+    ParamAt, ParamTypes, RequestKind, SourceParam, Sym, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use hashbrown::HashTable;
@@ -462,13 +462,13 @@ struct Assembler<'a, 't> {
     values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
-    /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), shared by
-    /// every connection to the same output name.
-    outputs: FxHashMap<Box<str>, Arc<str>>,
+    /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
+    /// a look-up here takes no lock.
+    outputs: FxHashMap<Box<str>, Sym>,
 }
 
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
-type SharedDecl = (Arc<str>, Arc<Decl>);
+type SharedDecl = (Sym, Arc<Decl>);
 
 /// An entry of [`Assembler::decls`]: the address of the shared shader id it belongs to (alive
 /// until the file is read), the decl token as written, and what was read from it.
@@ -853,14 +853,14 @@ impl<'a> Assembler<'a, '_> {
         ))
     }
 
-    /// The shared copy of output name `name` (see [`Assembler::outputs`]).
-    fn output_name(&mut self, name: &str) -> Arc<str> {
-        if let Some(shared) = self.outputs.get(name) {
-            return shared.clone();
+    /// The interned output name `name` (see [`Assembler::outputs`]).
+    fn output_name(&mut self, name: &str) -> Sym {
+        if let Some(&shared) = self.outputs.get(name) {
+            return shared;
         }
-        let shared: Arc<str> = Arc::from(name);
+        let shared = Sym::new(name);
         if self.outputs.len() < MAX_SHARED_VALUES {
-            self.outputs.insert(Box::from(name), shared.clone());
+            self.outputs.insert(Box::from(name), shared);
         }
         shared
     }
@@ -874,11 +874,11 @@ impl<'a> Assembler<'a, '_> {
         decl_tok: &Token,
         location: &At<'_>,
         diags: &mut Diagnostics,
-    ) -> Result<(Arc<str>, Arc<Decl>, bool), Error> {
+    ) -> Result<(Sym, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
         let owner = shared_shader.as_ptr() as usize;
         if let Some((name, decl)) = recall(&self.decls, owner, raw) {
-            return Ok((name.clone(), decl.clone(), true));
+            return Ok((*name, decl.clone(), true));
         }
         let shader: &str = shared_shader;
         let before = diags.len();
@@ -888,7 +888,7 @@ impl<'a> Assembler<'a, '_> {
                 .at(location.loc())
                 .into());
         };
-        let name: Arc<str> = Arc::from(words.name);
+        let name = Sym::new(words.name);
         if !words.extra.is_empty() {
             diags.push(
                 Diagnostic::warning(
@@ -918,7 +918,7 @@ impl<'a> Assembler<'a, '_> {
         if diags.len() != before {
             return Ok((name, decl, false));
         }
-        remember(&mut self.decls, owner, raw, (name.clone(), decl.clone()));
+        remember(&mut self.decls, owner, raw, (name, decl.clone()));
         Ok((name, decl, true))
     }
 
@@ -1081,7 +1081,7 @@ impl<'a> Assembler<'a, '_> {
                 .at(location.loc()),
             );
         }
-        let mut links = Links::with_capacity(toks.len());
+        let mut links = Vec::with_capacity(toks.len());
         for t in toks {
             let s = decode_str(self.src, t);
             let (handle, output) = match s.rfind(':') {
@@ -1098,10 +1098,7 @@ impl<'a> Assembler<'a, '_> {
             };
             let output = output.map(|o| self.output_name(o));
             match self.net.find(handle) {
-                Some(id) => links.push(Link {
-                    upstream: Upstream::Node(id),
-                    output,
-                }),
+                Some(id) => links.push(Link::node_sym(id, output)),
                 None => {
                     diags.push(
                         Diagnostic::warning(
@@ -1110,14 +1107,11 @@ impl<'a> Assembler<'a, '_> {
                         )
                         .at(location.loc()),
                     );
-                    links.push(Link {
-                        upstream: Upstream::Missing(Box::from(handle)),
-                        output,
-                    });
+                    links.push(Link::missing_sym(handle, output));
                 }
             }
         }
-        Ok(links)
+        Ok(Links::from_vec(links))
     }
 }
 
@@ -1126,13 +1120,12 @@ impl<'a> Assembler<'a, '_> {
 fn duplicates(read: &[Param]) -> (Flags, Flags) {
     let mut repeated: Flags = smallvec::smallvec![false; read.len()];
     let mut shadowed: Flags = smallvec::smallvec![false; read.len()];
-    // Names of repeated declarations are one shared string, so most comparisons are of two
-    // pointers.
-    let same = |a: &str, b: &str| std::ptr::eq(a, b) || a == b;
+    // Names are interned: comparing two is comparing two pointers.
+    let same = |a: &Param, b: &Param| a.name_sym() == b.name_sym();
     if read.len() <= SMALL_REQUEST {
         // Each occurrence against the nearest earlier one with its name.
         for j in 1..read.len() {
-            if let Some(i) = (0..j).rev().find(|&i| same(read[i].name(), read[j].name())) {
+            if let Some(i) = (0..j).rev().find(|&i| same(&read[i], &read[j])) {
                 repeated[j] = true;
                 shadowed[i] = true;
             }
@@ -1142,7 +1135,7 @@ fn duplicates(read: &[Param]) -> (Flags, Flags) {
     let mut order: Vec<usize> = (0..read.len()).collect();
     order.sort_by(|&a, &b| read[a].name().cmp(read[b].name()).then(a.cmp(&b)));
     for w in order.windows(2) {
-        if same(read[w[0]].name(), read[w[1]].name()) {
+        if same(&read[w[0]], &read[w[1]]) {
             repeated[w[1]] = true;
             shadowed[w[0]] = true;
         }

@@ -41,12 +41,19 @@
 //! ```
 
 mod limits;
+mod links;
 mod param_types;
+mod sym;
 #[cfg(feature = "testkit")]
 pub mod testgen;
 
+pub(crate) use links::Links;
 pub(crate) use param_types::Memo;
 pub use param_types::{NoDefinitions, ParamTypes};
+#[cfg(not(feature = "testkit"))]
+pub(crate) use sym::Sym;
+#[cfg(feature = "testkit")]
+pub use sym::Sym;
 
 use crate::diag::Location;
 use crate::types::{Type, Value};
@@ -179,27 +186,44 @@ pub struct Decl {
     pub inline_type: bool,
 }
 
-/// The upstream end of a connection.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum Upstream {
+/// The upstream end of a connection (see [`Link::upstream`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Upstream<'a> {
     /// An existing node of the network.
     Node(NodeId),
     /// A reference to a handle that names no node (RIB: not defined before the referencing
     /// request, RB018; JSON: not in the material, JS010). Kept so the writers reproduce it and
-    /// resolution can report it (VS010). Boxed rather than a `String`, so that a link is no
-    /// larger than the shared output name and a node index.
-    Missing(Box<str>),
+    /// resolution can report it (VS010).
+    Missing(&'a str),
 }
 
 /// One connection of an input: upstream node (or missing handle) and output name.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct Link {
-    /// The upstream node or missing handle.
-    pub upstream: Upstream,
-    /// The upstream output; `None` for a whole-node reference (RIB string without `:`,
-    /// JSON `upstreamOutputName: ""`). Shared with the graph edge (and, during resolution,
-    /// with the definition's tables), so a connection does not copy the name.
-    pub output: Option<Arc<str>>,
+///
+/// Sixteen bytes: a resolved scene has millions of member connections. A bound link holds
+/// the node index and the interned output name; a dangling one (rare) a box with the handle.
+#[derive(Clone, PartialEq, Eq, Hash)]
+pub struct Link(LinkRepr);
+
+#[derive(Clone, PartialEq, Eq, Hash)]
+enum LinkRepr {
+    Node(NodeId, Option<Sym>),
+    Missing(Box<MissingLink>),
+}
+
+/// A dangling connection's handle and output.
+#[derive(Clone, PartialEq, Eq, Hash)]
+struct MissingLink {
+    handle: Box<str>,
+    output: Option<Sym>,
+}
+
+impl fmt::Debug for Link {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Link")
+            .field("upstream", &self.upstream())
+            .field("output", &self.output())
+            .finish()
+    }
 }
 
 impl Link {
@@ -211,21 +235,15 @@ impl Link {
     /// let a = net.add_node("a", "PxrFractal");
     /// let link = Link::node(a, Some("resultF"));
     /// assert_eq!(link.upstream_node(), Some(a));
-    /// assert_eq!(link.output.as_deref(), Some("resultF"));
+    /// assert_eq!(link.output(), Some("resultF"));
     /// ```
     pub fn node(node: NodeId, output: Option<&str>) -> Link {
-        Link {
-            upstream: Upstream::Node(node),
-            output: output.map(Arc::from),
-        }
+        Link(LinkRepr::Node(node, output.map(Sym::new)))
     }
 
-    /// A connection to output `output` of node `node`, sharing the name.
-    pub fn node_shared(node: NodeId, output: Arc<str>) -> Link {
-        Link {
-            upstream: Upstream::Node(node),
-            output: Some(output),
-        }
+    /// A connection to output `output` of node `node`, with the name interned already.
+    pub(crate) fn node_sym(node: NodeId, output: Option<Sym>) -> Link {
+        Link(LinkRepr::Node(node, output))
     }
 
     /// A dangling connection to a handle that names no node.
@@ -237,31 +255,57 @@ impl Link {
     /// assert_eq!(link.upstream_node(), None);
     /// ```
     pub fn missing(handle: &str, output: Option<&str>) -> Link {
-        Link {
-            upstream: Upstream::Missing(Box::from(handle)),
-            output: output.map(Arc::from),
+        Link::missing_sym(handle, output.map(Sym::new))
+    }
+
+    /// [`Link::missing`] with the output name interned already.
+    pub(crate) fn missing_sym(handle: &str, output: Option<Sym>) -> Link {
+        Link(LinkRepr::Missing(Box::new(MissingLink {
+            handle: Box::from(handle),
+            output,
+        })))
+    }
+
+    /// The upstream node or missing handle.
+    ///
+    /// ```
+    /// use vstructc::network::{Link, Upstream};
+    /// assert_eq!(Link::missing("Ghost", None).upstream(), Upstream::Missing("Ghost"));
+    /// ```
+    pub fn upstream(&self) -> Upstream<'_> {
+        match &self.0 {
+            LinkRepr::Node(id, _) => Upstream::Node(*id),
+            LinkRepr::Missing(m) => Upstream::Missing(&m.handle),
         }
     }
 
     /// The upstream node, if the link is bound.
     pub fn upstream_node(&self) -> Option<NodeId> {
-        match self.upstream {
-            Upstream::Node(id) => Some(id),
-            Upstream::Missing(_) => None,
+        match self.0 {
+            LinkRepr::Node(id, _) => Some(id),
+            LinkRepr::Missing(_) => None,
         }
     }
 
     /// The missing handle, if the link is dangling.
     pub fn missing_handle(&self) -> Option<&str> {
-        match &self.upstream {
-            Upstream::Missing(h) => Some(h),
-            Upstream::Node(_) => None,
+        match &self.0 {
+            LinkRepr::Missing(m) => Some(&m.handle),
+            LinkRepr::Node(..) => None,
         }
     }
 
     /// The output name (`None`: whole-node reference).
     pub fn output(&self) -> Option<&str> {
-        self.output.as_deref()
+        self.output_sym().map(Sym::as_str)
+    }
+
+    /// The interned output name.
+    pub(crate) fn output_sym(&self) -> Option<Sym> {
+        match &self.0 {
+            LinkRepr::Node(_, output) => *output,
+            LinkRepr::Missing(m) => m.output,
+        }
     }
 }
 
@@ -295,19 +339,17 @@ pub enum ParamChange {
     Added,
 }
 
-/// A parameter's connections, in order.
-pub(crate) type Links = SmallVec<[Link; 1]>;
-
 /// One parameter of a node: authored value, connections, declaration and change state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Param {
-    name: Arc<str>,
+    /// Interned: a resolved scene has millions of parameters and a few thousand names.
+    name: Sym,
     /// Boxed, like `source`: most members of a resolved scene are connections, not values.
     /// Shared: resolution writes the same `set` value into many members (one per expansion
     /// with the same decision), and they share one block.
     value: Option<Arc<Value>>,
-    /// Inline for the usual single connection: a resolved scene has millions of member
-    /// connections, and a heap block each was most of their cost. The graph edges that mirror
+    /// Inline for the usual single connection (sixteen bytes): a resolved scene has millions
+    /// of member connections, and a heap block each was most of their cost. The graph edges that mirror
     /// them are found through the downstream node's incoming edges when a link changes
     /// (removing a petgraph edge walks those anyway), so a parameter keeps no edge ids.
     links: Links,
@@ -326,11 +368,31 @@ struct ParamSource {
     decl: Option<Arc<Decl>>,
     /// The index into [`NodeSource::items`]; [`NO_ORIGIN`] for none.
     origin: u32,
-    at: ParamAt,
-    /// The value was set or removed since the parameter was read.
-    value_touched: bool,
-    /// The connections were set or changed since the parameter was read.
-    links_touched: bool,
+    /// [`ParamAt`] as a kind ([`AT_UNKNOWN`], [`AT_LINE_COLUMN`], [`AT_JSON`]) in `flags`
+    /// and its line and column here: 24 bytes in all, for the hundreds of thousands of
+    /// parameters a large scene reads.
+    line: u32,
+    column: u32,
+    /// The `ParamAt` kind, [`VALUE_TOUCHED`] (the value was set or removed since the
+    /// parameter was read) and [`LINKS_TOUCHED`] (the connections were set or changed).
+    flags: u8,
+}
+
+const AT_UNKNOWN: u8 = 0;
+const AT_LINE_COLUMN: u8 = 1;
+const AT_JSON: u8 = 2;
+const AT_MASK: u8 = 3;
+const VALUE_TOUCHED: u8 = 4;
+const LINKS_TOUCHED: u8 = 8;
+
+impl ParamSource {
+    fn at(&self) -> ParamAt {
+        match self.flags & AT_MASK {
+            AT_LINE_COLUMN => ParamAt::LineColumn(self.line, self.column),
+            AT_JSON => ParamAt::JsonParameter,
+            _ => ParamAt::Unknown,
+        }
+    }
 }
 
 /// [`ParamSource::origin`] of a parameter not read from a RIB request.
@@ -350,7 +412,7 @@ pub(crate) enum ParamAt {
 }
 
 impl Param {
-    fn empty(name: Arc<str>) -> Param {
+    fn empty(name: Sym) -> Param {
         Param {
             name,
             value: None,
@@ -369,7 +431,7 @@ impl Param {
         origin: Option<u32>,
     ) -> Param {
         Param::from_shared(
-            Arc::from(name),
+            Sym::new(&name),
             value.map(Arc::new),
             decl.map(Arc::new),
             at,
@@ -380,7 +442,7 @@ impl Param {
     /// [`Param::from_source`] with a name, value and declaration that may be shared with
     /// other parameters (the RIB reader shares repeated ones).
     pub(crate) fn from_shared(
-        name: Arc<str>,
+        name: Sym,
         value: Option<Arc<Value>>,
         decl: Option<Arc<Decl>>,
         at: ParamAt,
@@ -391,12 +453,17 @@ impl Param {
             value,
             links: Links::new(),
             source: (decl.is_some() || at != ParamAt::Unknown || origin.is_some()).then(|| {
+                let (kind, line, column) = match at {
+                    ParamAt::Unknown => (AT_UNKNOWN, 0, 0),
+                    ParamAt::LineColumn(line, column) => (AT_LINE_COLUMN, line, column),
+                    ParamAt::JsonParameter => (AT_JSON, 0, 0),
+                };
                 Box::new(ParamSource {
                     decl,
                     origin: origin.unwrap_or(NO_ORIGIN),
-                    at,
-                    value_touched: false,
-                    links_touched: false,
+                    line,
+                    column,
+                    flags: kind,
                 })
             }),
         }
@@ -414,20 +481,25 @@ impl Param {
     /// source).
     fn touch_value(&mut self) {
         if let Some(s) = &mut self.source {
-            s.value_touched = true;
+            s.flags |= VALUE_TOUCHED;
         }
     }
 
     /// Record that the connections changed (see [`Param::touch_value`]).
     fn touch_links(&mut self) {
         if let Some(s) = &mut self.source {
-            s.links_touched = true;
+            s.flags |= LINKS_TOUCHED;
         }
     }
 
     /// The parameter name.
     pub fn name(&self) -> &str {
-        &self.name
+        self.name.as_str()
+    }
+
+    /// The interned name.
+    pub(crate) fn name_sym(&self) -> Sym {
+        self.name
     }
 
     /// The authored value, if any. A connected parameter may still hold a value (a `connect`
@@ -459,7 +531,7 @@ impl Param {
     /// The 1-based line and column of the parameter's declaration in its node's file, if it
     /// was read from RIB ([`Node::param_location`] gives the whole location).
     pub fn line_column(&self) -> Option<(u32, u32)> {
-        match self.source.as_ref()?.at {
+        match self.source.as_ref()?.at() {
             ParamAt::LineColumn(line, column) => Some((line, column)),
             ParamAt::Unknown | ParamAt::JsonParameter => None,
         }
@@ -489,10 +561,9 @@ impl Param {
         if self.source_item().is_none() {
             return ParamChange::Added;
         }
-        let (value_touched, links_touched) = self
-            .source
-            .as_ref()
-            .map_or((false, false), |s| (s.value_touched, s.links_touched));
+        let (value_touched, links_touched) = self.source.as_ref().map_or((false, false), |s| {
+            (s.flags & VALUE_TOUCHED != 0, s.flags & LINKS_TOUCHED != 0)
+        });
         if links_touched && !self.links.is_empty() {
             ParamChange::Connected
         } else if !self.links.is_empty() {
@@ -581,9 +652,9 @@ pub struct Node {
     /// Indices into `params`, hashed by parameter name, once the node has more than
     /// [`SMALL_NODE`] parameters (fewer are scanned). Resolution looks parameters up by
     /// name several times per member; nodes such as PxrLayerMixer have hundreds of them.
-    /// (position in `params`, the name's hash folded to 32 bits): keeping the hash lets the
-    /// table grow without hashing every name again.
-    by_name: HashTable<(u32, u32)>,
+    /// Positions only (4 bytes an entry): the interned names keep their hashes, so the table
+    /// grows without hashing a name again.
+    by_name: HashTable<u32>,
     location: Option<Location>,
     source: Option<NodeSource>,
     dirty: bool,
@@ -709,8 +780,9 @@ impl Node {
         let params = &self.params;
         let mut by_name = HashTable::with_capacity(params.len() + additional);
         for (i, p) in params.iter().enumerate() {
-            let hash = name_hash(&p.name);
-            by_name.insert_unique(hash, (i as u32, hash as u32), |&(_, h)| unfold(h));
+            by_name.insert_unique(p.name.name_hash(), i as u32, |&j| {
+                params[j as usize].name.name_hash()
+            });
         }
         self.by_name = by_name;
     }
@@ -773,7 +845,7 @@ impl Node {
     /// ```
     pub fn param_location(&self, p: &Param) -> Option<Location> {
         let node = self.location.as_ref()?;
-        match p.source.as_ref()?.at {
+        match p.source.as_ref()?.at() {
             ParamAt::Unknown => None,
             ParamAt::LineColumn(line, column) => {
                 Some(Location::new(node.file.clone(), line, column))
@@ -827,31 +899,27 @@ impl Node {
             return params.iter().position(|p| &*p.name == name);
         }
         self.by_name
-            .find(hash, |&(i, _)| &*params[i as usize].name == name)
-            .map(|&(i, _)| i as usize)
+            .find(hash, |&i| &*params[i as usize].name == name)
+            .map(|&i| i as usize)
     }
 
     fn index_or_insert(&mut self, name: &str) -> usize {
         match self.index_of(name) {
             Some(i) => i,
-            None => self.insert_param(Arc::from(name)),
+            None => self.insert_param(Sym::new(name)),
         }
     }
 
-    /// [`Self::index_or_insert`] for a name the caller already shares.
-    fn insert_param(&mut self, name: Arc<str>) -> usize {
-        let hash = name_hash(&name);
-        self.insert_param_hashed(name, hash)
-    }
-
-    /// [`Self::insert_param`] with the name's [`name_hash`] already known.
-    fn insert_param_hashed(&mut self, name: Arc<str>, hash: u64) -> usize {
+    /// Appends the parameter `name`, which the node does not have.
+    fn insert_param(&mut self, name: Sym) -> usize {
         let idx = self.params.len();
+        let hash = name.name_hash();
         let was_indexed = self.indexed();
         self.params.push(Param::empty(name));
         if was_indexed {
+            let params = &self.params;
             self.by_name
-                .insert_unique(hash, (idx as u32, hash as u32), |&(_, h)| unfold(h));
+                .insert_unique(hash, idx as u32, |&j| params[j as usize].name.name_hash());
         } else if self.indexed() {
             self.build_index(0);
         }
@@ -1241,7 +1309,9 @@ impl Network {
             n.params.reserve_exact(additional.max(n.params.len() / 4));
         }
         if n.indexed() {
-            n.by_name.reserve(additional, |&(_, h)| unfold(h));
+            let params = &n.params;
+            n.by_name
+                .reserve(additional, |&j| params[j as usize].name.name_hash());
         } else if n.params.len() + additional > SMALL_NODE {
             n.build_index(additional);
         }
@@ -1466,21 +1536,21 @@ impl Network {
         &mut self,
         down: NodeId,
         slot: Slot,
-        input: &Arc<str>,
+        input: Sym,
         up: NodeId,
-        output: &Arc<str>,
+        output: Sym,
     ) {
-        let link = Link::node_shared(up, output.clone());
+        let link = Link::node_sym(up, Some(output));
         let i = match slot {
             Slot::At(i) => i,
-            Slot::Missing { hash } => {
+            Slot::Missing { .. } => {
                 // A new parameter has no links or edges to replace.
-                let i = self.graph[down].insert_param_hashed(input.clone(), hash);
+                let i = self.graph[down].insert_param(input);
                 self.append_link(down, i, link);
                 return;
             }
         };
-        self.replace_links(down, i, smallvec::smallvec![link]);
+        self.replace_links(down, i, Links::One(link));
     }
 
     /// [`Network::set_param`] for a member whose position is known (see
@@ -1490,12 +1560,12 @@ impl Network {
         &mut self,
         node: NodeId,
         slot: Slot,
-        name: &Arc<str>,
+        name: Sym,
         value: Value,
     ) -> Option<Value> {
         let i = match slot {
             Slot::At(i) => i,
-            Slot::Missing { hash } => self.graph[node].insert_param_hashed(name.clone(), hash),
+            Slot::Missing { .. } => self.graph[node].insert_param(name),
         };
         self.set_at(node, i, value)
     }
@@ -1512,17 +1582,11 @@ impl Network {
         p.value.replace(Arc::new(value)).map(Arc::unwrap_or_clone)
     }
 
-    /// Give the parameter `name` of `node`, which is not there yet (`hash` is its
-    /// [`name_hash`]), the shared `value` (resolution's fast path for `set` into a new member).
-    pub(crate) fn add_shared_value(
-        &mut self,
-        node: NodeId,
-        name: &Arc<str>,
-        hash: u64,
-        value: &Arc<Value>,
-    ) {
+    /// Give the parameter `name` of `node`, which is not there yet, the shared `value`
+    /// (resolution's fast path for `set` into a new member).
+    pub(crate) fn add_shared_value(&mut self, node: NodeId, name: Sym, value: &Arc<Value>) {
         let n = &mut self.graph[node];
-        let i = n.insert_param_hashed(name.clone(), hash);
+        let i = n.insert_param(name);
         let p = &mut n.params[i];
         p.value = Some(value.clone());
         p.touch_value();
@@ -1659,7 +1723,7 @@ impl Network {
             order.push(n);
             // Walk inputs in parameter source order so the result is deterministic.
             for p in &self.graph[n].params {
-                for link in &p.links {
+                for link in p.links.iter() {
                     if let Some(u) = link.upstream_node() {
                         if seen.insert(u) {
                             queue.push_back(u);

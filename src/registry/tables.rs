@@ -17,6 +17,7 @@ use crate::cond::{self, ParseError, Statement};
 use crate::diag::{Diagnostic, Location};
 use crate::limits::Limits;
 use crate::model::{CondSource, Definition, Direction, Property};
+use crate::network::Sym;
 use crate::types::BaseType;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::sync::Arc;
@@ -46,6 +47,8 @@ pub struct InputMember {
     pub property: Arc<str>,
     /// Names tried in order: `[primary]` or `[primary, alias]`.
     pub names: Vec<String>,
+    /// The property's interned name (what resolution gives the parameters it adds).
+    pub(crate) sym: Sym,
 }
 
 /// One output member of an output head.
@@ -56,6 +59,8 @@ pub struct OutputMember {
     pub property: Arc<str>,
     /// Names it is found by: `[primary]` or `[primary, alias]`.
     pub names: Vec<String>,
+    /// The property's interned name (what resolution's connections name).
+    pub(crate) sym: Sym,
     /// Its conditional, if it has a non-empty one.
     pub cond: Option<CondEntry>,
 }
@@ -316,6 +321,7 @@ impl Builder<'_, '_> {
             }
             let member = InputMember {
                 property: Arc::from(p.name.as_str()),
+                sym: Sym::new(&p.name),
                 names: member_names(p),
             };
             match position.get(m.head.as_str()) {
@@ -377,6 +383,7 @@ impl Builder<'_, '_> {
             }
             head.members.push(OutputMember {
                 property: Arc::from(p.name.as_str()),
+                sym: Sym::new(&p.name),
                 names,
                 cond,
             });

@@ -14,7 +14,7 @@ use crate::cond::{
 };
 use crate::diag::{Diagnostic, Diagnostics, LIST_ENDS, Location, join_bounded};
 use crate::limits::{LimitExceeded, Limits};
-use crate::network::{Link, Network, NodeId, Slot};
+use crate::network::{Link, Network, NodeId, Slot, Sym};
 use crate::registry::tables::{CondEntry, InputMember, OutputMember, VstructTables};
 use crate::registry::{IndexedDefinition, Registry};
 use crate::types::Value;
@@ -507,6 +507,7 @@ impl Resolver<'_> {
                 node,
                 head,
                 member: &member.property,
+                member_sym: member.sym,
                 slot,
                 source,
                 down_def: down_def.as_deref(),
@@ -518,13 +519,10 @@ impl Resolver<'_> {
             }
             match (verdict, &planned.matched) {
                 (Verdict::Ignore, _) => {}
-                (Verdict::Connect, Some((_, output))) => self.connect(&ctx, &output.property),
+                (Verdict::Connect, Some((_, output))) => self.connect(&ctx, output.sym),
                 // A new parameter has no value to replace (VS018), so writing is all there is.
                 (Verdict::Write(value), Some(_)) if matches!(slot, Slot::Missing { .. }) => {
-                    if let Slot::Missing { hash } = slot {
-                        self.net
-                            .add_shared_value(node, &member.property, hash, value);
-                    }
+                    self.net.add_shared_value(node, member.sym, value);
                 }
                 (_, Some((name, output))) => self.apply_member(&ctx, &member.names[*name], output),
                 (_, None) => self.no_counterpart(&ctx, &member.names),
@@ -683,11 +681,11 @@ impl Resolver<'_> {
             .then(|| self.event(ctx, Some((output.property.to_string(), name.to_string()))));
         let outcome = match (&output.cond, self.options.conditions) {
             (None, _) => {
-                self.connect(ctx, &output.property);
+                self.connect(ctx, output.sym);
                 Outcome::Connected
             }
             (Some(entry), false) => {
-                self.connect(ctx, &output.property);
+                self.connect(ctx, output.sym);
                 if !always_connects(entry) {
                     self.no_conditions_info(ctx, &output.property, entry);
                 }
@@ -698,7 +696,7 @@ impl Resolver<'_> {
                     e.expression = Some(entry.source.text.clone());
                 }
                 match entry.statement() {
-                    Some(stmt) => self.evaluate(ctx, &output.property, entry, stmt, event.as_mut()),
+                    Some(stmt) => self.evaluate(ctx, output.sym, entry, stmt, event.as_mut()),
                     None => {
                         self.unparsable(ctx, &output.property, entry);
                         Outcome::Unparsable
@@ -716,7 +714,7 @@ impl Resolver<'_> {
     fn evaluate(
         &mut self,
         ctx: &MemberCtx<'_>,
-        output: &Arc<str>,
+        output: Sym,
         entry: &CondEntry,
         stmt: &Statement,
         event: Option<&mut MemberEvent>,
@@ -752,7 +750,7 @@ impl Resolver<'_> {
             event.action = Some(action.to_string());
         }
         for report in &reports {
-            self.comparison_warning(ctx, output, entry, report);
+            self.comparison_warning(ctx, &output, entry, report);
         }
         match &action.kind {
             ActionKind::Connect => {
@@ -830,7 +828,7 @@ impl Resolver<'_> {
         }
     }
 
-    fn connect(&mut self, ctx: &MemberCtx<'_>, output: &Arc<str>) {
+    fn connect(&mut self, ctx: &MemberCtx<'_>, output: Sym) {
         let authored = ctx
             .slot
             .position()
@@ -841,17 +839,22 @@ impl Resolver<'_> {
                 format!(
                     "authored value on {} is overridden by the connection from {}",
                     self.plug(ctx.node, ctx.member),
-                    self.plug(ctx.source.upstream, output)
+                    self.plug(ctx.source.upstream, &output)
                 ),
             );
             self.push(d, ctx.node, Some(ctx.member));
         }
-        self.net
-            .connect_slot(ctx.node, ctx.slot, ctx.member, ctx.source.upstream, output);
+        self.net.connect_slot(
+            ctx.node,
+            ctx.slot,
+            ctx.member_sym,
+            ctx.source.upstream,
+            output,
+        );
     }
 
     fn write(&mut self, ctx: &MemberCtx<'_>, value: Value, action: &Action) {
-        let previous = self.net.set_slot(ctx.node, ctx.slot, ctx.member, value);
+        let previous = self.net.set_slot(ctx.node, ctx.slot, ctx.member_sym, value);
         if let Some(old) = previous {
             let d = Diagnostic::info(
                 "VS018",
@@ -1164,7 +1167,9 @@ impl Resolver<'_> {
 struct MemberCtx<'c> {
     node: NodeId,
     head: &'c str,
-    member: &'c Arc<str>,
+    member: &'c str,
+    /// The member's interned name.
+    member_sym: Sym,
     /// Where the member is among the node's parameters.
     slot: Slot,
     /// The conditional's choice when it was evaluated ahead.

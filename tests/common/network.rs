@@ -20,8 +20,8 @@ pub fn summary(net: &Network) -> Vec<String> {
                     .connections()
                     .iter()
                     .map(|l| {
-                        let up = match &l.upstream {
-                            Upstream::Node(u) => net[*u].key().to_string(),
+                        let up = match l.upstream() {
+                            Upstream::Node(u) => net[u].key().to_string(),
                             Upstream::Missing(h) => format!("<missing {h}>"),
                         };
                         format!("{up}:{}", l.output().unwrap_or("<node>"))

@@ -253,16 +253,16 @@ fn hand_edited_network_versions_and_quotes() {
     let cc0 = net.by_key("ConstantCurvature#0").unwrap();
     let cc1 = net.by_key("ConstantCurvature#1").unwrap();
     assert_eq!(
-        net.connections(cc0, "emitColor")[0].upstream,
+        net.connections(cc0, "emitColor")[0].upstream(),
         Upstream::Node(c0)
     );
     let color_correct = net.by_key("PxrColorCorrect1#0").unwrap();
     assert_eq!(
-        net.connections(cc1, "emitColor")[0].upstream,
+        net.connections(cc1, "emitColor")[0].upstream(),
         Upstream::Node(color_correct)
     );
     assert_eq!(
-        net.connections(color_correct, "inputRGB")[0].upstream,
+        net.connections(color_correct, "inputRGB")[0].upstream(),
         Upstream::Node(c1)
     );
     // The commented-out parameter is not a parameter.

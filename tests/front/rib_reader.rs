@@ -454,12 +454,12 @@ Bxdf "PxrSurface" "self" "reference float diffuseGain" ["self:resultF"]
     // `surf` bound to noise#0 (the only version before it); surf2 to the latest, noise#2.
     let surf = net.find("surf").unwrap();
     assert_eq!(
-        net.connections(surf, "diffuseGain")[0].upstream,
+        net.connections(surf, "diffuseGain")[0].upstream(),
         Upstream::Node(net.by_key("noise#0").unwrap())
     );
     let surf2 = net.find("surf2").unwrap();
     assert_eq!(
-        net.connections(surf2, "diffuseGain")[0].upstream,
+        net.connections(surf2, "diffuseGain")[0].upstream(),
         Upstream::Node(net.by_key("noise#2").unwrap())
     );
     // A reference to its own handle, not defined before: dangling (RB018).

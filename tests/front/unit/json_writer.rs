@@ -137,9 +137,9 @@ fn material(net: &Network, index: usize) -> Out {
 }
 
 fn connection(net: &Network, link: &Link, names: &HashMap<NodeId, String>) -> Out {
-    let node = match &link.upstream {
-        Upstream::Node(id) => names.get(id).cloned().unwrap_or_else(|| {
-            net.get(*id)
+    let node = match link.upstream() {
+        Upstream::Node(id) => names.get(&id).cloned().unwrap_or_else(|| {
+            net.get(id)
                 .map_or_else(String::new, |n| n.handle().to_string())
         }),
         Upstream::Missing(h) => h.to_string(),

@@ -1,6 +1,5 @@
 //! Unit tests of `network` (`src/network/mod.rs`).
 
-use std::sync::Arc;
 use vstructc::Value;
 use vstructc::network::*;
 use vstructc::types::BaseType;
@@ -146,9 +145,9 @@ fn lookups_across_the_small_node_boundary() {
     net.set_param(block, "first", Value::Int(-1));
     net.reserve_params(block, 2 * SMALL_NODE);
     for (k, name) in names.iter().enumerate() {
-        let name: Arc<str> = Arc::from(name.as_str());
+        let name = Sym::new(name);
         let slot = net.slot_of(block, &name, name_hash(&name));
-        net.set_slot(block, slot, &name, Value::Int(k as i32));
+        net.set_slot(block, slot, name, Value::Int(k as i32));
     }
     assert_eq!(net.value(block, "first"), Some(&Value::Int(-1)));
     for (k, name) in names.iter().enumerate() {
@@ -207,4 +206,62 @@ fn self_loop_and_cycles_are_representable() {
     let c = net.upstream_closure(&[a]);
     assert_eq!(c, vec![a, b]);
     assert_eq!(net.upstream_nodes(a), vec![b, a]);
+}
+
+/// A resolved scene has millions of member parameters and connections: their sizes are the
+/// memory budget of resolution (issue: tens of bytes per member), so they cannot grow back
+/// unnoticed.
+#[test]
+fn params_and_links_stay_compact() {
+    assert!(
+        std::mem::size_of::<Link>() <= 16,
+        "{}",
+        std::mem::size_of::<Link>()
+    );
+    assert!(
+        std::mem::size_of::<Param>() <= 40,
+        "{}",
+        std::mem::size_of::<Param>()
+    );
+    assert_eq!(std::mem::size_of::<Sym>(), 8);
+}
+
+/// Interned names: one copy per name, equal names are the same symbol, and the order is
+/// the names' byte-wise order.
+#[test]
+fn names_are_interned_once() {
+    let a = Sym::new("diffuseGain");
+    let b = Sym::new(&String::from("diffuseGain"));
+    assert_eq!(a, b);
+    assert!(std::ptr::eq(a.as_str(), b.as_str()));
+    assert_eq!(a.name_hash(), name_hash("diffuseGain"));
+    assert_ne!(a, Sym::new("diffuseGai"));
+    assert!(Sym::new("a") < Sym::new("b"));
+    let mut net = Network::new();
+    let x = net.add_node("x", "X");
+    let y = net.add_node("y", "X");
+    net.connect(y, "in", x, "resultF");
+    net.connect(y, "in", x, "resultG");
+    net.push_link(y, "in", Link::missing("ghost", Some("resultF")));
+    let links = net.connections(y, "in");
+    assert_eq!(links.len(), 3);
+    assert!(std::ptr::eq(
+        links[0].output().unwrap(),
+        links[2].output().unwrap()
+    ));
+    assert_eq!(links[2].upstream(), Upstream::Missing("ghost"));
+    assert_eq!(
+        net.remove_connection(y, "in", 1).unwrap().output(),
+        Some("resultG")
+    );
+    assert_eq!(
+        net.remove_connection(y, "in", 1).unwrap().missing_handle(),
+        Some("ghost")
+    );
+    assert_eq!(net.connections(y, "in")[0].output(), Some("resultF"));
+    assert_eq!(
+        net.remove_connection(y, "in", 0).unwrap().upstream_node(),
+        Some(x)
+    );
+    assert!(net.connections(y, "in").is_empty());
 }
