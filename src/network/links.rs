@@ -27,10 +27,12 @@ impl Links {
 
     /// The connections of `links`, in order.
     pub(crate) fn from_vec(mut links: Vec<Link>) -> Links {
-        match links.len() {
-            0 => Links::Empty,
-            1 => Links::One(links.pop().expect("one link")),
-            _ => Links::Many(Box::new(links)),
+        if links.len() > 1 {
+            return Links::Many(Box::new(links));
+        }
+        match links.pop() {
+            Some(link) => Links::One(link),
+            None => Links::Empty,
         }
     }
 
