@@ -293,9 +293,19 @@ impl<'de> Visitor<'de> for Seed<'_> {
     }
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<J<'de>, A::Error> {
         let mut members: Vec<(Cow<'de, str>, J<'de>)> = Vec::new();
-        let mut seen = SeenKeys::default();
+        // Duplicates: a scan of the members while the object is small, a set beyond (built
+        // from the members when first needed), so a small object allocates nothing for it.
+        let mut many: FxHashSet<Cow<'de, str>> = FxHashSet::default();
         while let Some(key) = map.next_key_seed(Key)? {
-            if !seen.insert(&key) {
+            let fresh = if members.len() < SeenKeys::SCAN {
+                !members.iter().any(|(k, _)| *k == key)
+            } else {
+                if many.is_empty() {
+                    many.extend(members.iter().map(|(k, _)| k.clone()));
+                }
+                many.insert(key.clone())
+            };
+            if !fresh {
                 return Err(self.0.duplicate_key(&key));
             }
             let value = map.next_value_seed(Seed(self.0));
