@@ -150,18 +150,18 @@ impl<'de> SeenKeys<'de> {
     const SCAN: usize = 16;
 
     /// Record `key`; false if it was already there.
-    fn insert(&mut self, key: &Cow<'de, str>) -> bool {
+    fn insert(&mut self, key: Cow<'de, str>) -> bool {
         if self.few.len() < Self::SCAN {
-            if self.few.iter().any(|k| k == key) {
+            if self.few.contains(&key) {
                 return false;
             }
-            self.few.push(key.clone());
+            self.few.push(key);
             if self.few.len() == Self::SCAN {
                 self.many.extend(self.few.iter().cloned());
             }
             return true;
         }
-        self.many.insert(key.clone())
+        self.many.insert(key)
     }
 }
 
@@ -336,12 +336,12 @@ struct MaterialState<'de> {
 fn check_duplicate<'de, E: de::Error>(
     ctx: &Ctx,
     seen: &mut SeenKeys<'de>,
-    key: &Cow<'de, str>,
+    key: Cow<'de, str>,
 ) -> Result<(), E> {
-    if seen.insert(key) {
+    if seen.insert(key.clone()) {
         Ok(())
     } else {
-        Err(ctx.duplicate_key(key))
+        Err(ctx.duplicate_key(&key))
     }
 }
 
@@ -443,7 +443,7 @@ impl<'de> Visitor<'de> for DocSeed<'_, '_> {
         let mut version = None;
         let mut has_materials = false;
         while let Some(key) = map.next_key_seed(Key)? {
-            check_duplicate(&r.ctx, &mut seen, &key)?;
+            check_duplicate(&r.ctx, &mut seen, key.clone())?;
             match &*key {
                 "vstructcNetwork" => version = Some(value_tree(&r.ctx, &mut map, &key)?),
                 "materials" => {
@@ -501,7 +501,7 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
         let r = self.0;
         let mut seen = SeenKeys::default();
         while let Some(name) = map.next_key_seed(Key)? {
-            check_duplicate(&r.ctx, &mut seen, &name)?;
+            check_duplicate(&r.ctx, &mut seen, name.clone())?;
             r.materials += 1;
             let group = r.materials;
             let m = MaterialState {
@@ -566,7 +566,7 @@ impl<'de> Visitor<'de> for MaterialSeed<'_, '_, 'de> {
         };
         let mut seen = SeenKeys::default();
         while let Some(key) = map.next_key_seed(Key)? {
-            check_duplicate(&r.ctx, &mut seen, &key)?;
+            check_duplicate(&r.ctx, &mut seen, key.clone())?;
             let root = m.pointer.clone();
             let p = P::Key(&P::Root(&root), &key);
             r.at(group, MAT_KEYS);
