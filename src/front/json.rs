@@ -9,6 +9,8 @@
 //! The network is built while serde reads the text: custom `DeserializeSeed`s for the
 //! document, `materials`, each material and its `nodes` create nodes as they come; only one
 //! node (and a material's `terminals` and `primvars`) is held as a small tree at a time.
+//! Keys and strings borrow from the text unless they hold escapes, and a JSON Pointer is
+//! composed only when a diagnostic needs one.
 //! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
 //! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
 //! and duplicate keys also carry line and column.
