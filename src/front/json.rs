@@ -9,6 +9,8 @@
 //! The network is built while serde reads the text: custom `DeserializeSeed`s for the
 //! document, `materials`, each material and its `nodes` create nodes as they come; only one
 //! node (and a material's `terminals` and `primvars`) is held as a small tree at a time.
+//! Keys and strings borrow from the text unless they hold escapes, and a JSON Pointer is
+//! composed only when a diagnostic needs one.
 //! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
 //! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
 //! and duplicate keys also carry line and column.
@@ -38,11 +40,12 @@ use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes,
-    RequestKind, Terminal,
+    RequestKind, Sym, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use rustc_hash::{FxHashMap, FxHashSet};
 use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
+use std::borrow::Cow;
 use std::cell::RefCell;
 use std::fmt;
 use std::sync::Arc;
@@ -69,10 +72,11 @@ impl Num {
     }
 }
 
-/// A JSON value with object members in document order.
+/// A JSON value with object members in document order; strings borrow from the text unless
+/// they hold escapes.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
-enum J {
+enum J<'de> {
     /// `null`.
     Null,
     /// `true` or `false`.
@@ -80,14 +84,14 @@ enum J {
     /// A number.
     Num(Num),
     /// A string.
-    Str(String),
+    Str(Cow<'de, str>),
     /// An array.
-    Arr(Vec<J>),
+    Arr(Vec<J<'de>>),
     /// An object, members in document order.
-    Obj(Vec<(String, J)>),
+    Obj(Vec<(Cow<'de, str>, J<'de>)>),
 }
 
-impl J {
+impl J<'_> {
     fn kind(&self) -> &'static str {
         match self {
             J::Null => "null",
@@ -139,27 +143,93 @@ impl Ctx {
 
 /// Keys seen in one object: a scan while the object is small, a hash set beyond.
 #[derive(Default)]
-struct SeenKeys {
-    few: Vec<String>,
-    many: FxHashSet<String>,
+struct SeenKeys<'de> {
+    few: Vec<Cow<'de, str>>,
+    many: FxHashSet<Cow<'de, str>>,
 }
 
-impl SeenKeys {
+impl<'de> SeenKeys<'de> {
     const SCAN: usize = 16;
 
     /// Record `key`; false if it was already there.
-    fn insert(&mut self, key: &str) -> bool {
+    fn insert(&mut self, key: Cow<'de, str>) -> bool {
         if self.few.len() < Self::SCAN {
-            if self.few.iter().any(|k| k == key) {
+            if self.few.contains(&key) {
                 return false;
             }
-            self.few.push(key.to_string());
+            self.few.push(key);
             if self.few.len() == Self::SCAN {
                 self.many.extend(self.few.iter().cloned());
             }
             return true;
         }
-        self.many.insert(key.to_string())
+        self.many.insert(key)
+    }
+}
+
+/// An object key, borrowed from the text unless it holds escapes.
+struct Key;
+
+impl<'de> DeserializeSeed<'de> for Key {
+    type Value = Cow<'de, str>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Cow<'de, str>, D::Error> {
+        d.deserialize_str(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Key {
+    type Value = Cow<'de, str>;
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a string")
+    }
+    fn visit_borrowed_str<E>(self, v: &'de str) -> Result<Cow<'de, str>, E> {
+        Ok(Cow::Borrowed(v))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Cow<'de, str>, E> {
+        Ok(Cow::Owned(v.to_string()))
+    }
+    fn visit_string<E>(self, v: String) -> Result<Cow<'de, str>, E> {
+        Ok(Cow::Owned(v))
+    }
+}
+
+/// A JSON Pointer built only when a diagnostic needs it: a rendered base and the segments
+/// below it, each borrowed from the caller's frame.
+#[derive(Clone, Copy)]
+enum P<'a> {
+    /// A pointer already rendered.
+    Root(&'a str),
+    /// The member `key` of the object at the base.
+    Key(&'a P<'a>, &'a str),
+    /// The element `index` of the array at the base.
+    Index(&'a P<'a>, usize),
+}
+
+impl P<'_> {
+    fn render(&self) -> String {
+        let mut s = String::new();
+        self.write(&mut s);
+        s
+    }
+
+    fn write(&self, s: &mut String) {
+        match *self {
+            P::Root(r) => s.push_str(r),
+            P::Key(base, key) => {
+                base.write(s);
+                s.push('/');
+                if key.contains(['~', '/']) {
+                    s.push_str(&escape_pointer(key));
+                } else {
+                    s.push_str(key);
+                }
+            }
+            P::Index(base, i) => {
+                base.write(s);
+                s.push('/');
+                s.push_str(itoa::Buffer::new().format(i));
+            }
+        }
     }
 }
 
@@ -175,42 +245,45 @@ fn escape_pointer(s: &str) -> String {
 struct Seed<'c>(&'c Ctx);
 
 impl<'de> DeserializeSeed<'de> for Seed<'_> {
-    type Value = J;
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<J, D::Error> {
+    type Value = J<'de>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<J<'de>, D::Error> {
         d.deserialize_any(self)
     }
 }
 
 impl<'de> Visitor<'de> for Seed<'_> {
-    type Value = J;
+    type Value = J<'de>;
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("a JSON value")
     }
-    fn visit_bool<E>(self, v: bool) -> Result<J, E> {
+    fn visit_bool<E>(self, v: bool) -> Result<J<'de>, E> {
         Ok(J::Bool(v))
     }
-    fn visit_i64<E>(self, v: i64) -> Result<J, E> {
+    fn visit_i64<E>(self, v: i64) -> Result<J<'de>, E> {
         Ok(J::Num(Num::I(v)))
     }
-    fn visit_u64<E>(self, v: u64) -> Result<J, E> {
+    fn visit_u64<E>(self, v: u64) -> Result<J<'de>, E> {
         Ok(J::Num(Num::U(v)))
     }
-    fn visit_f64<E>(self, v: f64) -> Result<J, E> {
+    fn visit_f64<E>(self, v: f64) -> Result<J<'de>, E> {
         Ok(J::Num(Num::F(v)))
     }
-    fn visit_str<E>(self, v: &str) -> Result<J, E> {
-        Ok(J::Str(v.to_string()))
+    fn visit_borrowed_str<E>(self, v: &'de str) -> Result<J<'de>, E> {
+        Ok(J::Str(Cow::Borrowed(v)))
     }
-    fn visit_string<E>(self, v: String) -> Result<J, E> {
-        Ok(J::Str(v))
+    fn visit_str<E>(self, v: &str) -> Result<J<'de>, E> {
+        Ok(J::Str(Cow::Owned(v.to_string())))
     }
-    fn visit_unit<E>(self) -> Result<J, E> {
+    fn visit_string<E>(self, v: String) -> Result<J<'de>, E> {
+        Ok(J::Str(Cow::Owned(v)))
+    }
+    fn visit_unit<E>(self) -> Result<J<'de>, E> {
         Ok(J::Null)
     }
-    fn visit_none<E>(self) -> Result<J, E> {
+    fn visit_none<E>(self) -> Result<J<'de>, E> {
         Ok(J::Null)
     }
-    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<J, A::Error> {
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<J<'de>, A::Error> {
         let mut items = Vec::new();
         loop {
             let next = seq.next_element_seed(Seed(self.0));
@@ -220,15 +293,25 @@ impl<'de> Visitor<'de> for Seed<'_> {
             }
         }
     }
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<J, A::Error> {
-        let mut members: Vec<(String, J)> = Vec::new();
-        let mut seen = SeenKeys::default();
-        while let Some(key) = map.next_key::<String>()? {
-            if !seen.insert(&key) {
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<J<'de>, A::Error> {
+        let mut members: Vec<(Cow<'de, str>, J<'de>)> = Vec::new();
+        // Duplicates: a scan of the members while the object is small, a set beyond (built
+        // from the members when first needed), so a small object allocates nothing for it.
+        let mut many: FxHashSet<Cow<'de, str>> = FxHashSet::default();
+        while let Some(key) = map.next_key_seed(Key)? {
+            let fresh = if members.len() < SeenKeys::SCAN {
+                !members.iter().any(|(k, _)| *k == key)
+            } else {
+                if many.is_empty() {
+                    many.extend(members.iter().map(|(k, _)| k.clone()));
+                }
+                many.insert(key.clone())
+            };
+            if !fresh {
                 return Err(self.0.duplicate_key(&key));
             }
             let value = map.next_value_seed(Seed(self.0));
-            let value = self.0.within(|| key.clone(), value)?;
+            let value = self.0.within(|| key.to_string(), value)?;
             members.push((key, value));
         }
         Ok(J::Obj(members))
@@ -236,31 +319,40 @@ impl<'de> Visitor<'de> for Seed<'_> {
 }
 
 /// Nodes of one material by name; `None` for a node whose reading failed.
-type NodesByName = FxHashMap<String, Option<NodeId>>;
+type NodesByName<'de> = FxHashMap<Cow<'de, str>, Option<NodeId>>;
 
 /// One material while its members are read.
-struct MaterialState {
+struct MaterialState<'de> {
     name: String,
     pointer: String,
     has_nodes: bool,
     ids: Vec<NodeId>,
-    by_name: NodesByName,
-    pending: Vec<(NodeId, NodeConns)>,
-    terminals: Option<J>,
+    by_name: NodesByName<'de>,
+    /// Each node read, its name and its connections.
+    pending: Vec<(NodeId, Cow<'de, str>, NodeConns<'de>)>,
+    terminals: Option<J<'de>>,
     primvars: Vec<String>,
 }
 
 /// A duplicate key of the object at the current path is a serde error (JS002 with position).
-fn check_duplicate<E: de::Error>(ctx: &Ctx, seen: &mut SeenKeys, key: &str) -> Result<(), E> {
-    if seen.insert(key) {
+fn check_duplicate<'de, E: de::Error>(
+    ctx: &Ctx,
+    seen: &mut SeenKeys<'de>,
+    key: Cow<'de, str>,
+) -> Result<(), E> {
+    if seen.insert(key.clone()) {
         Ok(())
     } else {
-        Err(ctx.duplicate_key(key))
+        Err(ctx.duplicate_key(&key))
     }
 }
 
 /// Read the value of the current key as a tree (small subtrees only), under `key` in the path.
-fn value_tree<'de, A: MapAccess<'de>>(ctx: &Ctx, map: &mut A, key: &str) -> Result<J, A::Error> {
+fn value_tree<'de, A: MapAccess<'de>>(
+    ctx: &Ctx,
+    map: &mut A,
+    key: &str,
+) -> Result<J<'de>, A::Error> {
     let value = map.next_value_seed(Seed(ctx));
     ctx.within(|| key.to_string(), value)
 }
@@ -352,18 +444,18 @@ impl<'de> Visitor<'de> for DocSeed<'_, '_> {
         let mut seen = SeenKeys::default();
         let mut version = None;
         let mut has_materials = false;
-        while let Some(key) = map.next_key::<String>()? {
-            check_duplicate(&r.ctx, &mut seen, &key)?;
-            match key.as_str() {
+        while let Some(key) = map.next_key_seed(Key)? {
+            check_duplicate(&r.ctx, &mut seen, key.clone())?;
+            match &*key {
                 "vstructcNetwork" => version = Some(value_tree(&r.ctx, &mut map, &key)?),
                 "materials" => {
                     has_materials = true;
                     let read = map.next_value_seed(MaterialsSeed(&mut *r));
-                    r.ctx.within(|| key.clone(), read)?;
+                    r.ctx.within(|| key.to_string(), read)?;
                 }
                 _ => {
                     r.at(0, DOC_KEYS);
-                    r.unknown_key(&ptr("", &key), &key, "the document");
+                    r.unknown_key(&P::Key(&P::Root(""), &key), &key, "the document");
                     value_tree(&r.ctx, &mut map, &key)?;
                 }
             }
@@ -410,8 +502,8 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let r = self.0;
         let mut seen = SeenKeys::default();
-        while let Some(name) = map.next_key::<String>()? {
-            check_duplicate(&r.ctx, &mut seen, &name)?;
+        while let Some(name) = map.next_key_seed(Key)? {
+            check_duplicate(&r.ctx, &mut seen, name.clone())?;
             r.materials += 1;
             let group = r.materials;
             let m = MaterialState {
@@ -422,7 +514,7 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
                 pending: Vec::new(),
                 terminals: None,
                 primvars: Vec::new(),
-                name,
+                name: name.into_owned(),
             };
             let name = m.name.clone();
             let read = map.next_value_seed(MaterialSeed {
@@ -437,13 +529,13 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
 }
 
 /// One material object.
-struct MaterialSeed<'r, 't> {
+struct MaterialSeed<'r, 't, 'de> {
     r: &'r mut Reader<'t>,
-    m: Option<MaterialState>,
+    m: Option<MaterialState<'de>>,
     group: u32,
 }
 
-impl MaterialSeed<'_, '_> {
+impl MaterialSeed<'_, '_, '_> {
     fn ctx(&self) -> &Ctx {
         &self.r.ctx
     }
@@ -459,14 +551,14 @@ impl MaterialSeed<'_, '_> {
     }
 }
 
-impl<'de> DeserializeSeed<'de> for MaterialSeed<'_, '_> {
+impl<'de> DeserializeSeed<'de> for MaterialSeed<'_, '_, 'de> {
     type Value = ();
     fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
         d.deserialize_any(self)
     }
 }
 
-impl<'de> Visitor<'de> for MaterialSeed<'_, '_> {
+impl<'de> Visitor<'de> for MaterialSeed<'_, '_, 'de> {
     type Value = ();
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
@@ -475,20 +567,21 @@ impl<'de> Visitor<'de> for MaterialSeed<'_, '_> {
             return Ok(());
         };
         let mut seen = SeenKeys::default();
-        while let Some(key) = map.next_key::<String>()? {
-            check_duplicate(&r.ctx, &mut seen, &key)?;
-            let p = ptr(&m.pointer, &key);
+        while let Some(key) = map.next_key_seed(Key)? {
+            check_duplicate(&r.ctx, &mut seen, key.clone())?;
+            let root = m.pointer.clone();
+            let p = P::Key(&P::Root(&root), &key);
             r.at(group, MAT_KEYS);
-            match key.as_str() {
+            match &*key {
                 "nodes" => {
                     m.has_nodes = true;
                     let read = map.next_value_seed(NodesSeed {
                         r: &mut *r,
                         m: &mut m,
-                        pointer: p,
+                        pointer: p.render(),
                         group,
                     });
-                    r.ctx.within(|| key.clone(), read)?;
+                    r.ctx.within(|| key.to_string(), read)?;
                 }
                 "terminals" => {
                     let j = value_tree(&r.ctx, &mut map, &key)?;
@@ -517,14 +610,14 @@ impl<'de> Visitor<'de> for MaterialSeed<'_, '_> {
 
 /// The `nodes` object of a material: each node is read (as a small tree) and inserted in turn;
 /// its kind is set when the material's terminals are known.
-struct NodesSeed<'r, 't, 'm> {
+struct NodesSeed<'r, 't, 'm, 'de> {
     r: &'r mut Reader<'t>,
-    m: &'m mut MaterialState,
+    m: &'m mut MaterialState<'de>,
     pointer: String,
     group: u32,
 }
 
-impl NodesSeed<'_, '_, '_> {
+impl NodesSeed<'_, '_, '_, '_> {
     fn ctx(&self) -> &Ctx {
         &self.r.ctx
     }
@@ -540,29 +633,34 @@ impl NodesSeed<'_, '_, '_> {
     }
 }
 
-impl<'de> DeserializeSeed<'de> for NodesSeed<'_, '_, '_> {
+impl<'de> DeserializeSeed<'de> for NodesSeed<'_, '_, '_, 'de> {
     type Value = ();
     fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
         d.deserialize_any(self)
     }
 }
 
-impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_> {
+impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
     type Value = ();
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, m) = (self.r, self.m);
-        while let Some(name) = map.next_key::<String>()? {
+        while let Some(name) = map.next_key_seed(Key)? {
             if m.by_name.contains_key(&name) {
                 return Err(r.ctx.duplicate_key(&name));
             }
             let j = value_tree(&r.ctx, &mut map, &name)?;
             r.at(self.group, MAT_NODES);
-            let read = r.node(&name, &j, RequestKind::Pattern, &ptr(&self.pointer, &name));
+            let read = r.node(
+                &name,
+                &j,
+                RequestKind::Pattern,
+                &P::Key(&P::Root(&self.pointer), &name),
+            );
             match read {
                 Ok((id, conns)) => {
                     m.ids.push(id);
-                    m.pending.push((id, conns));
+                    m.pending.push((id, name.clone(), conns));
                     m.by_name.insert(name, Some(id));
                 }
                 Err(e) => {
@@ -639,9 +737,21 @@ pub(crate) fn parse_json_limited(
         found: Vec::new(),
         order: Order::default(),
         materials: 0,
+        inline_decls: Default::default(),
+        declared_decls: Default::default(),
     };
-    let mut de = serde_json::Deserializer::from_slice(bytes);
-    let read = DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end());
+    // Valid UTF-8 (checked once, in bulk) is read as text, which spares serde_json a check
+    // per string; other input goes through the byte reader, which reports where it breaks.
+    let read = match std::str::from_utf8(bytes) {
+        Ok(text) => {
+            let mut de = serde_json::Deserializer::from_str(text);
+            DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end())
+        }
+        Err(_) => {
+            let mut de = serde_json::Deserializer::from_slice(bytes);
+            DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end())
+        }
+    };
     if let Err(e) = read {
         return Err(syntax_error(&e, bytes, &file, &r.ctx));
     }
@@ -701,14 +811,17 @@ fn char_column(bytes: &[u8], line: usize, byte_col: usize) -> u32 {
     text.chars().count().max(1) as u32
 }
 
-/// The connections of one node, per parameter index, waiting to be bound.
-type NodeConns = Vec<(usize, Vec<Conn>)>;
+/// Up to this many parameters, an input finds its parameter by a scan rather than a map.
+const SCAN_PARAMS: usize = 16;
+
+/// The connections of one node, per parameter index (with the input's name, for the
+/// pointer of a diagnostic), waiting to be bound.
+type NodeConns<'de> = Vec<(usize, Cow<'de, str>, Vec<Conn<'de>>)>;
 
 /// A parsed connection object.
-struct Conn {
-    node: String,
-    output: Option<String>,
-    pointer: String,
+struct Conn<'de> {
+    node: Cow<'de, str>,
+    output: Option<Cow<'de, str>>,
 }
 
 /// Where a diagnostic falls in the order of the checks: the document's checks (group 0) come
@@ -750,6 +863,10 @@ struct Reader<'t> {
     order: Order,
     /// Materials read so far.
     materials: u32,
+    /// One declaration per type string of the canonical form, shared by its parameters.
+    inline_decls: FxHashMap<Box<str>, Arc<Decl>>,
+    /// One declaration per declared type of the shorthand form, shared likewise.
+    declared_decls: FxHashMap<Type, Arc<Decl>>,
 }
 
 fn ptr(base: &str, seg: &str) -> String {
@@ -797,31 +914,41 @@ impl Reader<'_> {
         self.record(Found::Error(e));
     }
 
-    fn object<'j>(&self, j: &'j J, pointer: &str, what: &str) -> Result<&'j [(String, J)], Error> {
+    fn object<'j, 'de>(
+        &self,
+        j: &'j J<'de>,
+        pointer: &P,
+        what: &str,
+    ) -> Result<&'j [(Cow<'de, str>, J<'de>)], Error> {
         match j {
             J::Obj(m) => Ok(m),
             other => Err(self.error(
                 "JS002",
-                pointer,
+                &pointer.render(),
                 format!("{what} must be an object, found {}", other.kind()),
             )),
         }
     }
 
-    fn string<'j>(&self, j: &'j J, pointer: &str, what: &str) -> Result<&'j str, Error> {
+    fn string<'j, 'de>(
+        &self,
+        j: &'j J<'de>,
+        pointer: &P,
+        what: &str,
+    ) -> Result<&'j Cow<'de, str>, Error> {
         match j {
             J::Str(s) => Ok(s),
             other => Err(self.error(
                 "JS002",
-                pointer,
+                &pointer.render(),
                 format!("{what} must be a string, found {}", other.kind()),
             )),
         }
     }
 
-    fn unknown_key(&mut self, pointer: &str, key: &str, where_: &str) {
+    fn unknown_key(&mut self, pointer: &P, key: &str, where_: &str) {
         let d = Diagnostic::warning("JS011", format!("unknown key `{key}` in {where_}; ignored"))
-            .at(self.loc(pointer));
+            .at(self.loc(&pointer.render()));
         self.warn(d);
     }
 
@@ -851,7 +978,7 @@ impl Reader<'_> {
     }
 
     /// Close a material once all its members are read: terminals, node kinds, bindings.
-    fn finish_material(&mut self, m: MaterialState, group: u32) {
+    fn finish_material(&mut self, m: MaterialState<'_>, group: u32) {
         let pointer = m.pointer;
         if !m.has_nodes {
             self.at(group, MAT_NO_NODES);
@@ -863,42 +990,48 @@ impl Reader<'_> {
             self.fail(e);
         }
         self.at(group, MAT_TERMINALS);
-        let tpointer = ptr(&pointer, "terminals");
-        let mut terms: Vec<(String, Conn)> = Vec::new();
+        let root = P::Root(&pointer);
+        let tpointer = P::Key(&root, "terminals");
+        let mut terms: Vec<(&str, Conn)> = Vec::new();
         for (t, c) in m.terminals.as_ref().map_or(&[][..], |j| match j {
             J::Obj(members) => members.as_slice(),
             _ => &[],
         }) {
-            match self.connection(c, &ptr(&tpointer, t)) {
-                Ok(conn) => terms.push((t.clone(), conn)),
+            match self.connection(c, &P::Key(&tpointer, t)) {
+                Ok(conn) => terms.push((&**t, conn)),
                 Err(e) => self.fail(e),
             }
         }
         // A node's kind comes from the first terminal naming it.
         let mut named: FxHashSet<&str> = Default::default();
         for (t, c) in &terms {
-            if named.insert(c.node.as_str())
-                && let Some(&Some(id)) = m.by_name.get(c.node.as_str())
+            if named.insert(&c.node)
+                && let Some(&Some(id)) = m.by_name.get(&*c.node)
             {
                 self.net
                     .set_node_kind(id, RequestKind::from_terminal_name(t));
             }
         }
         self.at(group, MAT_BIND);
-        for (id, conns) in m.pending {
-            for (param, list) in conns {
+        let nodes = P::Key(&root, "nodes");
+        for (id, name, conns) in &m.pending {
+            let node = P::Key(&nodes, name);
+            let inputs = P::Key(&node, "inputConnections");
+            for (param, input, list) in conns {
+                let input = P::Key(&inputs, input);
                 let links = list
                     .iter()
-                    .map(|c| self.bind(c, &m.by_name, &m.name))
+                    .enumerate()
+                    .map(|(i, c)| self.bind(c, &P::Index(&input, i), &m.by_name, &m.name))
                     .collect();
-                self.net.push_source_links(id, param, links);
+                self.net.push_source_links(*id, *param, links);
             }
         }
         let terminals = terms
             .iter()
             .map(|(t, c)| Terminal {
-                name: t.clone(),
-                link: self.bind(c, &m.by_name, &m.name),
+                name: t.to_string(),
+                link: self.bind(c, &P::Key(&tpointer, t), &m.by_name, &m.name),
             })
             .collect();
         let location = Some(self.loc(&pointer));
@@ -911,27 +1044,27 @@ impl Reader<'_> {
         });
     }
 
-    fn primvars(&self, j: &J, pointer: &str) -> Result<Vec<String>, Error> {
+    fn primvars(&self, j: &J, pointer: &P) -> Result<Vec<String>, Error> {
         match j {
             J::Arr(items) => items
                 .iter()
                 .enumerate()
                 .map(|(i, v)| {
-                    self.string(v, &ptr(pointer, &i.to_string()), "a primvar")
-                        .map(str::to_string)
+                    self.string(v, &P::Index(pointer, i), "a primvar")
+                        .map(|s| s.to_string())
                 })
                 .collect(),
             other => Err(self.error(
                 "JS002",
-                pointer,
+                &pointer.render(),
                 format!("`primvars` must be an array, found {}", other.kind()),
             )),
         }
     }
 
     /// Bind a connection to a node of the material, or keep it dangling (JS010).
-    fn bind(&mut self, c: &Conn, by_name: &NodesByName, material: &str) -> Link {
-        match by_name.get(c.node.as_str()) {
+    fn bind(&mut self, c: &Conn, pointer: &P, by_name: &NodesByName, material: &str) -> Link {
+        match by_name.get(&*c.node) {
             Some(&Some(id)) => Link::node(id, c.output.as_deref()),
             _ => {
                 let d = Diagnostic::warning(
@@ -941,60 +1074,63 @@ impl Reader<'_> {
                         c.node
                     ),
                 )
-                .at(self.loc(&c.pointer));
+                .at(self.loc(&pointer.render()));
                 self.warn(d);
                 Link::missing(&c.node, c.output.as_deref())
             }
         }
     }
 
-    fn connection(&mut self, j: &J, pointer: &str) -> Result<Conn, Error> {
+    fn connection<'de>(&mut self, j: &J<'de>, pointer: &P) -> Result<Conn<'de>, Error> {
         let members = self.object(j, pointer, "a connection")?;
         let mut node = None;
         let mut output = None;
         for (k, v) in members {
-            let p = ptr(pointer, k);
-            match k.as_str() {
-                "upstreamNode" => node = Some(self.string(v, &p, "`upstreamNode`")?.to_string()),
+            let p = P::Key(pointer, k);
+            match &**k {
+                "upstreamNode" => node = Some(self.string(v, &p, "`upstreamNode`")?.clone()),
                 "upstreamOutputName" => {
-                    output = Some(self.string(v, &p, "`upstreamOutputName`")?.to_string())
+                    output = Some(self.string(v, &p, "`upstreamOutputName`")?.clone())
                 }
                 _ => self.unknown_key(&p, k, "a connection"),
             }
         }
         let Some(node) = node else {
-            return Err(self.error("JS002", pointer, "connection without `upstreamNode`"));
+            return Err(self.error(
+                "JS002",
+                &pointer.render(),
+                "connection without `upstreamNode`",
+            ));
         };
         let Some(output) = output else {
             return Err(self.error(
                 "JS002",
-                pointer,
+                &pointer.render(),
                 "connection without `upstreamOutputName` (use \"\" for a whole-node reference)",
             ));
         };
         Ok(Conn {
             node,
             output: (!output.is_empty()).then_some(output),
-            pointer: pointer.to_string(),
         })
     }
 
     /// Read one node; returns its id and its connections (per parameter index), to bind once
     /// every node of the material exists.
-    fn node(
+    fn node<'de>(
         &mut self,
         name: &str,
-        j: &J,
+        j: &J<'de>,
         kind: RequestKind,
-        pointer: &str,
-    ) -> Result<(NodeId, NodeConns), Error> {
+        pointer: &P,
+    ) -> Result<(NodeId, NodeConns<'de>), Error> {
         let members = self.object(j, pointer, "a node")?;
         let mut shader = None;
-        let mut parameters: &[(String, J)] = &[];
-        let mut inputs: &[(String, J)] = &[];
+        let mut parameters: &[(Cow<'de, str>, J<'de>)] = &[];
+        let mut inputs: &[(Cow<'de, str>, J<'de>)] = &[];
         for (k, v) in members {
-            let p = ptr(pointer, k);
-            match k.as_str() {
+            let p = P::Key(pointer, k);
+            match &**k {
                 "nodeTypeId" => shader = Some(self.string(v, &p, "`nodeTypeId`")?),
                 "parameters" => parameters = self.object(v, &p, "`parameters`")?,
                 "inputConnections" => inputs = self.object(v, &p, "`inputConnections`")?,
@@ -1004,33 +1140,42 @@ impl Reader<'_> {
         let Some(shader) = shader else {
             return Err(self.error(
                 "JS002",
-                pointer,
+                &pointer.render(),
                 format!("node `{name}` has no `nodeTypeId`"),
             ));
         };
         let mut params: Vec<Param> = Vec::with_capacity(parameters.len() + inputs.len());
-        let mut index: FxHashMap<&str, usize> = Default::default();
-        let ppointer = ptr(pointer, "parameters");
+        let ppointer = P::Key(pointer, "parameters");
         for (pname, pj) in parameters {
-            let p = ptr(&ppointer, pname);
+            let p = P::Key(&ppointer, pname);
             let (value, decl) = self.parameter(shader, pname, pj, &p)?;
-            index.insert(pname, params.len());
-            params.push(Param::from_source(
-                pname.clone(),
-                Some(value),
+            params.push(Param::from_shared(
+                Sym::new(pname),
+                Some(Arc::new(value)),
                 Some(decl),
                 ParamAt::JsonParameter,
                 None,
             ));
         }
-        let ipointer = ptr(pointer, "inputConnections");
-        let mut conns: NodeConns = Vec::new();
+        // Inputs name parameters given above, or add their own; a scan while the node is small.
+        let index: FxHashMap<&str, usize> = if parameters.len() > SCAN_PARAMS && !inputs.is_empty()
+        {
+            parameters
+                .iter()
+                .enumerate()
+                .map(|(i, (n, _))| (&**n, i))
+                .collect()
+        } else {
+            Default::default()
+        };
+        let ipointer = P::Key(pointer, "inputConnections");
+        let mut conns: NodeConns<'de> = Vec::new();
         for (input, list) in inputs {
-            let p = ptr(&ipointer, input);
+            let p = P::Key(&ipointer, input);
             let J::Arr(items) = list else {
                 return Err(self.error(
                     "JS002",
-                    &p,
+                    &p.render(),
                     format!(
                         "connections of `{input}` must be an array, found {}",
                         list.kind()
@@ -1040,11 +1185,16 @@ impl Reader<'_> {
             let list: Vec<Conn> = items
                 .iter()
                 .enumerate()
-                .map(|(i, c)| self.connection(c, &ptr(&p, &i.to_string())))
+                .map(|(i, c)| self.connection(c, &P::Index(&p, i)))
                 .collect::<Result<_, Error>>()?;
-            let k = *index.entry(input).or_insert_with(|| {
-                params.push(Param::from_source(
-                    input.clone(),
+            let given = if parameters.len() > SCAN_PARAMS {
+                index.get(&**input).copied()
+            } else {
+                parameters.iter().position(|(n, _)| n == input)
+            };
+            let k = given.unwrap_or_else(|| {
+                params.push(Param::from_shared(
+                    Sym::new(input),
                     None,
                     None,
                     ParamAt::Unknown,
@@ -1052,11 +1202,11 @@ impl Reader<'_> {
                 ));
                 params.len() - 1
             });
-            conns.push((k, list));
+            conns.push((k, input.clone(), list));
         }
         let mut node = Node::new_raw(name, shader, kind);
         node.set_raw_params(params);
-        node.set_origin(Some(self.loc(pointer)), None);
+        node.set_origin(Some(self.loc(&pointer.render())), None);
         Ok((self.net.insert_node(node), conns))
     }
 
@@ -1067,14 +1217,14 @@ impl Reader<'_> {
         shader: &str,
         name: &str,
         j: &J,
-        pointer: &str,
-    ) -> Result<(Value, Decl), Error> {
+        pointer: &P,
+    ) -> Result<(Value, Arc<Decl>), Error> {
         if let J::Obj(members) = j {
             let mut ty = None;
             let mut value = None;
             for (k, v) in members {
-                let p = ptr(pointer, k);
-                match k.as_str() {
+                let p = P::Key(pointer, k);
+                match &**k {
                     "type" => ty = Some(self.string(v, &p, "`type`")?),
                     "value" => value = Some(v),
                     _ => self.unknown_key(&p, k, "a parameter"),
@@ -1083,55 +1233,69 @@ impl Reader<'_> {
             let (Some(text), Some(v)) = (ty, value) else {
                 return Err(self.error(
                     "JS002",
-                    pointer,
+                    &pointer.render(),
                     format!(
                         "parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"
                     ),
                 ));
             };
-            let Some(t) = parse_type(text) else {
-                return Err(self.error(
-                    "JS002",
-                    &ptr(pointer, "type"),
-                    format!("unknown type `{text}` of `{name}`"),
-                ));
+            let decl = match self.inline_decls.get(&**text) {
+                Some(decl) => decl.clone(),
+                None => {
+                    let Some(t) = parse_type(text) else {
+                        return Err(self.error(
+                            "JS002",
+                            &P::Key(pointer, "type").render(),
+                            format!("unknown type `{text}` of `{name}`"),
+                        ));
+                    };
+                    let decl = Arc::new(Decl {
+                        text: text.to_string(),
+                        class: None,
+                        reference: false,
+                        ty: t,
+                        inline_type: true,
+                    });
+                    self.inline_decls.insert(Box::from(&**text), decl.clone());
+                    decl
+                }
             };
-            let value = to_value(&t, v).map_err(|why| {
+            let value = to_value(&decl.ty, v).map_err(|why| {
                 self.error(
                     "JS004",
-                    &ptr(pointer, "value"),
+                    &P::Key(pointer, "value").render(),
                     format!("value of `{name}` does not match its type `{text}`: {why}"),
                 )
             })?;
-            let decl = Decl {
-                text: text.to_string(),
-                class: None,
-                reference: false,
-                ty: t,
-                inline_type: true,
-            };
             return Ok((value, decl));
         }
         let Some(t) = self.types.input_type(shader, name) else {
             return Err(self.error(
                 "JS006",
-                pointer,
+                &pointer.render(),
                 format!("shorthand value for `{name}`, which `{shader}` does not declare; write {{ \"type\": T, \"value\": V }}"),
             ));
         };
         let value = to_value(&t, j).map_err(|why| {
             self.error(
                 "JS004",
-                pointer,
+                &pointer.render(),
                 format!("value of `{name}` does not match its declared type `{t}`: {why}"),
             )
         })?;
-        let decl = Decl {
-            text: String::new(),
-            class: None,
-            reference: false,
-            ty: t,
-            inline_type: false,
+        let decl = match self.declared_decls.get(&t) {
+            Some(decl) => decl.clone(),
+            None => {
+                let decl = Arc::new(Decl {
+                    text: String::new(),
+                    class: None,
+                    reference: false,
+                    ty: t.clone(),
+                    inline_type: false,
+                });
+                self.declared_decls.insert(t, decl.clone());
+                decl
+            }
         };
         Ok((value, decl))
     }
@@ -1218,7 +1382,7 @@ fn floats<const N: usize>(j: &J) -> Result<[f32; N], String> {
 
 fn scalar(base: &BaseType, j: &J) -> Result<Value, String> {
     let string = |j: &J| match j {
-        J::Str(s) => Ok(s.clone()),
+        J::Str(s) => Ok(s.to_string()),
         other => Err(format!("expected a string, found {}", other.kind())),
     };
     Ok(match base {
