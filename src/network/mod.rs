@@ -587,9 +587,9 @@ pub struct NodeSource {
     /// Every parameter occurrence in source order (duplicates included).
     pub items: Vec<SourceParam>,
     /// The comments of the parameter occurrences, in source order, each from `#` to the end
-    /// of its line (newline excluded); an occurrence names its own by
-    /// [`SourceParam::comments`] (see [`NodeSource::leading_comments`] and
-    /// [`NodeSource::trailing_comment`]). One list per request: most parameters have none.
+    /// of its line (newline excluded); an occurrence's own are given by
+    /// [`NodeSource::leading_comments`] and [`NodeSource::trailing_comment`]. One list per
+    /// request: most parameters have none.
     pub comments: Vec<Range<usize>>,
     /// Comments inside the span that precede no parameter (a request without parameters).
     pub end_comments: Vec<Range<usize>>,
