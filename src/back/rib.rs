@@ -38,7 +38,7 @@
 //!   kept while the value is unchanged and dropped when the value is replaced.
 
 use crate::network::{Link, Network, Node, NodeId, ParamChange, ParamTypes, Upstream};
-use crate::network::{Memo, Param, RequestKind, SourceParam};
+use crate::network::{Memo, Param, RequestKind};
 use crate::types::{ArraySpec, BaseType, Type, Value, format_f32, saturate_f32};
 use rustc_hash::FxHashMap;
 use std::borrow::Cow;
@@ -300,7 +300,7 @@ impl Writer<'_> {
             for c in src.leading_comments(item) {
                 lines.pending.push(self.bytes(c)?);
             }
-            let param = item.param.and_then(|k| node.all_params().get(k as usize));
+            let param = item.param().and_then(|k| node.all_params().get(k as usize));
             let trailing = match src.trailing_comment(item) {
                 Some(c) => Some(self.bytes(c)?),
                 None => None,
@@ -315,9 +315,9 @@ impl Writer<'_> {
             };
             let t = lines.begin();
             match change {
-                ParamChange::ValueReplaced => self.value_text(node, p, Some(item), t)?,
-                ParamChange::Connected => self.connection_text(node, p, Some(item), t)?,
-                _ => self.original_text(item, t)?,
+                ParamChange::ValueReplaced => self.value_text(node, p, Some(src.decl(item)), t)?,
+                ParamChange::Connected => self.connection_text(node, p, Some(src.decl(item)), t)?,
+                _ => self.original_text(src.decl(item), src.value(item), t)?,
             }
             if let Some(c) = trailing {
                 t.push(b' ');
@@ -386,15 +386,20 @@ impl Writer<'_> {
 
     /// Appends decl and value exactly as written (one space between them if the source had a
     /// line break or comment there).
-    fn original_text(&self, item: &SourceParam, t: &mut Vec<u8>) -> io::Result<()> {
-        let between = self.bytes(&(item.decl.end..item.value.start))?;
+    fn original_text(
+        &self,
+        decl: Range<usize>,
+        value: Range<usize>,
+        t: &mut Vec<u8>,
+    ) -> io::Result<()> {
+        let between = self.bytes(&(decl.end..value.start))?;
         if between.iter().all(|&b| b == b' ' || b == b'\t') {
-            t.extend_from_slice(self.bytes(&(item.decl.start..item.value.end))?);
+            t.extend_from_slice(self.bytes(&(decl.start..value.end))?);
             return Ok(());
         }
-        t.extend_from_slice(self.bytes(&item.decl)?);
+        t.extend_from_slice(self.bytes(&decl)?);
         t.push(b' ');
-        t.extend_from_slice(self.bytes(&item.value)?);
+        t.extend_from_slice(self.bytes(&value)?);
         Ok(())
     }
 
@@ -403,15 +408,15 @@ impl Writer<'_> {
         &self,
         node: &Node,
         p: &Param,
-        item: Option<&SourceParam>,
+        source_decl: Option<Range<usize>>,
         t: &mut Vec<u8>,
     ) -> io::Result<()> {
         let Some(v) = p.value() else {
-            return self.connection_text(node, p, item, t);
+            return self.connection_text(node, p, source_decl, t);
         };
-        match (item, p.decl()) {
-            (Some(item), Some(d)) if !d.reference && d.inline_type && value_fits(&d.ty, v) => {
-                t.extend_from_slice(self.bytes(&item.decl)?)
+        match (source_decl, p.decl()) {
+            (Some(s), Some(d)) if !d.reference && d.inline_type && value_fits(&d.ty, v) => {
+                t.extend_from_slice(self.bytes(&s)?)
             }
             _ => {
                 t.push(b'"');
@@ -431,11 +436,11 @@ impl Writer<'_> {
         &self,
         node: &Node,
         p: &Param,
-        item: Option<&SourceParam>,
+        source_decl: Option<Range<usize>>,
         t: &mut Vec<u8>,
     ) -> io::Result<()> {
-        match (item, p.decl()) {
-            (Some(item), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&item.decl)?),
+        match (source_decl, p.decl()) {
+            (Some(s), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&s)?),
             _ => {
                 t.extend_from_slice(b"\"reference ");
                 self.connection_type(node, p, t);

@@ -207,6 +207,10 @@ pub(super) const CODES: &[(&str, &str)] = &[
         "a legacy shading request with `reference` parameters; passed through, not resolved",
     ),
     (
+        "RB021",
+        "a shading request longer than 4 GiB (from its keyword to its last value)",
+    ),
+    (
         "RG001",
         "a second definition of the same kind with the same id is ignored (a note when it only shadows a built-in definition)",
     ),

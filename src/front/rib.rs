@@ -538,6 +538,14 @@ fn index_u32(i: usize) -> u32 {
     u32::try_from(i).unwrap_or(u32::MAX)
 }
 
+/// `range`, a part of the request starting at byte `start`, as offsets from that start
+/// ([`SourceParam`] keeps 32-bit offsets); `None` beyond 4 GiB from the start.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn in_request(start: usize, range: Range<usize>) -> Option<Range<u32>> {
+    let at = |b: usize| u32::try_from(b.checked_sub(start)?).ok();
+    Some(at(range.start)?..at(range.end)?)
+}
+
 /// A decl and its value as found in a request, before interpretation.
 struct RawParam<'p> {
     decl_tok: Token,
@@ -646,26 +654,32 @@ impl<'a> Assembler<'a, '_> {
                 .into());
             };
             i += 1;
-            let mut item = SourceParam {
-                param: None,
-                decl: decl_tok.start..decl_tok.end,
-                value: value_piece.range(),
-                comments: 0..0,
-                trailing: false,
+            let value_range = value_piece.range();
+            end = value_range.end;
+            let origin = items.len() as u32;
+            let (Some(decl), Some(value)) = (
+                in_request(kw.start, decl_tok.start..decl_tok.end),
+                in_request(kw.start, value_range),
+            ) else {
+                return Err(Diagnostic::error(
+                    "RB021",
+                    format!("request `{handle}` is longer than 4 GiB"),
+                )
+                .at(lx.tok_loc(kw))
+                .into());
             };
-            end = item.value.end;
+            let mut item = SourceParam::new(origin, decl, value);
+            let mut trailing = false;
             if let Some(Piece::Comment(c)) = pieces.get(i) {
                 if c.line == value_piece.end_line() {
                     comments.push(c.start..c.end);
-                    item.trailing = true;
+                    trailing = true;
                     end = c.end;
                     i += 1;
                 }
             }
-            item.comments = index_u32(pending)..index_u32(comments.len());
+            item.set_comments(index_u32(pending)..index_u32(comments.len()), trailing);
             pending = comments.len();
-            let origin = items.len() as u32;
-            item.param = Some(origin);
             items.push(item);
             let raw = RawParam {
                 decl_tok,
@@ -770,9 +784,9 @@ impl<'a> Assembler<'a, '_> {
             let mut kept = Vec::with_capacity(params.len());
             for ((p, &shadow), item) in params.into_iter().zip(shadowed).zip(&mut source.items) {
                 if shadow {
-                    item.param = None;
+                    item.set_param(None);
                 } else {
-                    item.param = Some(kept.len() as u32);
+                    item.set_param(Some(kept.len() as u32));
                     kept.push(p);
                 }
             }

@@ -587,9 +587,9 @@ pub struct NodeSource {
     /// Every parameter occurrence in source order (duplicates included).
     pub items: Vec<SourceParam>,
     /// The comments of the parameter occurrences, in source order, each from `#` to the end
-    /// of its line (newline excluded); an occurrence names its own by
-    /// [`SourceParam::comments`] (see [`NodeSource::leading_comments`] and
-    /// [`NodeSource::trailing_comment`]). One list per request: most parameters have none.
+    /// of its line (newline excluded); an occurrence's own are given by
+    /// [`NodeSource::leading_comments`] and [`NodeSource::trailing_comment`]. One list per
+    /// request: most parameters have none.
     pub comments: Vec<Range<usize>>,
     /// Comments inside the span that precede no parameter (a request without parameters).
     pub end_comments: Vec<Range<usize>>,
@@ -612,6 +612,21 @@ impl NodeSource {
         }
     }
 
+    /// The bytes of `item`'s decl string token (quotes included) in the source.
+    pub fn decl(&self, item: &SourceParam) -> Range<usize> {
+        self.absolute(&item.decl)
+    }
+
+    /// The bytes of `item`'s value (array brackets or the bare value token included) in the
+    /// source.
+    pub fn value(&self, item: &SourceParam) -> Range<usize> {
+        self.absolute(&item.value)
+    }
+
+    fn absolute(&self, r: &Range<u32>) -> Range<usize> {
+        self.span.start + r.start as usize..self.span.start + r.end as usize
+    }
+
     fn of(&self, item: &SourceParam) -> &[Range<usize>] {
         self.comments
             .get(item.comments.start as usize..item.comments.end as usize)
@@ -619,22 +634,59 @@ impl NodeSource {
     }
 }
 
-/// One parameter occurrence inside a RIB request.
+/// One parameter occurrence inside a RIB request: which parameter it defines and where its
+/// decl, value and comments are ([`NodeSource::decl`], [`NodeSource::value`],
+/// [`NodeSource::leading_comments`], [`NodeSource::trailing_comment`]). A scene holds one per
+/// parameter read, so its byte ranges are 32-bit offsets from the start of the request's
+/// span (a request is at most 4 GiB long).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SourceParam {
-    /// Index into [`Node::all_params`] of the parameter this occurrence defines; `None` when a
-    /// later duplicate replaced it (RB015).
-    pub param: Option<u32>,
-    /// The decl string token (quotes included).
-    pub decl: Range<usize>,
-    /// The value (array brackets or the bare value token included).
-    pub value: Range<usize>,
+    /// Index into [`Node::all_params`], or [`NO_PARAM`].
+    param: u32,
+    /// The decl string token, relative to [`NodeSource::span`]'s start.
+    decl: Range<u32>,
+    /// The value, relative to [`NodeSource::span`]'s start.
+    value: Range<u32>,
     /// This occurrence's comments in [`NodeSource::comments`]: the leading ones, then the
-    /// trailing one when [`SourceParam::trailing`] is set.
-    pub comments: Range<u32>,
-    /// True if the last of [`SourceParam::comments`] is on the same line as the end of the
-    /// value.
-    pub trailing: bool,
+    /// trailing one when `trailing` is set.
+    comments: Range<u32>,
+    /// True if the last of `comments` is on the same line as the end of the value.
+    trailing: bool,
+}
+
+/// [`SourceParam::param`] of an occurrence that defines no parameter.
+const NO_PARAM: u32 = u32::MAX;
+
+impl SourceParam {
+    /// An occurrence defining parameter `param`, its decl and value given relative to the
+    /// start of the request's span, with no comments.
+    pub(crate) fn new(param: u32, decl: Range<u32>, value: Range<u32>) -> Self {
+        SourceParam {
+            param,
+            decl,
+            value,
+            comments: 0..0,
+            trailing: false,
+        }
+    }
+
+    /// Index into [`Node::all_params`] of the parameter this occurrence defines; `None` when
+    /// a later duplicate replaced it (RB015).
+    pub fn param(&self) -> Option<u32> {
+        (self.param != NO_PARAM).then_some(self.param)
+    }
+
+    /// Sets the parameter this occurrence defines (`None`: replaced by a later duplicate).
+    pub(crate) fn set_param(&mut self, param: Option<u32>) {
+        self.param = param.unwrap_or(NO_PARAM);
+    }
+
+    /// Sets this occurrence's comments in [`NodeSource::comments`]; `trailing` when the last
+    /// of them is on the same line as the end of the value.
+    pub(crate) fn set_comments(&mut self, comments: Range<u32>, trailing: bool) {
+        self.comments = comments;
+        self.trailing = trailing;
+    }
 }
 
 /// One shader node (one RIB request, one JSON node).

@@ -290,7 +290,7 @@ fn hand_edited_network_versions_and_quotes() {
         .items
         .iter()
         .find(|it| {
-            it.param
+            it.param()
                 .is_some_and(|k| net[solid].all_params()[k as usize].name() == "specularIor")
         })
         .unwrap();

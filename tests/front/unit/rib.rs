@@ -129,3 +129,15 @@ fn int_parsing() {
     assert_eq!(parse_int("1.5", &mut note), None);
     assert_eq!(notes.len(), 2);
 }
+
+/// Source ranges are kept as 32-bit offsets from the request's start: a part of a request
+/// more than 4 GiB from its start is refused (RB021), not truncated.
+#[test]
+fn request_offsets_fit_in_32_bits_or_are_refused() {
+    let start = 5usize << 32;
+    let max = u32::MAX as usize;
+    assert_eq!(in_request(start, start + 3..start + 9), Some(3..9));
+    assert_eq!(in_request(start, start..start + max), Some(0..u32::MAX));
+    assert_eq!(in_request(start, start..start + max + 1), None);
+    assert_eq!(in_request(start, start - 1..start), None);
+}

@@ -224,6 +224,12 @@ fn params_and_links_stay_compact() {
         std::mem::size_of::<Param>()
     );
     assert_eq!(std::mem::size_of::<Sym>(), 8);
+    // One per parameter occurrence read from RIB.
+    assert!(
+        std::mem::size_of::<SourceParam>() <= 32,
+        "{}",
+        std::mem::size_of::<SourceParam>()
+    );
 }
 
 /// Interned names: one copy per name, equal names are the same symbol, and the order is
