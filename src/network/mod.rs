@@ -421,7 +421,8 @@ impl Param {
         }
     }
 
-    /// A parameter as read from a file (crate-internal: used by the readers).
+    /// A parameter as read from a file (crate-internal: used by the USD reader).
+    #[cfg(any(feature = "usd", feature = "testkit"))]
     #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn from_source(
         name: String,
