@@ -424,21 +424,25 @@ fn node_body(
     body.push('\n');
     for p in node.params_by_name() {
         let declared = types.input_type(shader, p.name());
-        if let Some(v) = p.value() {
-            value_line(&mut body, declared.as_ref(), p.name(), v);
-        }
-        if p.is_connected() {
-            connect_line(
-                &mut body,
-                declared.as_ref(),
-                p.name(),
-                p.connections(),
-                paths,
-                outputs,
-            );
-        }
+        input_lines(&mut body, declared.as_ref(), p, paths, outputs);
     }
     body
+}
+
+/// Input `p` whole: its value line and its connection line, each when it has one.
+fn input_lines(
+    body: &mut String,
+    declared: Option<&Type>,
+    p: &crate::network::Param,
+    paths: &Paths,
+    outputs: &mut FxHashMap<NodeId, Vec<String>>,
+) {
+    if let Some(v) = p.value() {
+        value_line(body, declared, p.name(), v);
+    }
+    if p.is_connected() {
+        connect_line(body, declared, p.name(), p.connections(), paths, outputs);
+    }
 }
 
 /// The lines of node `id`'s `over` in an override layer: only the inputs resolution changed
@@ -490,14 +494,7 @@ fn over_body(
             ParamChange::Connected => {
                 connect_line(&mut body, declared, name, p.connections(), paths, outputs);
             }
-            ParamChange::Added => {
-                if let Some(v) = p.value() {
-                    value_line(&mut body, declared, name, v);
-                }
-                if p.is_connected() {
-                    connect_line(&mut body, declared, name, p.connections(), paths, outputs);
-                }
-            }
+            ParamChange::Added => input_lines(&mut body, declared, p, paths, outputs),
         }
     }
     body
