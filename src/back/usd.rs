@@ -596,7 +596,7 @@ pub fn write_usda(
     let mut outputs: FxHashMap<NodeId, Vec<String>> = FxHashMap::default();
     let mut text = String::with_capacity(1 << 16);
     text.push_str("#usda 1.0\n(\n");
-    let kinds: FxHashMap<usize, String>;
+    let kinds: Vec<String>;
     if let UsdMode::Over { sublayer } = mode {
         if !paths.from_usd {
             return Err(io::Error::new(
@@ -632,13 +632,12 @@ pub fn write_usda(
             tree.prims[at].node = Some(id);
         }
         declare_outputs(net, types, &mut tree, &outputs);
-        kinds = (0..tree.prims.len())
-            .map(|i| {
-                let head = match tree.prims[i].node {
-                    Some(id) if fresh.contains(&id) => "def Shader",
-                    _ => "over",
-                };
-                (i, head.to_string())
+        kinds = tree
+            .prims
+            .iter()
+            .map(|prim| match prim.node {
+                Some(id) if fresh.contains(&id) => "def Shader".to_string(),
+                _ => "over".to_string(),
             })
             .collect();
     } else {
@@ -724,8 +723,8 @@ fn prim_types(_: &str, _: &[u8], _: &[String]) -> FxHashMap<String, String> {
 /// Each prim's `def` line head in a flattened layer: `def Material`, `def Shader`, the type
 /// the source stage gives (`def Xform`, or `def` for an untyped prim), else `def NodeGraph`
 /// inside a Material and `def Scope` outside.
-fn flat_kinds(tree: &Tree, source: &FxHashMap<String, String>) -> FxHashMap<usize, String> {
-    let mut kinds = FxHashMap::default();
+fn flat_kinds(tree: &Tree, source: &FxHashMap<String, String>) -> Vec<String> {
+    let mut kinds = vec![String::new(); tree.prims.len()];
     let mut stack = vec![(0usize, false)];
     while let Some((i, in_material)) = stack.pop() {
         let prim = &tree.prims[i];
@@ -744,7 +743,7 @@ fn flat_kinds(tree: &Tree, source: &FxHashMap<String, String>) -> FxHashMap<usiz
         } else {
             "def Scope".to_string()
         };
-        kinds.insert(i, head);
+        kinds[i] = head;
         let inner = in_material || prim.material.is_some();
         stack.extend(prim.children.iter().map(|&c| (c, inner)));
     }
@@ -753,7 +752,7 @@ fn flat_kinds(tree: &Tree, source: &FxHashMap<String, String>) -> FxHashMap<usiz
 
 /// The prims of `tree` as usda text: each child of the pseudo-root with its `kinds` head,
 /// its lines, and its children, depth first.
-fn emit(tree: &Tree, kinds: &FxHashMap<usize, String>, text: &mut String) {
+fn emit(tree: &Tree, kinds: &[String], text: &mut String) {
     struct Frame {
         prim: usize,
         next: usize,
@@ -783,7 +782,7 @@ fn emit(tree: &Tree, kinds: &FxHashMap<usize, String>, text: &mut String) {
         top.next += 1;
         let indent = "    ".repeat(depth);
         let prim = &tree.prims[c];
-        let _ = writeln!(text, "{indent}{} \"{}\"\n{indent}{{", kinds[&c], prim.name);
+        let _ = writeln!(text, "{indent}{} \"{}\"\n{indent}{{", kinds[c], prim.name);
         let inner = "    ".repeat(depth + 1);
         for l in prim.lines.lines() {
             let _ = writeln!(text, "{inner}{l}");

@@ -176,6 +176,19 @@ impl Reader<'_> {
         self.diags.push(d);
     }
 
+    /// US002: the attribute `apath` is connected to `prim`, which is not a Shader; the
+    /// connection is kept dangling (`what`: a connection or a terminal).
+    fn warn_not_a_shader(&mut self, apath: &str, prim: &str, what: &str) {
+        self.warn(
+            "US002",
+            apath,
+            format!(
+                "`{apath}` is connected to `{prim}`, which is not a Shader on the stage; kept \
+                 as a dangling {what}"
+            ),
+        );
+    }
+
     fn kind_of(&self, prim: &sdf::Path) -> Option<PrimKind> {
         let t = match self.flat {
             Some(data) => match data
@@ -446,14 +459,7 @@ impl Reader<'_> {
                             }
                         }
                         Source::Missing(prim, output) => {
-                            self.warn(
-                                "US002",
-                                &apath,
-                                format!(
-                                    "`{apath}` is connected to `{prim}`, which is not a Shader \
-                                     on the stage; kept as a dangling connection"
-                                ),
-                            );
+                            self.warn_not_a_shader(&apath, &prim, "connection");
                             links.push((prim, output, true));
                         }
                     }
@@ -524,14 +530,7 @@ impl Reader<'_> {
                     let link = match s {
                         Source::Output(prim, _) => Link::node(this.nodes[&prim], None),
                         Source::Missing(prim, _) => {
-                            this.warn(
-                                "US002",
-                                &apath,
-                                format!(
-                                    "`{apath}` is connected to `{prim}`, which is not a Shader \
-                                     on the stage; kept as a dangling terminal"
-                                ),
-                            );
+                            this.warn_not_a_shader(&apath, &prim, "terminal");
                             Link::missing(&prim, None)
                         }
                         Source::Value(..) => continue,
