@@ -5,6 +5,9 @@
 //! The spec's sizes: 5 views (runs) per configuration, 10⁶ samples each, the pooled-cell rule
 //! and the Šidák correction over every run of the suite. `harness_rejects_wrong_pdfs` shows
 //! that the harness detects a 10 % error in a GGX width and a wrong hemisphere density.
+//!
+//! At these sizes the suite is run optimised: `cargo test --release` (and CI) runs it, a
+//! debug `cargo test` lists it as ignored.
 
 use glam::Vec3;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
@@ -433,21 +436,37 @@ fn consistency(name: &str, p: &PreparedLobe, tol: f32, seed: u64) -> Vec<String>
 const PARTS: usize = 4;
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "spec-sized statistical suite: runs with `cargo test --release`"
+)]
 fn chi2_every_sampled_leaf_part_1() {
     chi2_sampled_leaves(0);
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "spec-sized statistical suite: runs with `cargo test --release`"
+)]
 fn chi2_every_sampled_leaf_part_2() {
     chi2_sampled_leaves(1);
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "spec-sized statistical suite: runs with `cargo test --release`"
+)]
 fn chi2_every_sampled_leaf_part_3() {
     chi2_sampled_leaves(2);
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "spec-sized statistical suite: runs with `cargo test --release`"
+)]
 fn chi2_every_sampled_leaf_part_4() {
     chi2_sampled_leaves(3);
 }

@@ -6,6 +6,8 @@
 //! (specular delta, transparency) has no density: it counts as a sample outside the pdf,
 //! whose mass is then below one by that choice's probability. The per-sample consistency of
 //! `sample` with `eval` and the mean weight against `albedo()` are in tests/interp/material.rs.
+//! Run optimised, as the leaf suite: `cargo test --release` (and CI); ignored by a debug
+//! `cargo test`.
 
 use crate::common;
 
@@ -26,6 +28,10 @@ fn materials() -> Vec<(String, MaterialIr)> {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "spec-sized statistical suite: runs with `cargo test --release`"
+)]
 fn chi2_every_material() {
     let materials = materials();
     let cfg = Chi2Config::default();
