@@ -151,8 +151,12 @@ pub fn parse_rib(
         match tok.kind {
             TokKind::Comment => next = lx.next_token(diags)?,
             TokKind::Ident => {
-                let name = std::str::from_utf8(lx.bytes(&tok)).unwrap_or("");
-                if let Some(kind) = RequestKind::from_keyword(name) {
+                // Request names are ASCII: matched as bytes, no UTF-8 check.
+                let word = lx.bytes(&tok);
+                if let Some(kind) = RequestKind::ALL
+                    .into_iter()
+                    .find(|k| k.keyword().as_bytes() == word)
+                {
                     let after = read_args(&mut lx, diags, true, &mut args)?;
                     asm.shading_request(&lx, kind, &tok, &args, diags)?;
                     // Stop at the first node too many, before the rest is read.
@@ -162,9 +166,9 @@ pub fn parse_rib(
                         .map_err(|e| e.at(lx.tok_loc(&tok)))?;
                     next = after;
                 } else {
-                    let legacy = LEGACY_REQUESTS.contains(&name);
-                    let after = read_args(&mut lx, diags, legacy, &mut args)?;
-                    if legacy && has_reference_decl(bytes, &args.pieces) {
+                    let legacy = LEGACY_REQUESTS.iter().find(|name| name.as_bytes() == word);
+                    let after = read_args(&mut lx, diags, legacy.is_some(), &mut args)?;
+                    if let Some(name) = legacy.filter(|_| has_reference_decl(bytes, &args.pieces)) {
                         diags.push(
                             Diagnostic::info(
                                 "RB020",

@@ -394,7 +394,7 @@ fn bytes_equal(w: u64, b: u8) -> u64 {
 }
 
 /// The end (after the closing quote `q`) of the string starting at `start`, when it is
-/// plain: within [`SHORT_STRING`] bytes, ASCII, with no backslash and no line break. Then
+/// plain: within [`SHORT_STRING`] bytes, printable ASCII, with no backslash. Then
 /// its columns are its bytes and it needs no decoding. `None` otherwise (the caller scans it
 /// in full). Nearly every string of a scene (decls, handles, connections) is plain, and a
 /// vector search, a line count and a character count each cost more than such a string.
@@ -403,10 +403,11 @@ fn plain_string_end(src: &[u8], start: usize, q: u8) -> Option<usize> {
     while i - start <= SHORT_STRING {
         let chunk: [u8; 8] = src.get(i..i + 8)?.try_into().ok()?;
         let w = u64::from_le_bytes(chunk);
-        let stop = bytes_equal(w, q)
-            | bytes_equal(w, b'\\')
-            | bytes_equal(w, b'\n')
-            | (w & 0x8080_8080_8080_8080);
+        // Control bytes (a line break among them) and non-ASCII bytes in one test: a byte
+        // below 0x20 borrows when 0x20 is subtracted from it, a byte from 0x80 has its high
+        // bit. A borrow can flag bytes above the first one flagged, never below it.
+        let special = (w.wrapping_sub(0x2020_2020_2020_2020) | w) & 0x8080_8080_8080_8080;
+        let stop = bytes_equal(w, q) | bytes_equal(w, b'\\') | special;
         if stop != 0 {
             let at = i + (stop.trailing_zeros() / 8) as usize;
             return (src[at] == q).then_some(at + 1);
