@@ -5,7 +5,8 @@
 //! or written; the readers' rows leave the dropping of the network out); `scene/parse_json`
 //! reads the same network from its JSON form (issue 33: ≤ 1.5× `scene/parse`). `scene_cpu/resolve` is the same resolution measured as the
 //! thread's CPU time (ns): resolution is single-threaded, and on the shared development
-//! machine wall-clock time mostly measures the other processes.
+//! machine wall-clock time mostly measures the other processes. `scene_cpu/parse` is the RIB
+//! reader's thread CPU time, for the same reason.
 
 use criterion::measurement::Measurement;
 use criterion::{
@@ -110,9 +111,14 @@ fn bench_cpu(c: &mut Criterion<CpuTime>) {
     group.sample_size(10);
     for materials in [10_000usize, 20_000] {
         let rib = layered_scene(materials).into_bytes();
-        let mut diags = Diagnostics::new();
-        let parsed =
-            parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap();
+        let parse = || {
+            let mut diags = Diagnostics::new();
+            parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap()
+        };
+        let parsed = parse();
+        group.bench_with_input(BenchmarkId::new("parse", materials), &materials, |b, _| {
+            b.iter_with_large_drop(parse)
+        });
         bench_resolve(&mut group, &reg, &parsed, materials);
     }
     group.finish();

@@ -133,10 +133,12 @@ pub fn parse_rib(
     let mut lx = Lexer::new(bytes, file.clone(), options.strict);
     // The reader asks about the type of every parameter of every node.
     let types = Memo::new(types);
+    let mut net = Network::new();
+    net.reserve_nodes(node_estimate(bytes.len(), &options.limits));
     let mut asm = Assembler {
         src: bytes,
         types: &types,
-        net: Network::new(),
+        net,
         decls: HashTable::new(),
         values: FxHashMap::default(),
         shared_values: 0,
@@ -149,8 +151,12 @@ pub fn parse_rib(
         match tok.kind {
             TokKind::Comment => next = lx.next_token(diags)?,
             TokKind::Ident => {
-                let name = std::str::from_utf8(lx.bytes(&tok)).unwrap_or("");
-                if let Some(kind) = RequestKind::from_keyword(name) {
+                // Request names are ASCII: matched as bytes, no UTF-8 check.
+                let word = lx.bytes(&tok);
+                if let Some(kind) = RequestKind::ALL
+                    .into_iter()
+                    .find(|k| k.keyword().as_bytes() == word)
+                {
                     let after = read_args(&mut lx, diags, true, &mut args)?;
                     asm.shading_request(&lx, kind, &tok, &args, diags)?;
                     // Stop at the first node too many, before the rest is read.
@@ -160,9 +166,9 @@ pub fn parse_rib(
                         .map_err(|e| e.at(lx.tok_loc(&tok)))?;
                     next = after;
                 } else {
-                    let legacy = LEGACY_REQUESTS.contains(&name);
-                    let after = read_args(&mut lx, diags, legacy, &mut args)?;
-                    if legacy && has_reference_decl(bytes, &args.pieces) {
+                    let legacy = LEGACY_REQUESTS.iter().find(|name| name.as_bytes() == word);
+                    let after = read_args(&mut lx, diags, legacy.is_some(), &mut args)?;
+                    if let Some(name) = legacy.filter(|_| has_reference_decl(bytes, &args.pieces)) {
                         diags.push(
                             Diagnostic::info(
                                 "RB020",
@@ -188,6 +194,21 @@ pub fn parse_rib(
     net.check_limits(&options.limits)?;
     add_materials(&mut net);
     Ok(net)
+}
+
+/// Bytes of RIB per shading node assumed when room for the nodes is reserved: a node request
+/// with a few parameters takes more (the bench scene takes about 310), so a file of shading
+/// networks rarely outgrows the estimate, and one that is mostly geometry reserves address
+/// space it never touches.
+const BYTES_PER_NODE: usize = 256;
+
+/// Nodes reserved at most before reading (about 64 MB of address space).
+const MAX_RESERVED_NODES: usize = 1 << 18;
+
+/// How many nodes to reserve room for before reading `len` bytes.
+fn node_estimate(len: usize, limits: &Limits) -> usize {
+    let cap = usize::try_from(limits.nodes).unwrap_or(usize::MAX);
+    (len / BYTES_PER_NODE).min(MAX_RESERVED_NODES).min(cap)
 }
 
 fn describe(t: &Token) -> &'static str {
@@ -688,7 +709,7 @@ impl<'a> Assembler<'a, '_> {
                 arena: &args.items,
                 origin,
             };
-            params.push(self.read_param(&shader, raw, diags)?);
+            self.read_param(&shader, raw, &mut params, diags)?;
         }
         let (repeated, shadowed) = duplicates(&params);
         for (p, _) in params.iter().zip(&repeated).filter(|(_, r)| **r) {
@@ -705,16 +726,18 @@ impl<'a> Assembler<'a, '_> {
             diags.push(d);
         }
 
-        if self.is_reuse(&handle, &shader, &params) {
+        // One look-up of the handle for the re-use and redefinition checks.
+        let versions = self.net.versions(&handle);
+        let (prev, defined) = (versions.last().copied(), versions.len());
+        if self.is_reuse(prev, &shader, &params) {
             return Ok(());
         }
         let location = lx.tok_loc(kw);
-        if let Some(&prev) = self.net.versions(&handle).last() {
+        if let Some(prev) = prev {
             let mut d = Diagnostic::warning(
                 "RB017",
                 format!(
-                    "handle `{handle}` redefined (version {}); later references bind to this definition",
-                    self.net.versions(&handle).len()
+                    "handle `{handle}` redefined (version {defined}); later references bind to this definition"
                 ),
             )
             .at(location.clone());
@@ -753,10 +776,10 @@ impl<'a> Assembler<'a, '_> {
         Ok(())
     }
 
-    /// A request whose handle is defined, for the same shader, with no parameters other than
-    /// `string __materialid` re-uses the earlier node.
-    fn is_reuse(&self, handle: &str, shader: &str, params: &[Param]) -> bool {
-        let Some(prev) = self.net.find(handle) else {
+    /// A request whose handle is defined (`prev`, its latest version), for the same shader,
+    /// with no parameters other than `string __materialid` re-uses the earlier node.
+    fn is_reuse(&self, prev: Option<NodeId>, shader: &str, params: &[Param]) -> bool {
+        let Some(prev) = prev else {
             return false;
         };
         self.net[prev].shader() == shader
@@ -799,12 +822,15 @@ impl<'a> Assembler<'a, '_> {
         self.net.add_source_edges(id);
     }
 
+    /// Reads one parameter into `params` (built in place there: a parameter returned
+    /// through memory was read back before its stores had landed).
     fn read_param(
         &mut self,
         shader: &Arc<str>,
         raw: RawParam<'_>,
+        params: &mut Vec<Param>,
         diags: &mut Diagnostics,
-    ) -> Result<Param, Error> {
+    ) -> Result<(), Error> {
         let RawParam {
             decl_tok,
             location,
@@ -818,7 +844,8 @@ impl<'a> Assembler<'a, '_> {
             let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
             let at = ParamAt::LineColumn(location.line, location.column);
             let param = Param::from_shared(name, None, Some(decl), at, Some(origin));
-            return Ok(param.with_source_links(links));
+            params.push(param.with_source_links(links));
+            return Ok(());
         }
         if decl.reference {
             diags.push(
@@ -858,13 +885,14 @@ impl<'a> Assembler<'a, '_> {
             }
             v
         };
-        Ok(Param::from_shared(
+        params.push(Param::from_shared(
             name,
             Some(value),
             Some(decl),
             ParamAt::LineColumn(location.line, location.column),
             Some(origin),
-        ))
+        ));
+        Ok(())
     }
 
     /// The interned output name `name` (see [`Assembler::outputs`]).

@@ -1178,34 +1178,43 @@ impl Network {
     /// Insert a prepared node, assigning its version and key (crate-internal: readers).
     #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn insert_node(&mut self, mut node: Node) -> NodeId {
-        let handle = node.handle();
-        let version = match self.handles.get(handle) {
-            Some(versions) => versions.len(),
-            None => 0,
-        };
-        node.version = version as u32;
-        node.key.truncate(node.handle_len);
-        node.key.push('#');
-        node.key.push_str(itoa::Buffer::new().format(version));
+        fn set_version(node: &mut Node, version: usize) {
+            node.version = version as u32;
+            node.key.truncate(node.handle_len);
+            node.key.push('#');
+            node.key.push_str(itoa::Buffer::new().format(version));
+        }
         match self.shaders.get(&*node.shader) {
             Some(shared) => node.shader = shared.clone(),
             None => {
                 self.shaders.insert(node.shader.clone());
             }
         }
+        // One look-up of the handle.
         match self.handles.get_mut(node.handle()) {
             Some(versions) => {
+                set_version(&mut node, versions.len());
                 let id = self.graph.add_node(node);
                 versions.push(id);
                 id
             }
             None => {
+                set_version(&mut node, 0);
                 let key: Box<str> = Box::from(node.handle());
                 let id = self.graph.add_node(node);
-                self.handles.entry(key).or_default().push(id);
+                self.handles.insert(key, smallvec::smallvec![id]);
                 id
             }
         }
+    }
+
+    /// Room for `nodes` more nodes and as many edges (crate-internal: readers that can
+    /// estimate them). The tables then fill in place: growing them by doubling copied every
+    /// node several times and touched twice the memory. Room that stays unused is address
+    /// space, not memory, until something is written there.
+    pub(crate) fn reserve_nodes(&mut self, nodes: usize) {
+        self.graph.reserve_nodes(nodes);
+        self.graph.reserve_edges(nodes);
     }
 
     /// The network's shared copy of shader id `shader` (crate-internal: readers build nodes

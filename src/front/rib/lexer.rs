@@ -3,9 +3,10 @@
 //! Tokens are produced one at a time; the parser keeps only the tokens of the shading request
 //! it is reading, so pass-through requests (geometry with millions of numbers) cost no memory.
 //! String contents are decoded on demand ([`decode_string`], `decode_str`). Short plain
-//! strings (ASCII, no escape, no line break) are scanned eight bytes at a time and move only
-//! the column; comments and other strings are scanned with `memchr`, and their lines and
-//! columns are counted over whole tokens rather than byte by byte.
+//! strings (ASCII, no escape, no line break) are scanned eight bytes at a time; comments and
+//! other strings are scanned with `memchr`. A column is computed when a token starts, from
+//! the offset of its line's start and the UTF-8 continuation bytes since (which only strings
+//! and comments can hold), so only line breaks cost anything to track.
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use std::borrow::Cow;
@@ -52,53 +53,84 @@ pub(crate) struct Token {
 /// The length of the RIB number at the start of `i`:
 /// `[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?`, or `None` if `i` does not start
 /// with one.
+#[inline]
 fn number(i: &[u8]) -> Option<usize> {
-    let digits = |from: usize| {
-        i[from.min(i.len())..]
-            .iter()
-            .take_while(|b| b.is_ascii_digit())
-            .count()
+    // The end of the digits from `n` on.
+    let digits = |mut n: usize| {
+        while i.get(n).is_some_and(u8::is_ascii_digit) {
+            n += 1;
+        }
+        n
     };
     let mut n = usize::from(matches!(i.first(), Some(b'+' | b'-')));
-    let int = digits(n);
-    n += int;
+    let int_end = digits(n);
+    let int = int_end - n;
+    n = int_end;
     if i.get(n) == Some(&b'.') {
-        let frac = digits(n + 1);
-        if int == 0 && frac == 0 {
+        let frac_end = digits(n + 1);
+        if int == 0 && frac_end == n + 1 {
             return None;
         }
-        n += 1 + frac;
+        n = frac_end;
     } else if int == 0 {
         return None;
     }
     // An exponent only when digits follow it (`1e` is the number `1` then an identifier).
     if matches!(i.get(n), Some(b'e' | b'E')) {
-        let sign = usize::from(matches!(i.get(n + 1), Some(b'+' | b'-')));
-        let exp = digits(n + 1 + sign);
-        if exp > 0 {
-            n += 1 + sign + exp;
+        let from = n + 1 + usize::from(matches!(i.get(n + 1), Some(b'+' | b'-')));
+        let exp_end = digits(from);
+        if exp_end > from {
+            n = exp_end;
         }
     }
     Some(n)
 }
 
-/// The number of characters in `s` (UTF-8 continuation bytes are not counted).
-fn chars(s: &[u8]) -> u32 {
-    s.iter().filter(|&&b| (b as i8) >= -0x40).count() as u32
+/// The number of UTF-8 continuation bytes in `s` (bytes that start no character).
+fn continuations(s: &[u8]) -> usize {
+    s.iter().filter(|&&b| b & 0xC0 == 0x80).count()
 }
 
 /// True for the RIB whitespace bytes: space, `\t`, `\r`, `\n`, `\f`, `\v`.
+#[inline]
 pub(crate) fn is_space(b: u8) -> bool {
-    matches!(b, b' ' | b'\t' | b'\r' | b'\n' | 0x0c | 0x0b)
+    CLASS[usize::from(b)] & SPACE != 0
 }
 
-/// The tokenizer state: position, line and column (in characters) of the next byte.
+/// [`CLASS`] bit: RIB whitespace.
+const SPACE: u8 = 1;
+/// [`CLASS`] bit: a byte of an identifier (`[A-Za-z0-9_]`).
+const WORD: u8 = 2;
+
+/// The class bits of each byte value (one table look-up per byte in the scanning loops).
+static CLASS: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut b = 0;
+    while b < 256 {
+        let c = b as u8;
+        if matches!(c, b' ' | b'\t' | b'\r' | b'\n' | 0x0c | 0x0b) {
+            t[b] = SPACE;
+        }
+        if c.is_ascii_alphanumeric() || c == b'_' {
+            t[b] = WORD;
+        }
+        b += 1;
+    }
+    t
+};
+
+/// The tokenizer state: position and line of the next byte, and what its column (in
+/// characters) is computed from. Only line breaks and the rare non-ASCII text inside strings
+/// and comments update the column's parts; the bytes between them cost nothing.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 pub(crate) struct Lexer<'a> {
     src: &'a [u8],
     pos: usize,
     line: u32,
-    col: u32,
+    /// The offset of the first byte of the current line.
+    line_start: usize,
+    /// UTF-8 continuation bytes between `line_start` and `pos` (they start no character).
+    continuations: usize,
     file: Arc<str>,
     strict: bool,
 }
@@ -110,7 +142,8 @@ impl<'a> Lexer<'a> {
             src,
             pos: 0,
             line: 1,
-            col: 1,
+            line_start: 0,
+            continuations: 0,
             file,
             strict,
         }
@@ -136,43 +169,56 @@ impl<'a> Lexer<'a> {
         &self.src[t.start..t.end]
     }
 
+    /// The column (in characters, from 1) of the next byte.
+    #[inline(always)]
+    fn col(&self) -> u32 {
+        // Wrapping, as counting columns one by one in 32 bits did.
+        ((self.pos - self.line_start - self.continuations) as u32).wrapping_add(1)
+    }
+
     /// Advance over `src[pos..end]`, keeping line and column (characters) up to date.
     fn advance_to(&mut self, end: usize) {
         let s = &self.src[self.pos..end];
         match memchr::memrchr(b'\n', s) {
-            None => self.col += chars(s),
+            None => self.continuations += continuations(s),
             Some(last) => {
                 self.line += memchr::memchr_iter(b'\n', s).count() as u32;
-                self.col = 1 + chars(&s[last + 1..]);
+                self.line_start = self.pos + last + 1;
+                self.continuations = continuations(&s[last + 1..]);
             }
         }
         self.pos = end;
     }
 
+    #[inline(always)]
     fn skip_space(&mut self) {
-        while let Some(&b) = self.src.get(self.pos) {
+        let mut pos = self.pos;
+        while let Some(&b) = self.src.get(pos) {
             if !is_space(b) {
                 break;
             }
+            pos += 1;
             if b == b'\n' {
                 self.line += 1;
-                self.col = 1;
-            } else {
-                self.col += 1;
+                self.line_start = pos;
+                self.continuations = 0;
             }
-            self.pos += 1;
         }
+        self.pos = pos;
     }
 
     /// The next token, or `None` at the end of input. Errors: RB002, RB003, RB004 (and RB011
     /// under `strict`). Infos RB010, RB011 go to `diags`.
+    // Inlined into the argument loop: a token returned through memory was read back before
+    // its stores had landed, and that stall was the loop's largest cost.
+    #[inline(always)]
     pub fn next_token(&mut self, diags: &mut Diagnostics) -> Result<Option<Token>, Error> {
         self.skip_space();
         let start = self.pos;
         let Some(&b) = self.src.get(start) else {
             return Ok(None);
         };
-        let (line, col) = (self.line, self.col);
+        let (line, col) = (self.line, self.col());
         let mut tok = Token {
             kind: TokKind::Comment,
             start,
@@ -187,13 +233,12 @@ impl<'a> Lexer<'a> {
                 let end =
                     memchr::memchr(b'\n', &self.src[start..]).map_or(self.src.len(), |n| start + n);
                 // No newline inside: only the column moves.
-                self.col += chars(&self.src[start..end]);
+                self.continuations += continuations(&self.src[start..end]);
                 self.pos = end;
                 tok.kind = TokKind::Comment;
             }
             b'[' | b']' => {
                 self.pos += 1;
-                self.col += 1;
                 tok.kind = if b == b'[' {
                     TokKind::Open
                 } else {
@@ -202,9 +247,8 @@ impl<'a> Lexer<'a> {
             }
             b'"' | b'\'' => {
                 let escaped = match plain_string_end(self.src, start, b) {
-                    // One character per byte and no line break: only the column moves.
+                    // One character per byte and no line break: only the position moves.
                     Some(end) => {
-                        self.col += (end - start) as u32;
                         self.pos = end;
                         false
                     }
@@ -233,17 +277,15 @@ impl<'a> Lexer<'a> {
             c if c.is_ascii_alphabetic() || c == b'_' => {
                 let len = self.src[start..]
                     .iter()
-                    .position(|&c| !(c.is_ascii_alphanumeric() || c == b'_'))
+                    .position(|&c| CLASS[usize::from(c)] & WORD == 0)
                     .unwrap_or(self.src.len() - start);
                 self.pos += len;
-                self.col += len as u32;
                 tok.kind = TokKind::Ident;
             }
             c if c.is_ascii_digit() || matches!(c, b'+' | b'-' | b'.') => {
                 match number(&self.src[start..]) {
                     Some(len) => {
                         self.pos += len;
-                        self.col += len as u32;
                         tok.kind = TokKind::Number;
                     }
                     None => return Err(self.unexpected(start, line, col)),
@@ -291,7 +333,7 @@ impl<'a> Lexer<'a> {
         loop {
             let Some(off) = memchr::memchr2(q, b'\\', &self.src[i..]) else {
                 return Err(Diagnostic::error("RB003", "unterminated string")
-                    .at(self.loc(self.line, self.col))
+                    .at(self.loc(self.line, self.col()))
                     .into());
             };
             i += off;
@@ -301,7 +343,7 @@ impl<'a> Lexer<'a> {
             escaped = true;
             let Some(&e) = self.src.get(i + 1) else {
                 return Err(Diagnostic::error("RB003", "unterminated string")
-                    .at(self.loc(self.line, self.col))
+                    .at(self.loc(self.line, self.col()))
                     .into());
             };
             if !is_known_escape(e, q) {
@@ -325,7 +367,7 @@ impl<'a> Lexer<'a> {
 
     /// Line and column of offset `at` inside the current token (at ≥ pos).
     fn position_of(&self, at: usize) -> (u32, u32) {
-        let (mut line, mut col) = (self.line, self.col);
+        let (mut line, mut col) = (self.line, self.col());
         for &b in &self.src[self.pos..at] {
             if b == b'\n' {
                 line += 1;
@@ -352,7 +394,7 @@ fn bytes_equal(w: u64, b: u8) -> u64 {
 }
 
 /// The end (after the closing quote `q`) of the string starting at `start`, when it is
-/// plain: within [`SHORT_STRING`] bytes, ASCII, with no backslash and no line break. Then
+/// plain: within [`SHORT_STRING`] bytes, printable ASCII, with no backslash. Then
 /// its columns are its bytes and it needs no decoding. `None` otherwise (the caller scans it
 /// in full). Nearly every string of a scene (decls, handles, connections) is plain, and a
 /// vector search, a line count and a character count each cost more than such a string.
@@ -361,10 +403,11 @@ fn plain_string_end(src: &[u8], start: usize, q: u8) -> Option<usize> {
     while i - start <= SHORT_STRING {
         let chunk: [u8; 8] = src.get(i..i + 8)?.try_into().ok()?;
         let w = u64::from_le_bytes(chunk);
-        let stop = bytes_equal(w, q)
-            | bytes_equal(w, b'\\')
-            | bytes_equal(w, b'\n')
-            | (w & 0x8080_8080_8080_8080);
+        // Control bytes (a line break among them) and non-ASCII bytes in one test: a byte
+        // below 0x20 borrows when 0x20 is subtracted from it, a byte from 0x80 has its high
+        // bit. A borrow can flag bytes above the first one flagged, never below it.
+        let special = (w.wrapping_sub(0x2020_2020_2020_2020) | w) & 0x8080_8080_8080_8080;
+        let stop = bytes_equal(w, q) | bytes_equal(w, b'\\') | special;
         if stop != 0 {
             let at = i + (stop.trailing_zeros() / 8) as usize;
             return (src[at] == q).then_some(at + 1);
@@ -395,7 +438,11 @@ pub(crate) fn decode_string(src: &[u8], t: &Token) -> String {
 pub(crate) fn decode_str<'s>(src: &'s [u8], t: &Token) -> Cow<'s, str> {
     let inner = &src[t.start + 1..t.end - 1];
     if !t.escaped {
-        return String::from_utf8_lossy(inner);
+        // Valid UTF-8 (nearly always, and ASCII checks fast) before the lossy decoder.
+        return match std::str::from_utf8(inner) {
+            Ok(s) => Cow::Borrowed(s),
+            Err(_) => String::from_utf8_lossy(inner),
+        };
     }
     let mut out: Vec<u8> = Vec::with_capacity(inner.len());
     let mut i = 0;
