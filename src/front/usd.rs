@@ -880,6 +880,21 @@ fn open_flat(name: &str, bytes: &[u8]) -> Option<(sdf::LayerData, Vec<sdf::Path>
     read.ok().flatten()
 }
 
+/// The usda text `bytes` read as one layer, without composing anything (crate-internal:
+/// the USD writer encodes its text layers in the binary form from it).
+pub(crate) fn read_usda_layer(bytes: &[u8]) -> Result<sdf::LayerData, String> {
+    let (resolver, root) = mem_resolver("<written>.usda", bytes);
+    let resolved = ar::ResolvedPath::new(&root);
+    let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved)
+    }));
+    match read {
+        Ok(Ok(data)) => Ok(data),
+        Ok(Err(e)) => Err(format!("{e:#}")),
+        Err(_) => Err("the USD library failed on this layer".to_string()),
+    }
+}
+
 /// Read the materials of the USD stage whose root layer is `bytes` (named `name` in
 /// diagnostics; references and sublayers are found relative to it), with the parameter
 /// types of `types`. A stage that cannot be opened is an error (US001); composition
