@@ -480,6 +480,11 @@ def Material "M" {
 }
 "#;
     inputs.push(("odd.usda".to_string(), odd.to_vec()));
+    // The same layer as a crate file: read alone by the crate reader.
+    let odd_layer = openusd::usda::parse(std::str::from_utf8(odd).unwrap()).unwrap();
+    let mut odd_usdc = std::io::Cursor::new(Vec::new());
+    openusd::usdc::CrateWriter::write(&odd_layer, &mut odd_usdc).unwrap();
+    inputs.push(("odd.usdc".to_string(), odd_usdc.into_inner()));
     // An inactive prim, a class inherited by a material, an over: composed.
     let arcs = br#"#usda 1.0
 class Material "Base" {
@@ -567,6 +572,7 @@ def Scope "Off" (active = false) {
             "override.rib.usda",
             "override.rib.usdc",
             "odd.usda",
+            "odd.usdc",
         ]
     );
 }
