@@ -976,14 +976,22 @@ impl Specs for sdf::LayerData {
     }
 }
 
+/// The hash [`CrateLayer`] finds a spec by: its path's text, hashed with FxHash.
+fn path_hash(path: &sdf::Path) -> u64 {
+    use std::hash::BuildHasher;
+    rustc_hash::FxBuildHasher.hash_one(path.as_str())
+}
+
 /// A crate file's specs, indexed once: each spec's type and fields by path, each field
 /// name's token, so that a field is found by comparing token indices in the spec's field
 /// set (`openusd`'s own crate data compares names and hashes paths with SipHash); values
 /// are decoded from the file when asked for.
 struct CrateLayer {
     file: std::cell::RefCell<openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>>,
-    /// Each spec's type and the start of its field set in the file's field sets.
-    specs: FxHashMap<sdf::Path, (sdf::SpecType, usize)>,
+    /// Each spec: its path's index in the file's paths, its type and the start of its
+    /// field set in the file's field sets, found by the hash of its path (so the paths are
+    /// not copied).
+    specs: hashbrown::HashTable<(usize, sdf::SpecType, usize)>,
     /// The token index of each field name (under the names `openusd`'s layers use:
     /// `propertyChildren` for the crate's `properties`).
     names: FxHashMap<String, usize>,
@@ -1001,12 +1009,23 @@ impl CrateLayer {
         let mut file = openusd::usdc::CrateFile::open(io::Cursor::new(bytes.to_vec())).ok()?;
         file.validate().ok()?;
         let specs_in = std::mem::take(&mut file.specs);
-        let mut specs = FxHashMap::default();
-        specs.reserve(specs_in.len());
+        let mut specs = hashbrown::HashTable::with_capacity(specs_in.len());
+        let paths = &file.paths;
         for spec in &specs_in {
-            let path = file.paths.get(spec.path_index)?.clone();
+            let path = paths.get(spec.path_index)?;
             file.fieldsets.get(spec.fieldset_index)?;
-            specs.insert(path, (spec.spec_type, spec.fieldset_index));
+            let entry = (spec.path_index, spec.spec_type, spec.fieldset_index);
+            // A path given twice keeps its last spec, as a map would.
+            match specs.entry(
+                path_hash(path),
+                |&(i, ..): &(usize, _, _)| paths[i] == *path,
+                |&(i, ..)| path_hash(&paths[i]),
+            ) {
+                hashbrown::hash_table::Entry::Occupied(mut e) => *e.get_mut() = entry,
+                hashbrown::hash_table::Entry::Vacant(e) => {
+                    e.insert(entry);
+                }
+            }
         }
         let mut names = FxHashMap::default();
         let mut field_names = FxHashMap::default();
@@ -1035,6 +1054,14 @@ impl CrateLayer {
         })
     }
 
+    /// The type and the field set start of the spec at `path`.
+    fn spec(&self, path: &sdf::Path) -> Option<(sdf::SpecType, usize)> {
+        let file = self.file.borrow();
+        self.specs
+            .find(path_hash(path), |&(i, ..)| file.paths[i] == *path)
+            .map(|&(_, ty, start)| (ty, start))
+    }
+
     /// The field indices of the field set starting at `start`.
     fn field_set(
         file: &openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>,
@@ -1048,7 +1075,7 @@ impl CrateLayer {
 
 impl Specs for CrateLayer {
     fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType> {
-        self.specs.get(path).map(|s| s.0)
+        self.spec(path).map(|s| s.0)
     }
 
     fn try_field(
@@ -1056,8 +1083,7 @@ impl Specs for CrateLayer {
         path: &sdf::Path,
         field: &str,
     ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError> {
-        let (Some(&(_, start)), Some(&token)) = (self.specs.get(path), self.names.get(field))
-        else {
+        let (Some((_, start)), Some(&token)) = (self.spec(path), self.names.get(field)) else {
             return Ok(None);
         };
         let mut file = self.file.borrow_mut();
@@ -1082,7 +1108,7 @@ impl Specs for CrateLayer {
 
     /// One look-up and one walk of the spec's field set for the four fields.
     fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
-        let &(ty, start) = self.specs.get(path)?;
+        let (ty, start) = self.spec(path)?;
         if ty != sdf::SpecType::Attribute {
             return None;
         }
@@ -1130,7 +1156,7 @@ impl Specs for CrateLayer {
     }
 
     fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>> {
-        let &(_, start) = self.specs.get(path)?;
+        let (_, start) = self.spec(path)?;
         let file = self.file.borrow();
         Some(
             Self::field_set(&file, start)
