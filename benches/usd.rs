@@ -2,14 +2,14 @@
 //! in ≤ 2× the time of the same network in RIB).
 //!
 //! `usd/rib/1000` reads and resolves the generated layered scene from RIB; `usd/usdc/1000`
-//! and `usd/usda/1000` the same network written by vstructc's USD writer (the `usdc` form
-//! encoded by `openusd`), read back through `openusd` and resolved (nothing in these layers
-//! composes, so the reader takes each root layer's specs as they are). Wall-clock time.
+//! and `usd/usda/1000` the same network written by vstructc's USD writer in each encoding,
+//! read back through `openusd` and resolved (nothing in these layers composes, so the reader
+//! takes each root layer's specs as they are). Wall-clock time.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use vstructc::Diagnostics;
-use vstructc::back::usd::{UsdMode, write_binary, write_usda};
+use vstructc::back::usd::{UsdMode, write_usd};
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::front::usd::parse_usd;
 use vstructc::limits::Limits;
@@ -28,9 +28,9 @@ fn bench(c: &mut Criterion) {
     let mut diags = Diagnostics::new();
     let net = parse_rib(&rib, "scene.rib", &reg, &RibOptions::default(), &mut diags).unwrap();
     let mut usda = Vec::new();
-    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
     let mut usdc = Vec::new();
-    write_binary(&net, &reg, "usdc", &mut usdc).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usdc", &mut usdc).unwrap();
     let mut group = c.benchmark_group("usd");
     group.sample_size(10);
     group.bench_with_input(BenchmarkId::new("rib", materials), &rib, |b, rib| {

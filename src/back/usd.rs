@@ -500,32 +500,151 @@ fn over_body(
     body
 }
 
-/// [`write_usda`], then the layer in `openusd`'s binary encoding `format` (`usdc`, or `usdz`:
-/// a zip package holding one `usdc` layer). For the crate's tests and benchmarks only
-/// (`testkit`): Pixar's USD rejects the crate files `openusd` 0.6 writes ("invalid children in
-/// primChildren"), so the command line does not offer binary output.
-#[cfg(all(feature = "usd", feature = "testkit"))]
-#[cfg_attr(feature = "testkit", visibility::make(pub))]
-fn write_binary(
-    net: &Network,
-    types: &dyn ParamTypes,
-    format: &str,
-    out: &mut dyn Write,
-) -> io::Result<()> {
-    let mut text = Vec::new();
-    write_usda(net, types, UsdMode::Flatten, &mut text)?;
-    let stage = crate::front::usd::open_stage("<written>.usda", &text)
-        .map_err(|why| io::Error::other(format!("the written layer does not read back: {why}")))?;
-    let encoder = openusd::sdf::LayerRegistry::find_by_id(format)
-        .ok_or_else(|| io::Error::other(format!("no `{format}` encoder")))?;
-    let mut bytes = io::Cursor::new(Vec::new());
-    encoder
-        .write(stage.root_layer().data(), &mut bytes)
-        .map_err(|e| io::Error::other(format!("{e:#}")))?;
-    out.write_all(bytes.get_ref())
+/// The usda layer `text` in the binary crate encoding (`usdc`), or as a `usdz` package
+/// holding it as its one layer, `layer.usdc`, when `package`.
+///
+/// `openusd`'s crate writer tags the values of the `primChildren` and `properties` fields
+/// (and `subLayers`) as token (string) arrays, where Pixar's USD stores, and requires, its
+/// token (string) vector type: the same bytes under another type tag. Pixar's USD rejects
+/// a file whose `primChildren` value is not a token vector ("Invalid children found in
+/// primChildren field"), so the tags are rewritten ([`retag_children`]).
+#[cfg(feature = "usd")]
+fn binary(text: &[u8], package: bool) -> io::Result<Vec<u8>> {
+    let fail = |what: &str, e: String| io::Error::other(format!("{what}: {e}"));
+    let data = crate::front::usd::read_usda_layer(text)
+        .map_err(|e| fail("the written layer does not read back", e))?;
+    let mut crate_file = io::Cursor::new(Vec::new());
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        openusd::usdc::CrateWriter::write(data.as_ref(), &mut crate_file)
+    }))
+    .map_err(|_| fail("usdc encoding", "the USD library failed".into()))?
+    .map_err(|e| fail("usdc encoding", format!("{e:#}")))?;
+    let bytes = retag_children(crate_file.into_inner())?;
+    if !package {
+        return Ok(bytes);
+    }
+    let mut zip = openusd::usdz::ArchiveWriter::new(io::Cursor::new(Vec::new()));
+    zip.add_layer("layer.usdc", &bytes)
+        .map_err(|e| fail("usdz packaging", format!("{e:#}")))?;
+    let archive = zip
+        .finish()
+        .map_err(|e| fail("usdz packaging", format!("{e:#}")))?;
+    Ok(archive.into_inner())
 }
 
-/// What [`write_usda`] writes.
+/// Crate value type tags (the high byte of a value representation).
+#[cfg(feature = "usd")]
+mod crate_type {
+    pub const STRING: u64 = 10;
+    pub const TOKEN: u64 = 11;
+    pub const TOKEN_VECTOR: u64 = 41;
+    pub const STRING_VECTOR: u64 = 50;
+}
+
+/// Crate file `bytes` with the values of its `primChildren` and `properties` fields tagged
+/// as token vectors, and those of `subLayers` as string vectors, where they are tagged as
+/// token (string) arrays. Both forms store a 64-bit count and 32-bit token (string)
+/// indices, so only the `FIELDS` section's value representations change: the section is
+/// rewritten with them stored uncompressed (a literal-only LZ4 block), the sections after
+/// it move, and the table of contents and the header follow.
+#[cfg(feature = "usd")]
+fn retag_children(bytes: Vec<u8>) -> io::Result<Vec<u8>> {
+    use crate_type::{STRING, STRING_VECTOR, TOKEN, TOKEN_VECTOR};
+    let bad = |why: &str| io::Error::other(format!("usdc encoding: {why}"));
+    let u64_at = |at: usize| -> io::Result<u64> {
+        bytes
+            .get(at..at + 8)
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+            .ok_or_else(|| bad("truncated crate file"))
+    };
+    let file = openusd::usdc::CrateFile::open(io::Cursor::new(bytes.as_slice()))
+        .map_err(|e| bad(&format!("{e:#}")))?;
+    const TYPE_BITS: u64 = 0xff << 48;
+    const ARRAY_BIT: u64 = 1 << 63;
+    let mut reps: Vec<u64> = file.fields.iter().map(|f| f.value_rep.0).collect();
+    for (rep, field) in reps.iter_mut().zip(&file.fields) {
+        let name = file.tokens.get(field.token_index).map(String::as_str);
+        let (ty, array) = ((*rep & TYPE_BITS) >> 48, *rep & ARRAY_BIT != 0);
+        let to = match (name, ty) {
+            (Some("primChildren" | "properties"), TOKEN) if array => TOKEN_VECTOR,
+            (Some("subLayers"), STRING) if array => STRING_VECTOR,
+            _ => continue,
+        };
+        *rep = (*rep & !(TYPE_BITS | ARRAY_BIT)) | (to << 48);
+    }
+    // The table of contents: (name bytes, start, size) per section.
+    let toc = usize::try_from(u64_at(16)?).map_err(|_| bad("table of contents"))?;
+    let count = u64_at(toc)? as usize;
+    let mut sections = Vec::with_capacity(count);
+    for i in 0..count.min(64) {
+        let at = toc + 8 + i * 32;
+        let name = bytes
+            .get(at..at + 16)
+            .ok_or_else(|| bad("table of contents"))?;
+        sections.push((name.to_vec(), u64_at(at + 16)?, u64_at(at + 24)?));
+    }
+    let is = |n: &[u8], want: &str| n.split(|&b| b == 0).next() == Some(want.as_bytes());
+    let (_, start, size) = sections
+        .iter()
+        .find(|(n, ..)| is(n, "FIELDS"))
+        .cloned()
+        .ok_or_else(|| bad("no FIELDS section"))?;
+    let (start, end) = (start as usize, (start + size) as usize);
+    // FIELDS: field count, compressed token indices, compressed value representations.
+    let reps_size_at = start + 16 + u64_at(start + 8)? as usize;
+    if reps_size_at + 8 + u64_at(reps_size_at)? as usize != end || end > toc {
+        return Err(bad("unexpected FIELDS section layout"));
+    }
+    let raw: Vec<u8> = reps.iter().flat_map(|r| r.to_le_bytes()).collect();
+    let block = lz4_literals(&raw);
+    let mut out = Vec::with_capacity(bytes.len() + raw.len());
+    out.extend_from_slice(&bytes[..reps_size_at]);
+    out.extend_from_slice(&(block.len() as u64).to_le_bytes());
+    out.extend_from_slice(&block);
+    let new_end = out.len();
+    out.extend_from_slice(&bytes[end..toc]);
+    let shift = |at: u64| (at as i64 + new_end as i64 - end as i64) as u64;
+    let new_toc = out.len() as u64;
+    out.extend_from_slice(&(sections.len() as u64).to_le_bytes());
+    for (name, s, len) in &sections {
+        let (s, len) = if *s as usize == start {
+            (*s, (new_end - start) as u64)
+        } else if *s as usize >= end {
+            (shift(*s), *len)
+        } else {
+            (*s, *len)
+        };
+        out.extend_from_slice(name);
+        out.extend_from_slice(&s.to_le_bytes());
+        out.extend_from_slice(&len.to_le_bytes());
+    }
+    out[16..24].copy_from_slice(&new_toc.to_le_bytes());
+    Ok(out)
+}
+
+/// `data` as Pixar's compressed form of one chunk (a zero chunk count), holding one LZ4
+/// block made of a single literal run: valid LZ4 that any decoder expands to `data`.
+#[cfg(feature = "usd")]
+fn lz4_literals(data: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(data.len() + data.len() / 255 + 3);
+    out.push(0);
+    let n = data.len();
+    if n < 15 {
+        out.push((n as u8) << 4);
+    } else {
+        out.push(0xf0);
+        let mut rest = n - 15;
+        while rest >= 255 {
+            out.push(255);
+            rest -= 255;
+        }
+        out.push(rest as u8);
+    }
+    out.extend_from_slice(data);
+    out
+}
+
+/// What [`write_usd`] writes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum UsdMode<'a> {
     /// One flattened layer holding every material and shader (see the module
@@ -562,11 +681,15 @@ pub enum UsdMode<'a> {
     },
 }
 
-/// Write the resolved network `net` as a `usda` layer as `mode` asks (see the module
-/// documentation), with the declared types of `types` (a [`crate::registry::Registry`]).
+/// Write the resolved network `net` as a USD layer as `mode` asks (see the module
+/// documentation), with the declared types of `types` (a [`crate::registry::Registry`]), in
+/// the encoding `encoding` names as USD's file extensions do: `"usda"` text, `"usdc"` the
+/// binary crate form, or `"usdz"` a package holding the layer as its one file,
+/// `layer.usdc`. The binary encodings need the `usd` feature ([`io::ErrorKind::Unsupported`]
+/// without it); another name is an [`io::ErrorKind::InvalidInput`] error.
 ///
 /// ```
-/// use vstructc::back::usd::{UsdMode, write_usda};
+/// use vstructc::back::usd::{UsdMode, write_usd};
 /// use vstructc::network::{Network, RequestKind};
 /// use vstructc::registry::Registry;
 /// use vstructc::{BaseType, Value};
@@ -577,13 +700,48 @@ pub enum UsdMode<'a> {
 /// let m = net.add_material("red ball");
 /// net.set_terminal(m, "surface", s, None);
 /// let mut out = Vec::new();
-/// write_usda(&net, &Registry::embedded(), UsdMode::Flatten, &mut out).unwrap();
+/// write_usd(&net, &Registry::embedded(), UsdMode::Flatten, "usda", &mut out).unwrap();
 /// let text = String::from_utf8(out).unwrap();
 /// assert!(text.contains("def Material \"red_ball\""), "{text}");
 /// assert!(text.contains("color3f inputs:diffuseColor = (0.8, 0.2, 0.2)"), "{text}");
 /// assert!(text.contains("outputs:ri:surface.connect = </Materials/red_ball/ball.outputs:out>"));
 /// ```
-pub fn write_usda(
+pub fn write_usd(
+    net: &Network,
+    types: &dyn ParamTypes,
+    mode: UsdMode<'_>,
+    encoding: &str,
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    let package = match encoding {
+        "usda" => return write_usda(net, types, mode, out),
+        "usdc" => false,
+        "usdz" => true,
+        other => {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("`{other}` is not a USD encoding (usda, usdc, usdz)"),
+            ));
+        }
+    };
+    #[cfg(feature = "usd")]
+    {
+        let mut text = Vec::new();
+        write_usda(net, types, mode, &mut text)?;
+        out.write_all(&binary(&text, package)?)
+    }
+    #[cfg(not(feature = "usd"))]
+    {
+        let _ = package;
+        Err(io::Error::new(
+            io::ErrorKind::Unsupported,
+            format!("`{encoding}` output needs the `usd` feature"),
+        ))
+    }
+}
+
+/// [`write_usd`] as `usda` text.
+fn write_usda(
     net: &Network,
     types: &dyn ParamTypes,
     mode: UsdMode<'_>,

@@ -17,7 +17,10 @@
 //! ([`crate::network::ParamChange`]), which is what the USD writer's override layer writes.
 //!
 //! A `.usda` or `.usdc` root layer in which nothing composes is read from its specs
-//! directly, without composing a stage; the result is the same, and it is much faster.
+//! directly, without composing a stage; the result is the same, and it is much faster. A
+//! crate file is then indexed once from its tables (each spec's type and field set by path,
+//! each field name's token), and an attribute's fields are found in one walk of its field
+//! set.
 //!
 //! Diagnostics name the file and the prim or property path (in [`Location::pointer`]);
 //! `openusd` keeps no line numbers, so USD diagnostics have none.
@@ -150,7 +153,7 @@ struct Reader<'a> {
     /// The root layer's specs, when nothing in that layer composes (see [`flat_prims`]):
     /// read directly, they are what the composed stage would give, without composing
     /// each prim.
-    flat: Option<&'a dyn sdf::AbstractData>,
+    flat: Option<&'a dyn Specs>,
     file: Arc<str>,
     types: &'a dyn ParamTypes,
     diags: &'a mut Diagnostics,
@@ -212,18 +215,7 @@ impl Reader<'_> {
     /// Attribute `path`'s default value, as the stage composes it.
     fn default_value(&self, path: &sdf::Path) -> Result<Option<sdf::Value>, String> {
         if let Some(data) = self.flat {
-            match data
-                .try_field(path, sdf::FieldKey::Default.as_str())
-                .map_err(|e| e.to_string())?
-            {
-                None => return Ok(None),
-                // The stage would resolve asset paths too; the reader keeps only the
-                // authored path, which resolution leaves as it is.
-                Some(v) => match v.as_ref() {
-                    sdf::Value::ValueBlock => return Ok(None),
-                    _ => return Ok(Some(v.into_owned())),
-                },
-            }
+            return default_of(data.try_field(path, sdf::FieldKey::Default.as_str()));
         }
         match self.stage {
             Some(stage) => stage
@@ -237,13 +229,7 @@ impl Reader<'_> {
     /// The targets of attribute `path`'s connections, as the stage composes them.
     fn connections(&self, path: &sdf::Path) -> Vec<sdf::Path> {
         match self.flat {
-            Some(data) => match data.try_field(path, sdf::FieldKey::ConnectionPaths.as_str()) {
-                Ok(Some(v)) => match v.as_ref() {
-                    sdf::Value::PathListOp(op) => op.compose_over(&[]),
-                    _ => Vec::new(),
-                },
-                _ => Vec::new(),
-            },
+            Some(data) => targets_of(data.try_field(path, sdf::FieldKey::ConnectionPaths.as_str())),
             None => self
                 .stage
                 .and_then(|stage| stage.attribute(path.clone()).connections().ok())
@@ -254,13 +240,7 @@ impl Reader<'_> {
     /// How many time samples attribute `path` has.
     fn time_samples(&self, path: &sdf::Path) -> usize {
         match self.flat {
-            Some(data) => match data.try_field(path, sdf::FieldKey::TimeSamples.as_str()) {
-                Ok(Some(v)) => match v.as_ref() {
-                    sdf::Value::TimeSamples(t) => t.len(),
-                    _ => 0,
-                },
-                _ => 0,
-            },
+            Some(data) => samples_of(data.try_field(path, sdf::FieldKey::TimeSamples.as_str())),
             None => self
                 .stage
                 .and_then(|stage| stage.attribute(path.clone()).num_time_samples().ok())
@@ -271,14 +251,7 @@ impl Reader<'_> {
     /// Attribute `path`'s USD type name, or nothing.
     fn value_type(&self, path: &sdf::Path) -> String {
         match self.flat {
-            Some(data) => match data.try_field(path, sdf::FieldKey::TypeName.as_str()) {
-                Ok(Some(v)) => match v.as_ref() {
-                    sdf::Value::Token(t) => t.as_str().to_string(),
-                    sdf::Value::String(t) => t.clone(),
-                    _ => String::new(),
-                },
-                _ => String::new(),
-            },
+            Some(data) => type_name_of(data.try_field(path, sdf::FieldKey::TypeName.as_str())),
             None => self
                 .stage
                 .and_then(|stage| stage.attribute(path.clone()).type_name().ok().flatten())
@@ -287,8 +260,31 @@ impl Reader<'_> {
         }
     }
 
+    /// What the reader reads of attribute `path`, or nothing when the layer read alone
+    /// has no attribute there. Through the stage, the type name and the default value are
+    /// looked up only for an attribute without connections, the only one that uses them.
+    fn attr_fields(&self, path: &sdf::Path) -> Option<AttrFields> {
+        if let Some(data) = self.flat {
+            return data.attribute(path);
+        }
+        let targets = self.connections(path);
+        let samples = self.time_samples(path);
+        let (type_name, default) = if targets.is_empty() {
+            (self.value_type(path), self.default_value(path))
+        } else {
+            (String::new(), Ok(None))
+        };
+        Some(AttrFields {
+            type_name,
+            default,
+            targets,
+            samples,
+        })
+    }
+
     /// The `inputs:` attributes of prim `path` in composed order: each one's path and
-    /// input name.
+    /// input name (read alone, every property so named: [`Reader::attr_fields`] leaves out
+    /// those that are not attributes).
     fn inputs(&self, path: &sdf::Path) -> Vec<(sdf::Path, String)> {
         match self.flat {
             Some(data) => {
@@ -308,9 +304,7 @@ impl Reader<'_> {
                     if !seen.insert(input.to_string()) {
                         continue;
                     }
-                    if let Ok(p) = path.append_property(n.as_str())
-                        && data.spec_type(&p) == Some(sdf::SpecType::Attribute)
-                    {
+                    if let Some(p) = property_path(path, n.as_str()) {
                         out.push((p, input.to_string()));
                     }
                 }
@@ -332,7 +326,7 @@ impl Reader<'_> {
 
     /// A token or string attribute's default value.
     fn text_attr(&self, prim: &sdf::Path, name: &str) -> Option<String> {
-        let path = prim.append_property(name).ok()?;
+        let path = property_path(prim, name)?;
         match self.default_value(&path).ok()?? {
             sdf::Value::Token(t) => Some(t.as_str().to_string()),
             sdf::Value::String(s) => Some(s),
@@ -426,17 +420,20 @@ impl Reader<'_> {
         let mut params: Vec<Param> = Vec::new();
         let mut pending: PendingLinks = Vec::new();
         for (attr, input) in self.inputs(path) {
+            let Some(fields) = self.attr_fields(&attr) else {
+                continue;
+            };
             let apath = attr.as_str().to_string();
-            if self.time_samples(&attr) > 0 {
+            if fields.samples > 0 {
                 self.sampled.push(apath.clone());
             }
             let declared = self.types.input_type(shader, &input);
-            let targets = self.connections(&attr);
+            let targets = fields.targets;
             let mut value = None;
             let mut links = Vec::new();
             if targets.is_empty() {
-                let usd_type = self.value_type(&attr);
-                match self.default_value(&attr) {
+                let usd_type = fields.type_name;
+                match fields.default {
                     Ok(Some(v)) => value = self.value(&v, declared.as_ref(), &usd_type, &apath),
                     Ok(None) => {}
                     Err(e) => self.warn(
@@ -857,10 +854,325 @@ fn may_compose(bytes: &[u8]) -> bool {
         .any(|w| memchr::memmem::find(bytes, w).is_some())
 }
 
+/// The path of property `name` of prim `prim` (a prim path, never a property path), or
+/// nothing for an empty name or `.`, which name no property.
+fn property_path(prim: &sdf::Path, name: &str) -> Option<sdf::Path> {
+    if name.is_empty() || name == "." {
+        return None;
+    }
+    let mut p = String::with_capacity(prim.as_str().len() + 1 + name.len());
+    p.push_str(prim.as_str());
+    p.push('.');
+    p.push_str(name);
+    Some(sdf::Path::from(p))
+}
+
+/// A field read from a layer alone.
+type FieldRead<'a> = Result<Option<std::borrow::Cow<'a, sdf::Value>>, sdf::DataError>;
+
+/// An attribute's default value from its `default` field: a blocked value is none. (The
+/// stage would resolve asset paths too; the reader keeps only the authored path, which
+/// resolution leaves as it is.)
+fn default_of(field: FieldRead<'_>) -> Result<Option<sdf::Value>, String> {
+    match field.map_err(|e| e.to_string())? {
+        None => Ok(None),
+        Some(v) => match v.as_ref() {
+            sdf::Value::ValueBlock => Ok(None),
+            _ => Ok(Some(v.into_owned())),
+        },
+    }
+}
+
+/// An attribute's connection targets from its `connectionPaths` field.
+fn targets_of(field: FieldRead<'_>) -> Vec<sdf::Path> {
+    match field {
+        Ok(Some(v)) => match v.as_ref() {
+            sdf::Value::PathListOp(op) => op.compose_over(&[]),
+            _ => Vec::new(),
+        },
+        _ => Vec::new(),
+    }
+}
+
+/// An attribute's number of time samples from its `timeSamples` field.
+fn samples_of(field: FieldRead<'_>) -> usize {
+    match field {
+        Ok(Some(v)) => match v.as_ref() {
+            sdf::Value::TimeSamples(t) => t.len(),
+            _ => 0,
+        },
+        _ => 0,
+    }
+}
+
+/// An attribute's USD type name from its `typeName` field, or nothing.
+fn type_name_of(field: FieldRead<'_>) -> String {
+    match field {
+        Ok(Some(v)) => match v.as_ref() {
+            sdf::Value::Token(t) => t.as_str().to_string(),
+            sdf::Value::String(t) => t.clone(),
+            _ => String::new(),
+        },
+        _ => String::new(),
+    }
+}
+
+/// What the reader reads of an attribute ([`Reader::attr_fields`]).
+struct AttrFields {
+    /// Its USD type name, or nothing.
+    type_name: String,
+    /// Its default value (a blocked value is none), or why it cannot be read.
+    default: Result<Option<sdf::Value>, String>,
+    /// Its connection targets.
+    targets: Vec<sdf::Path>,
+    /// Its number of time samples.
+    samples: usize,
+}
+
+/// What the reader of a layer read alone asks of its specs (see [`open_flat`]): the read
+/// side of `openusd`'s [`sdf::AbstractData`], which a usda layer's data answers, and
+/// [`CrateLayer`] for a crate file.
+trait Specs {
+    /// The type of the spec at `path`, if there is one.
+    fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType>;
+    /// Field `field` of the spec at `path`, if both exist.
+    fn try_field(
+        &self,
+        path: &sdf::Path,
+        field: &str,
+    ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError>;
+    /// The names of the fields of the spec at `path`.
+    fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>>;
+    /// What the reader reads of the attribute at `path`, or nothing when there is no
+    /// attribute spec there.
+    fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
+        if self.spec_type(path) != Some(sdf::SpecType::Attribute) {
+            return None;
+        }
+        Some(AttrFields {
+            type_name: type_name_of(self.try_field(path, sdf::FieldKey::TypeName.as_str())),
+            default: default_of(self.try_field(path, sdf::FieldKey::Default.as_str())),
+            targets: targets_of(self.try_field(path, sdf::FieldKey::ConnectionPaths.as_str())),
+            samples: samples_of(self.try_field(path, sdf::FieldKey::TimeSamples.as_str())),
+        })
+    }
+}
+
+impl Specs for sdf::LayerData {
+    fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType> {
+        self.as_ref().spec_type(path)
+    }
+
+    fn try_field(
+        &self,
+        path: &sdf::Path,
+        field: &str,
+    ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError> {
+        self.as_ref().try_field(path, field)
+    }
+
+    fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>> {
+        self.as_ref().list_fields(path)
+    }
+}
+
+/// The hash [`CrateLayer`] finds a spec by: its path's text, hashed with FxHash.
+fn path_hash(path: &sdf::Path) -> u64 {
+    use std::hash::BuildHasher;
+    rustc_hash::FxBuildHasher.hash_one(path.as_str())
+}
+
+/// A crate file's specs, indexed once: each spec's type and fields by path, each field
+/// name's token, so that a field is found by comparing token indices in the spec's field
+/// set (`openusd`'s own crate data compares names and hashes paths with SipHash); values
+/// are decoded from the file when asked for.
+struct CrateLayer {
+    file: std::cell::RefCell<openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>>,
+    /// Each spec: its path's index in the file's paths, its type and the start of its
+    /// field set in the file's field sets, found by the hash of its path (so the paths are
+    /// not copied).
+    specs: hashbrown::HashTable<(usize, sdf::SpecType, usize)>,
+    /// The token index of each field name (under the names `openusd`'s layers use:
+    /// `propertyChildren` for the crate's `properties`).
+    names: FxHashMap<String, usize>,
+    /// The field name of each token index that names a field.
+    field_names: FxHashMap<usize, String>,
+    /// The token indices of the fields [`Specs::attribute`] reads: `typeName`, `default`,
+    /// `connectionPaths`, `timeSamples`.
+    attribute_fields: [Option<usize>; 4],
+}
+
+impl CrateLayer {
+    /// The crate file `bytes`, or nothing when it does not read or is not sound (then the
+    /// stage is composed, and reports why).
+    fn open(bytes: &[u8]) -> Option<Self> {
+        let mut file = openusd::usdc::CrateFile::open(io::Cursor::new(bytes.to_vec())).ok()?;
+        file.validate().ok()?;
+        let specs_in = std::mem::take(&mut file.specs);
+        let mut specs = hashbrown::HashTable::with_capacity(specs_in.len());
+        let paths = &file.paths;
+        for spec in &specs_in {
+            let path = paths.get(spec.path_index)?;
+            file.fieldsets.get(spec.fieldset_index)?;
+            let entry = (spec.path_index, spec.spec_type, spec.fieldset_index);
+            // A path given twice keeps its last spec, as a map would.
+            match specs.entry(
+                path_hash(path),
+                |&(i, ..): &(usize, _, _)| paths[i] == *path,
+                |&(i, ..)| path_hash(&paths[i]),
+            ) {
+                hashbrown::hash_table::Entry::Occupied(mut e) => *e.get_mut() = entry,
+                hashbrown::hash_table::Entry::Vacant(e) => {
+                    e.insert(entry);
+                }
+            }
+        }
+        let mut names = FxHashMap::default();
+        let mut field_names = FxHashMap::default();
+        for f in &file.fields {
+            let token = file.tokens.get(f.token_index)?;
+            let name = match token.as_str() {
+                "properties" => "propertyChildren",
+                t => t,
+            };
+            names.insert(name.to_string(), f.token_index);
+            field_names.insert(f.token_index, name.to_string());
+        }
+        let attribute_fields = [
+            sdf::FieldKey::TypeName,
+            sdf::FieldKey::Default,
+            sdf::FieldKey::ConnectionPaths,
+            sdf::FieldKey::TimeSamples,
+        ]
+        .map(|k| names.get(k.as_str()).copied());
+        Some(CrateLayer {
+            file: std::cell::RefCell::new(file),
+            specs,
+            names,
+            field_names,
+            attribute_fields,
+        })
+    }
+
+    /// The type and the field set start of the spec at `path`.
+    fn spec(&self, path: &sdf::Path) -> Option<(sdf::SpecType, usize)> {
+        let file = self.file.borrow();
+        self.specs
+            .find(path_hash(path), |&(i, ..)| file.paths[i] == *path)
+            .map(|&(_, ty, start)| (ty, start))
+    }
+
+    /// The field indices of the field set starting at `start`.
+    fn field_set(
+        file: &openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>,
+        start: usize,
+    ) -> &[Option<usize>] {
+        let rest = file.fieldsets.get(start..).unwrap_or(&[]);
+        let end = rest.iter().position(Option::is_none).unwrap_or(rest.len());
+        &rest[..end]
+    }
+}
+
+impl Specs for CrateLayer {
+    fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType> {
+        self.spec(path).map(|s| s.0)
+    }
+
+    fn try_field(
+        &self,
+        path: &sdf::Path,
+        field: &str,
+    ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError> {
+        let (Some((_, start)), Some(&token)) = (self.spec(path), self.names.get(field)) else {
+            return Ok(None);
+        };
+        let mut file = self.file.borrow_mut();
+        let rep = Self::field_set(&file, start)
+            .iter()
+            .flatten()
+            .filter_map(|&i| file.fields.get(i))
+            .find(|f| f.token_index == token)
+            .map(|f| f.value_rep);
+        let Some(rep) = rep else {
+            return Ok(None);
+        };
+        match file.value(rep) {
+            Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
+            Err(e) => Err(sdf::DataError::Decode {
+                path: path.clone(),
+                field: field.to_string(),
+                source: e.into(),
+            }),
+        }
+    }
+
+    /// One look-up and one walk of the spec's field set for the four fields.
+    fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
+        let (ty, start) = self.spec(path)?;
+        if ty != sdf::SpecType::Attribute {
+            return None;
+        }
+        let mut file = self.file.borrow_mut();
+        let mut reps = [None; 4];
+        for f in Self::field_set(&file, start)
+            .iter()
+            .flatten()
+            .filter_map(|&i| file.fields.get(i))
+        {
+            if let Some(k) = self
+                .attribute_fields
+                .iter()
+                .position(|&t| t == Some(f.token_index))
+                && reps[k].is_none()
+            {
+                reps[k] = Some(f.value_rep);
+            }
+        }
+        let keys = [
+            sdf::FieldKey::TypeName,
+            sdf::FieldKey::Default,
+            sdf::FieldKey::ConnectionPaths,
+            sdf::FieldKey::TimeSamples,
+        ];
+        let mut read = |k: usize| -> FieldRead<'static> {
+            let Some(rep) = reps[k] else {
+                return Ok(None);
+            };
+            match file.value(rep) {
+                Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
+                Err(e) => Err(sdf::DataError::Decode {
+                    path: path.clone(),
+                    field: keys[k].as_str().to_string(),
+                    source: e.into(),
+                }),
+            }
+        };
+        Some(AttrFields {
+            type_name: type_name_of(read(0)),
+            default: default_of(read(1)),
+            targets: targets_of(read(2)),
+            samples: samples_of(read(3)),
+        })
+    }
+
+    fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>> {
+        let (_, start) = self.spec(path)?;
+        let file = self.file.borrow();
+        Some(
+            Self::field_set(&file, start)
+                .iter()
+                .flatten()
+                .filter_map(|&i| file.fields.get(i))
+                .filter_map(|f| self.field_names.get(&f.token_index).cloned())
+                .collect(),
+        )
+    }
+}
+
 /// The root layer `bytes` (a `.usda` or `.usdc`, named so and holding that encoding) read
 /// alone, with its prims in traversal order, when nothing in it composes
 /// ([`flat_prims`]); else nothing, and the stage is composed instead.
-fn open_flat(name: &str, bytes: &[u8]) -> Option<(sdf::LayerData, Vec<sdf::Path>)> {
+fn open_flat(name: &str, bytes: &[u8]) -> Option<(Box<dyn Specs>, Vec<sdf::Path>)> {
     let (resolver, root) = mem_resolver(name, bytes);
     let ext = root.rsplit('.').next()?.to_ascii_lowercase();
     if ext != flavour(bytes) {
@@ -868,16 +1180,32 @@ fn open_flat(name: &str, bytes: &[u8]) -> Option<(sdf::LayerData, Vec<sdf::Path>
     }
     let resolved = ar::ResolvedPath::new(&root);
     let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let data = match ext.as_str() {
-            "usdc" => sdf::FileFormat::read(&openusd::usdc::UsdcFileFormat, &resolver, &resolved),
-            "usda" => sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved),
+        let data: Box<dyn Specs> = match ext.as_str() {
+            "usdc" => Box::new(CrateLayer::open(bytes)?),
+            "usda" => Box::new(
+                sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved).ok()?,
+            ),
             _ => return None,
-        }
-        .ok()?;
+        };
         let prims = flat_prims(data.as_ref())?;
         Some((data, prims))
     }));
     read.ok().flatten()
+}
+
+/// The usda text `bytes` read as one layer, without composing anything (crate-internal:
+/// the USD writer encodes its text layers in the binary form from it).
+pub(crate) fn read_usda_layer(bytes: &[u8]) -> Result<sdf::LayerData, String> {
+    let (resolver, root) = mem_resolver("<written>.usda", bytes);
+    let resolved = ar::ResolvedPath::new(&root);
+    let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved)
+    }));
+    match read {
+        Ok(Ok(data)) => Ok(data),
+        Ok(Err(e)) => Err(format!("{e:#}")),
+        Err(_) => Err("the USD library failed on this layer".to_string()),
+    }
 }
 
 /// Read the materials of the USD stage whose root layer is `bytes` (named `name` in
@@ -1124,7 +1452,7 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
 /// (an arc, a variant set, an `over` or `class`, `active`, `instanceable`, child or
 /// property reordering, sublayers or relocates on the layer) gives nothing, and the
 /// composed stage is read instead.
-fn flat_prims(data: &dyn sdf::AbstractData) -> Option<Vec<sdf::Path>> {
+fn flat_prims(data: &dyn Specs) -> Option<Vec<sdf::Path>> {
     const ROOT_CHANGES: [&str; 5] = [
         "subLayers",
         "subLayerOffsets",

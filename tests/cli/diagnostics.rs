@@ -198,17 +198,27 @@ fn the_output_extension_picks_the_output_format() {
         stderr(&out)
     );
     assert!(!conflict.exists());
-    // Binary USD output is refused before the input is read.
-    for ext in ["usdc", "usdz"] {
+    // Binary USD output when the extension asks for it: a crate file, a package holding
+    // one; both read back as the text output does.
+    let text = dir.path().join("out.usda");
+    let out = vstructc(&[
+        "resolve",
+        "examples/chain.rib",
+        "-o",
+        text.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let json = |path: &std::path::Path| {
+        let out = vstructc(&["resolve", path.to_str().unwrap(), "--format", "json"]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        out.stdout
+    };
+    for (ext, signature) in [("usdc", &b"PXR-USDC"[..]), ("usdz", &b"PK\x03\x04"[..])] {
         let bin = dir.path().join(format!("out.{ext}"));
         let out = vstructc(&["resolve", "examples/chain.rib", "-o", bin.to_str().unwrap()]);
-        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
-        assert!(
-            stderr(&out).contains("binary USD output is not supported yet"),
-            "{}",
-            stderr(&out)
-        );
-        assert!(!bin.exists());
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        assert!(std::fs::read(&bin).unwrap().starts_with(signature), "{ext}");
+        assert_eq!(json(&bin), json(&text), "{ext}");
     }
     let conflict = dir.path().join("out2.usda");
     let out = vstructc(&[
@@ -252,8 +262,9 @@ fn the_output_extension_picks_the_output_format() {
 }
 
 /// `--usd-mode over` writes an override layer that sublayers the input by a path relative to
-/// the output's folder and reads as the flattened output does; with a non-USD input, a
-/// non-usda output or standard input it is a usage error that writes nothing.
+/// the output's folder and reads as the flattened output does, as `.usda` or `.usdc`; with
+/// a non-USD input, a non-USD or `.usdz` output or standard input it is a usage error that
+/// writes nothing.
 #[test]
 fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
     let dir = tempfile::tempdir().unwrap();
@@ -289,6 +300,19 @@ fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
         out.stdout
     };
     assert_eq!(json(&over), json(&flat));
+    // The override layer in the binary form too.
+    let over_c = output.join("over.usdc");
+    let out = vstructc(&[
+        "resolve",
+        look,
+        "--usd-mode",
+        "over",
+        "-o",
+        over_c.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(std::fs::read(&over_c).unwrap().starts_with(b"PXR-USDC"));
+    assert_eq!(json(&over_c), json(&flat));
     // On standard output the path is relative to the current folder.
     let out = vstructc(&[
         "resolve",
@@ -321,6 +345,10 @@ fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
         (
             vec!["-", "-o", "refused.usda"],
             "standard input cannot be sublayered",
+        ),
+        (
+            vec![look, "-o", "refused.usdz"],
+            "a `.usdz` package would look for the input inside itself",
         ),
     ] {
         let file = args.last().unwrap().to_string();

@@ -206,10 +206,11 @@ fn writers_saturate_non_finite_values_built_in_code() {
     parse_json(json.as_bytes(), "w.json", &NoDefinitions, &mut d)
         .unwrap_or_else(|e| panic!("{e}\n{json}"));
     let mut usda = Vec::new();
-    vstructc::back::usd::write_usda(
+    vstructc::back::usd::write_usd(
         &net,
         &NoDefinitions,
         vstructc::back::usd::UsdMode::Flatten,
+        "usda",
         &mut usda,
     )
     .expect("writes");

@@ -7,8 +7,7 @@ use crate::common;
 
 use std::collections::BTreeMap;
 use vstructc::back::rib::write_rib_to_vec;
-use vstructc::back::usd::write_binary;
-use vstructc::back::usd::{UsdMode, write_usda};
+use vstructc::back::usd::{UsdMode, write_usd};
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::front::usd::{parse_usd, parse_usd_composed, reads_layer_alone};
 use vstructc::limits::Limits;
@@ -197,7 +196,7 @@ fn rib_to_usda_to_rib_keeps_every_connection_and_value() {
             let net = resolved_rib(example, &reg, conditions);
             let want = canon(&net);
             let mut usda = Vec::new();
-            write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+            write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
             let (back, diags) = read_usd(&usda, "out.usda", &reg);
             assert!(diags.is_empty(), "{example}: {diags:#?}");
             assert_eq!(canon(&back), want, "{example} → usda");
@@ -216,7 +215,7 @@ fn usda_to_resolved_usda_to_rib_keeps_every_connection_and_value() {
         let net = resolved_usd(usd, &reg, true);
         let want = canon(&net);
         let mut usda = Vec::new();
-        write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+        write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
         let text = String::from_utf8(usda.clone()).unwrap();
         let (back, diags) = read_usd(&usda, "out.usda", &reg);
         assert!(diags.is_empty(), "{usd}: {diags:#?}");
@@ -242,7 +241,7 @@ fn the_writer_types_inputs_as_declared() {
     let reg = Registry::embedded();
     let net = resolved_rib("override.rib", &reg, true);
     let mut usda = Vec::new();
-    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
     let text = String::from_utf8(usda).unwrap();
     for line in [
         "def Material \"plasticSurface\"",
@@ -266,7 +265,7 @@ fn the_writer_types_inputs_as_declared() {
     let m = net.add_material("m");
     net.set_terminal(m, "surface", s, None);
     let mut usda = Vec::new();
-    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
     let text = String::from_utf8(usda).unwrap();
     assert!(text.contains("float inputs:diffuseGain = 1\n"), "{text}");
     assert!(text.contains("int inputs:madeUp = 2\n"), "{text}");
@@ -285,7 +284,7 @@ Bxdf "PxrLayerSurface" "my surface" "reference float inputMaterial" ["mix:pxrMat
 "#;
     let net = read_rib(rib, "h.rib", &reg);
     let mut usda = Vec::new();
-    write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
     let text = String::from_utf8(usda).unwrap();
     assert!(text.contains("def Material \"my_surface\""), "{text}");
     assert!(text.contains("def Shader \"_3_coat_a\""), "{text}");
@@ -451,10 +450,10 @@ fn layers_read_alone_match_the_composed_stage() {
         let path = common::repo_dir().join("examples").join(example);
         let net = read_rib(&std::fs::read(&path).unwrap(), example, &reg);
         let mut usda = Vec::new();
-        write_usda(&net, &reg, UsdMode::Flatten, &mut usda).unwrap();
+        write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
         inputs.push((format!("{example}.usda"), usda));
         let mut usdc = Vec::new();
-        write_binary(&net, &reg, "usdc", &mut usdc).unwrap();
+        write_usd(&net, &reg, UsdMode::Flatten, "usdc", &mut usdc).unwrap();
         inputs.push((format!("{example}.usdc"), usdc));
     }
     // Time samples, a value block, an asset, a dangling connection, a shader without an
@@ -481,6 +480,11 @@ def Material "M" {
 }
 "#;
     inputs.push(("odd.usda".to_string(), odd.to_vec()));
+    // The same layer as a crate file: read alone by the crate reader.
+    let odd_layer = openusd::usda::parse(std::str::from_utf8(odd).unwrap()).unwrap();
+    let mut odd_usdc = std::io::Cursor::new(Vec::new());
+    openusd::usdc::CrateWriter::write(&odd_layer, &mut odd_usdc).unwrap();
+    inputs.push(("odd.usdc".to_string(), odd_usdc.into_inner()));
     // An inactive prim, a class inherited by a material, an over: composed.
     let arcs = br#"#usda 1.0
 class Material "Base" {
@@ -568,6 +572,7 @@ def Scope "Off" (active = false) {
             "override.rib.usda",
             "override.rib.usdc",
             "odd.usda",
+            "odd.usdc",
         ]
     );
 }
@@ -608,9 +613,16 @@ fn flat_and_over(
     let (mut net, _) = read_usd(&std::fs::read(path).unwrap(), name, reg);
     resolve(&mut net, reg, &options(conditions));
     let mut flat = Vec::new();
-    write_usda(&net, reg, UsdMode::Flatten, &mut flat).unwrap();
+    write_usd(&net, reg, UsdMode::Flatten, "usda", &mut flat).unwrap();
     let mut over = Vec::new();
-    write_usda(&net, reg, UsdMode::Over { sublayer: name }, &mut over).unwrap();
+    write_usd(
+        &net,
+        reg,
+        UsdMode::Over { sublayer: name },
+        "usda",
+        &mut over,
+    )
+    .unwrap();
     let over_path = dir.join("over.usda");
     std::fs::write(&over_path, &over).unwrap();
     let (flat_back, diags) = read_usd(&flat, "flat.usda", reg);
@@ -641,6 +653,150 @@ fn override_layers_compose_to_the_flattened_output() {
             assert!(text.contains(".connect = None"), "{at}");
         }
     }
+}
+
+/// The binary encodings read back as the text layer does: every corpus look, resolved
+/// (conditions on and off), written flattened as `usda`, `usdc` and `usdz`, and as an
+/// override layer in `usdc` composed over its input, gives the same prims, values,
+/// connections and terminals; so does every bundled RIB example written as `usdc`.
+#[test]
+fn binary_outputs_read_back_as_the_text_layer() {
+    let reg = Registry::embedded();
+    let dir = tempfile::tempdir().unwrap();
+    let check = |net: &Network, back: &Network, at: &str| {
+        assert_eq!(handles(back), handles(net), "{at}");
+        assert_eq!(canon(back), canon(net), "{at}");
+        assert_eq!(terminals(back), terminals(net), "{at}");
+    };
+    for conditions in [true, false] {
+        for &(usd, _) in PAIRS {
+            let path = usd_dir().join(usd);
+            let name = path.to_str().unwrap();
+            let (mut net, _) = read_usd(&std::fs::read(&path).unwrap(), name, &reg);
+            resolve(&mut net, &reg, &options(conditions));
+            for encoding in ["usda", "usdc", "usdz"] {
+                let mut out = Vec::new();
+                write_usd(&net, &reg, UsdMode::Flatten, encoding, &mut out).unwrap();
+                let at = format!("{usd} as {encoding}, conditions {conditions}");
+                let signature: &[u8] = match encoding {
+                    "usda" => b"#usda 1.0",
+                    "usdc" => b"PXR-USDC",
+                    _ => b"PK\x03\x04",
+                };
+                assert!(out.starts_with(signature), "{at}");
+                let (back, diags) = read_usd(&out, &format!("out.{encoding}"), &reg);
+                assert!(diags.is_empty(), "{at}: {diags:#?}");
+                check(&net, &back, &at);
+            }
+            let mut over = Vec::new();
+            write_usd(
+                &net,
+                &reg,
+                UsdMode::Over { sublayer: name },
+                "usdc",
+                &mut over,
+            )
+            .unwrap();
+            let over_path = dir.path().join("over.usdc");
+            std::fs::write(&over_path, &over).unwrap();
+            let (back, diags) = read_usd(&over, over_path.to_str().unwrap(), &reg);
+            let at = format!("{usd} as a usdc override layer, conditions {conditions}");
+            assert!(diags.is_empty(), "{at}: {diags:#?}");
+            check(&net, &back, &at);
+        }
+    }
+    for example in ["chain.rib", "layered.rib", "override.rib"] {
+        let net = resolved_rib(example, &reg, true);
+        let mut usda = Vec::new();
+        write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut usda).unwrap();
+        let (want, _) = read_usd(&usda, "out.usda", &reg);
+        let mut usdc = Vec::new();
+        write_usd(&net, &reg, UsdMode::Flatten, "usdc", &mut usdc).unwrap();
+        let (back, diags) = read_usd(&usdc, "out.usdc", &reg);
+        assert!(diags.is_empty(), "{example}: {diags:#?}");
+        check(&want, &back, example);
+    }
+}
+
+/// The crate files written store prim and property children as token vectors and sublayers
+/// as a string vector, the types Pixar's USD requires (it rejects a `primChildren` value of
+/// another type), never as token or string arrays; `usdz` packages hold such a file.
+#[test]
+fn crate_files_store_children_as_pixar_requires() {
+    use openusd::usdc::CrateFile;
+    const TOKEN_VECTOR: u64 = 41;
+    const STRING_VECTOR: u64 = 50;
+    let reg = Registry::embedded();
+    let path = usd_dir().join("nodegraph.usda");
+    let name = path.to_str().unwrap();
+    let (mut net, _) = read_usd(&std::fs::read(&path).unwrap(), name, &reg);
+    resolve(&mut net, &reg, &options(true));
+    let mut flat = Vec::new();
+    write_usd(&net, &reg, UsdMode::Flatten, "usdc", &mut flat).unwrap();
+    let mut over = Vec::new();
+    write_usd(
+        &net,
+        &reg,
+        UsdMode::Over { sublayer: name },
+        "usdc",
+        &mut over,
+    )
+    .unwrap();
+    let mut package = Vec::new();
+    write_usd(&net, &reg, UsdMode::Flatten, "usdz", &mut package).unwrap();
+    // The package's one file: stored uncompressed, its data 64-byte aligned (a zip local
+    // header: method at 8, sizes at 18 and 22, name and extra lengths at 26 and 28).
+    let packaged = {
+        let u16_at = |at: usize| u16::from_le_bytes([package[at], package[at + 1]]) as usize;
+        let u32_at = |at: usize| u32::from_le_bytes(package[at..at + 4].try_into().unwrap());
+        assert!(package.starts_with(b"PK\x03\x04"));
+        assert_eq!(u16_at(8), 0, "stored");
+        let name_len = u16_at(26);
+        assert_eq!(&package[30..30 + name_len], b"layer.usdc");
+        let start = 30 + name_len + u16_at(28);
+        assert_eq!(start % 64, 0, "aligned");
+        let len = u32_at(18) as usize;
+        assert_eq!(u32_at(22) as usize, len);
+        package[start..start + len].to_vec()
+    };
+    for (what, bytes) in [("flat", &flat), ("over", &over), ("usdz", &packaged)] {
+        let file = CrateFile::open(std::io::Cursor::new(bytes.as_slice())).unwrap();
+        let mut seen = BTreeMap::new();
+        for f in &file.fields {
+            let name = file.tokens[f.token_index].as_str();
+            let rep = f.value_rep.0;
+            let (ty, array) = ((rep >> 48) & 0xff, rep >> 63 == 1);
+            let want = match name {
+                "primChildren" | "properties" => TOKEN_VECTOR,
+                "subLayers" => STRING_VECTOR,
+                _ => continue,
+            };
+            assert_eq!((ty, array), (want, false), "{what}: {name}");
+            *seen.entry(name).or_insert(0) += 1;
+        }
+        assert!(
+            seen.get("primChildren").is_some_and(|&n| n >= 3),
+            "{what}: {seen:?}"
+        );
+        assert!(seen.contains_key("properties"), "{what}: {seen:?}");
+        assert_eq!(
+            seen.contains_key("subLayers"),
+            what == "over",
+            "{what}: {seen:?}"
+        );
+    }
+}
+
+/// An encoding other than `usda`, `usdc` and `usdz` is an invalid-input error.
+#[test]
+fn unknown_usd_encodings_are_refused() {
+    let reg = Registry::embedded();
+    let net = resolved_rib("chain.rib", &reg, true);
+    let mut out = Vec::new();
+    let e = write_usd(&net, &reg, UsdMode::Flatten, "usdx", &mut out).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+    assert!(e.to_string().contains("usdx"), "{e}");
+    assert!(out.is_empty());
 }
 
 /// A look resolution does not change gives an override layer without prims; a look with
@@ -761,7 +917,14 @@ def Material "M" {
     net.set_param(n, "filename", vstructc::Value::Asset("n.tex".into()));
     net.connect(s, "specularGain", n, "resultR");
     let mut over = Vec::new();
-    write_usda(&net, &reg, UsdMode::Over { sublayer: name }, &mut over).unwrap();
+    write_usd(
+        &net,
+        &reg,
+        UsdMode::Over { sublayer: name },
+        "usda",
+        &mut over,
+    )
+    .unwrap();
     let text = String::from_utf8(over.clone()).unwrap();
     for present in [
         "color3f inputs:diffuseColor = (0.1, 0.2, 0.3)",
@@ -782,13 +945,20 @@ def Material "M" {
     let (back, diags) = read_usd(&over, over_path.to_str().unwrap(), &reg);
     assert!(diags.is_empty(), "{diags:#?}");
     let mut flat = Vec::new();
-    write_usda(&net, &reg, UsdMode::Flatten, &mut flat).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut flat).unwrap();
     let (flat, _) = read_usd(&flat, "flat.usda", &reg);
     assert_eq!(canon(&back), canon(&flat), "{text}");
     // Not read from USD: an error, nothing written.
     let rib = resolved_rib("override.rib", &reg, true);
     let mut out = Vec::new();
-    let e = write_usda(&rib, &reg, UsdMode::Over { sublayer: "x.usda" }, &mut out).unwrap_err();
+    let e = write_usd(
+        &rib,
+        &reg,
+        UsdMode::Over { sublayer: "x.usda" },
+        "usda",
+        &mut out,
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
     assert!(out.is_empty());
 }
@@ -805,13 +975,14 @@ fn the_flattened_layer_keeps_the_input_prim_types() {
     let (mut net, _) = read_usd(&bytes, name, &reg);
     resolve(&mut net, &reg, &options(true));
     let mut out = Vec::new();
-    write_usda(
+    write_usd(
         &net,
         &reg,
         UsdMode::FlattenFrom {
             name,
             bytes: &bytes,
         },
+        "usda",
         &mut out,
     )
     .unwrap();
@@ -822,13 +993,14 @@ fn the_flattened_layer_keeps_the_input_prim_types() {
         let (mut net, _) = read_usd(usda, "t.usda", &reg);
         resolve(&mut net, &reg, &options(true));
         let mut out = Vec::new();
-        write_usda(
+        write_usd(
             &net,
             &reg,
             UsdMode::FlattenFrom {
                 name: "t.usda",
                 bytes: usda,
             },
+            "usda",
             &mut out,
         )
         .unwrap();
@@ -864,7 +1036,7 @@ def Xform "World" {
     // Without the input: the writer's own choice.
     let (net, _) = read_usd(text.as_bytes(), "t.usda", &reg);
     let mut out = Vec::new();
-    write_usda(&net, &reg, UsdMode::Flatten, &mut out).unwrap();
+    write_usd(&net, &reg, UsdMode::Flatten, "usda", &mut out).unwrap();
     let plain = String::from_utf8(out).unwrap();
     assert!(plain.contains("def Scope \"World\""), "{plain}");
     assert!(plain.contains("def NodeGraph \"G\""), "{plain}");

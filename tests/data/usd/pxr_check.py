@@ -6,14 +6,16 @@
     /tmp/usd-core/bin/python tests/data/usd/pxr_check.py [target/debug/vstructc]
 
 The script writes a small layered look with Pixar's USD (`pxr`), resolves it with vstructc
-into `.usda`, both flattened and as an override layer (`--usd-mode over`), and opens each
-result with Pixar's USD (the override layer composed with the look it sublayers): every
+into `.usda` and binary `.usdc`, both flattened and as an override layer (`--usd-mode
+over`), and into a flattened `.usdz` package, and opens each result with Pixar's USD (an
+override layer composed with the look it sublayers): every
 Shader keeps its `info:id`, the connections and input values Pixar's USD finds are exactly
 those of vstructc's JSON output of the same resolution (member connections included), and
 the Material's `outputs:ri:surface` leads to the surface. Then, for every look of the corpus
 beside this script (conditions on and off), Pixar's USD finds the same connections and input
-values in the override layer over the look as in the flattened output, and the flattened
-output gives every prim of the look it holds the look's prim type.
+values in the override layer over the look as in the flattened output, in the `.usdc` and
+`.usdz` outputs as in the `.usda` ones, and the flattened output gives every prim of the look
+it holds the look's prim type.
 It exits with status 0 when every check holds. Not part of `cargo test`: usd-core is a
 large download, which CI's Python step makes.
 """
@@ -126,6 +128,8 @@ def shading(path):
     type name}."""
     stage = Usd.Stage.Open(path)
     inputs, types = {}, {}
+    if not stage:
+        return inputs, types
     for prim in stage.Traverse():
         types[str(prim.GetPath())] = prim.GetTypeName()
         if prim.GetTypeName() != "Shader":
@@ -154,23 +158,34 @@ def check_corpus(vstructc, tmp):
         for flags in [[], ["--no-conditions"]]:
             at = "%s %s" % (look, " ".join(flags))
             flat = os.path.join(tmp, "flat.usda")
-            over = os.path.join(tmp, "over.usda")
+            outputs = [(flat, []), (os.path.join(tmp, "over.usda"), ["--usd-mode", "over"]),
+                       (os.path.join(tmp, "flat.usdc"), []),
+                       (os.path.join(tmp, "over.usdc"), ["--usd-mode", "over"]),
+                       (os.path.join(tmp, "flat.usdz"), [])]
             runs = [subprocess.run([vstructc, "resolve", source, "-o", out] + flags + mode,
                                    capture_output=True, text=True)
-                    for out, mode in [(flat, []), (over, ["--usd-mode", "over"])]]
+                    for out, mode in outputs]
             failed = [r.stderr for r in runs if r.returncode != 0]
             if failed:
                 problems.append("%s: vstructc failed:\n%s" % (at, failed[0]))
                 continue
-            (flat_inputs, flat_types), (over_inputs, _) = shading(flat), shading(over)
+            flat_inputs, flat_types = shading(flat)
             look_inputs, look_types = shading(source)
             if flat_inputs == look_inputs:
                 problems.append("%s: the output is the look: not resolved" % at)
-            for key in sorted(set(flat_inputs) | set(over_inputs)):
-                a, b = flat_inputs.get(key), over_inputs.get(key)
-                if a != b:
-                    problems.append("%s: %s.%s is %s flattened, %s in the override layer"
-                                    % (at, key[0], key[1], a, b))
+            for out, _ in outputs[1:]:
+                other, other_types = shading(out)
+                if not other:
+                    problems.append("%s: Pixar's USD finds no inputs in %s"
+                                    % (at, os.path.basename(out)))
+                for key in sorted(set(flat_inputs) | set(other)):
+                    a, b = flat_inputs.get(key), other.get(key)
+                    if a != b:
+                        problems.append("%s: %s.%s is %s in flat.usda, %s in %s"
+                                        % (at, key[0], key[1], a, b, os.path.basename(out)))
+                if "flat" in out and other_types != flat_types:
+                    problems.append("%s: %s has other prims or prim types than flat.usda"
+                                    % (at, os.path.basename(out)))
             for path, t in sorted(flat_types.items()):
                 if path in look_types and look_types[path] != t:
                     problems.append("%s: %s is a %r, not the look's %r"
@@ -184,19 +199,21 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         look = os.path.join(tmp, "look.usda")
         write_look(look)
-        for mode in ["flatten", "over"]:
-            out = os.path.join(tmp, "resolved-%s.usda" % mode)
+        for mode, ext in [("flatten", "usda"), ("over", "usda"), ("flatten", "usdc"),
+                          ("over", "usdc"), ("flatten", "usdz")]:
+            out = os.path.join(tmp, "resolved-%s.%s" % (mode, ext))
+            at = "%s .%s" % (mode, ext)
             run = subprocess.run([vstructc, "resolve", look, "--usd-mode", mode, "-o", out],
                                  capture_output=True, text=True)
             if run.returncode != 0:
-                print("%s: vstructc failed:\n%s" % (mode, run.stderr))
+                print("%s: vstructc failed:\n%s" % (at, run.stderr))
                 failed = True
                 continue
             problems = check(out, *expected(vstructc, look))
             for p in problems:
-                print("%s: %s" % (mode, p))
+                print("%s: %s" % (at, p))
             failed = failed or bool(problems)
-            print("%s: %s" % (mode, "FAILED" if problems else "ok"))
+            print("%s: %s" % (at, "FAILED" if problems else "ok"))
         problems = check_corpus(vstructc, tmp)
         for p in problems:
             print("corpus: %s" % p)

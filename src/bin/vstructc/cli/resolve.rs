@@ -6,7 +6,7 @@ use std::path::{Component, Path, PathBuf};
 use std::process::ExitCode;
 use vstructc::back::json::write_json_to;
 use vstructc::back::rib::write_rib;
-use vstructc::back::usd::{UsdMode, write_usda};
+use vstructc::back::usd::{UsdMode, write_usd};
 use vstructc::front::NetFormat;
 use vstructc::pipeline::Lowering;
 
@@ -20,9 +20,10 @@ pub struct ResolveArgs {
     /// `enableConditions = false`).
     #[arg(long)]
     pub no_conditions: bool,
-    /// Output format (default: the extension of `-o` when it is `.rib`, `.json` or `.usda`,
-    /// else the input's: USD input gives usda text). A `-o` extension naming another format
-    /// is a usage error; binary `.usdc`/`.usdz` output is not supported yet.
+    /// Output format (default: the extension of `-o` when it is `.rib`, `.json`, `.usda`,
+    /// `.usdc` or `.usdz`, else the input's: USD input gives usda text). `-o` with `.usdc` or
+    /// `.usdz` writes binary USD (a crate file, or a package holding one); a `-o` extension
+    /// naming another format is a usage error.
     #[arg(long, value_parser = format_parser())]
     pub format: Option<NetFormat>,
     /// The resolved network as JSON (the JSON network form): the same as `--format json`,
@@ -57,7 +58,8 @@ pub enum UsdModeArg {
 }
 
 /// Why `--usd-mode over` cannot be honoured before the input is read, if it cannot: it
-/// writes usda only, and it sublayers an input file.
+/// writes a USD layer (`.usda` or `.usdc`; not a `.usdz` package, inside which the input's
+/// relative path would be looked for), and it sublayers an input file.
 fn check_over(args: &ResolveArgs, format: Option<NetFormat>) -> Result<(), String> {
     if args.usd_mode != UsdModeArg::Over {
         return Ok(());
@@ -75,12 +77,33 @@ fn check_over(args: &ResolveArgs, format: Option<NetFormat>) -> Result<(), Strin
             "--usd-mode over writes a usda override layer; {asked} is not usda"
         ));
     }
+    if encoding(args.output.as_deref()) == "usdz" {
+        return Err(
+            "--usd-mode over writes a layer that sublayers the input by a relative path; a \
+             `.usdz` package would look for the input inside itself (use .usda or .usdc)"
+                .into(),
+        );
+    }
     if args.input.as_os_str() == "-" {
         return Err(
             "--usd-mode over sublayers the input file; standard input cannot be sublayered".into(),
         );
     }
     Ok(())
+}
+
+/// The USD encoding output file `output` asks for by its extension: `usdc` or `usdz`
+/// (binary, only to a file), else `usda` text.
+fn encoding(output: Option<&Path>) -> &'static str {
+    let ext = output
+        .and_then(|p| p.extension())
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("usdc") => "usdc",
+        Some("usdz") => "usdz",
+        _ => "usda",
+    }
 }
 
 /// The name `--format` gives format `f`.
@@ -135,13 +158,7 @@ pub fn output_format(
     let by_ext = match ext.as_deref() {
         Some("rib") => Some(NetFormat::Rib),
         Some("json") => Some(NetFormat::Json),
-        Some("usda" | "usd") => Some(NetFormat::Usd),
-        Some(e @ ("usdc" | "usdz")) => {
-            return Err(format!(
-                "`.{e}` output: binary USD output is not supported yet (use .usda, .rib or \
-                 .json)"
-            ));
-        }
+        Some("usda" | "usd" | "usdc" | "usdz") => Some(NetFormat::Usd),
         Some("mtlx") => {
             return Err(
                 "`.mtlx` output: MaterialX output is not supported (use .rib, .json or .usda)"
@@ -235,7 +252,10 @@ pub fn run(args: &ResolveArgs, common: &CommonOptions) -> ExitCode {
     let written = match format.unwrap_or(loaded.format) {
         NetFormat::Json => stream_output(output, |out| write_json_to(network, out)),
         NetFormat::Usd => {
-            stream_output(output, |out| write_usda(network, &ran.registry, mode, out))
+            let encoding = encoding(output);
+            stream_output(output, |out| {
+                write_usd(network, &ran.registry, mode, encoding, out)
+            })
         }
         NetFormat::Rib => {
             // Streamed: the untouched parts of a large scene are copied from the source
