@@ -278,15 +278,18 @@ fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
         output.join("over.usda"),
         output.join("flat.usda"),
     );
-    let out = vstructc(&[
-        "resolve",
-        look,
-        "--usd-mode",
-        "over",
-        "-o",
-        over.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let write_over = |path: &std::path::Path| {
+        let out = vstructc(&[
+            "resolve",
+            look,
+            "--usd-mode",
+            "over",
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    };
+    write_over(&over);
     let text = std::fs::read_to_string(&over).unwrap();
     assert!(
         text.contains("subLayers = [\n        @../in/look.usda@\n    ]"),
@@ -302,15 +305,7 @@ fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
     assert_eq!(json(&over), json(&flat));
     // The override layer in the binary form too.
     let over_c = output.join("over.usdc");
-    let out = vstructc(&[
-        "resolve",
-        look,
-        "--usd-mode",
-        "over",
-        "-o",
-        over_c.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    write_over(&over_c);
     assert!(std::fs::read(&over_c).unwrap().starts_with(b"PXR-USDC"));
     assert_eq!(json(&over_c), json(&flat));
     // On standard output the path is relative to the current folder.

@@ -614,15 +614,7 @@ fn flat_and_over(
     resolve(&mut net, reg, &options(conditions));
     let mut flat = Vec::new();
     write_usd(&net, reg, UsdMode::Flatten, "usda", &mut flat).unwrap();
-    let mut over = Vec::new();
-    write_usd(
-        &net,
-        reg,
-        UsdMode::Over { sublayer: name },
-        "usda",
-        &mut over,
-    )
-    .unwrap();
+    let over = over_layer(&net, reg, name, "usda");
     let over_path = dir.join("over.usda");
     std::fs::write(&over_path, &over).unwrap();
     let (flat_back, diags) = read_usd(&flat, "flat.usda", reg);
@@ -688,15 +680,7 @@ fn binary_outputs_read_back_as_the_text_layer() {
                 assert!(diags.is_empty(), "{at}: {diags:#?}");
                 check(&net, &back, &at);
             }
-            let mut over = Vec::new();
-            write_usd(
-                &net,
-                &reg,
-                UsdMode::Over { sublayer: name },
-                "usdc",
-                &mut over,
-            )
-            .unwrap();
+            let over = over_layer(&net, &reg, name, "usdc");
             let over_path = dir.path().join("over.usdc");
             std::fs::write(&over_path, &over).unwrap();
             let (back, diags) = read_usd(&over, over_path.to_str().unwrap(), &reg);
@@ -718,6 +702,20 @@ fn binary_outputs_read_back_as_the_text_layer() {
     }
 }
 
+/// The override layer of `net` over the layer `name`, in `encoding`.
+fn over_layer(net: &Network, reg: &Registry, name: &str, encoding: &str) -> Vec<u8> {
+    let mut over = Vec::new();
+    write_usd(
+        net,
+        reg,
+        UsdMode::Over { sublayer: name },
+        encoding,
+        &mut over,
+    )
+    .unwrap();
+    over
+}
+
 /// The crate files written store prim and property children as token vectors and sublayers
 /// as a string vector, the types Pixar's USD requires (it rejects a `primChildren` value of
 /// another type), never as token or string arrays; `usdz` packages hold such a file.
@@ -733,15 +731,7 @@ fn crate_files_store_children_as_pixar_requires() {
     resolve(&mut net, &reg, &options(true));
     let mut flat = Vec::new();
     write_usd(&net, &reg, UsdMode::Flatten, "usdc", &mut flat).unwrap();
-    let mut over = Vec::new();
-    write_usd(
-        &net,
-        &reg,
-        UsdMode::Over { sublayer: name },
-        "usdc",
-        &mut over,
-    )
-    .unwrap();
+    let over = over_layer(&net, &reg, name, "usdc");
     let mut package = Vec::new();
     write_usd(&net, &reg, UsdMode::Flatten, "usdz", &mut package).unwrap();
     // The package's one file: stored uncompressed, its data 64-byte aligned (a zip local
@@ -916,15 +906,7 @@ def Material "M" {
     let n = net.add_node("/M/N", "PxrTexture");
     net.set_param(n, "filename", vstructc::Value::Asset("n.tex".into()));
     net.connect(s, "specularGain", n, "resultR");
-    let mut over = Vec::new();
-    write_usd(
-        &net,
-        &reg,
-        UsdMode::Over { sublayer: name },
-        "usda",
-        &mut over,
-    )
-    .unwrap();
+    let over = over_layer(&net, &reg, name, "usda");
     let text = String::from_utf8(over.clone()).unwrap();
     for present in [
         "color3f inputs:diffuseColor = (0.1, 0.2, 0.3)",
