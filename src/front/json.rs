@@ -218,11 +218,7 @@ impl P<'_> {
             P::Key(base, key) => {
                 base.write(s);
                 s.push('/');
-                if key.contains(['~', '/']) {
-                    s.push_str(&escape_pointer(key));
-                } else {
-                    s.push_str(key);
-                }
+                s.push_str(&escape_pointer(key));
             }
             P::Index(base, i) => {
                 base.write(s);
@@ -235,11 +231,11 @@ impl P<'_> {
 
 /// RFC 6901 escaping of one pointer segment.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
-fn escape_pointer(s: &str) -> String {
+fn escape_pointer(s: &str) -> Cow<'_, str> {
     if !s.contains(['~', '/']) {
-        return s.to_string();
+        return Cow::Borrowed(s);
     }
-    s.replace('~', "~0").replace('/', "~1")
+    Cow::Owned(s.replace('~', "~0").replace('/', "~1"))
 }
 
 struct Seed<'c>(&'c Ctx);
@@ -507,7 +503,7 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
             r.materials += 1;
             let group = r.materials;
             let m = MaterialState {
-                pointer: ptr("/materials", &name),
+                pointer: P::Key(&P::Root("/materials"), &name).render(),
                 has_nodes: false,
                 ids: Vec::new(),
                 by_name: Default::default(),
@@ -867,18 +863,6 @@ struct Reader<'t> {
     inline_decls: FxHashMap<Box<str>, Arc<Decl>>,
     /// One declaration per declared type of the shorthand form, shared likewise.
     declared_decls: FxHashMap<Type, Arc<Decl>>,
-}
-
-fn ptr(base: &str, seg: &str) -> String {
-    let mut p = String::with_capacity(base.len() + seg.len() + 1);
-    p.push_str(base);
-    p.push('/');
-    if seg.contains(['~', '/']) {
-        p.push_str(&escape_pointer(seg));
-    } else {
-        p.push_str(seg);
-    }
-    p
 }
 
 impl Reader<'_> {

@@ -158,24 +158,17 @@ fn usd_inputs_are_read_and_materialx_is_named_not_misread() {
 #[test]
 fn the_output_extension_picks_the_output_format() {
     let dir = tempfile::tempdir().unwrap();
+    // `vstructc resolve INPUT -o OUTPUT`, which must succeed.
+    let resolve_to = |input: &str, output: &std::path::Path| {
+        let out = vstructc(&["resolve", input, "-o", output.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    };
     let json = dir.path().join("out.json");
-    let out = vstructc(&[
-        "resolve",
-        "examples/chain.rib",
-        "-o",
-        json.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    resolve_to("examples/chain.rib", &json);
     let text = std::fs::read_to_string(&json).unwrap();
     serde_json::from_str::<serde_json::Value>(&text).expect("JSON was written");
     let rib = dir.path().join("back.rib");
-    let out = vstructc(&[
-        "resolve",
-        json.to_str().unwrap(),
-        "-o",
-        rib.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    resolve_to(json.to_str().unwrap(), &rib);
     assert!(
         std::fs::read_to_string(&rib)
             .unwrap()
@@ -201,13 +194,7 @@ fn the_output_extension_picks_the_output_format() {
     // Binary USD output when the extension asks for it: a crate file, a package holding
     // one; both read back as the text output does.
     let text = dir.path().join("out.usda");
-    let out = vstructc(&[
-        "resolve",
-        "examples/chain.rib",
-        "-o",
-        text.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    resolve_to("examples/chain.rib", &text);
     let json = |path: &std::path::Path| {
         let out = vstructc(&["resolve", path.to_str().unwrap(), "--format", "json"]);
         assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
@@ -215,8 +202,7 @@ fn the_output_extension_picks_the_output_format() {
     };
     for (ext, signature) in [("usdc", &b"PXR-USDC"[..]), ("usdz", &b"PK\x03\x04"[..])] {
         let bin = dir.path().join(format!("out.{ext}"));
-        let out = vstructc(&["resolve", "examples/chain.rib", "-o", bin.to_str().unwrap()]);
-        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        resolve_to("examples/chain.rib", &bin);
         assert!(std::fs::read(&bin).unwrap().starts_with(signature), "{ext}");
         assert_eq!(json(&bin), json(&text), "{ext}");
     }
@@ -237,13 +223,7 @@ fn the_output_extension_picks_the_output_format() {
     );
     assert!(!conflict.exists());
     let usda = dir.path().join("out.usda");
-    let out = vstructc(&[
-        "resolve",
-        "examples/chain.rib",
-        "-o",
-        usda.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    resolve_to("examples/chain.rib", &usda);
     assert!(
         std::fs::read_to_string(&usda)
             .unwrap()
