@@ -237,27 +237,21 @@ impl Reader<'_> {
         }
     }
 
-    /// How many time samples attribute `path` has.
+    /// How many time samples attribute `path` has on the stage (a layer read alone answers
+    /// through [`Specs::attribute`]).
     fn time_samples(&self, path: &sdf::Path) -> usize {
-        match self.flat {
-            Some(data) => samples_of(data.try_field(path, sdf::FieldKey::TimeSamples.as_str())),
-            None => self
-                .stage
-                .and_then(|stage| stage.attribute(path.clone()).num_time_samples().ok())
-                .unwrap_or(0),
-        }
+        self.stage
+            .and_then(|stage| stage.attribute(path.clone()).num_time_samples().ok())
+            .unwrap_or(0)
     }
 
-    /// Attribute `path`'s USD type name, or nothing.
+    /// Attribute `path`'s USD type name on the stage, or nothing (a layer read alone answers
+    /// through [`Specs::attribute`]).
     fn value_type(&self, path: &sdf::Path) -> String {
-        match self.flat {
-            Some(data) => type_name_of(data.try_field(path, sdf::FieldKey::TypeName.as_str())),
-            None => self
-                .stage
-                .and_then(|stage| stage.attribute(path.clone()).type_name().ok().flatten())
-                .map(|t| t.as_str().to_string())
-                .unwrap_or_default(),
-        }
+        self.stage
+            .and_then(|stage| stage.attribute(path.clone()).type_name().ok().flatten())
+            .map(|t| t.as_str().to_string())
+            .unwrap_or_default()
     }
 
     /// What the reader reads of attribute `path`, or nothing when the layer read alone
