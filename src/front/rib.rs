@@ -140,7 +140,7 @@ pub fn parse_rib(
         types: &types,
         net,
         decls: HashTable::new(),
-        values: FxHashMap::default(),
+        values: HashTable::new(),
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
@@ -476,11 +476,10 @@ struct Assembler<'a, 't> {
     /// a hit reports nothing, exactly as reading them again would. One table keyed by the
     /// address of the network's shared shader id and the token's bytes: one hash and one
     /// comparison of bytes per parameter.
-    decls: HashTable<Remembered>,
+    decls: HashTable<Remembered<SharedDecl>>,
     /// Short values read before without a diagnostic, per declaration (its address) and value
-    /// text. (Per declaration rather than in one table: the values of one declaration stay
-    /// few, and tens of thousands of them in one table cost more memory than they save time.)
-    values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
+    /// text: one hash and one comparison of bytes per parameter value.
+    values: HashTable<Remembered<Arc<Value>>>,
     /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
@@ -491,12 +490,13 @@ struct Assembler<'a, 't> {
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
 type SharedDecl = (Sym, Arc<Decl>);
 
-/// An entry of [`Assembler::decls`]: the address of the shared shader id it belongs to (alive
-/// until the file is read), the decl token as written, and what was read from it.
-struct Remembered {
+/// An entry of [`Assembler::decls`] or [`Assembler::values`]: the address of what it belongs
+/// to (the shared shader id, the shared declaration: alive until the file is read), the token
+/// text as written, and what was read from it.
+struct Remembered<T> {
     owner: usize,
     text: Box<[u8]>,
-    shared: SharedDecl,
+    shared: T,
 }
 
 /// The hash of an owner's address and a text, for [`Remembered`] entries.
@@ -508,11 +508,7 @@ fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
 }
 
 /// The entry of `table` for `owner` and `text`, if remembered.
-fn recall<'t>(
-    table: &'t HashTable<Remembered>,
-    owner: usize,
-    text: &[u8],
-) -> Option<&'t SharedDecl> {
+fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
     let hash = remembered_hash(owner, text);
     table
         .find(hash, |e| e.owner == owner && *e.text == *text)
@@ -520,7 +516,7 @@ fn recall<'t>(
 }
 
 /// Remember `shared` for `owner` and `text` (not remembered yet).
-fn remember(table: &mut HashTable<Remembered>, owner: usize, text: &[u8], shared: SharedDecl) {
+fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
     let hash = remembered_hash(owner, text);
     let entry = Remembered {
         owner,
@@ -863,7 +859,7 @@ impl<'a> Assembler<'a, '_> {
         let value = 'value: {
             // A value seen before is shared without looking at its elements.
             if remembered {
-                if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
+                if let Some(v) = recall(&self.values, key, text) {
                     break 'value v.clone();
                 }
             }
@@ -878,10 +874,7 @@ impl<'a> Assembler<'a, '_> {
                 && self.shared_values < MAX_SHARED_VALUES
             {
                 self.shared_values += 1;
-                self.values
-                    .entry(key)
-                    .or_default()
-                    .insert(Box::from(text), v.clone());
+                remember(&mut self.values, key, text, v.clone());
             }
             v
         };
