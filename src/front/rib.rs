@@ -332,7 +332,22 @@ fn read_args(
                     args.items.push(tok);
                 }
             }
-            (TokKind::Open, None) => array = Some((tok, args.items.len(), None)),
+            (TokKind::Open, None) => {
+                // The usual array in one pass; anything else token by token.
+                let first = args.items.len();
+                if keep {
+                    if let Some(close) = lx.flat_array(&mut args.items) {
+                        let items = first..args.items.len();
+                        args.pieces.push(Piece::Array {
+                            open: tok,
+                            items,
+                            close,
+                        });
+                        continue;
+                    }
+                }
+                array = Some((tok, first, None));
+            }
             (TokKind::Open, Some(_)) => {
                 return Err(
                     Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
