@@ -140,7 +140,7 @@ pub fn parse_rib(
         types: &types,
         net,
         decls: HashTable::new(),
-        values: HashTable::new(),
+        params: HashTable::new(),
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
@@ -492,10 +492,12 @@ struct Assembler<'a, 't> {
     /// address of the network's shared shader id and the token's bytes: one hash and one
     /// comparison of bytes per parameter.
     decls: HashTable<Remembered<SharedDecl>>,
-    /// Short values read before without a diagnostic, per declaration (its address) and value
-    /// text: one hash and one comparison of bytes per parameter value.
-    values: HashTable<Remembered<Arc<Value>>>,
-    /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
+    /// Parameters with a short value read before without a diagnostic, per shader (the
+    /// address of its shared id) and text from the decl string to the end of the value: a
+    /// scene repeats the same parameters on thousands of nodes, and such a parameter is read
+    /// with one hash and one comparison of bytes.
+    params: HashTable<Remembered<SharedParam>>,
+    /// How many parameters `params` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
     /// a look-up here takes no lock.
@@ -505,9 +507,13 @@ struct Assembler<'a, 't> {
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
 type SharedDecl = (Sym, Arc<Decl>);
 
-/// An entry of [`Assembler::decls`] or [`Assembler::values`]: the address of what it belongs
-/// to (the shared shader id, the shared declaration: alive until the file is read), the token
-/// text as written, and what was read from it.
+/// A parameter name, declaration and value shared by the parameters that repeat a decl and
+/// value text.
+type SharedParam = (Sym, Arc<Decl>, Arc<Value>);
+
+/// An entry of [`Assembler::decls`] or [`Assembler::params`]: the address of the shared
+/// shader id it belongs to (alive until the file is read), the text as written, and what
+/// was read from it.
 struct Remembered<T> {
     owner: usize,
     text: Box<[u8]>,
@@ -546,6 +552,10 @@ const MAX_SHARED_VALUES: usize = 1 << 16;
 
 /// Values written in at most this many bytes are remembered for sharing.
 const MAX_SHARED_VALUE_BYTES: usize = 48;
+
+/// Parameters written (decl string to end of value) in at most this many bytes are
+/// remembered for sharing.
+const MAX_SHARED_PARAM_BYTES: usize = 160;
 
 /// Where a parameter's decl string is: enough to build its [`Location`] when a diagnostic
 /// needs one (most parameters need none, and keep only line and column).
@@ -849,11 +859,28 @@ impl<'a> Assembler<'a, '_> {
             arena,
             origin,
         } = raw;
+        let at = ParamAt::LineColumn(location.line, location.column);
+        // The whole parameter as written, when it may have been read before.
+        let owner = shader.as_ptr() as usize;
+        let whole = self
+            .src
+            .get(decl_tok.start..value.range().end)
+            .filter(|w| w.len() <= MAX_SHARED_PARAM_BYTES);
+        if let Some((name, decl, value)) = whole.and_then(|w| recall(&self.params, owner, w)) {
+            let param = Param::from_shared(
+                *name,
+                Some(value.clone()),
+                Some(decl.clone()),
+                at,
+                Some(origin),
+            );
+            params.push(param);
+            return Ok(());
+        }
         let (name, decl, remembered) = self.declaration(shader, &decl_tok, &location, diags)?;
         let toks = value_tokens(value, arena);
         if decl.reference && toks.iter().all(|t| t.kind == TokKind::Str) {
             let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
-            let at = ParamAt::LineColumn(location.line, location.column);
             let param = Param::from_shared(name, None, Some(decl), at, Some(origin));
             params.push(param.with_source_links(links));
             return Ok(());
@@ -867,37 +894,28 @@ impl<'a> Assembler<'a, '_> {
                 .at(location.loc()),
             );
         }
-        // Keyed by the declaration's address: only remembered declarations, which stay alive
-        // (so keep their address) until the file is read.
         let text = &self.src[value.range()];
-        let key = Arc::as_ptr(&decl) as usize;
-        let value = 'value: {
-            // A value seen before is shared without looking at its elements.
-            if remembered {
-                if let Some(v) = recall(&self.values, key, text) {
-                    break 'value v.clone();
-                }
-            }
-            let elems = self.elems(toks);
-            if !remembered {
-                break 'value Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
-            }
-            let before = diags.len();
-            let v = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
-            if diags.len() == before
+        let elems = self.elems(toks);
+        let before = diags.len();
+        let value = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
+        // Remembered only when reading it again would report nothing (the declaration and
+        // the value read cleanly, and a `reference` with numbers is RB014 each time).
+        if let Some(whole) = whole.filter(|_| {
+            remembered
+                && !decl.reference
+                && diags.len() == before
                 && text.len() <= MAX_SHARED_VALUE_BYTES
                 && self.shared_values < MAX_SHARED_VALUES
-            {
-                self.shared_values += 1;
-                remember(&mut self.values, key, text, v.clone());
-            }
-            v
-        };
+        }) {
+            self.shared_values += 1;
+            let shared = (name, decl.clone(), value.clone());
+            remember(&mut self.params, owner, whole, shared);
+        }
         params.push(Param::from_shared(
             name,
             Some(value),
             Some(decl),
-            ParamAt::LineColumn(location.line, location.column),
+            at,
             Some(origin),
         ));
         Ok(())
