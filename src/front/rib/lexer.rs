@@ -364,8 +364,8 @@ impl<'a> Lexer<'a> {
 
     /// The elements and the `]` of an array whose `[` was just read, when they are the usual
     /// ones: on the `[`'s line, separated by spaces or tabs, all numbers or all plain strings
-    /// (see [`plain_string_end`]). Appends the elements to `items` and returns the `]`.
-    /// Otherwise (a comment, a line break, a mixed array, an error to report, ...) returns
+    /// (short printable ASCII without a backslash). Appends the elements to `items` and
+    /// returns the `]`. Otherwise (a comment, a line break, a mixed array, an error to report, ...) returns
     /// `None` with nothing read and `items` as it was: [`Lexer::next_token`] then reads the
     /// array token by token and reports what it finds. The tokens are those `next_token`
     /// gives, found without its general dispatch: an array of a scene is read in one pass.

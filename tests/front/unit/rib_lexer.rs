@@ -260,11 +260,8 @@ fn flat_arrays_read_as_token_by_token() {
             assert_eq!(items[..], expected[..read], "{src:?}");
             // The lexer goes on from where the array ended, positions intact.
             let mut rest = items;
-            loop {
-                match lx.next_token(&mut d) {
-                    Ok(Some(t)) => rest.push(t),
-                    Ok(None) | Err(_) => break,
-                }
+            while let Ok(Some(t)) = lx.next_token(&mut d) {
+                rest.push(t);
             }
             assert_eq!(rest, expected, "{src:?}");
         }
