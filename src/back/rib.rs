@@ -703,13 +703,9 @@ fn push_int_value(t: &mut Vec<u8>, i: i32) {
 /// `\n` and `\t`, other control characters in octal.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn escape(s: &str) -> Cow<'_, str> {
-    // Names and handles almost never need escaping: use them as they are. The check looks
-    // at every byte without stopping early, which lets it run on whole vectors of bytes
-    // (the writer checks millions of names).
-    let special = s.bytes().fold(false, |found, b| {
-        found | (b < 0x20) | (b == 0x7f) | (b == b'"') | (b == b'\\')
-    });
-    if !special {
+    // Names and handles almost never need escaping: use them as they are (the writer checks
+    // millions of names).
+    if !needs_escape(s.as_bytes()) {
         return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len());
@@ -726,4 +722,62 @@ fn escape(s: &str) -> Cow<'_, str> {
         }
     }
     Cow::Owned(out)
+}
+
+/// True if `s` holds a byte that [`escape`] changes: a control byte, DEL, `"` or `\\`.
+#[cfg(not(target_arch = "x86_64"))]
+fn needs_escape(s: &[u8]) -> bool {
+    // Every byte without stopping early, which lets the check run on whole vectors.
+    s.iter().fold(false, |found, &b| {
+        found | (b < 0x20) | (b == 0x7f) | (b == b'"') | (b == b'\\')
+    })
+}
+
+/// [`needs_escape`] with SSE2 (part of every x86-64 processor), sixteen bytes per step:
+/// names are tens of bytes long, and the compiler's own vectors of the byte-by-byte check
+/// cost more than such a name.
+#[cfg(target_arch = "x86_64")]
+fn needs_escape(s: &[u8]) -> bool {
+    // SAFETY: SSE2 is part of the x86-64 baseline: every processor running this code has it.
+    unsafe { needs_escape_sse2(s) }
+}
+
+/// The body of [`needs_escape`] on x86-64.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse2")]
+fn needs_escape_sse2(s: &[u8]) -> bool {
+    use std::arch::x86_64::{
+        _mm_cmpeq_epi8, _mm_min_epu8, _mm_movemask_epi8, _mm_or_si128, _mm_set_epi64x,
+        _mm_set1_epi8,
+    };
+    let special = |lo: &[u8], hi: &[u8]| {
+        let half = |h: &[u8]| i64::from_le_bytes([h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7]]);
+        let v = _mm_set_epi64x(half(hi), half(lo));
+        // A byte below 0x20 is its own minimum with 0x1f.
+        let control = _mm_cmpeq_epi8(_mm_min_epu8(v, _mm_set1_epi8(0x1f)), v);
+        let quote = _mm_cmpeq_epi8(v, _mm_set1_epi8(b'"' as i8));
+        let backslash = _mm_cmpeq_epi8(v, _mm_set1_epi8(b'\\' as i8));
+        let del = _mm_cmpeq_epi8(v, _mm_set1_epi8(0x7f));
+        let any = _mm_or_si128(_mm_or_si128(control, del), _mm_or_si128(quote, backslash));
+        _mm_movemask_epi8(any) != 0
+    };
+    let n = s.len();
+    if n < 8 {
+        return s
+            .iter()
+            .any(|&b| b < 0x20 || b == 0x7f || b == b'"' || b == b'\\');
+    }
+    if n < 16 {
+        // The first and the last eight bytes (overlapping): every byte is looked at.
+        return special(&s[..8], &s[n - 8..]);
+    }
+    let mut at = 0;
+    while at + 16 <= n {
+        if special(&s[at..at + 8], &s[at + 8..at + 16]) {
+            return true;
+        }
+        at += 16;
+    }
+    // The last sixteen bytes (overlapping the ones already looked at).
+    at < n && special(&s[n - 16..n - 8], &s[n - 8..])
 }

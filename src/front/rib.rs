@@ -140,7 +140,7 @@ pub fn parse_rib(
         types: &types,
         net,
         decls: HashTable::new(),
-        values: FxHashMap::default(),
+        params: HashTable::new(),
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
@@ -332,7 +332,22 @@ fn read_args(
                     args.items.push(tok);
                 }
             }
-            (TokKind::Open, None) => array = Some((tok, args.items.len(), None)),
+            (TokKind::Open, None) => {
+                // The usual array in one pass; anything else token by token.
+                let first = args.items.len();
+                if keep {
+                    if let Some(close) = lx.flat_array(&mut args.items) {
+                        let items = first..args.items.len();
+                        args.pieces.push(Piece::Array {
+                            open: tok,
+                            items,
+                            close,
+                        });
+                        continue;
+                    }
+                }
+                array = Some((tok, first, None));
+            }
             (TokKind::Open, Some(_)) => {
                 return Err(
                     Diagnostic::error("RB004", "unexpected `[`: arrays cannot be nested")
@@ -476,12 +491,13 @@ struct Assembler<'a, 't> {
     /// a hit reports nothing, exactly as reading them again would. One table keyed by the
     /// address of the network's shared shader id and the token's bytes: one hash and one
     /// comparison of bytes per parameter.
-    decls: HashTable<Remembered>,
-    /// Short values read before without a diagnostic, per declaration (its address) and value
-    /// text. (Per declaration rather than in one table: the values of one declaration stay
-    /// few, and tens of thousands of them in one table cost more memory than they save time.)
-    values: FxHashMap<usize, FxHashMap<Box<[u8]>, Arc<Value>>>,
-    /// How many values `values` holds (it stops growing at [`MAX_SHARED_VALUES`]).
+    decls: HashTable<Remembered<SharedDecl>>,
+    /// Parameters with a short value read before without a diagnostic, per shader (the
+    /// address of its shared id) and text from the decl string to the end of the value: a
+    /// scene repeats the same parameters on thousands of nodes, and such a parameter is read
+    /// with one hash and one comparison of bytes.
+    params: HashTable<Remembered<SharedParam>>,
+    /// How many parameters `params` holds (it stops growing at [`MAX_SHARED_VALUES`]).
     shared_values: usize,
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
     /// a look-up here takes no lock.
@@ -491,12 +507,17 @@ struct Assembler<'a, 't> {
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
 type SharedDecl = (Sym, Arc<Decl>);
 
-/// An entry of [`Assembler::decls`]: the address of the shared shader id it belongs to (alive
-/// until the file is read), the decl token as written, and what was read from it.
-struct Remembered {
+/// A parameter name, declaration and value shared by the parameters that repeat a decl and
+/// value text.
+type SharedParam = (Sym, Arc<Decl>, Arc<Value>);
+
+/// An entry of [`Assembler::decls`] or [`Assembler::params`]: the address of the shared
+/// shader id it belongs to (alive until the file is read), the text as written, and what
+/// was read from it.
+struct Remembered<T> {
     owner: usize,
     text: Box<[u8]>,
-    shared: SharedDecl,
+    shared: T,
 }
 
 /// The hash of an owner's address and a text, for [`Remembered`] entries.
@@ -508,11 +529,7 @@ fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
 }
 
 /// The entry of `table` for `owner` and `text`, if remembered.
-fn recall<'t>(
-    table: &'t HashTable<Remembered>,
-    owner: usize,
-    text: &[u8],
-) -> Option<&'t SharedDecl> {
+fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
     let hash = remembered_hash(owner, text);
     table
         .find(hash, |e| e.owner == owner && *e.text == *text)
@@ -520,7 +537,7 @@ fn recall<'t>(
 }
 
 /// Remember `shared` for `owner` and `text` (not remembered yet).
-fn remember(table: &mut HashTable<Remembered>, owner: usize, text: &[u8], shared: SharedDecl) {
+fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
     let hash = remembered_hash(owner, text);
     let entry = Remembered {
         owner,
@@ -535,6 +552,10 @@ const MAX_SHARED_VALUES: usize = 1 << 16;
 
 /// Values written in at most this many bytes are remembered for sharing.
 const MAX_SHARED_VALUE_BYTES: usize = 48;
+
+/// Parameters written (decl string to end of value) in at most this many bytes are
+/// remembered for sharing.
+const MAX_SHARED_PARAM_BYTES: usize = 160;
 
 /// Where a parameter's decl string is: enough to build its [`Location`] when a diagnostic
 /// needs one (most parameters need none, and keep only line and column).
@@ -838,11 +859,28 @@ impl<'a> Assembler<'a, '_> {
             arena,
             origin,
         } = raw;
+        let at = ParamAt::LineColumn(location.line, location.column);
+        // The whole parameter as written, when it may have been read before.
+        let owner = shader.as_ptr() as usize;
+        let whole = self
+            .src
+            .get(decl_tok.start..value.range().end)
+            .filter(|w| w.len() <= MAX_SHARED_PARAM_BYTES);
+        if let Some((name, decl, value)) = whole.and_then(|w| recall(&self.params, owner, w)) {
+            let param = Param::from_shared(
+                *name,
+                Some(value.clone()),
+                Some(decl.clone()),
+                at,
+                Some(origin),
+            );
+            params.push(param);
+            return Ok(());
+        }
         let (name, decl, remembered) = self.declaration(shader, &decl_tok, &location, diags)?;
         let toks = value_tokens(value, arena);
         if decl.reference && toks.iter().all(|t| t.kind == TokKind::Str) {
             let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
-            let at = ParamAt::LineColumn(location.line, location.column);
             let param = Param::from_shared(name, None, Some(decl), at, Some(origin));
             params.push(param.with_source_links(links));
             return Ok(());
@@ -856,40 +894,28 @@ impl<'a> Assembler<'a, '_> {
                 .at(location.loc()),
             );
         }
-        // Keyed by the declaration's address: only remembered declarations, which stay alive
-        // (so keep their address) until the file is read.
         let text = &self.src[value.range()];
-        let key = Arc::as_ptr(&decl) as usize;
-        let value = 'value: {
-            // A value seen before is shared without looking at its elements.
-            if remembered {
-                if let Some(v) = self.values.get(&key).and_then(|m| m.get(text)) {
-                    break 'value v.clone();
-                }
-            }
-            let elems = self.elems(toks);
-            if !remembered {
-                break 'value Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
-            }
-            let before = diags.len();
-            let v = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
-            if diags.len() == before
+        let elems = self.elems(toks);
+        let before = diags.len();
+        let value = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
+        // Remembered only when reading it again would report nothing (the declaration and
+        // the value read cleanly, and a `reference` with numbers is RB014 each time).
+        if let Some(whole) = whole.filter(|_| {
+            remembered
+                && !decl.reference
+                && diags.len() == before
                 && text.len() <= MAX_SHARED_VALUE_BYTES
                 && self.shared_values < MAX_SHARED_VALUES
-            {
-                self.shared_values += 1;
-                self.values
-                    .entry(key)
-                    .or_default()
-                    .insert(Box::from(text), v.clone());
-            }
-            v
-        };
+        }) {
+            self.shared_values += 1;
+            let shared = (name, decl.clone(), value.clone());
+            remember(&mut self.params, owner, whole, shared);
+        }
         params.push(Param::from_shared(
             name,
             Some(value),
             Some(decl),
-            ParamAt::LineColumn(location.line, location.column),
+            at,
             Some(origin),
         ));
         Ok(())

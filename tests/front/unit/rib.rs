@@ -23,17 +23,21 @@ fn read(src: &str) -> (Network, Diagnostics) {
 /// nothing: a repeated declaration or value with a finding reports it at every place.
 #[test]
 fn repeated_findings_are_reported_each_time() {
-    let (_, d) = read(
-        "Pattern \"P\" \"a\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2]\n\
-         Pattern \"P\" \"b\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2]\n",
+    let (net, d) = read(
+        "Pattern \"P\" \"a\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2] \"reference float r\" [1]\n\
+         Pattern \"P\" \"b\" \"uniform bogus x\" [1] \"int n\" [1.5] \"float f\" [2] \"reference float r\" [1]\n",
     );
     assert_eq!(d.count("RB013"), 2, "{d:?}");
-    assert_eq!(d.count("RB014"), 2, "{d:?}");
+    assert_eq!(d.count("RB014"), 4, "{d:?}");
     let lines: Vec<u32> = d
         .with_code("RB014")
         .filter_map(|x| x.location.as_ref().map(|l| l.line))
         .collect();
-    assert_eq!(lines, [1, 2]);
+    assert_eq!(lines, [1, 1, 2, 2]);
+    // A parameter shared with an earlier node keeps its own position.
+    let b = &net[net.find("b").unwrap()];
+    let at = b.param_location(b.param("f").unwrap()).unwrap();
+    assert_eq!((at.line, at.column), (2, 53));
 }
 
 /// Parameters of different nodes with the same declaration and value share them, and

@@ -158,3 +158,112 @@ fn strings_of_every_length_and_content_keep_positions() {
         }
     }
 }
+
+/// The tokens of `src` (kind, span, position) up to the first error, and that error's code
+/// and position.
+fn tokens(src: &str) -> (Vec<Token>, Option<String>) {
+    let mut d = Diagnostics::new();
+    let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+    let mut out = Vec::new();
+    loop {
+        match lx.next_token(&mut d) {
+            Ok(Some(t)) => out.push(t),
+            Ok(None) => return (out, None),
+            Err(e) => return (out, Some(format!("{:?} {}", e.code(), e))),
+        }
+    }
+}
+
+#[test]
+fn numbers_read_alike_with_and_without_room_after() {
+    // A number with sixteen bytes after its start is classified in one step; nearer the end
+    // of the input it is read byte by byte. Both must find the same tokens and errors.
+    let alphabet = ['0', '7', '.', 'e', 'E', '+', '-', 'x'];
+    let mut cases: Vec<String> = vec![String::new()];
+    for _ in 0..4 {
+        let longer: Vec<String> = cases
+            .iter()
+            .flat_map(|c| alphabet.iter().map(move |a| format!("{c}{a}")))
+            .collect();
+        cases.extend(longer);
+    }
+    for n in 13..19 {
+        cases.push("1".repeat(n));
+        cases.push(format!("0.{}", "5".repeat(n - 2)));
+        cases.push(format!("-{}", "2".repeat(n)));
+        cases.push(format!("{}e3", "3".repeat(n)));
+    }
+    for case in cases.iter().filter(|c| !c.is_empty()) {
+        let (short, short_err) = tokens(case);
+        let padded = format!("{case} 0 0 0 0 0 0 0 0 0 0 0");
+        let (long, long_err) = tokens(&padded);
+        let inside: Vec<Token> = long
+            .iter()
+            .copied()
+            .filter(|t| t.start < case.len())
+            .collect();
+        assert_eq!(short, inside, "{case:?}");
+        // An error inside the case is the same error; the padding itself reads cleanly.
+        if short_err.is_some() {
+            assert_eq!(short_err, long_err, "{case:?}");
+        }
+    }
+}
+
+#[test]
+fn flat_arrays_read_as_token_by_token() {
+    // `Lexer::flat_array` reads the usual arrays in one pass and leaves any other to
+    // `next_token`: either way the same tokens and positions follow.
+    let bodies = [
+        "",
+        "1 2 3",
+        "0.5",
+        "\t1\t-2 +.5 3e4  ",
+        "\"a\" \"b:c\"",
+        "\"a\"\"b\"",
+        "1\"a\"",
+        "1 \"a\"",
+        "\"a\" 1",
+        "1 # c\n 2",
+        "1\n2",
+        "1\r\n2",
+        "'a'",
+        "\"a\\\"b\"",
+        "\"é\" 1",
+        "\"x\ny\"",
+        "1e",
+        "1 x",
+        "- 1",
+        "[1]",
+        "1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17",
+        "\"a very long string that takes more than the sixty-four bytes looked at first\"",
+    ];
+    for body in bodies {
+        for tail in ["] x", "]x", "", "]\n]"] {
+            let src = format!("  [{body}{tail}");
+            let mut d = Diagnostics::new();
+            let (expected, _) = tokens(&src);
+            let mut lx = Lexer::new(src.as_bytes(), "t".into(), false);
+            let open = lx.next_token(&mut d).unwrap().unwrap();
+            assert_eq!(open, expected[0], "{src:?}");
+            let mut items = vec![open];
+            let read = match lx.flat_array(&mut items) {
+                Some(close) => {
+                    items.push(close);
+                    items.len()
+                }
+                None => {
+                    assert_eq!(items.len(), 1, "{src:?}");
+                    1
+                }
+            };
+            assert_eq!(items[..], expected[..read], "{src:?}");
+            // The lexer goes on from where the array ended, positions intact.
+            let mut rest = items;
+            while let Ok(Some(t)) = lx.next_token(&mut d) {
+                rest.push(t);
+            }
+            assert_eq!(rest, expected, "{src:?}");
+        }
+    }
+}

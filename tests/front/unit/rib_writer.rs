@@ -93,10 +93,11 @@ fn escapes() {
 
 #[test]
 fn only_strings_with_a_special_byte_are_escaped() {
-    // Every ASCII byte (and a two-byte character) at every position of strings up to 20
-    // bytes: the word-at-a-time check must agree with the byte-by-byte rule.
+    // Every ASCII byte (and a two-byte character) at every position of strings up to 40
+    // bytes (two whole vectors and a part): the vector check must agree with the
+    // byte-by-byte rule.
     let special = |c: char| c < ' ' || c == '\u{7f}' || c == '"' || c == '\\';
-    for len in 0usize..20 {
+    for len in 0usize..40 {
         for at in 0..len.max(1) {
             for c in (0u8..0x80).map(char::from).chain(['é']) {
                 let mut s: String = "name_x".chars().cycle().take(len).collect();
