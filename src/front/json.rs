@@ -645,15 +645,17 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
             if m.by_name.contains_key(&name) {
                 return Err(r.ctx.duplicate_key(&name));
             }
-            let j = value_tree(&r.ctx, &mut map, &name)?;
+            let nodes = P::Root(&self.pointer);
+            let pointer = P::Key(&nodes, &name);
+            let mut n = NodeState::default();
+            let read = map.next_value_seed(NodeSeed {
+                r: &mut *r,
+                n: &mut n,
+                pointer: &pointer,
+            });
+            r.ctx.within(|| name.to_string(), read)?;
             r.at(self.group, MAT_NODES);
-            let read = r.node(
-                &name,
-                &j,
-                RequestKind::Pattern,
-                &P::Key(&P::Root(&self.pointer), &name),
-            );
-            match read {
+            match r.close_node(&name, n, RequestKind::Pattern, &pointer) {
                 Ok((id, conns)) => {
                     m.ids.push(id);
                     m.pending.push((id, name.clone(), conns));
@@ -665,6 +667,354 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
                 }
             }
         }
+        Ok(())
+    }
+}
+
+/// The stages of one node's checks, in the order their findings are reported: the node's own
+/// keys, a missing `nodeTypeId`, each parameter (in document order), each input.
+const NODE_KEYS: u8 = 0;
+const NODE_SHADER: u8 = 1;
+const NODE_PARAMS: u8 = 2;
+
+/// A parameter value read and typed, with its declaration.
+type Typed = (Value, Arc<Decl>);
+
+/// One node while its members stream in. Its findings are kept with their stage (and the
+/// parameter's index) and reported when the node closes, in the order of the checks, up to
+/// the first error: the same report whatever the order of the keys.
+#[derive(Default)]
+struct NodeState<'de> {
+    shader: Option<Cow<'de, str>>,
+    /// The `parameters` keys in document order, and their values once read.
+    names: Vec<Sym>,
+    values: Vec<Option<Typed>>,
+    /// Parameter index by name, once the node has more than [`SCAN_PARAMS`] parameters.
+    index: FxHashMap<Sym, usize>,
+    /// Shorthand values read before `nodeTypeId` (their type comes from the shader).
+    deferred: Vec<(usize, Cow<'de, str>, J<'de>)>,
+    /// The `inputConnections` object (small: read as a tree).
+    inputs: Option<J<'de>>,
+    found: Vec<(u8, usize, Found)>,
+}
+
+impl NodeState<'_> {
+    fn push(&mut self, stage: u8, index: usize, found: Found) {
+        self.found.push((stage, index, found));
+    }
+
+    /// A key's first sighting among the node's parameters (false if a duplicate).
+    fn add_parameter(&mut self, name: Sym) -> bool {
+        let fresh = if self.names.len() <= SCAN_PARAMS {
+            !self.names.contains(&name)
+        } else {
+            !self.index.contains_key(&name)
+        };
+        if fresh {
+            self.names.push(name);
+            self.values.push(None);
+            if self.names.len() > SCAN_PARAMS {
+                if self.index.is_empty() {
+                    self.index = self
+                        .names
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &n)| (n, i))
+                        .collect();
+                } else {
+                    self.index.insert(name, self.names.len() - 1);
+                }
+            }
+        }
+        fresh
+    }
+
+    /// The index of the parameter `name`, if `parameters` gives it.
+    fn parameter_index(&self, name: Sym) -> Option<usize> {
+        if self.names.len() > SCAN_PARAMS {
+            self.index.get(&name).copied()
+        } else {
+            self.names.iter().position(|&n| n == name)
+        }
+    }
+}
+
+/// Keys of a small object whose expected keys are a known few: a flag per expected key and
+/// a scan of the others (rare).
+#[derive(Default)]
+struct FewKeys<'de> {
+    known: u8,
+    others: Vec<Cow<'de, str>>,
+}
+
+impl<'de> FewKeys<'de> {
+    /// Record `key` (`slot`: the expected key's index, if it is one); false if seen before.
+    fn insert(&mut self, slot: Option<u8>, key: &Cow<'de, str>) -> bool {
+        match slot {
+            Some(i) => {
+                let bit = 1u8 << i;
+                let fresh = self.known & bit == 0;
+                self.known |= bit;
+                fresh
+            }
+            None => {
+                if self.others.contains(key) {
+                    return false;
+                }
+                self.others.push(key.clone());
+                true
+            }
+        }
+    }
+}
+
+/// One node object, read straight into a [`NodeState`].
+struct NodeSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    pointer: &'p P<'p>,
+}
+
+impl NodeSeed<'_, '_, '_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("a node must be an object, found {kind}"),
+        );
+        self.n.push(NODE_KEYS, 0, Found::Error(e));
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, pointer) = (self.r, self.n, self.pointer);
+        let mut seen = FewKeys::default();
+        while let Some(key) = map.next_key_seed(Key)? {
+            let slot = match &*key {
+                "nodeTypeId" => Some(0),
+                "parameters" => Some(1),
+                "inputConnections" => Some(2),
+                _ => None,
+            };
+            if !seen.insert(slot, &key) {
+                return Err(r.ctx.duplicate_key(&key));
+            }
+            let p = P::Key(pointer, &key);
+            match slot {
+                Some(0) => match value_tree(&r.ctx, &mut map, &key)? {
+                    J::Str(s) => n.shader = Some(s),
+                    other => {
+                        let e = r.error(
+                            "JS002",
+                            &p.render(),
+                            format!("`nodeTypeId` must be a string, found {}", other.kind()),
+                        );
+                        n.push(NODE_KEYS, 0, Found::Error(e));
+                    }
+                },
+                Some(1) => {
+                    let read = map.next_value_seed(ParamsSeed {
+                        r: &mut *r,
+                        n: &mut *n,
+                        pointer: &p,
+                    });
+                    r.ctx.within(|| key.to_string(), read)?;
+                }
+                Some(_) => {
+                    let j = value_tree(&r.ctx, &mut map, &key)?;
+                    match r.object(&j, &p, "`inputConnections`") {
+                        Ok(_) => n.inputs = Some(j),
+                        Err(e) => n.push(NODE_KEYS, 0, Found::Error(e)),
+                    }
+                }
+                None => {
+                    let d = r.unknown_key_warning(&p, &key, "a node");
+                    n.push(NODE_KEYS, 0, Found::Warning(d));
+                    value_tree(&r.ctx, &mut map, &key)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The `parameters` object of a node: each parameter is typed as it is read.
+struct ParamsSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    pointer: &'p P<'p>,
+}
+
+impl ParamsSeed<'_, '_, '_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("`parameters` must be an object, found {kind}"),
+        );
+        self.n.push(NODE_KEYS, 0, Found::Error(e));
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, pointer) = (self.r, self.n, self.pointer);
+        while let Some(name) = map.next_key_seed(Key)? {
+            if !n.add_parameter(Sym::new(&name)) {
+                return Err(r.ctx.duplicate_key(&name));
+            }
+            let p = P::Key(pointer, &name);
+            let index = n.names.len() - 1;
+            let read = map.next_value_seed(ParamSeed {
+                r: &mut *r,
+                n: &mut *n,
+                index,
+                name: &name,
+                pointer: &p,
+            });
+            r.ctx.within(|| name.to_string(), read)?;
+        }
+        Ok(())
+    }
+}
+
+/// One parameter: the canonical `{ "type", "value" }` object, or a bare (shorthand) value.
+struct ParamSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    index: usize,
+    name: &'p Cow<'de, str>,
+    pointer: &'p P<'p>,
+}
+
+impl<'de> ParamSeed<'_, '_, '_, 'de, '_> {
+    /// A shorthand value: typed now if the shader is known, else when the node closes.
+    fn bare<E>(self, j: J<'de>) -> Result<(), E> {
+        match &self.n.shader {
+            Some(shader) => {
+                let read = self.r.shorthand(shader, self.name, &j, self.pointer);
+                self.n.settle(self.index, read);
+            }
+            None => self.n.deferred.push((self.index, self.name.clone(), j)),
+        }
+        Ok(())
+    }
+}
+
+impl<'de> NodeState<'de> {
+    /// Keep parameter `index`'s value, or its error.
+    fn settle(&mut self, index: usize, read: Result<Typed, Error>) {
+        match read {
+            Ok(typed) => self.values[index] = Some(typed),
+            Err(e) => self.push(NODE_PARAMS, index, Found::Error(e)),
+        }
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<(), E> {
+        self.bare(J::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<(), E> {
+        self.bare(J::Num(Num::I(v)))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<(), E> {
+        self.bare(J::Num(Num::U(v)))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<(), E> {
+        self.bare(J::Num(Num::F(v)))
+    }
+    fn visit_borrowed_str<E>(self, v: &'de str) -> Result<(), E> {
+        self.bare(J::Str(Cow::Borrowed(v)))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<(), E> {
+        self.bare(J::Str(Cow::Owned(v.to_string())))
+    }
+    fn visit_string<E>(self, v: String) -> Result<(), E> {
+        self.bare(J::Str(Cow::Owned(v)))
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        self.bare(J::Null)
+    }
+    fn visit_none<E>(self) -> Result<(), E> {
+        self.bare(J::Null)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<(), A::Error> {
+        let j = Seed(&self.r.ctx).visit_seq(seq)?;
+        self.bare(j)
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
+        let mut seen = FewKeys::default();
+        let mut ty = None;
+        let mut value = None;
+        while let Some(key) = map.next_key_seed(Key)? {
+            let slot = match &*key {
+                "type" => Some(0),
+                "value" => Some(1),
+                _ => None,
+            };
+            if !seen.insert(slot, &key) {
+                return Err(r.ctx.duplicate_key(&key));
+            }
+            let j = value_tree(&r.ctx, &mut map, &key)?;
+            match slot {
+                Some(0) => match j {
+                    J::Str(s) => ty = Some(s),
+                    other => {
+                        let e = r.error(
+                            "JS002",
+                            &P::Key(pointer, &key).render(),
+                            format!("`type` must be a string, found {}", other.kind()),
+                        );
+                        n.push(NODE_PARAMS, index, Found::Error(e));
+                    }
+                },
+                Some(_) => value = Some(j),
+                None => {
+                    let d = r.unknown_key_warning(&P::Key(pointer, &key), &key, "a parameter");
+                    n.push(NODE_PARAMS, index, Found::Warning(d));
+                }
+            }
+        }
+        let read = r.canonical(self.name, ty.as_deref(), value.as_ref(), pointer);
+        n.settle(index, read);
         Ok(())
     }
 }
@@ -931,9 +1281,13 @@ impl Reader<'_> {
     }
 
     fn unknown_key(&mut self, pointer: &P, key: &str, where_: &str) {
-        let d = Diagnostic::warning("JS011", format!("unknown key `{key}` in {where_}; ignored"))
-            .at(self.loc(&pointer.render()));
+        let d = self.unknown_key_warning(pointer, key, where_);
         self.warn(d);
+    }
+
+    fn unknown_key_warning(&self, pointer: &P, key: &str, where_: &str) -> Diagnostic {
+        Diagnostic::warning("JS011", format!("unknown key `{key}` in {where_}; ignored"))
+            .at(self.loc(&pointer.render()))
     }
 
     /// The `vstructcNetwork` member (`None` when missing).
@@ -1099,58 +1453,60 @@ impl Reader<'_> {
         })
     }
 
-    /// Read one node; returns its id and its connections (per parameter index), to bind once
-    /// every node of the material exists.
-    fn node<'de>(
+    /// Close a node once all its members are read: report its findings (module docs), bind
+    /// its inputs to its parameters and insert it. Returns its id and its connections (per
+    /// parameter index), to bind once every node of the material exists.
+    fn close_node<'de>(
         &mut self,
         name: &str,
-        j: &J<'de>,
+        mut n: NodeState<'de>,
         kind: RequestKind,
         pointer: &P,
     ) -> Result<(NodeId, NodeConns<'de>), Error> {
-        let members = self.object(j, pointer, "a node")?;
-        let mut shader = None;
-        let mut parameters: &[(Cow<'de, str>, J<'de>)] = &[];
-        let mut inputs: &[(Cow<'de, str>, J<'de>)] = &[];
-        for (k, v) in members {
-            let p = P::Key(pointer, k);
-            match &**k {
-                "nodeTypeId" => shader = Some(self.string(v, &p, "`nodeTypeId`")?),
-                "parameters" => parameters = self.object(v, &p, "`parameters`")?,
-                "inputConnections" => inputs = self.object(v, &p, "`inputConnections`")?,
-                _ => self.unknown_key(&p, k, "a node"),
+        match n.shader.clone() {
+            Some(shader) => {
+                let ppointer = P::Key(pointer, "parameters");
+                for (index, pname, j) in std::mem::take(&mut n.deferred) {
+                    let read = self.shorthand(&shader, &pname, &j, &P::Key(&ppointer, &pname));
+                    n.settle(index, read);
+                }
+            }
+            None => {
+                let e = self.error(
+                    "JS002",
+                    &pointer.render(),
+                    format!("node `{name}` has no `nodeTypeId`"),
+                );
+                n.push(NODE_SHADER, 0, Found::Error(e));
             }
         }
-        let Some(shader) = shader else {
-            return Err(self.error(
-                "JS002",
-                &pointer.render(),
-                format!("node `{name}` has no `nodeTypeId`"),
-            ));
+        if !n.found.is_empty() {
+            n.found.sort_by_key(|&(stage, index, _)| (stage, index));
+            for (_, _, found) in std::mem::take(&mut n.found) {
+                match found {
+                    Found::Warning(d) => self.warn(d),
+                    Found::Error(e) => return Err(e),
+                }
+            }
+        }
+        let Some(shader) = n.shader.take() else {
+            return Err(self.error("JS002", &pointer.render(), "node without `nodeTypeId`"));
         };
-        let mut params: Vec<Param> = Vec::with_capacity(parameters.len() + inputs.len());
-        let ppointer = P::Key(pointer, "parameters");
-        for (pname, pj) in parameters {
-            let p = P::Key(&ppointer, pname);
-            let (value, decl) = self.parameter(shader, pname, pj, &p)?;
+        let mut params: Vec<Param> = Vec::with_capacity(n.names.len());
+        for (&pname, typed) in n.names.iter().zip(std::mem::take(&mut n.values)) {
+            let Some((value, decl)) = typed else { continue };
             params.push(Param::from_shared(
-                Sym::new(pname),
+                pname,
                 Some(Arc::new(value)),
                 Some(decl),
                 ParamAt::JsonParameter,
                 None,
             ));
         }
-        // Inputs name parameters given above, or add their own; a scan while the node is small.
-        let index: FxHashMap<&str, usize> = if parameters.len() > SCAN_PARAMS && !inputs.is_empty()
-        {
-            parameters
-                .iter()
-                .enumerate()
-                .map(|(i, (n, _))| (&**n, i))
-                .collect()
-        } else {
-            Default::default()
+        // Inputs name parameters given above, or add their own.
+        let inputs = match &n.inputs {
+            Some(J::Obj(members)) => members.as_slice(),
+            _ => &[],
         };
         let ipointer = P::Key(pointer, "inputConnections");
         let mut conns: NodeConns<'de> = Vec::new();
@@ -1171,88 +1527,70 @@ impl Reader<'_> {
                 .enumerate()
                 .map(|(i, c)| self.connection(c, &P::Index(&p, i)))
                 .collect::<Result<_, Error>>()?;
-            let given = if parameters.len() > SCAN_PARAMS {
-                index.get(&**input).copied()
-            } else {
-                parameters.iter().position(|(n, _)| n == input)
-            };
-            let k = given.unwrap_or_else(|| {
-                params.push(Param::from_shared(
-                    Sym::new(input),
-                    None,
-                    None,
-                    ParamAt::Unknown,
-                    None,
-                ));
+            let sym = Sym::new(input);
+            let k = n.parameter_index(sym).unwrap_or_else(|| {
+                params.push(Param::from_shared(sym, None, None, ParamAt::Unknown, None));
                 params.len() - 1
             });
             conns.push((k, input.clone(), list));
         }
-        let mut node = Node::new_raw(name, shader, kind);
+        let mut node = Node::new_raw(name, &shader, kind);
         node.set_raw_params(params);
         node.set_origin(Some(self.loc(&pointer.render())), None);
         Ok((self.net.insert_node(node), conns))
     }
 
-    /// A parameter value: canonical `{ "type", "value" }`, or a shorthand bare value typed by
-    /// the definition.
-    fn parameter(
+    /// A parameter in the canonical `{ "type", "value" }` form (`ty` and `value`: its members,
+    /// if given and, for `type`, a string).
+    fn canonical(
         &mut self,
-        shader: &str,
         name: &str,
-        j: &J,
+        ty: Option<&str>,
+        value: Option<&J>,
         pointer: &P,
-    ) -> Result<(Value, Arc<Decl>), Error> {
-        if let J::Obj(members) = j {
-            let mut ty = None;
-            let mut value = None;
-            for (k, v) in members {
-                let p = P::Key(pointer, k);
-                match &**k {
-                    "type" => ty = Some(self.string(v, &p, "`type`")?),
-                    "value" => value = Some(v),
-                    _ => self.unknown_key(&p, k, "a parameter"),
-                }
+    ) -> Result<Typed, Error> {
+        let (Some(text), Some(v)) = (ty, value) else {
+            return Err(self.error(
+                "JS002",
+                &pointer.render(),
+                format!(
+                    "parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"
+                ),
+            ));
+        };
+        let decl = match self.inline_decls.get(text) {
+            Some(decl) => decl.clone(),
+            None => {
+                let Some(t) = parse_type(text) else {
+                    return Err(self.error(
+                        "JS002",
+                        &P::Key(pointer, "type").render(),
+                        format!("unknown type `{text}` of `{name}`"),
+                    ));
+                };
+                let decl = Arc::new(Decl {
+                    text: text.to_string(),
+                    class: None,
+                    reference: false,
+                    ty: t,
+                    inline_type: true,
+                });
+                self.inline_decls.insert(Box::from(text), decl.clone());
+                decl
             }
-            let (Some(text), Some(v)) = (ty, value) else {
-                return Err(self.error(
-                    "JS002",
-                    &pointer.render(),
-                    format!(
-                        "parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"
-                    ),
-                ));
-            };
-            let decl = match self.inline_decls.get(&**text) {
-                Some(decl) => decl.clone(),
-                None => {
-                    let Some(t) = parse_type(text) else {
-                        return Err(self.error(
-                            "JS002",
-                            &P::Key(pointer, "type").render(),
-                            format!("unknown type `{text}` of `{name}`"),
-                        ));
-                    };
-                    let decl = Arc::new(Decl {
-                        text: text.to_string(),
-                        class: None,
-                        reference: false,
-                        ty: t,
-                        inline_type: true,
-                    });
-                    self.inline_decls.insert(Box::from(&**text), decl.clone());
-                    decl
-                }
-            };
-            let value = to_value(&decl.ty, v).map_err(|why| {
-                self.error(
-                    "JS004",
-                    &P::Key(pointer, "value").render(),
-                    format!("value of `{name}` does not match its type `{text}`: {why}"),
-                )
-            })?;
-            return Ok((value, decl));
-        }
+        };
+        let value = to_value(&decl.ty, v).map_err(|why| {
+            self.error(
+                "JS004",
+                &P::Key(pointer, "value").render(),
+                format!("value of `{name}` does not match its type `{text}`: {why}"),
+            )
+        })?;
+        Ok((value, decl))
+    }
+
+    /// A shorthand (bare) parameter value, typed by the shader's definition.
+    fn shorthand(&mut self, shader: &str, name: &str, j: &J, pointer: &P) -> Result<Typed, Error> {
         let Some(t) = self.types.input_type(shader, name) else {
             return Err(self.error(
                 "JS006",
