@@ -641,13 +641,15 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, m) = (self.r, self.m);
+        // One node's scratch state, reused by the next.
+        let mut n = NodeState::default();
         while let Some(name) = map.next_key_seed(Key)? {
             if m.by_name.contains_key(&name) {
                 return Err(r.ctx.duplicate_key(&name));
             }
             let nodes = P::Root(&self.pointer);
             let pointer = P::Key(&nodes, &name);
-            let mut n = NodeState::default();
+            n.reset();
             let read = map.next_value_seed(NodeSeed {
                 r: &mut *r,
                 n: &mut n,
@@ -655,7 +657,7 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
             });
             r.ctx.within(|| name.to_string(), read)?;
             r.at(self.group, MAT_NODES);
-            match r.close_node(&name, n, RequestKind::Pattern, &pointer) {
+            match r.close_node(&name, &mut n, RequestKind::Pattern, &pointer) {
                 Ok((id, conns)) => {
                     m.ids.push(id);
                     m.pending.push((id, name.clone(), conns));
@@ -699,6 +701,17 @@ struct NodeState<'de> {
 }
 
 impl NodeState<'_> {
+    /// Ready for the next node (keeping the buffers).
+    fn reset(&mut self) {
+        self.shader = None;
+        self.names.clear();
+        self.values.clear();
+        self.index.clear();
+        self.deferred.clear();
+        self.inputs = None;
+        self.found.clear();
+    }
+
     fn push(&mut self, stage: u8, index: usize, found: Found) {
         self.found.push((stage, index, found));
     }
@@ -936,6 +949,70 @@ impl<'de> NodeState<'de> {
     }
 }
 
+/// A canonical parameter's value, typed as it is read when its `type` came first, else
+/// kept as a tree until the `type` is known.
+enum ValueRead<'de> {
+    Tree(J<'de>),
+    Typed(Result<Value, String>),
+}
+
+/// A value of a known type, converted as it is read ([`to_value`]'s result, without a tree
+/// for an array of numbers).
+struct TypedSeed<'c, 't>(&'c Ctx, &'t Type);
+
+impl<'de> DeserializeSeed<'de> for TypedSeed<'_, '_> {
+    type Value = Result<Value, String>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for TypedSeed<'_, '_> {
+    type Value = Result<Value, String>;
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Bool(v)))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Num(Num::I(v))))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Num(Num::U(v))))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Num(Num::F(v))))
+    }
+    fn visit_borrowed_str<E>(self, v: &'de str) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Str(Cow::Borrowed(v))))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Str(Cow::Borrowed(v))))
+    }
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Null))
+    }
+    fn visit_none<E>(self) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Null))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        // Up to a matrix's sixteen items without a heap block.
+        let mut items: smallvec::SmallVec<[J<'de>; 16]> = smallvec::SmallVec::new();
+        loop {
+            let next = seq.next_element_seed(Seed(self.0));
+            match self.0.within(|| items.len().to_string(), next)? {
+                Some(v) => items.push(v),
+                None => return Ok(to_value_seq(self.1, &items)),
+            }
+        }
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+        let j = Seed(self.0).visit_map(map)?;
+        Ok(to_value(self.1, &j))
+    }
+}
+
 impl<'de> DeserializeSeed<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
     type Value = ();
     fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
@@ -983,6 +1060,7 @@ impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
         let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
         let mut seen = FewKeys::default();
         let mut ty = None;
+        let mut decl = None;
         let mut value = None;
         while let Some(key) = map.next_key_seed(Key)? {
             let slot = match &*key {
@@ -993,10 +1071,24 @@ impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
             if !seen.insert(slot, &key) {
                 return Err(r.ctx.duplicate_key(&key));
             }
+            if slot == Some(1) {
+                value = Some(match &decl {
+                    Some(d) => {
+                        let d: &Arc<Decl> = d;
+                        let read = map.next_value_seed(TypedSeed(&r.ctx, &d.ty));
+                        ValueRead::Typed(r.ctx.within(|| key.to_string(), read)?)
+                    }
+                    None => ValueRead::Tree(value_tree(&r.ctx, &mut map, &key)?),
+                });
+                continue;
+            }
             let j = value_tree(&r.ctx, &mut map, &key)?;
             match slot {
-                Some(0) => match j {
-                    J::Str(s) => ty = Some(s),
+                Some(_) => match j {
+                    J::Str(s) => {
+                        decl = r.inline_decl(&s);
+                        ty = Some(s);
+                    }
                     other => {
                         let e = r.error(
                             "JS002",
@@ -1006,14 +1098,13 @@ impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
                         n.push(NODE_PARAMS, index, Found::Error(e));
                     }
                 },
-                Some(_) => value = Some(j),
                 None => {
                     let d = r.unknown_key_warning(&P::Key(pointer, &key), &key, "a parameter");
                     n.push(NODE_PARAMS, index, Found::Warning(d));
                 }
             }
         }
-        let read = r.canonical(self.name, ty.as_deref(), value.as_ref(), pointer);
+        let read = r.canonical(self.name, ty.as_deref(), decl, value, pointer);
         n.settle(index, read);
         Ok(())
     }
@@ -1459,7 +1550,7 @@ impl Reader<'_> {
     fn close_node<'de>(
         &mut self,
         name: &str,
-        mut n: NodeState<'de>,
+        n: &mut NodeState<'de>,
         kind: RequestKind,
         pointer: &P,
     ) -> Result<(NodeId, NodeConns<'de>), Error> {
@@ -1482,7 +1573,7 @@ impl Reader<'_> {
         }
         if !n.found.is_empty() {
             n.found.sort_by_key(|&(stage, index, _)| (stage, index));
-            for (_, _, found) in std::mem::take(&mut n.found) {
+            for (_, _, found) in n.found.drain(..) {
                 match found {
                     Found::Warning(d) => self.warn(d),
                     Found::Error(e) => return Err(e),
@@ -1493,7 +1584,7 @@ impl Reader<'_> {
             return Err(self.error("JS002", &pointer.render(), "node without `nodeTypeId`"));
         };
         let mut params: Vec<Param> = Vec::with_capacity(n.names.len());
-        for (&pname, typed) in n.names.iter().zip(std::mem::take(&mut n.values)) {
+        for (&pname, typed) in n.names.iter().zip(n.values.drain(..)) {
             let Some((value, decl)) = typed else { continue };
             params.push(Param::from_shared(
                 pname,
@@ -1541,12 +1632,13 @@ impl Reader<'_> {
     }
 
     /// A parameter in the canonical `{ "type", "value" }` form (`ty` and `value`: its members,
-    /// if given and, for `type`, a string).
+    /// if given and, for `type`, a string; `decl`: the type's declaration if it is a type).
     fn canonical(
         &mut self,
         name: &str,
         ty: Option<&str>,
-        value: Option<&J>,
+        decl: Option<Arc<Decl>>,
+        value: Option<ValueRead>,
         pointer: &P,
     ) -> Result<Typed, Error> {
         let (Some(text), Some(v)) = (ty, value) else {
@@ -1558,28 +1650,18 @@ impl Reader<'_> {
                 ),
             ));
         };
-        let decl = match self.inline_decls.get(text) {
-            Some(decl) => decl.clone(),
-            None => {
-                let Some(t) = parse_type(text) else {
-                    return Err(self.error(
-                        "JS002",
-                        &P::Key(pointer, "type").render(),
-                        format!("unknown type `{text}` of `{name}`"),
-                    ));
-                };
-                let decl = Arc::new(Decl {
-                    text: text.to_string(),
-                    class: None,
-                    reference: false,
-                    ty: t,
-                    inline_type: true,
-                });
-                self.inline_decls.insert(Box::from(text), decl.clone());
-                decl
-            }
+        let Some(decl) = decl else {
+            return Err(self.error(
+                "JS002",
+                &P::Key(pointer, "type").render(),
+                format!("unknown type `{text}` of `{name}`"),
+            ));
         };
-        let value = to_value(&decl.ty, v).map_err(|why| {
+        let value = match v {
+            ValueRead::Tree(j) => to_value(&decl.ty, &j),
+            ValueRead::Typed(read) => read,
+        };
+        let value = value.map_err(|why| {
             self.error(
                 "JS004",
                 &P::Key(pointer, "value").render(),
@@ -1587,6 +1669,23 @@ impl Reader<'_> {
             )
         })?;
         Ok((value, decl))
+    }
+
+    /// The declaration shared by the parameters whose `type` is `text` (`None` if `text` is
+    /// not a type).
+    fn inline_decl(&mut self, text: &str) -> Option<Arc<Decl>> {
+        if let Some(decl) = self.inline_decls.get(text) {
+            return Some(decl.clone());
+        }
+        let decl = Arc::new(Decl {
+            text: text.to_string(),
+            class: None,
+            reference: false,
+            ty: parse_type(text)?,
+            inline_type: true,
+        });
+        self.inline_decls.insert(Box::from(text), decl.clone());
+        Some(decl)
     }
 
     /// A shorthand (bare) parameter value, typed by the shader's definition.
@@ -1650,22 +1749,33 @@ fn parse_type(text: &str) -> Option<Type> {
 /// Convert a JSON value to a typed value of type `t`.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn to_value(t: &Type, j: &J) -> Result<Value, String> {
-    let items = |j: &J| -> Result<Vec<Value>, String> {
-        match j {
-            J::Arr(items) => items.iter().map(|i| scalar(&t.base, i)).collect(),
-            other => Err(format!("expected an array, found {}", other.kind())),
-        }
-    };
+    match (j, &t.array) {
+        (J::Arr(items), _) => to_value_seq(t, items),
+        (_, ArraySpec::None) => scalar(&t.base, j),
+        (other, _) => Err(format!("expected an array, found {}", other.kind())),
+    }
+}
+
+/// [`to_value`] of a JSON array, given as its items.
+fn to_value_seq(t: &Type, items: &[J]) -> Result<Value, String> {
+    let values =
+        || -> Result<Vec<Value>, String> { items.iter().map(|i| scalar(&t.base, i)).collect() };
     match t.array {
-        ArraySpec::None => scalar(&t.base, j),
+        ArraySpec::None => match &t.base {
+            b if b.is_triple() => Ok(Value::Triple(b.clone(), floats_seq::<3>(items)?)),
+            BaseType::HPoint => Ok(Value::HPoint(floats_seq::<4>(items)?)),
+            BaseType::Matrix => Ok(Value::Matrix(floats_seq::<16>(items)?)),
+            // The other types take no array, whatever its items.
+            b => scalar(b, &J::Arr(Vec::new())),
+        },
         ArraySpec::Fixed(n) => {
-            let v = items(j)?;
+            let v = values()?;
             if v.len() != n {
                 return Err(format!("expected {n} elements, found {}", v.len()));
             }
             Ok(Value::Array(t.base.clone(), v))
         }
-        ArraySpec::Dynamic => Ok(Value::Array(t.base.clone(), items(j)?)),
+        ArraySpec::Dynamic => Ok(Value::Array(t.base.clone(), values()?)),
     }
 }
 
@@ -1692,6 +1802,10 @@ fn floats<const N: usize>(j: &J) -> Result<[f32; N], String> {
             j.kind()
         ));
     };
+    floats_seq(items)
+}
+
+fn floats_seq<const N: usize>(items: &[J]) -> Result<[f32; N], String> {
     if items.len() != N {
         return Err(format!("expected {N} numbers, found {}", items.len()));
     }
