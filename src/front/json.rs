@@ -678,6 +678,7 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
 const NODE_KEYS: u8 = 0;
 const NODE_SHADER: u8 = 1;
 const NODE_PARAMS: u8 = 2;
+const NODE_INPUTS: u8 = 3;
 
 /// A parameter value read and typed, with its declaration.
 type Typed = (Value, Arc<Decl>);
@@ -695,8 +696,10 @@ struct NodeState<'de> {
     index: FxHashMap<Sym, usize>,
     /// Shorthand values read before `nodeTypeId` (their type comes from the shader).
     deferred: Vec<(usize, Cow<'de, str>, J<'de>)>,
-    /// The `inputConnections` object (small: read as a tree).
-    inputs: Option<J<'de>>,
+    /// The `inputConnections` keys in document order, each with its connections.
+    inputs: Vec<(Cow<'de, str>, Vec<Conn<'de>>)>,
+    /// The input names, once the node has more than [`SCAN_PARAMS`] inputs.
+    input_names: FxHashSet<Cow<'de, str>>,
     found: Vec<(u8, usize, Found)>,
 }
 
@@ -708,7 +711,8 @@ impl NodeState<'_> {
         self.values.clear();
         self.index.clear();
         self.deferred.clear();
-        self.inputs = None;
+        self.inputs.clear();
+        self.input_names.clear();
         self.found.clear();
     }
 
@@ -847,11 +851,12 @@ impl<'de> Visitor<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
                     r.ctx.within(|| key.to_string(), read)?;
                 }
                 Some(_) => {
-                    let j = value_tree(&r.ctx, &mut map, &key)?;
-                    match r.object(&j, &p, "`inputConnections`") {
-                        Ok(_) => n.inputs = Some(j),
-                        Err(e) => n.push(NODE_KEYS, 0, Found::Error(e)),
-                    }
+                    let read = map.next_value_seed(InputsSeed {
+                        r: &mut *r,
+                        n: &mut *n,
+                        pointer: &p,
+                    });
+                    r.ctx.within(|| key.to_string(), read)?;
                 }
                 None => {
                     let d = r.unknown_key_warning(&p, &key, "a node");
@@ -946,6 +951,274 @@ impl<'de> NodeState<'de> {
             Ok(typed) => self.values[index] = Some(typed),
             Err(e) => self.push(NODE_PARAMS, index, Found::Error(e)),
         }
+    }
+}
+
+/// The `inputConnections` object of a node: each input's connections as they are read.
+struct InputsSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    pointer: &'p P<'p>,
+}
+
+impl InputsSeed<'_, '_, '_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("`inputConnections` must be an object, found {kind}"),
+        );
+        self.n.push(NODE_KEYS, 0, Found::Error(e));
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, pointer) = (self.r, self.n, self.pointer);
+        while let Some(input) = map.next_key_seed(Key)? {
+            let fresh = if n.inputs.len() < SeenKeys::SCAN {
+                !n.inputs.iter().any(|(k, _)| *k == input)
+            } else {
+                if n.input_names.is_empty() {
+                    n.input_names = n.inputs.iter().map(|(k, _)| k.clone()).collect();
+                }
+                n.input_names.insert(input.clone())
+            };
+            if !fresh {
+                return Err(r.ctx.duplicate_key(&input));
+            }
+            let index = n.inputs.len();
+            n.inputs.push((input.clone(), Vec::new()));
+            let p = P::Key(pointer, &input);
+            let read = map.next_value_seed(ConnsSeed {
+                r: &mut *r,
+                n: &mut *n,
+                index,
+                input: &input,
+                pointer: &p,
+            });
+            r.ctx.within(|| input.to_string(), read)?;
+        }
+        Ok(())
+    }
+}
+
+/// The connection list of one input.
+struct ConnsSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    index: usize,
+    input: &'p str,
+    pointer: &'p P<'p>,
+}
+
+impl ConnsSeed<'_, '_, '_, '_, '_> {
+    fn not_array<E>(self, kind: &str) -> Result<(), E> {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!(
+                "connections of `{}` must be an array, found {kind}",
+                self.input
+            ),
+        );
+        self.n.push(NODE_INPUTS, self.index, Found::Error(e));
+        Ok(())
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ConnsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ConnsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        self.not_array("a boolean")
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        self.not_array("a number")
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+        self.not_array("a number")
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        self.not_array("a number")
+    }
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        self.not_array("a string")
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        self.not_array("null")
+    }
+    fn visit_none<E>(self) -> Result<(), E> {
+        self.not_array("null")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<(), A::Error> {
+        Seed(&self.r.ctx).visit_map(map)?;
+        self.not_array("an object")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
+        let mut i = 0usize;
+        loop {
+            let p = P::Index(pointer, i);
+            let next = seq.next_element_seed(ConnSeed {
+                r: &mut *r,
+                n: &mut *n,
+                index,
+                pointer: &p,
+            });
+            match r.ctx.within(|| i.to_string(), next)? {
+                Some(Some(conn)) => n.inputs[index].1.push(conn),
+                Some(None) => {}
+                None => return Ok(()),
+            }
+            i += 1;
+        }
+    }
+}
+
+/// One connection of an input (`None` when it has an error, kept in the node's findings).
+struct ConnSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    index: usize,
+    pointer: &'p P<'p>,
+}
+
+impl ConnSeed<'_, '_, '_, '_, '_> {
+    fn fail<'de, E>(self, kind: &str) -> Result<Option<Conn<'de>>, E> {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("a connection must be an object, found {kind}"),
+        );
+        self.n.push(NODE_INPUTS, self.index, Found::Error(e));
+        Ok(None)
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ConnSeed<'_, '_, '_, 'de, '_> {
+    type Value = Option<Conn<'de>>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ConnSeed<'_, '_, '_, 'de, '_> {
+    type Value = Option<Conn<'de>>;
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<Self::Value, E> {
+        self.fail("a boolean")
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<Self::Value, E> {
+        self.fail("a number")
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<Self::Value, E> {
+        self.fail("a number")
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<Self::Value, E> {
+        self.fail("a number")
+    }
+    fn visit_str<E>(self, _: &str) -> Result<Self::Value, E> {
+        self.fail("a string")
+    }
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        self.fail("null")
+    }
+    fn visit_none<E>(self) -> Result<Self::Value, E> {
+        self.fail("null")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+        skip_seq(&self.r.ctx, seq)?;
+        self.fail("an array")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
+        let mut seen = FewKeys::default();
+        let mut node = None;
+        let mut output = None;
+        let mut failed = false;
+        while let Some(key) = map.next_key_seed(Key)? {
+            let slot = match &*key {
+                "upstreamNode" => Some(0),
+                "upstreamOutputName" => Some(1),
+                _ => None,
+            };
+            if !seen.insert(slot, &key) {
+                return Err(r.ctx.duplicate_key(&key));
+            }
+            let j = value_tree(&r.ctx, &mut map, &key)?;
+            let p = P::Key(pointer, &key);
+            match (slot, j) {
+                (Some(0), J::Str(s)) => node = Some(s),
+                (Some(_), J::Str(s)) => output = Some(s),
+                (Some(_), other) => {
+                    let what = if slot == Some(0) {
+                        "`upstreamNode`"
+                    } else {
+                        "`upstreamOutputName`"
+                    };
+                    let e = r.error(
+                        "JS002",
+                        &p.render(),
+                        format!("{what} must be a string, found {}", other.kind()),
+                    );
+                    n.push(NODE_INPUTS, index, Found::Error(e));
+                    failed = true;
+                }
+                (None, _) => {
+                    let d = r.unknown_key_warning(&p, &key, "a connection");
+                    n.push(NODE_INPUTS, index, Found::Warning(d));
+                }
+            }
+        }
+        if failed {
+            return Ok(None);
+        }
+        let Some(node) = node else {
+            let e = r.error(
+                "JS002",
+                &pointer.render(),
+                "connection without `upstreamNode`",
+            );
+            n.push(NODE_INPUTS, index, Found::Error(e));
+            return Ok(None);
+        };
+        let Some(output) = output else {
+            let e = r.error(
+                "JS002",
+                &pointer.render(),
+                "connection without `upstreamOutputName` (use \"\" for a whole-node reference)",
+            );
+            n.push(NODE_INPUTS, index, Found::Error(e));
+            return Ok(None);
+        };
+        Ok(Some(Conn {
+            node,
+            output: (!output.is_empty()).then_some(output),
+        }))
     }
 }
 
@@ -1595,35 +1868,14 @@ impl Reader<'_> {
             ));
         }
         // Inputs name parameters given above, or add their own.
-        let inputs = match &n.inputs {
-            Some(J::Obj(members)) => members.as_slice(),
-            _ => &[],
-        };
-        let ipointer = P::Key(pointer, "inputConnections");
-        let mut conns: NodeConns<'de> = Vec::new();
-        for (input, list) in inputs {
-            let p = P::Key(&ipointer, input);
-            let J::Arr(items) = list else {
-                return Err(self.error(
-                    "JS002",
-                    &p.render(),
-                    format!(
-                        "connections of `{input}` must be an array, found {}",
-                        list.kind()
-                    ),
-                ));
-            };
-            let list: Vec<Conn> = items
-                .iter()
-                .enumerate()
-                .map(|(i, c)| self.connection(c, &P::Index(&p, i)))
-                .collect::<Result<_, Error>>()?;
-            let sym = Sym::new(input);
+        let mut conns: NodeConns<'de> = Vec::with_capacity(n.inputs.len());
+        for (input, list) in std::mem::take(&mut n.inputs) {
+            let sym = Sym::new(&input);
             let k = n.parameter_index(sym).unwrap_or_else(|| {
                 params.push(Param::from_shared(sym, None, None, ParamAt::Unknown, None));
                 params.len() - 1
             });
-            conns.push((k, input.clone(), list));
+            conns.push((k, input, list));
         }
         let mut node = Node::new_raw(name, &shader, kind);
         node.set_raw_params(params);
