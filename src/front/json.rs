@@ -7,10 +7,11 @@
 //! each material is resolved on its own node set.
 //!
 //! The network is built while serde reads the text: custom `DeserializeSeed`s for the
-//! document, `materials`, each material and its `nodes` create nodes as they come; only one
-//! node (and a material's `terminals` and `primvars`) is held as a small tree at a time.
-//! Keys and strings borrow from the text unless they hold escapes, and a JSON Pointer is
-//! composed only when a diagnostic needs one.
+//! document, `materials`, each material, its `nodes`, each node, its parameters (a value whose
+//! `type` came first is converted as it is read) and its connections create nodes as they
+//! come; only a material's `terminals` and `primvars`, a value read before its `type` and
+//! unknown members are held as small trees. Keys and strings borrow from the text unless they
+//! hold escapes, and a JSON Pointer is composed only when a diagnostic needs one.
 //! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
 //! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
 //! and duplicate keys also carry line and column.
@@ -20,9 +21,10 @@
 //! error or duplicate key first (nothing else is then reported); the version; unknown
 //! top-level keys; `materials`; then per material, in document order, its own keys and
 //! `primvars`, a missing `nodes`, its terminals, its nodes, and its dangling connections
-//! (JS010). The first error ends the report; warnings before it are kept. A node's kind is
-//! set when its material's terminals are read (they may follow the nodes, as in the order
-//! the JSON writer uses).
+//! (JS010); within a node, its own keys, a missing `nodeTypeId`, each parameter, each input
+//! (a node's findings wait for the node to close). The first error ends the report; warnings
+//! before it are kept. A node's kind is set when its material's terminals are read (they may
+//! follow the nodes, as in the order the JSON writer uses).
 //!
 //! Choices where the spec is silent:
 //!
