@@ -209,9 +209,18 @@ enum P<'a> {
 
 impl P<'_> {
     fn render(&self) -> String {
-        let mut s = String::new();
+        let mut s = String::with_capacity(self.len_hint());
         self.write(&mut s);
         s
+    }
+
+    /// The rendered length when no segment needs escaping (one block for the text).
+    fn len_hint(&self) -> usize {
+        match *self {
+            P::Root(r) => r.len(),
+            P::Key(base, key) => base.len_hint() + 1 + key.len(),
+            P::Index(base, _) => base.len_hint() + 21,
+        }
     }
 
     fn write(&self, s: &mut String) {
@@ -507,9 +516,10 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
             let m = MaterialState {
                 pointer: P::Key(&P::Root("/materials"), &name).render(),
                 has_nodes: false,
-                ids: Vec::new(),
-                by_name: Default::default(),
-                pending: Vec::new(),
+                // Room for a material's usual few nodes without growing.
+                ids: Vec::with_capacity(8),
+                by_name: FxHashMap::with_capacity_and_hasher(8, Default::default()),
+                pending: Vec::with_capacity(8),
                 terminals: None,
                 primvars: Vec::new(),
                 name: name.into_owned(),
