@@ -771,14 +771,14 @@ impl NodeState<'_> {
 /// Keys of a small object whose expected keys are a known few: a flag per expected key and
 /// a scan of the others (rare).
 #[derive(Default)]
-struct FewKeys<'de> {
+struct FewKeys {
     known: u8,
-    others: Vec<Cow<'de, str>>,
+    others: Vec<Box<str>>,
 }
 
-impl<'de> FewKeys<'de> {
+impl FewKeys {
     /// Record `key` (`slot`: the expected key's index, if it is one); false if seen before.
-    fn insert(&mut self, slot: Option<u8>, key: &Cow<'de, str>) -> bool {
+    fn insert(&mut self, slot: Option<u8>, key: &str) -> bool {
         match slot {
             Some(i) => {
                 let bit = 1u8 << i;
@@ -787,10 +787,10 @@ impl<'de> FewKeys<'de> {
                 fresh
             }
             None => {
-                if self.others.contains(key) {
+                if self.others.iter().any(|k| &**k == key) {
                     return false;
                 }
-                self.others.push(key.clone());
+                self.others.push(key.into());
                 true
             }
         }
