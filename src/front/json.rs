@@ -7,10 +7,11 @@
 //! each material is resolved on its own node set.
 //!
 //! The network is built while serde reads the text: custom `DeserializeSeed`s for the
-//! document, `materials`, each material and its `nodes` create nodes as they come; only one
-//! node (and a material's `terminals` and `primvars`) is held as a small tree at a time.
-//! Keys and strings borrow from the text unless they hold escapes, and a JSON Pointer is
-//! composed only when a diagnostic needs one.
+//! document, `materials`, each material, its `nodes`, each node, its parameters (a value whose
+//! `type` came first is converted as it is read) and its connections create nodes as they
+//! come; only a material's `terminals` and `primvars`, a value read before its `type` and
+//! unknown members are held as small trees. Keys and strings borrow from the text unless they
+//! hold escapes, and a JSON Pointer is composed only when a diagnostic needs one.
 //! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
 //! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
 //! and duplicate keys also carry line and column.
@@ -20,9 +21,12 @@
 //! error or duplicate key first (nothing else is then reported); the version; unknown
 //! top-level keys; `materials`; then per material, in document order, its own keys and
 //! `primvars`, a missing `nodes`, its terminals, its nodes, and its dangling connections
-//! (JS010). The first error ends the report; warnings before it are kept. A node's kind is
-//! set when its material's terminals are read (they may follow the nodes, as in the order
-//! the JSON writer uses).
+//! (JS010); within a node, its own keys, a missing `nodeTypeId`, each parameter, each input
+//! (a node's findings wait for the node to close). The first error ends the report; warnings
+//! before it are kept. So within one of these steps, document order still counts: a warning
+//! for an unknown key of a node is reported when the key comes before an error in the
+//! node's own keys (a `nodeTypeId` that is not a string), not when it comes after. A node's kind is set when its material's terminals are read (they may
+//! follow the nodes, as in the order the JSON writer uses).
 //!
 //! Choices where the spec is silent:
 //!
@@ -207,9 +211,18 @@ enum P<'a> {
 
 impl P<'_> {
     fn render(&self) -> String {
-        let mut s = String::new();
+        let mut s = String::with_capacity(self.len_hint());
         self.write(&mut s);
         s
+    }
+
+    /// The rendered length when no segment needs escaping (one block for the text).
+    fn len_hint(&self) -> usize {
+        match *self {
+            P::Root(r) => r.len(),
+            P::Key(base, key) => base.len_hint() + 1 + key.len(),
+            P::Index(base, _) => base.len_hint() + 21,
+        }
     }
 
     fn write(&self, s: &mut String) {
@@ -505,9 +518,10 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
             let m = MaterialState {
                 pointer: P::Key(&P::Root("/materials"), &name).render(),
                 has_nodes: false,
-                ids: Vec::new(),
-                by_name: Default::default(),
-                pending: Vec::new(),
+                // Room for a material's usual few nodes without growing.
+                ids: Vec::with_capacity(8),
+                by_name: FxHashMap::with_capacity_and_hasher(8, Default::default()),
+                pending: Vec::with_capacity(8),
                 terminals: None,
                 primvars: Vec::new(),
                 name: name.into_owned(),
@@ -641,19 +655,23 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, m) = (self.r, self.m);
+        // One node's scratch state, reused by the next.
+        let mut n = NodeState::default();
         while let Some(name) = map.next_key_seed(Key)? {
             if m.by_name.contains_key(&name) {
                 return Err(r.ctx.duplicate_key(&name));
             }
-            let j = value_tree(&r.ctx, &mut map, &name)?;
+            let nodes = P::Root(&self.pointer);
+            let pointer = P::Key(&nodes, &name);
+            n.reset();
+            let read = map.next_value_seed(NodeSeed {
+                r: &mut *r,
+                n: &mut n,
+                pointer: &pointer,
+            });
+            r.ctx.within(|| name.to_string(), read)?;
             r.at(self.group, MAT_NODES);
-            let read = r.node(
-                &name,
-                &j,
-                RequestKind::Pattern,
-                &P::Key(&P::Root(&self.pointer), &name),
-            );
-            match read {
+            match r.close_node(&name, &mut n, RequestKind::Pattern, &pointer) {
                 Ok((id, conns)) => {
                     m.ids.push(id);
                     m.pending.push((id, name.clone(), conns));
@@ -665,6 +683,716 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
                 }
             }
         }
+        Ok(())
+    }
+}
+
+/// The stages of one node's checks, in the order their findings are reported: the node's own
+/// keys, a missing `nodeTypeId`, each parameter (in document order), each input.
+const NODE_KEYS: u8 = 0;
+const NODE_SHADER: u8 = 1;
+const NODE_PARAMS: u8 = 2;
+const NODE_INPUTS: u8 = 3;
+
+/// A parameter value read and typed, with its declaration.
+type Typed = (Value, Arc<Decl>);
+
+/// One node while its members stream in. Its findings are kept with their stage (and the
+/// parameter's index) and reported when the node closes, in the order of the checks, up to
+/// the first error: the same report whatever the order of the keys.
+#[derive(Default)]
+struct NodeState<'de> {
+    shader: Option<Cow<'de, str>>,
+    /// The `parameters` keys in document order, and their values once read.
+    names: Vec<Sym>,
+    values: Vec<Option<Typed>>,
+    /// Parameter index by name, once the node has more than [`SCAN_PARAMS`] parameters.
+    index: FxHashMap<Sym, usize>,
+    /// Shorthand values read before `nodeTypeId` (their type comes from the shader).
+    deferred: Vec<(usize, Cow<'de, str>, J<'de>)>,
+    /// The `inputConnections` keys in document order, each with its connections.
+    inputs: Vec<(Cow<'de, str>, Vec<Conn<'de>>)>,
+    /// The input names, once the node has more than [`SCAN_PARAMS`] inputs.
+    input_names: FxHashSet<Cow<'de, str>>,
+    found: Vec<(u8, usize, Found)>,
+}
+
+impl NodeState<'_> {
+    /// Ready for the next node (keeping the buffers).
+    fn reset(&mut self) {
+        self.shader = None;
+        self.names.clear();
+        self.values.clear();
+        self.index.clear();
+        self.deferred.clear();
+        self.inputs.clear();
+        self.input_names.clear();
+        self.found.clear();
+    }
+
+    fn push(&mut self, stage: u8, index: usize, found: Found) {
+        self.found.push((stage, index, found));
+    }
+
+    /// A key's first sighting among the node's parameters (false if a duplicate).
+    fn add_parameter(&mut self, name: Sym) -> bool {
+        let fresh = if self.names.len() <= SCAN_PARAMS {
+            !self.names.contains(&name)
+        } else {
+            !self.index.contains_key(&name)
+        };
+        if fresh {
+            self.names.push(name);
+            self.values.push(None);
+            if self.names.len() > SCAN_PARAMS {
+                if self.index.is_empty() {
+                    self.index = self
+                        .names
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &n)| (n, i))
+                        .collect();
+                } else {
+                    self.index.insert(name, self.names.len() - 1);
+                }
+            }
+        }
+        fresh
+    }
+
+    /// The index of the parameter `name`, if `parameters` gives it.
+    fn parameter_index(&self, name: Sym) -> Option<usize> {
+        if self.names.len() > SCAN_PARAMS {
+            self.index.get(&name).copied()
+        } else {
+            self.names.iter().position(|&n| n == name)
+        }
+    }
+}
+
+/// Keys of a small object whose expected keys are a known few: a flag per expected key and
+/// a scan of the others (rare).
+#[derive(Default)]
+struct FewKeys {
+    known: u8,
+    others: Vec<Box<str>>,
+}
+
+impl FewKeys {
+    /// Record `key` (`slot`: the expected key's index, if it is one); false if seen before.
+    fn insert(&mut self, slot: Option<u8>, key: &str) -> bool {
+        match slot {
+            Some(i) => {
+                let bit = 1u8 << i;
+                let fresh = self.known & bit == 0;
+                self.known |= bit;
+                fresh
+            }
+            None => {
+                if self.others.iter().any(|k| &**k == key) {
+                    return false;
+                }
+                self.others.push(key.into());
+                true
+            }
+        }
+    }
+}
+
+/// One node object, read straight into a [`NodeState`].
+struct NodeSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    pointer: &'p P<'p>,
+}
+
+impl NodeSeed<'_, '_, '_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("a node must be an object, found {kind}"),
+        );
+        self.n.push(NODE_KEYS, 0, Found::Error(e));
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, pointer) = (self.r, self.n, self.pointer);
+        let mut seen = FewKeys::default();
+        while let Some(key) = map.next_key_seed(Key)? {
+            let slot = match &*key {
+                "nodeTypeId" => Some(0),
+                "parameters" => Some(1),
+                "inputConnections" => Some(2),
+                _ => None,
+            };
+            if !seen.insert(slot, &key) {
+                return Err(r.ctx.duplicate_key(&key));
+            }
+            let p = P::Key(pointer, &key);
+            match slot {
+                Some(0) => match value_tree(&r.ctx, &mut map, &key)? {
+                    J::Str(s) => n.shader = Some(s),
+                    other => {
+                        let e = r.error(
+                            "JS002",
+                            &p.render(),
+                            format!("`nodeTypeId` must be a string, found {}", other.kind()),
+                        );
+                        n.push(NODE_KEYS, 0, Found::Error(e));
+                    }
+                },
+                Some(1) => {
+                    let read = map.next_value_seed(ParamsSeed {
+                        r: &mut *r,
+                        n: &mut *n,
+                        pointer: &p,
+                    });
+                    r.ctx.within(|| key.to_string(), read)?;
+                }
+                Some(_) => {
+                    let read = map.next_value_seed(InputsSeed {
+                        r: &mut *r,
+                        n: &mut *n,
+                        pointer: &p,
+                    });
+                    r.ctx.within(|| key.to_string(), read)?;
+                }
+                None => {
+                    let d = r.unknown_key_warning(&p, &key, "a node");
+                    n.push(NODE_KEYS, 0, Found::Warning(d));
+                    value_tree(&r.ctx, &mut map, &key)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The `parameters` object of a node: each parameter is typed as it is read.
+struct ParamsSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    pointer: &'p P<'p>,
+}
+
+impl ParamsSeed<'_, '_, '_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("`parameters` must be an object, found {kind}"),
+        );
+        self.n.push(NODE_KEYS, 0, Found::Error(e));
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, pointer) = (self.r, self.n, self.pointer);
+        while let Some(name) = map.next_key_seed(Key)? {
+            if !n.add_parameter(Sym::new(&name)) {
+                return Err(r.ctx.duplicate_key(&name));
+            }
+            let p = P::Key(pointer, &name);
+            let index = n.names.len() - 1;
+            let read = map.next_value_seed(ParamSeed {
+                r: &mut *r,
+                n: &mut *n,
+                index,
+                name: &name,
+                pointer: &p,
+            });
+            r.ctx.within(|| name.to_string(), read)?;
+        }
+        Ok(())
+    }
+}
+
+/// One parameter: the canonical `{ "type", "value" }` object, or a bare (shorthand) value.
+struct ParamSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    index: usize,
+    name: &'p Cow<'de, str>,
+    pointer: &'p P<'p>,
+}
+
+impl<'de> ParamSeed<'_, '_, '_, 'de, '_> {
+    /// A shorthand value: typed now if the shader is known, else when the node closes.
+    fn bare<E>(self, j: J<'de>) -> Result<(), E> {
+        match &self.n.shader {
+            Some(shader) => {
+                let read = self.r.shorthand(shader, self.name, &j, self.pointer);
+                self.n.settle(self.index, read);
+            }
+            None => self.n.deferred.push((self.index, self.name.clone(), j)),
+        }
+        Ok(())
+    }
+}
+
+impl<'de> NodeState<'de> {
+    /// Keep parameter `index`'s value, or its error.
+    fn settle(&mut self, index: usize, read: Result<Typed, Error>) {
+        match read {
+            Ok(typed) => self.values[index] = Some(typed),
+            Err(e) => self.push(NODE_PARAMS, index, Found::Error(e)),
+        }
+    }
+}
+
+/// The `inputConnections` object of a node: each input's connections as they are read.
+struct InputsSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    pointer: &'p P<'p>,
+}
+
+impl InputsSeed<'_, '_, '_, '_, '_> {
+    fn ctx(&self) -> &Ctx {
+        &self.r.ctx
+    }
+    fn not_object(&mut self, kind: &str) {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("`inputConnections` must be an object, found {kind}"),
+        );
+        self.n.push(NODE_KEYS, 0, Found::Error(e));
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    needs_object!();
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, pointer) = (self.r, self.n, self.pointer);
+        while let Some(input) = map.next_key_seed(Key)? {
+            let fresh = if n.inputs.len() < SeenKeys::SCAN {
+                !n.inputs.iter().any(|(k, _)| *k == input)
+            } else {
+                if n.input_names.is_empty() {
+                    n.input_names = n.inputs.iter().map(|(k, _)| k.clone()).collect();
+                }
+                n.input_names.insert(input.clone())
+            };
+            if !fresh {
+                return Err(r.ctx.duplicate_key(&input));
+            }
+            let index = n.inputs.len();
+            n.inputs.push((input.clone(), Vec::new()));
+            let p = P::Key(pointer, &input);
+            let read = map.next_value_seed(ConnsSeed {
+                r: &mut *r,
+                n: &mut *n,
+                index,
+                input: &input,
+                pointer: &p,
+            });
+            r.ctx.within(|| input.to_string(), read)?;
+        }
+        Ok(())
+    }
+}
+
+/// The connection list of one input.
+struct ConnsSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    index: usize,
+    input: &'p str,
+    pointer: &'p P<'p>,
+}
+
+impl ConnsSeed<'_, '_, '_, '_, '_> {
+    fn not_array<E>(self, kind: &str) -> Result<(), E> {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!(
+                "connections of `{}` must be an array, found {kind}",
+                self.input
+            ),
+        );
+        self.n.push(NODE_INPUTS, self.index, Found::Error(e));
+        Ok(())
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ConnsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ConnsSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        self.not_array("a boolean")
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        self.not_array("a number")
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+        self.not_array("a number")
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        self.not_array("a number")
+    }
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        self.not_array("a string")
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        self.not_array("null")
+    }
+    fn visit_none<E>(self) -> Result<(), E> {
+        self.not_array("null")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<(), A::Error> {
+        Seed(&self.r.ctx).visit_map(map)?;
+        self.not_array("an object")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
+        let mut i = 0usize;
+        loop {
+            let p = P::Index(pointer, i);
+            let next = seq.next_element_seed(ConnSeed {
+                r: &mut *r,
+                n: &mut *n,
+                index,
+                pointer: &p,
+            });
+            match r.ctx.within(|| i.to_string(), next)? {
+                Some(Some(conn)) => n.inputs[index].1.push(conn),
+                Some(None) => {}
+                None => return Ok(()),
+            }
+            i += 1;
+        }
+    }
+}
+
+/// One connection of an input (`None` when it has an error, kept in the node's findings).
+struct ConnSeed<'r, 't, 'n, 'de, 'p> {
+    r: &'r mut Reader<'t>,
+    n: &'n mut NodeState<'de>,
+    index: usize,
+    pointer: &'p P<'p>,
+}
+
+impl ConnSeed<'_, '_, '_, '_, '_> {
+    fn fail<'de, E>(self, kind: &str) -> Result<Option<Conn<'de>>, E> {
+        let e = self.r.error(
+            "JS002",
+            &self.pointer.render(),
+            format!("a connection must be an object, found {kind}"),
+        );
+        self.n.push(NODE_INPUTS, self.index, Found::Error(e));
+        Ok(None)
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ConnSeed<'_, '_, '_, 'de, '_> {
+    type Value = Option<Conn<'de>>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ConnSeed<'_, '_, '_, 'de, '_> {
+    type Value = Option<Conn<'de>>;
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<Self::Value, E> {
+        self.fail("a boolean")
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<Self::Value, E> {
+        self.fail("a number")
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<Self::Value, E> {
+        self.fail("a number")
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<Self::Value, E> {
+        self.fail("a number")
+    }
+    fn visit_str<E>(self, _: &str) -> Result<Self::Value, E> {
+        self.fail("a string")
+    }
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        self.fail("null")
+    }
+    fn visit_none<E>(self) -> Result<Self::Value, E> {
+        self.fail("null")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+        skip_seq(&self.r.ctx, seq)?;
+        self.fail("an array")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
+        let mut seen = FewKeys::default();
+        let mut node = None;
+        let mut output = None;
+        let mut failed = false;
+        while let Some(key) = map.next_key_seed(Key)? {
+            let slot = match &*key {
+                "upstreamNode" => Some(0),
+                "upstreamOutputName" => Some(1),
+                _ => None,
+            };
+            if !seen.insert(slot, &key) {
+                return Err(r.ctx.duplicate_key(&key));
+            }
+            let j = value_tree(&r.ctx, &mut map, &key)?;
+            let p = P::Key(pointer, &key);
+            match (slot, j) {
+                (Some(0), J::Str(s)) => node = Some(s),
+                (Some(_), J::Str(s)) => output = Some(s),
+                (Some(_), other) => {
+                    let what = if slot == Some(0) {
+                        "`upstreamNode`"
+                    } else {
+                        "`upstreamOutputName`"
+                    };
+                    let e = r.error(
+                        "JS002",
+                        &p.render(),
+                        format!("{what} must be a string, found {}", other.kind()),
+                    );
+                    n.push(NODE_INPUTS, index, Found::Error(e));
+                    failed = true;
+                }
+                (None, _) => {
+                    let d = r.unknown_key_warning(&p, &key, "a connection");
+                    n.push(NODE_INPUTS, index, Found::Warning(d));
+                }
+            }
+        }
+        if failed {
+            return Ok(None);
+        }
+        let Some(node) = node else {
+            let e = r.error(
+                "JS002",
+                &pointer.render(),
+                "connection without `upstreamNode`",
+            );
+            n.push(NODE_INPUTS, index, Found::Error(e));
+            return Ok(None);
+        };
+        let Some(output) = output else {
+            let e = r.error(
+                "JS002",
+                &pointer.render(),
+                "connection without `upstreamOutputName` (use \"\" for a whole-node reference)",
+            );
+            n.push(NODE_INPUTS, index, Found::Error(e));
+            return Ok(None);
+        };
+        Ok(Some(Conn {
+            node,
+            output: (!output.is_empty()).then_some(output),
+        }))
+    }
+}
+
+/// A canonical parameter's value, typed as it is read when its `type` came first, else
+/// kept as a tree until the `type` is known.
+enum ValueRead<'de> {
+    Tree(J<'de>),
+    Typed(Result<Value, String>),
+}
+
+/// A value of a known type, converted as it is read ([`to_value`]'s result, without a tree
+/// for an array of numbers).
+struct TypedSeed<'c, 't>(&'c Ctx, &'t Type);
+
+impl<'de> DeserializeSeed<'de> for TypedSeed<'_, '_> {
+    type Value = Result<Value, String>;
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for TypedSeed<'_, '_> {
+    type Value = Result<Value, String>;
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Bool(v)))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Num(Num::I(v))))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Num(Num::U(v))))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Num(Num::F(v))))
+    }
+    fn visit_borrowed_str<E>(self, v: &'de str) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Str(Cow::Borrowed(v))))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Str(Cow::Borrowed(v))))
+    }
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Null))
+    }
+    fn visit_none<E>(self) -> Result<Self::Value, E> {
+        Ok(to_value(self.1, &J::Null))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        // Up to a matrix's sixteen items without a heap block.
+        let mut items: smallvec::SmallVec<[J<'de>; 16]> = smallvec::SmallVec::new();
+        loop {
+            let next = seq.next_element_seed(Seed(self.0));
+            match self.0.within(|| items.len().to_string(), next)? {
+                Some(v) => items.push(v),
+                None => return Ok(to_value_seq(self.1, &items)),
+            }
+        }
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+        let j = Seed(self.0).visit_map(map)?;
+        Ok(to_value(self.1, &j))
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<(), E> {
+        self.bare(J::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<(), E> {
+        self.bare(J::Num(Num::I(v)))
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<(), E> {
+        self.bare(J::Num(Num::U(v)))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<(), E> {
+        self.bare(J::Num(Num::F(v)))
+    }
+    fn visit_borrowed_str<E>(self, v: &'de str) -> Result<(), E> {
+        self.bare(J::Str(Cow::Borrowed(v)))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<(), E> {
+        self.bare(J::Str(Cow::Owned(v.to_string())))
+    }
+    fn visit_string<E>(self, v: String) -> Result<(), E> {
+        self.bare(J::Str(Cow::Owned(v)))
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        self.bare(J::Null)
+    }
+    fn visit_none<E>(self) -> Result<(), E> {
+        self.bare(J::Null)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<(), A::Error> {
+        let j = Seed(&self.r.ctx).visit_seq(seq)?;
+        self.bare(j)
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let (r, n, index, pointer) = (self.r, self.n, self.index, self.pointer);
+        let mut seen = FewKeys::default();
+        let mut ty = None;
+        let mut decl = None;
+        let mut value = None;
+        while let Some(key) = map.next_key_seed(Key)? {
+            let slot = match &*key {
+                "type" => Some(0),
+                "value" => Some(1),
+                _ => None,
+            };
+            if !seen.insert(slot, &key) {
+                return Err(r.ctx.duplicate_key(&key));
+            }
+            if slot == Some(1) {
+                value = Some(match &decl {
+                    Some(d) => {
+                        let d: &Arc<Decl> = d;
+                        let read = map.next_value_seed(TypedSeed(&r.ctx, &d.ty));
+                        ValueRead::Typed(r.ctx.within(|| key.to_string(), read)?)
+                    }
+                    None => ValueRead::Tree(value_tree(&r.ctx, &mut map, &key)?),
+                });
+                continue;
+            }
+            let j = value_tree(&r.ctx, &mut map, &key)?;
+            match slot {
+                Some(_) => match j {
+                    J::Str(s) => {
+                        decl = r.inline_decl(&s);
+                        ty = Some(s);
+                    }
+                    other => {
+                        let e = r.error(
+                            "JS002",
+                            &P::Key(pointer, &key).render(),
+                            format!("`type` must be a string, found {}", other.kind()),
+                        );
+                        n.push(NODE_PARAMS, index, Found::Error(e));
+                    }
+                },
+                None => {
+                    let d = r.unknown_key_warning(&P::Key(pointer, &key), &key, "a parameter");
+                    n.push(NODE_PARAMS, index, Found::Warning(d));
+                }
+            }
+        }
+        let read = r.canonical(self.name, ty.as_deref(), decl, value, pointer);
+        n.settle(index, read);
         Ok(())
     }
 }
@@ -931,9 +1659,13 @@ impl Reader<'_> {
     }
 
     fn unknown_key(&mut self, pointer: &P, key: &str, where_: &str) {
-        let d = Diagnostic::warning("JS011", format!("unknown key `{key}` in {where_}; ignored"))
-            .at(self.loc(&pointer.render()));
+        let d = self.unknown_key_warning(pointer, key, where_);
         self.warn(d);
+    }
+
+    fn unknown_key_warning(&self, pointer: &P, key: &str, where_: &str) -> Diagnostic {
+        Diagnostic::warning("JS011", format!("unknown key `{key}` in {where_}; ignored"))
+            .at(self.loc(&pointer.render()))
     }
 
     /// The `vstructcNetwork` member (`None` when missing).
@@ -1099,160 +1831,131 @@ impl Reader<'_> {
         })
     }
 
-    /// Read one node; returns its id and its connections (per parameter index), to bind once
-    /// every node of the material exists.
-    fn node<'de>(
+    /// Close a node once all its members are read: report its findings (module docs), bind
+    /// its inputs to its parameters and insert it. Returns its id and its connections (per
+    /// parameter index), to bind once every node of the material exists.
+    fn close_node<'de>(
         &mut self,
         name: &str,
-        j: &J<'de>,
+        n: &mut NodeState<'de>,
         kind: RequestKind,
         pointer: &P,
     ) -> Result<(NodeId, NodeConns<'de>), Error> {
-        let members = self.object(j, pointer, "a node")?;
-        let mut shader = None;
-        let mut parameters: &[(Cow<'de, str>, J<'de>)] = &[];
-        let mut inputs: &[(Cow<'de, str>, J<'de>)] = &[];
-        for (k, v) in members {
-            let p = P::Key(pointer, k);
-            match &**k {
-                "nodeTypeId" => shader = Some(self.string(v, &p, "`nodeTypeId`")?),
-                "parameters" => parameters = self.object(v, &p, "`parameters`")?,
-                "inputConnections" => inputs = self.object(v, &p, "`inputConnections`")?,
-                _ => self.unknown_key(&p, k, "a node"),
+        match n.shader.clone() {
+            Some(shader) => {
+                let ppointer = P::Key(pointer, "parameters");
+                for (index, pname, j) in std::mem::take(&mut n.deferred) {
+                    let read = self.shorthand(&shader, &pname, &j, &P::Key(&ppointer, &pname));
+                    n.settle(index, read);
+                }
+            }
+            None => {
+                let e = self.error(
+                    "JS002",
+                    &pointer.render(),
+                    format!("node `{name}` has no `nodeTypeId`"),
+                );
+                n.push(NODE_SHADER, 0, Found::Error(e));
             }
         }
-        let Some(shader) = shader else {
-            return Err(self.error(
-                "JS002",
-                &pointer.render(),
-                format!("node `{name}` has no `nodeTypeId`"),
-            ));
+        if !n.found.is_empty() {
+            n.found.sort_by_key(|&(stage, index, _)| (stage, index));
+            for (_, _, found) in n.found.drain(..) {
+                match found {
+                    Found::Warning(d) => self.warn(d),
+                    Found::Error(e) => return Err(e),
+                }
+            }
+        }
+        let Some(shader) = n.shader.take() else {
+            return Err(self.error("JS002", &pointer.render(), "node without `nodeTypeId`"));
         };
-        let mut params: Vec<Param> = Vec::with_capacity(parameters.len() + inputs.len());
-        let ppointer = P::Key(pointer, "parameters");
-        for (pname, pj) in parameters {
-            let p = P::Key(&ppointer, pname);
-            let (value, decl) = self.parameter(shader, pname, pj, &p)?;
+        let mut params: Vec<Param> = Vec::with_capacity(n.names.len());
+        for (&pname, typed) in n.names.iter().zip(n.values.drain(..)) {
+            let Some((value, decl)) = typed else { continue };
             params.push(Param::from_shared(
-                Sym::new(pname),
+                pname,
                 Some(Arc::new(value)),
                 Some(decl),
                 ParamAt::JsonParameter,
                 None,
             ));
         }
-        // Inputs name parameters given above, or add their own; a scan while the node is small.
-        let index: FxHashMap<&str, usize> = if parameters.len() > SCAN_PARAMS && !inputs.is_empty()
-        {
-            parameters
-                .iter()
-                .enumerate()
-                .map(|(i, (n, _))| (&**n, i))
-                .collect()
-        } else {
-            Default::default()
-        };
-        let ipointer = P::Key(pointer, "inputConnections");
-        let mut conns: NodeConns<'de> = Vec::new();
-        for (input, list) in inputs {
-            let p = P::Key(&ipointer, input);
-            let J::Arr(items) = list else {
-                return Err(self.error(
-                    "JS002",
-                    &p.render(),
-                    format!(
-                        "connections of `{input}` must be an array, found {}",
-                        list.kind()
-                    ),
-                ));
-            };
-            let list: Vec<Conn> = items
-                .iter()
-                .enumerate()
-                .map(|(i, c)| self.connection(c, &P::Index(&p, i)))
-                .collect::<Result<_, Error>>()?;
-            let given = if parameters.len() > SCAN_PARAMS {
-                index.get(&**input).copied()
-            } else {
-                parameters.iter().position(|(n, _)| n == input)
-            };
-            let k = given.unwrap_or_else(|| {
-                params.push(Param::from_shared(
-                    Sym::new(input),
-                    None,
-                    None,
-                    ParamAt::Unknown,
-                    None,
-                ));
+        // Inputs name parameters given above, or add their own.
+        let mut conns: NodeConns<'de> = Vec::with_capacity(n.inputs.len());
+        for (input, list) in std::mem::take(&mut n.inputs) {
+            let sym = Sym::new(&input);
+            let k = n.parameter_index(sym).unwrap_or_else(|| {
+                params.push(Param::from_shared(sym, None, None, ParamAt::Unknown, None));
                 params.len() - 1
             });
-            conns.push((k, input.clone(), list));
+            conns.push((k, input, list));
         }
-        let mut node = Node::new_raw(name, shader, kind);
+        let mut node = Node::new_raw(name, &shader, kind);
         node.set_raw_params(params);
         node.set_origin(Some(self.loc(&pointer.render())), None);
         Ok((self.net.insert_node(node), conns))
     }
 
-    /// A parameter value: canonical `{ "type", "value" }`, or a shorthand bare value typed by
-    /// the definition.
-    fn parameter(
+    /// A parameter in the canonical `{ "type", "value" }` form (`ty` and `value`: its members,
+    /// if given and, for `type`, a string; `decl`: the type's declaration if it is a type).
+    fn canonical(
         &mut self,
-        shader: &str,
         name: &str,
-        j: &J,
+        ty: Option<&str>,
+        decl: Option<Arc<Decl>>,
+        value: Option<ValueRead>,
         pointer: &P,
-    ) -> Result<(Value, Arc<Decl>), Error> {
-        if let J::Obj(members) = j {
-            let mut ty = None;
-            let mut value = None;
-            for (k, v) in members {
-                let p = P::Key(pointer, k);
-                match &**k {
-                    "type" => ty = Some(self.string(v, &p, "`type`")?),
-                    "value" => value = Some(v),
-                    _ => self.unknown_key(&p, k, "a parameter"),
-                }
-            }
-            let (Some(text), Some(v)) = (ty, value) else {
-                return Err(self.error(
-                    "JS002",
-                    &pointer.render(),
-                    format!(
-                        "parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"
-                    ),
-                ));
-            };
-            let decl = match self.inline_decls.get(&**text) {
-                Some(decl) => decl.clone(),
-                None => {
-                    let Some(t) = parse_type(text) else {
-                        return Err(self.error(
-                            "JS002",
-                            &P::Key(pointer, "type").render(),
-                            format!("unknown type `{text}` of `{name}`"),
-                        ));
-                    };
-                    let decl = Arc::new(Decl {
-                        text: text.to_string(),
-                        class: None,
-                        reference: false,
-                        ty: t,
-                        inline_type: true,
-                    });
-                    self.inline_decls.insert(Box::from(&**text), decl.clone());
-                    decl
-                }
-            };
-            let value = to_value(&decl.ty, v).map_err(|why| {
-                self.error(
-                    "JS004",
-                    &P::Key(pointer, "value").render(),
-                    format!("value of `{name}` does not match its type `{text}`: {why}"),
-                )
-            })?;
-            return Ok((value, decl));
+    ) -> Result<Typed, Error> {
+        let (Some(text), Some(v)) = (ty, value) else {
+            return Err(self.error(
+                "JS002",
+                &pointer.render(),
+                format!(
+                    "parameter `{name}` must be {{ \"type\": T, \"value\": V }} or a bare value"
+                ),
+            ));
+        };
+        let Some(decl) = decl else {
+            return Err(self.error(
+                "JS002",
+                &P::Key(pointer, "type").render(),
+                format!("unknown type `{text}` of `{name}`"),
+            ));
+        };
+        let value = match v {
+            ValueRead::Tree(j) => to_value(&decl.ty, &j),
+            ValueRead::Typed(read) => read,
+        };
+        let value = value.map_err(|why| {
+            self.error(
+                "JS004",
+                &P::Key(pointer, "value").render(),
+                format!("value of `{name}` does not match its type `{text}`: {why}"),
+            )
+        })?;
+        Ok((value, decl))
+    }
+
+    /// The declaration shared by the parameters whose `type` is `text` (`None` if `text` is
+    /// not a type).
+    fn inline_decl(&mut self, text: &str) -> Option<Arc<Decl>> {
+        if let Some(decl) = self.inline_decls.get(text) {
+            return Some(decl.clone());
         }
+        let decl = Arc::new(Decl {
+            text: text.to_string(),
+            class: None,
+            reference: false,
+            ty: parse_type(text)?,
+            inline_type: true,
+        });
+        self.inline_decls.insert(Box::from(text), decl.clone());
+        Some(decl)
+    }
+
+    /// A shorthand (bare) parameter value, typed by the shader's definition.
+    fn shorthand(&mut self, shader: &str, name: &str, j: &J, pointer: &P) -> Result<Typed, Error> {
         let Some(t) = self.types.input_type(shader, name) else {
             return Err(self.error(
                 "JS006",
@@ -1312,22 +2015,33 @@ fn parse_type(text: &str) -> Option<Type> {
 /// Convert a JSON value to a typed value of type `t`.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn to_value(t: &Type, j: &J) -> Result<Value, String> {
-    let items = |j: &J| -> Result<Vec<Value>, String> {
-        match j {
-            J::Arr(items) => items.iter().map(|i| scalar(&t.base, i)).collect(),
-            other => Err(format!("expected an array, found {}", other.kind())),
-        }
-    };
+    match (j, &t.array) {
+        (J::Arr(items), _) => to_value_seq(t, items),
+        (_, ArraySpec::None) => scalar(&t.base, j),
+        (other, _) => Err(format!("expected an array, found {}", other.kind())),
+    }
+}
+
+/// [`to_value`] of a JSON array, given as its items.
+fn to_value_seq(t: &Type, items: &[J]) -> Result<Value, String> {
+    let values =
+        || -> Result<Vec<Value>, String> { items.iter().map(|i| scalar(&t.base, i)).collect() };
     match t.array {
-        ArraySpec::None => scalar(&t.base, j),
+        ArraySpec::None => match &t.base {
+            b if b.is_triple() => Ok(Value::Triple(b.clone(), floats_seq::<3>(items)?)),
+            BaseType::HPoint => Ok(Value::HPoint(floats_seq::<4>(items)?)),
+            BaseType::Matrix => Ok(Value::Matrix(floats_seq::<16>(items)?)),
+            // The other types take no array, whatever its items.
+            b => scalar(b, &J::Arr(Vec::new())),
+        },
         ArraySpec::Fixed(n) => {
-            let v = items(j)?;
+            let v = values()?;
             if v.len() != n {
                 return Err(format!("expected {n} elements, found {}", v.len()));
             }
             Ok(Value::Array(t.base.clone(), v))
         }
-        ArraySpec::Dynamic => Ok(Value::Array(t.base.clone(), items(j)?)),
+        ArraySpec::Dynamic => Ok(Value::Array(t.base.clone(), values()?)),
     }
 }
 
@@ -1354,6 +2068,10 @@ fn floats<const N: usize>(j: &J) -> Result<[f32; N], String> {
             j.kind()
         ));
     };
+    floats_seq(items)
+}
+
+fn floats_seq<const N: usize>(items: &[J]) -> Result<[f32; N], String> {
     if items.len() != N {
         return Err(format!("expected {N} numbers, found {}", items.len()));
     }

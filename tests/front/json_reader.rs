@@ -424,3 +424,100 @@ proptest! {
         let _ = parse_json(text.as_bytes(), "r.json", &NoDefinitions, &mut d);
     }
 }
+
+/// Every order of `members` (JSON object members, without braces), joined as an object.
+fn orders(members: &[&str]) -> Vec<String> {
+    if members.len() <= 1 {
+        return vec![format!("{{{}}}", members.join(""))];
+    }
+    let mut out = Vec::new();
+    for i in 0..members.len() {
+        let mut rest = members.to_vec();
+        let first = rest.remove(i);
+        for tail in orders(&rest) {
+            let tail = &tail[1..tail.len() - 1];
+            out.push(format!("{{{first}, {tail}}}"));
+        }
+    }
+    out
+}
+
+/// The report of `text`: the network as JSON, or the error's code and pointer, and the
+/// warnings' codes and pointers.
+fn report(text: &str, types: &dyn ParamTypes) -> (String, Vec<(String, String)>) {
+    let (r, d) = read_with(text, types);
+    let pointer = |d: &vstructc::Diagnostic| {
+        d.location
+            .as_ref()
+            .and_then(|l| l.pointer.clone())
+            .unwrap_or_default()
+    };
+    let result = match r {
+        Ok(net) => vstructc::back::json::write_json(&net).unwrap(),
+        Err(e) => {
+            let d = e.diagnostic().unwrap();
+            format!("{} {} {}", d.code, pointer(d), d.message)
+        }
+    };
+    let warnings = d.iter().map(|w| (w.code.to_string(), pointer(w))).collect();
+    (result, warnings)
+}
+
+#[test]
+fn node_keys_in_any_order_read_alike() {
+    let types = Table::new().shader("S", &[("g", "float"), ("c", "color")], &[]);
+    let params = orders(&[
+        r#""p": {"value": [1, 2, 3], "type": "color"}"#,
+        r#""g": 0.5"#,
+        r#""c": [0, 1, 0]"#,
+    ]);
+    let param = |members: &[&str]| orders(members);
+    // A valid node (values before types, shorthand before `nodeTypeId`, inputs before the
+    // parameters they name), then nodes with findings at several stages.
+    let cases: Vec<Vec<String>> = vec![
+        vec![
+            r#""nodeTypeId": "S""#.to_string(),
+            format!(r#""parameters": {}"#, params[3]),
+            r#""inputConnections": {"p": [{"upstreamNode": "a", "upstreamOutputName": "o"}], "q": []}"#
+                .to_string(),
+        ],
+        vec![
+            r#""nodeTypeId": "S""#.to_string(),
+            r#""other": 1"#.to_string(),
+            format!(
+                r#""parameters": {{"x": {}, "g": "no"}}"#,
+                param(&[r#""doc": 1"#, r#""type": "int""#, r#""value": 1.5"#])[4]
+            ),
+        ],
+        vec![
+            r#""nodeTypeId": 3"#.to_string(),
+            r#""parameters": {"x": {"type": "int", "value": 1.5}}"#.to_string(),
+        ],
+        vec![
+            r#""parameters": {"g": 1, "y": {"value": 1}}"#.to_string(),
+            r#""inputConnections": {"g": {}}"#.to_string(),
+        ],
+        vec![
+            r#""nodeTypeId": "S""#.to_string(),
+            r#""parameters": {"k": {"type": "bogus", "value": 1, "doc": 2}}"#.to_string(),
+            r#""inputConnections": {"g": [{"upstreamNode": "a", "w": 1}]}"#.to_string(),
+        ],
+    ];
+    for members in &cases {
+        let members: Vec<&str> = members.iter().map(String::as_str).collect();
+        let mut reports = Vec::new();
+        for node in orders(&members) {
+            let text = doc(&format!(r#""a": {{"nodeTypeId": "A"}}, "n": {node}"#));
+            reports.push((report(&text, &types), text));
+        }
+        for (r, text) in &reports[1..] {
+            assert_eq!(r, &reports[0].0, "{text}\nagainst\n{}", reports[0].1);
+        }
+    }
+    // Each parameter form, in every order of its members, gives one network.
+    for p in params {
+        let text = doc(&format!(r#""n": {{"nodeTypeId": "S", "parameters": {p}}}"#));
+        let (r, w) = report(&text, &types);
+        assert!(w.is_empty() && r.contains("\"c\""), "{text}: {r}");
+    }
+}
