@@ -895,12 +895,7 @@ impl ParamsSeed<'_, '_, '_, '_, '_> {
         &self.r.ctx
     }
     fn not_object(&mut self, kind: &str) {
-        let e = self.r.error(
-            "JS002",
-            &self.pointer.render(),
-            format!("`parameters` must be an object, found {kind}"),
-        );
-        self.n.push(NODE_KEYS, 0, Found::Error(e));
+        not_an_object(self.r, self.n, self.pointer, "parameters", kind);
     }
 }
 
@@ -980,13 +975,25 @@ impl InputsSeed<'_, '_, '_, '_, '_> {
         &self.r.ctx
     }
     fn not_object(&mut self, kind: &str) {
-        let e = self.r.error(
-            "JS002",
-            &self.pointer.render(),
-            format!("`inputConnections` must be an object, found {kind}"),
-        );
-        self.n.push(NODE_KEYS, 0, Found::Error(e));
+        not_an_object(self.r, self.n, self.pointer, "inputConnections", kind);
     }
+}
+
+/// JS002 for a node's `key` (at `pointer`) holding `kind` instead of an object: an error of
+/// the node's own keys.
+fn not_an_object(
+    r: &mut Reader<'_>,
+    n: &mut NodeState<'_>,
+    pointer: &P<'_>,
+    key: &str,
+    kind: &str,
+) {
+    let e = r.error(
+        "JS002",
+        &pointer.render(),
+        format!("`{key}` must be an object, found {kind}"),
+    );
+    n.push(NODE_KEYS, 0, Found::Error(e));
 }
 
 impl<'de> DeserializeSeed<'de> for InputsSeed<'_, '_, '_, 'de, '_> {

@@ -329,6 +329,34 @@ fn every_js_error_with_pointer() {
     }
 }
 
+/// A node's `parameters` or `inputConnections` that is not an object is JS002 at its pointer,
+/// naming the key and what it holds.
+#[test]
+fn node_objects_that_are_not_objects() {
+    for (member, key, kind) in [
+        (r#""parameters": 3"#, "parameters", "a number"),
+        (r#""inputConnections": "x""#, "inputConnections", "a string"),
+        (r#""parameters": [1]"#, "parameters", "an array"),
+    ] {
+        let text = doc(&format!(r#""n": {{"nodeTypeId": "X", {member}}}"#));
+        let (r, _) = read_with(&text, &NoDefinitions);
+        let e = r.err().unwrap_or_else(|| panic!("no error for {text}"));
+        let d = e.diagnostic().unwrap();
+        assert_eq!(d.code.as_str(), "JS002", "{text}: {d}");
+        let pointer = d.location.as_ref().and_then(|l| l.pointer.as_deref());
+        assert_eq!(
+            pointer,
+            Some(&*format!("/materials/M/nodes/n/{key}")),
+            "{d}"
+        );
+        assert_eq!(
+            d.message,
+            format!("`{key}` must be an object, found {kind}"),
+            "{text}"
+        );
+    }
+}
+
 #[test]
 fn duplicate_key_has_line_and_column() {
     let text = "{\"vstructcNetwork\": 1,\n \"materials\": {},\n \"materials\": {}}";
