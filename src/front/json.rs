@@ -253,13 +253,6 @@ fn escape_pointer(s: &str) -> Cow<'_, str> {
 
 struct Seed<'c>(&'c Ctx);
 
-impl<'de> DeserializeSeed<'de> for Seed<'_> {
-    type Value = J<'de>;
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<J<'de>, D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
 impl<'de> Visitor<'de> for Seed<'_> {
     type Value = J<'de>;
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -378,6 +371,34 @@ fn skip_seq<'de, A: SeqAccess<'de>>(ctx: &Ctx, mut seq: A) -> Result<(), A::Erro
     }
 }
 
+/// `DeserializeSeed` for each visitor listed: it reads any JSON value (and reports the
+/// kinds it did not expect itself).
+macro_rules! seed_reads_any {
+    ($($seed:ty),+ $(,)?) => {$(
+        impl<'de> DeserializeSeed<'de> for $seed {
+            type Value = <Self as Visitor<'de>>::Value;
+            fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+                d.deserialize_any(self)
+            }
+        }
+    )+};
+}
+
+seed_reads_any!(
+    Seed<'_>,
+    DocSeed<'_, '_>,
+    MaterialsSeed<'_, '_>,
+    MaterialSeed<'_, '_, 'de>,
+    NodesSeed<'_, '_, '_, 'de>,
+    NodeSeed<'_, '_, '_, 'de, '_>,
+    ParamsSeed<'_, '_, '_, 'de, '_>,
+    InputsSeed<'_, '_, '_, 'de, '_>,
+    ConnsSeed<'_, '_, '_, 'de, '_>,
+    ConnSeed<'_, '_, '_, 'de, '_>,
+    TypedSeed<'_, '_>,
+    ParamSeed<'_, '_, '_, 'de, '_>,
+);
+
 /// The visitor methods of a streamed object for every value that is not an object: the
 /// visitor's `not_object` records the error, and the value is consumed.
 macro_rules! needs_object {
@@ -438,13 +459,6 @@ impl DocSeed<'_, '_> {
     }
 }
 
-impl<'de> DeserializeSeed<'de> for DocSeed<'_, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
 impl<'de> Visitor<'de> for DocSeed<'_, '_> {
     type Value = ();
     needs_object!();
@@ -495,13 +509,6 @@ impl MaterialsSeed<'_, '_> {
             format!("`materials` must be an object, found {kind}"),
         );
         self.0.fail(e);
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for MaterialsSeed<'_, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
     }
 }
 
@@ -558,13 +565,6 @@ impl MaterialSeed<'_, '_, '_> {
             format!("a material must be an object, found {kind}"),
         );
         self.r.fail(e);
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for MaterialSeed<'_, '_, 'de> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
     }
 }
 
@@ -640,13 +640,6 @@ impl NodesSeed<'_, '_, '_, '_> {
         );
         self.r.fail(e);
         self.m.has_nodes = false;
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for NodesSeed<'_, '_, '_, 'de> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
     }
 }
 
@@ -820,13 +813,6 @@ impl NodeSeed<'_, '_, '_, '_, '_> {
     }
 }
 
-impl<'de> DeserializeSeed<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
 impl<'de> Visitor<'de> for NodeSeed<'_, '_, '_, 'de, '_> {
     type Value = ();
     needs_object!();
@@ -896,13 +882,6 @@ impl ParamsSeed<'_, '_, '_, '_, '_> {
     }
     fn not_object(&mut self, kind: &str) {
         not_an_object(self.r, self.n, self.pointer, "parameters", kind);
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
     }
 }
 
@@ -996,13 +975,6 @@ fn not_an_object(
     n.push(NODE_KEYS, 0, Found::Error(e));
 }
 
-impl<'de> DeserializeSeed<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
 impl<'de> Visitor<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
     type Value = ();
     needs_object!();
@@ -1057,13 +1029,6 @@ impl ConnsSeed<'_, '_, '_, '_, '_> {
         );
         self.n.push(NODE_INPUTS, self.index, Found::Error(e));
         Ok(())
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for ConnsSeed<'_, '_, '_, 'de, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
     }
 }
 
@@ -1135,13 +1100,6 @@ impl ConnSeed<'_, '_, '_, '_, '_> {
         );
         self.n.push(NODE_INPUTS, self.index, Found::Error(e));
         Ok(None)
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for ConnSeed<'_, '_, '_, 'de, '_> {
-    type Value = Option<Conn<'de>>;
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
-        d.deserialize_any(self)
     }
 }
 
@@ -1254,13 +1212,6 @@ enum ValueRead<'de> {
 /// for an array of numbers).
 struct TypedSeed<'c, 't>(&'c Ctx, &'t Type);
 
-impl<'de> DeserializeSeed<'de> for TypedSeed<'_, '_> {
-    type Value = Result<Value, String>;
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
-        d.deserialize_any(self)
-    }
-}
-
 impl<'de> Visitor<'de> for TypedSeed<'_, '_> {
     type Value = Result<Value, String>;
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -1304,13 +1255,6 @@ impl<'de> Visitor<'de> for TypedSeed<'_, '_> {
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
         let j = Seed(self.0).visit_map(map)?;
         Ok(to_value(self.1, &j))
-    }
-}
-
-impl<'de> DeserializeSeed<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
-    type Value = ();
-    fn deserialize<D: de::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-        d.deserialize_any(self)
     }
 }
 
