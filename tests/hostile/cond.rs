@@ -188,7 +188,15 @@ fn arg(p: &Path) -> String {
 
 /// Each chain in a definition of its own: `info` loads it, `resolve` evaluates it to the end,
 /// `explain` tells the story (the conditional printed whole, then what it read).
+///
+/// Nine runs of the command over 11 MB expressions: optimised only (`cargo test --release`,
+/// and CI), where each takes a fraction of a second; a debug `cargo test` lists it as ignored.
+/// The shorter chains of the other tests here run in every build.
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "nine runs over million-term chains: runs with `cargo test --release`"
+)]
 fn million_term_chains_load_resolve_and_explain() {
     for (member, expr, chosen) in long_conditionals() {
         let dir = chain_setup(member, &[(member, expr)]);
