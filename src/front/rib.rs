@@ -27,6 +27,8 @@
 
 // The tokenizer: public under `testkit` for its unit tests.
 testkit_mods!(lexer);
+#[cfg(feature = "parallel")]
+mod pipeline;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
@@ -117,6 +119,18 @@ pub fn parse_rib(
     options: &RibOptions,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
+    parse_rib_path(bytes, path, types, options, diags, ReadPath::Auto)
+}
+
+/// [`parse_rib`], read along `read_path`.
+fn parse_rib_path(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    options: &RibOptions,
+    diags: &mut Diagnostics,
+    read_path: ReadPath,
+) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(path);
     options
         .limits
@@ -130,7 +144,6 @@ pub fn parse_rib(
         .at(Location::new(file, 1, 1))
         .into());
     }
-    let mut lx = Lexer::new(bytes, file.clone(), options.strict);
     // The reader asks about the type of every parameter of every node.
     let types = Memo::new(types);
     let mut net = Network::new();
@@ -144,31 +157,145 @@ pub fn parse_rib(
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
+    read_requests(bytes, &file, options, &mut asm, diags, read_path)?;
+    let mut net = asm.net;
+    net.check_limits(&options.limits)?;
+    add_materials(&mut net);
+    Ok(net)
+}
+
+/// How [`read_requests`] reads a file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ReadPath {
+    /// Pipelined ([`pipeline`]) when the input is large and more than one thread may run;
+    /// on one thread otherwise.
+    Auto,
+    /// On the calling thread.
+    #[cfg(feature = "testkit")]
+    Serial,
+    /// Pipelined whatever the input's size, with at most this many requests per batch
+    /// (tests: every batch boundary behaves as within a batch).
+    #[cfg(feature = "testkit")]
+    Pipelined(usize),
+}
+
+/// Inputs from this size on are read pipelined (with the `parallel` feature and more than
+/// one thread): below, starting a thread costs about what it saves.
+#[cfg(feature = "parallel")]
+const PIPELINE_MIN_BYTES: usize = 1 << 20;
+
+/// Reads the requests of `bytes` into `asm`: tokenizing and assembling in turn on this
+/// thread, or pipelined on two ([`pipeline`]). Both give the same network, the same
+/// diagnostics in the same order and the same error.
+fn read_requests(
+    bytes: &[u8],
+    file: &Arc<str>,
+    options: &RibOptions,
+    asm: &mut Assembler<'_, '_>,
+    diags: &mut Diagnostics,
+    path: ReadPath,
+) -> Result<(), Error> {
+    #[cfg(feature = "parallel")]
+    {
+        let batch = match path {
+            ReadPath::Auto
+                if bytes.len() >= PIPELINE_MIN_BYTES && rayon::current_num_threads() > 1 =>
+            {
+                Some(pipeline::MAX_BATCH_REQUESTS)
+            }
+            #[cfg(feature = "testkit")]
+            ReadPath::Pipelined(n) => Some(n.max(1)),
+            _ => None,
+        };
+        if let Some(batch) = batch {
+            if let Some(result) = pipeline::read(bytes, file, options, asm, diags, batch) {
+                return result;
+            }
+        }
+    }
+    #[cfg(not(feature = "parallel"))]
+    let _ = path;
+    let mut scanner = Scanner::new(bytes, file.clone(), options.strict);
     // One argument buffer for every request: its room is reused.
     let mut args = Args::default();
-    let mut next = lx.next_token(diags)?;
-    while let Some(tok) = next {
-        match tok.kind {
-            TokKind::Comment => next = lx.next_token(diags)?,
-            TokKind::Ident => {
-                // Request names are ASCII: matched as bytes, no UTF-8 check.
-                let word = lx.bytes(&tok);
-                if let Some(kind) = RequestKind::ALL
-                    .into_iter()
-                    .find(|k| k.keyword().as_bytes() == word)
-                {
-                    let after = read_args(&mut lx, diags, true, &mut args)?;
-                    asm.shading_request(&lx, kind, &tok, &args, diags)?;
-                    // Stop at the first node too many, before the rest is read.
-                    options
-                        .limits
-                        .check(Limit::Nodes, asm.net.node_count() as u64)
-                        .map_err(|e| e.at(lx.tok_loc(&tok)))?;
-                    next = after;
-                } else {
+    loop {
+        args.pieces.clear();
+        args.items.clear();
+        let Some((kind, kw)) = scanner.next_request(&mut args, diags)? else {
+            return Ok(());
+        };
+        asm.shading_request(&scanner.lx, kind, &kw, &args.pieces, &args.items, diags)?;
+        asm.check_nodes(&scanner.lx, &kw, &options.limits)?;
+    }
+}
+
+/// [`parse_rib`] read on one thread ([`ReadPath::Serial`]) or pipelined in batches of at most
+/// `batch` requests ([`ReadPath::Pipelined`]), whatever the input's size: tests compare them.
+#[cfg(feature = "testkit")]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn parse_rib_with(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    options: &RibOptions,
+    diags: &mut Diagnostics,
+    batch: Option<usize>,
+) -> Result<Network, Error> {
+    let read_path = batch.map_or(ReadPath::Serial, ReadPath::Pipelined);
+    parse_rib_path(bytes, path, types, options, diags, read_path)
+}
+
+/// The request-level tokenizer: finds the shading requests and reads their arguments,
+/// passing every other request over (RB020 for a legacy request with `reference`
+/// parameters).
+struct Scanner<'a> {
+    lx: Lexer<'a>,
+    src: &'a [u8],
+    /// The token after the last request read (`None` at the end); `None` before the first.
+    next: Option<Option<Token>>,
+}
+
+impl<'a> Scanner<'a> {
+    fn new(src: &'a [u8], file: Arc<str>, strict: bool) -> Self {
+        Scanner {
+            lx: Lexer::new(src, file, strict),
+            src,
+            next: None,
+        }
+    }
+
+    /// The next shading request: its kind and keyword token, with its arguments appended to
+    /// `args` (array elements to [`Args::items`], so ranges stay valid across requests).
+    /// `None` at the end of input.
+    fn next_request(
+        &mut self,
+        args: &mut Args,
+        diags: &mut Diagnostics,
+    ) -> Result<Option<(RequestKind, Token)>, Error> {
+        let lx = &mut self.lx;
+        let mut next = match self.next.take() {
+            Some(next) => next,
+            None => lx.next_token(diags)?,
+        };
+        while let Some(tok) = next {
+            match tok.kind {
+                TokKind::Comment => next = lx.next_token(diags)?,
+                TokKind::Ident => {
+                    // Request names are ASCII: matched as bytes, no UTF-8 check.
+                    let word = lx.bytes(&tok);
+                    if let Some(kind) = RequestKind::ALL
+                        .into_iter()
+                        .find(|k| k.keyword().as_bytes() == word)
+                    {
+                        self.next = Some(read_args(lx, diags, true, args)?);
+                        return Ok(Some((kind, tok)));
+                    }
                     let legacy = LEGACY_REQUESTS.iter().find(|name| name.as_bytes() == word);
-                    let after = read_args(&mut lx, diags, legacy.is_some(), &mut args)?;
-                    if let Some(name) = legacy.filter(|_| has_reference_decl(bytes, &args.pieces)) {
+                    let (pieces, items) = (args.pieces.len(), args.items.len());
+                    let after = read_args(lx, diags, legacy.is_some(), args)?;
+                    if let Some(name) =
+                        legacy.filter(|_| has_reference_decl(self.src, &args.pieces[pieces..]))
+                    {
                         diags.push(
                             Diagnostic::info(
                                 "RB020",
@@ -177,23 +304,23 @@ pub fn parse_rib(
                             .at(lx.tok_loc(&tok)),
                         );
                     }
+                    args.pieces.truncate(pieces);
+                    args.items.truncate(items);
                     next = after;
                 }
-            }
-            _ => {
-                return Err(Diagnostic::error(
-                    "RB004",
-                    format!("unexpected {}: expected a request name", describe(&tok)),
-                )
-                .at(lx.tok_loc(&tok))
-                .into());
+                _ => {
+                    return Err(Diagnostic::error(
+                        "RB004",
+                        format!("unexpected {}: expected a request name", describe(&tok)),
+                    )
+                    .at(lx.tok_loc(&tok))
+                    .into());
+                }
             }
         }
+        self.next = Some(None);
+        Ok(None)
     }
-    let mut net = asm.net;
-    net.check_limits(&options.limits)?;
-    add_materials(&mut net);
-    Ok(net)
 }
 
 /// Bytes of RIB per shading node assumed when room for the nodes is reserved: a node request
@@ -267,7 +394,7 @@ impl Piece {
     }
 }
 
-/// Read the arguments of a request into `args` (emptied first) up to the next request name
+/// Read the arguments of a request, appended to `args`, up to the next request name
 /// (returned) or the end. Validates arrays (flat, homogeneous, closed). With `keep == false`
 /// nothing is stored, so pass-through requests of any size cost no memory.
 fn read_args(
@@ -276,8 +403,6 @@ fn read_args(
     keep: bool,
     args: &mut Args,
 ) -> Result<Option<Token>, Error> {
-    args.pieces.clear();
-    args.items.clear();
     let mut array: Option<(Token, usize, Option<TokKind>)> = None;
     loop {
         let Some(tok) = lx.next_token(diags)? else {
@@ -605,10 +730,10 @@ impl<'a> Assembler<'a, '_> {
         lx: &Lexer<'_>,
         kind: RequestKind,
         kw: &Token,
-        args: &Args,
+        pieces: &[Piece],
+        arena: &[Token],
         diags: &mut Diagnostics,
     ) -> Result<(), Error> {
-        let pieces = &args.pieces[..];
         let mut i = 0;
         let mut header_comments: Vec<Range<usize>> = Vec::new();
         let src: &'a [u8] = self.src;
@@ -727,7 +852,7 @@ impl<'a> Assembler<'a, '_> {
                 decl_tok,
                 location,
                 value: value_piece,
-                arena: &args.items,
+                arena,
                 origin,
             };
             self.read_param(&shader, raw, &mut params, diags)?;
@@ -795,6 +920,13 @@ impl<'a> Assembler<'a, '_> {
             &shadowed,
         );
         Ok(())
+    }
+
+    /// Stops at the first node too many ([`Limit::Nodes`]), before the rest is read.
+    fn check_nodes(&self, lx: &Lexer<'_>, kw: &Token, limits: &Limits) -> Result<(), Error> {
+        limits
+            .check(Limit::Nodes, self.net.node_count() as u64)
+            .map_err(|e| e.at(lx.tok_loc(kw)).into())
     }
 
     /// A request whose handle is defined (`prev`, its latest version), for the same shader,
