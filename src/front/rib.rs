@@ -224,7 +224,16 @@ fn read_requests(
         let Some((kind, kw)) = scanner.next_request(&mut args, diags)? else {
             return Ok(());
         };
-        asm.shading_request(&scanner.lx, kind, &kw, &args.pieces, &args.items, diags)?;
+        let split = split_request(bytes, &scanner.lx, kind, &kw, &args.pieces);
+        asm.shading_request(
+            &scanner.lx,
+            kind,
+            &kw,
+            &args.pieces,
+            &args.items,
+            split,
+            diags,
+        )?;
         asm.check_nodes(&scanner.lx, &kw, &options.limits)?;
     }
 }
@@ -724,7 +733,182 @@ struct RawParam<'p> {
     origin: u32,
 }
 
+/// A parameter occurrence of a split request ([`Split::params`]).
+struct Occurrence {
+    decl_tok: Token,
+    /// Its value in the request's pieces.
+    value: usize,
+}
+
+/// A shading request split into its parts before any parameter is interpreted
+/// ([`split_request`]): the work that needs only the request's tokens, which the pipelined
+/// reader does on the tokenizer's thread.
+struct Split<'a> {
+    shader: Cow<'a, str>,
+    handle: Cow<'a, str>,
+    /// Its parameter occurrences in order ([`NodeSource::items`] has one item each).
+    params: Vec<Occurrence>,
+    items: Vec<SourceParam>,
+    /// Every comment of the request in source order; those from `pending` on belong to no
+    /// parameter occurrence.
+    comments: Vec<Range<usize>>,
+    pending: usize,
+    /// The end of the last occurrence (or of the handle).
+    end: usize,
+    /// The error that ends the request after `params` (reading them may stop earlier).
+    error: Option<Error>,
+}
+
+/// Splits the shading request of keyword `kw` and arguments `pieces` into its header, its
+/// parameter occurrences, their source items and its comments, up to the first error.
+fn split_request<'a>(
+    src: &'a [u8],
+    lx: &Lexer<'_>,
+    kind: RequestKind,
+    kw: &Token,
+    pieces: &[Piece],
+) -> Split<'a> {
+    let mut split = Split {
+        shader: Cow::Borrowed(""),
+        handle: Cow::Borrowed(""),
+        params: Vec::new(),
+        items: Vec::new(),
+        comments: Vec::new(),
+        pending: 0,
+        end: kw.end,
+        error: None,
+    };
+    if let Err(e) = split_into(src, lx, kind, kw, pieces, &mut split) {
+        split.error = Some(e);
+    }
+    split
+}
+
+/// The body of [`split_request`]: fills `split` up to the first error.
+fn split_into<'a>(
+    src: &'a [u8],
+    lx: &Lexer<'_>,
+    kind: RequestKind,
+    kw: &Token,
+    pieces: &[Piece],
+    split: &mut Split<'a>,
+) -> Result<(), Error> {
+    let mut i = 0;
+    let comments = &mut split.comments;
+    let mut header_string = |what: &str, i: &mut usize| -> Result<(Cow<'a, str>, Token), Error> {
+        while let Some(Piece::Comment(c)) = pieces.get(*i) {
+            comments.push(c.start..c.end);
+            *i += 1;
+        }
+        match pieces.get(*i) {
+            Some(Piece::Value(t)) if t.kind == TokKind::Str => {
+                *i += 1;
+                Ok((decode_str(src, t), *t))
+            }
+            Some(p) => Err(Diagnostic::error(
+                "RB004",
+                format!(
+                    "unexpected {} after `{kind}`: expected the {what} string",
+                    piece_name(p)
+                ),
+            )
+            .at(lx.tok_loc(p.first()))
+            .into()),
+            None => Err(Diagnostic::error(
+                "RB004",
+                format!("`{kind}` request without {what} string"),
+            )
+            .at(lx.tok_loc(kw))
+            .into()),
+        }
+    };
+    let (shader, _) = header_string("shader name", &mut i)?;
+    split.shader = shader;
+    let (handle, handle_tok) = header_string("handle", &mut i)?;
+    split.handle = handle;
+    split.end = handle_tok.end;
+
+    // Exact room unless comments sit between parameters (a network of a million nodes
+    // keeps these tables).
+    let room = (pieces.len() - i) / 2;
+    split.params.reserve_exact(room);
+    split.items.reserve_exact(room);
+    let comments = &mut split.comments;
+    while i < pieces.len() {
+        let decl_tok = match &pieces[i] {
+            Piece::Comment(c) => {
+                comments.push(c.start..c.end);
+                i += 1;
+                continue;
+            }
+            Piece::Value(t) if t.kind == TokKind::Str => *t,
+            other => {
+                return Err(Diagnostic::error(
+                    "RB004",
+                    format!(
+                        "unexpected {}: expected a parameter declaration string",
+                        piece_name(other)
+                    ),
+                )
+                .at(lx.tok_loc(other.first()))
+                .into());
+            }
+        };
+        i += 1;
+        while let Some(Piece::Comment(c)) = pieces.get(i) {
+            comments.push(c.start..c.end);
+            i += 1;
+        }
+        let Some(value_piece) = pieces.get(i) else {
+            let decl_text = decode_string(src, &decl_tok);
+            return Err(Diagnostic::error(
+                "RB007",
+                format!("parameter `{}` has no value", decl_text.trim()),
+            )
+            .at(lx.tok_loc(&decl_tok))
+            .into());
+        };
+        let value = i;
+        i += 1;
+        let value_range = value_piece.range();
+        split.end = value_range.end;
+        let origin = split.items.len() as u32;
+        let (Some(decl), Some(value_at)) = (
+            in_request(kw.start, decl_tok.start..decl_tok.end),
+            in_request(kw.start, value_range),
+        ) else {
+            return Err(Diagnostic::error(
+                "RB021",
+                format!("request `{}` is longer than 4 GiB", split.handle),
+            )
+            .at(lx.tok_loc(kw))
+            .into());
+        };
+        let mut item = SourceParam::new(origin, decl, value_at);
+        let mut trailing = false;
+        if let Some(Piece::Comment(c)) = pieces.get(i) {
+            if c.line == value_piece.end_line() {
+                comments.push(c.start..c.end);
+                trailing = true;
+                split.end = c.end;
+                i += 1;
+            }
+        }
+        item.set_comments(
+            index_u32(split.pending)..index_u32(comments.len()),
+            trailing,
+        );
+        split.pending = comments.len();
+        split.items.push(item);
+        split.params.push(Occurrence { decl_tok, value });
+    }
+    Ok(())
+}
+
 impl<'a> Assembler<'a, '_> {
+    /// Reads the shading request of keyword `kw`, arguments `pieces` (array elements in
+    /// `arena`) and parts `split` into the network.
+    #[allow(clippy::too_many_arguments)]
     fn shading_request(
         &mut self,
         lx: &Lexer<'_>,
@@ -732,130 +916,46 @@ impl<'a> Assembler<'a, '_> {
         kw: &Token,
         pieces: &[Piece],
         arena: &[Token],
+        split: Split<'_>,
         diags: &mut Diagnostics,
     ) -> Result<(), Error> {
-        let mut i = 0;
-        let mut header_comments: Vec<Range<usize>> = Vec::new();
-        let src: &'a [u8] = self.src;
-        let mut header_string =
-            |what: &str, i: &mut usize| -> Result<(Cow<'a, str>, Token), Error> {
-                while let Some(Piece::Comment(c)) = pieces.get(*i) {
-                    header_comments.push(c.start..c.end);
-                    *i += 1;
-                }
-                match pieces.get(*i) {
-                    Some(Piece::Value(t)) if t.kind == TokKind::Str => {
-                        *i += 1;
-                        Ok((decode_str(src, t), *t))
-                    }
-                    Some(p) => Err(Diagnostic::error(
-                        "RB004",
-                        format!(
-                            "unexpected {} after `{kind}`: expected the {what} string",
-                            piece_name(p)
-                        ),
-                    )
-                    .at(lx.tok_loc(p.first()))
-                    .into()),
-                    None => Err(Diagnostic::error(
-                        "RB004",
-                        format!("`{kind}` request without {what} string"),
-                    )
-                    .at(lx.tok_loc(kw))
-                    .into()),
-                }
-            };
-        let (shader, _) = header_string("shader name", &mut i)?;
-        let (handle, handle_tok) = header_string("handle", &mut i)?;
+        let Split {
+            shader,
+            handle,
+            params: occurrences,
+            items,
+            mut comments,
+            pending,
+            end,
+            error,
+        } = split;
+        if occurrences.is_empty() {
+            if let Some(e) = error {
+                return Err(e);
+            }
+        }
         // The network's copy: its address keys the declarations read for this shader.
         let shader = self.net.shared_shader(&shader);
-        let mut end = handle_tok.end;
-
         // One parameter per occurrence, built in place; the rare later duplicates are taken
-        // out once the request is read. Exact room unless comments sit between parameters
-        // (a network of a million nodes keeps these tables).
-        let room = (pieces.len() - i) / 2;
-        let mut params: Vec<Param> = Vec::with_capacity(room);
-        let mut items: Vec<SourceParam> = Vec::with_capacity(room);
-        // Every comment of the request in source order; those from `pending` on belong to no
-        // parameter occurrence yet.
-        let mut comments = header_comments;
-        let mut pending = 0;
-        while i < pieces.len() {
-            let decl_tok = match &pieces[i] {
-                Piece::Comment(c) => {
-                    comments.push(c.start..c.end);
-                    i += 1;
-                    continue;
-                }
-                Piece::Value(t) if t.kind == TokKind::Str => *t,
-                other => {
-                    return Err(Diagnostic::error(
-                        "RB004",
-                        format!(
-                            "unexpected {}: expected a parameter declaration string",
-                            piece_name(other)
-                        ),
-                    )
-                    .at(lx.tok_loc(other.first()))
-                    .into());
-                }
-            };
-            i += 1;
-            while let Some(Piece::Comment(c)) = pieces.get(i) {
-                comments.push(c.start..c.end);
-                i += 1;
-            }
+        // out once the request is read.
+        let mut params: Vec<Param> = Vec::with_capacity(occurrences.len());
+        for (origin, o) in occurrences.iter().enumerate() {
             let location = At {
                 file: lx.file(),
-                line: decl_tok.line,
-                column: decl_tok.col,
+                line: o.decl_tok.line,
+                column: o.decl_tok.col,
             };
-            let Some(value_piece) = pieces.get(i) else {
-                let decl_text = decode_string(self.src, &decl_tok);
-                return Err(Diagnostic::error(
-                    "RB007",
-                    format!("parameter `{}` has no value", decl_text.trim()),
-                )
-                .at(location.loc())
-                .into());
-            };
-            i += 1;
-            let value_range = value_piece.range();
-            end = value_range.end;
-            let origin = items.len() as u32;
-            let (Some(decl), Some(value)) = (
-                in_request(kw.start, decl_tok.start..decl_tok.end),
-                in_request(kw.start, value_range),
-            ) else {
-                return Err(Diagnostic::error(
-                    "RB021",
-                    format!("request `{handle}` is longer than 4 GiB"),
-                )
-                .at(lx.tok_loc(kw))
-                .into());
-            };
-            let mut item = SourceParam::new(origin, decl, value);
-            let mut trailing = false;
-            if let Some(Piece::Comment(c)) = pieces.get(i) {
-                if c.line == value_piece.end_line() {
-                    comments.push(c.start..c.end);
-                    trailing = true;
-                    end = c.end;
-                    i += 1;
-                }
-            }
-            item.set_comments(index_u32(pending)..index_u32(comments.len()), trailing);
-            pending = comments.len();
-            items.push(item);
             let raw = RawParam {
-                decl_tok,
+                decl_tok: o.decl_tok,
                 location,
-                value: value_piece,
+                value: &pieces[o.value],
                 arena,
-                origin,
+                origin: origin as u32,
             };
             self.read_param(&shader, raw, &mut params, diags)?;
+        }
+        if let Some(e) = error {
+            return Err(e);
         }
         let (repeated, shadowed) = duplicates(&params);
         for (p, _) in params.iter().zip(&repeated).filter(|(_, r)| **r) {

@@ -1,6 +1,7 @@
-//! The RIB reader on two threads: one tokenizes (finds the shading requests and reads their
-//! arguments, [`Scanner`]), the calling thread assembles the network from them in file order
-//! ([`Assembler`]), as the one-thread reader does in turn.
+//! The RIB reader on two threads: one tokenizes (finds the shading requests, reads their
+//! arguments, [`Scanner`], and splits them into parameter occurrences, source items and
+//! comments, [`split_request`]), the calling thread interprets the parameters and assembles
+//! the network in file order ([`Assembler`]), as the one-thread reader does in turn.
 //!
 //! Requests travel in batches through a bounded channel, with the diagnostics the tokenizer
 //! reported while reading each one, so the calling thread pushes every diagnostic at the
@@ -10,7 +11,7 @@
 //! dropped, and the tokenizer stops at its next send). Emptied batches go back to the
 //! tokenizer, so their room is reused.
 
-use super::{Args, Assembler, Piece, RibOptions, Scanner, Token};
+use super::{Args, Assembler, Piece, RibOptions, Scanner, Split, Token, split_request};
 use crate::diag::{Diagnostic, Diagnostics, Error};
 use crate::network::RequestKind;
 use std::ops::Range;
@@ -28,9 +29,11 @@ const MAX_BATCH_TOKENS: usize = 16 * 1024;
 const IN_FLIGHT: usize = 4;
 
 /// One shading request of a batch.
-struct Request {
+struct Request<'a> {
     kind: RequestKind,
     keyword: Token,
+    /// Its parts, split on the tokenizer's thread.
+    split: Split<'a>,
     /// Its arguments in [`Batch::args`]' pieces.
     pieces: Range<usize>,
     /// How many of the batch's diagnostics were reported before the request was assembled
@@ -40,9 +43,9 @@ struct Request {
 
 /// Consecutive shading requests, their arguments, and what ended the input if it ended.
 #[derive(Default)]
-struct Batch {
+struct Batch<'a> {
     args: Args,
-    requests: Vec<Request>,
+    requests: Vec<Request<'a>>,
     diags: Vec<Diagnostic>,
     /// The end of the input (`Ok`) or the tokenizer's error, after the requests.
     end: Option<Result<(), Error>>,
@@ -58,8 +61,8 @@ pub(super) fn read(
     diags: &mut Diagnostics,
     batch: usize,
 ) -> Option<Result<(), Error>> {
-    let (full_tx, full_rx) = sync_channel::<Batch>(IN_FLIGHT);
-    let (free_tx, free_rx) = channel::<Batch>();
+    let (full_tx, full_rx) = sync_channel::<Batch<'_>>(IN_FLIGHT);
+    let (free_tx, free_rx) = channel::<Batch<'_>>();
     let strict = options.strict;
     std::thread::scope(|s| {
         let scanner = Scanner::new(bytes, file.clone(), strict);
@@ -77,11 +80,11 @@ pub(super) fn read(
 
 /// The tokenizer's thread: fills batches until the end of the input or an error, or until
 /// the assembler stops.
-fn tokenize(
-    mut scanner: Scanner<'_>,
+fn tokenize<'a>(
+    mut scanner: Scanner<'a>,
     max_requests: usize,
-    full: &SyncSender<Batch>,
-    free: &Receiver<Batch>,
+    full: &SyncSender<Batch<'a>>,
+    free: &Receiver<Batch<'a>>,
 ) {
     loop {
         let mut batch = free.try_recv().unwrap_or_default();
@@ -92,12 +95,23 @@ fn tokenize(
         {
             let from = batch.args.pieces.len();
             match scanner.next_request(&mut batch.args, &mut diags) {
-                Ok(Some((kind, keyword))) => batch.requests.push(Request {
-                    kind,
-                    keyword,
-                    pieces: from..batch.args.pieces.len(),
-                    diags: diags.len(),
-                }),
+                Ok(Some((kind, keyword))) => {
+                    let pieces = from..batch.args.pieces.len();
+                    let split = split_request(
+                        scanner.src,
+                        &scanner.lx,
+                        kind,
+                        &keyword,
+                        &batch.args.pieces[pieces.clone()],
+                    );
+                    batch.requests.push(Request {
+                        kind,
+                        keyword,
+                        split,
+                        pieces,
+                        diags: diags.len(),
+                    });
+                }
                 Ok(None) => batch.end = Some(Ok(())),
                 Err(e) => batch.end = Some(Err(e)),
             }
@@ -112,30 +126,31 @@ fn tokenize(
 
 /// The calling thread: assembles the requests of each batch in turn, pushing the
 /// tokenizer's diagnostics where the one-thread reader does.
-fn assemble(
-    bytes: &[u8],
+fn assemble<'a>(
+    bytes: &'a [u8],
     file: &Arc<str>,
     options: &RibOptions,
     asm: &mut Assembler<'_, '_>,
     diags: &mut Diagnostics,
-    full: Receiver<Batch>,
-    free: &Sender<Batch>,
+    full: Receiver<Batch<'a>>,
+    free: &Sender<Batch<'a>>,
 ) -> Result<(), Error> {
     // Only for positions: the tokens were read by the tokenizer's own.
     let positions = Scanner::new(bytes, file.clone(), options.strict).lx;
     for mut batch in full {
         let mut lexed = std::mem::take(&mut batch.diags).into_iter();
         let mut pushed = 0;
-        for r in &batch.requests {
+        for r in batch.requests.drain(..) {
             diags.extend(lexed.by_ref().take(r.diags - pushed));
             pushed = r.diags;
-            let pieces: &[Piece] = &batch.args.pieces[r.pieces.clone()];
+            let pieces: &[Piece] = &batch.args.pieces[r.pieces];
             asm.shading_request(
                 &positions,
                 r.kind,
                 &r.keyword,
                 pieces,
                 &batch.args.items,
+                r.split,
                 diags,
             )?;
             asm.check_nodes(&positions, &r.keyword, &options.limits)?;
@@ -146,7 +161,6 @@ fn assemble(
         }
         batch.args.pieces.clear();
         batch.args.items.clear();
-        batch.requests.clear();
         // The tokenizer may have stopped already: then the batch is dropped.
         let _ = free.send(batch);
     }
