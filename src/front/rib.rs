@@ -216,15 +216,24 @@ fn read_requests(
     #[cfg(not(feature = "parallel"))]
     let _ = path;
     let mut scanner = Scanner::new(bytes, file.clone(), options.strict);
-    // One argument buffer for every request: its room is reused.
+    // One argument buffer and one occurrence buffer for every request: their room is reused.
     let mut args = Args::default();
+    let mut occurrences = Vec::new();
     loop {
         args.pieces.clear();
         args.items.clear();
+        occurrences.clear();
         let Some((kind, kw)) = scanner.next_request(&mut args, diags)? else {
             return Ok(());
         };
-        let split = split_request(bytes, &scanner.lx, kind, &kw, &args.pieces);
+        let split = split_request(
+            bytes,
+            &scanner.lx,
+            kind,
+            &kw,
+            &args.pieces,
+            &mut occurrences,
+        );
         asm.shading_request(
             &scanner.lx,
             kind,
@@ -232,6 +241,7 @@ fn read_requests(
             &args.pieces,
             &args.items,
             split,
+            &occurrences,
             diags,
         )?;
         asm.check_nodes(&scanner.lx, &kw, &options.limits)?;
@@ -746,8 +756,9 @@ struct Occurrence {
 struct Split<'a> {
     shader: Cow<'a, str>,
     handle: Cow<'a, str>,
-    /// Its parameter occurrences in order ([`NodeSource::items`] has one item each).
-    params: Vec<Occurrence>,
+    /// Its parameter occurrences in order, in the buffer given to [`split_request`]
+    /// ([`NodeSource::items`] has one item each).
+    params: Range<usize>,
     items: Vec<SourceParam>,
     /// Every comment of the request in source order; those from `pending` on belong to no
     /// parameter occurrence.
@@ -760,27 +771,31 @@ struct Split<'a> {
 }
 
 /// Splits the shading request of keyword `kw` and arguments `pieces` into its header, its
-/// parameter occurrences, their source items and its comments, up to the first error.
+/// parameter occurrences (appended to `occurrences`), their source items and its comments,
+/// up to the first error.
 fn split_request<'a>(
     src: &'a [u8],
     lx: &Lexer<'_>,
     kind: RequestKind,
     kw: &Token,
     pieces: &[Piece],
+    occurrences: &mut Vec<Occurrence>,
 ) -> Split<'a> {
+    let from = occurrences.len();
     let mut split = Split {
         shader: Cow::Borrowed(""),
         handle: Cow::Borrowed(""),
-        params: Vec::new(),
+        params: from..from,
         items: Vec::new(),
         comments: Vec::new(),
         pending: 0,
         end: kw.end,
         error: None,
     };
-    if let Err(e) = split_into(src, lx, kind, kw, pieces, &mut split) {
+    if let Err(e) = split_into(src, lx, kind, kw, pieces, occurrences, &mut split) {
         split.error = Some(e);
     }
+    split.params = from..occurrences.len();
     split
 }
 
@@ -791,6 +806,7 @@ fn split_into<'a>(
     kind: RequestKind,
     kw: &Token,
     pieces: &[Piece],
+    occurrences: &mut Vec<Occurrence>,
     split: &mut Split<'a>,
 ) -> Result<(), Error> {
     let mut i = 0;
@@ -831,7 +847,7 @@ fn split_into<'a>(
     // Exact room unless comments sit between parameters (a network of a million nodes
     // keeps these tables).
     let room = (pieces.len() - i) / 2;
-    split.params.reserve_exact(room);
+    occurrences.reserve(room);
     split.items.reserve_exact(room);
     let comments = &mut split.comments;
     while i < pieces.len() {
@@ -900,14 +916,14 @@ fn split_into<'a>(
         );
         split.pending = comments.len();
         split.items.push(item);
-        split.params.push(Occurrence { decl_tok, value });
+        occurrences.push(Occurrence { decl_tok, value });
     }
     Ok(())
 }
 
 impl<'a> Assembler<'a, '_> {
     /// Reads the shading request of keyword `kw`, arguments `pieces` (array elements in
-    /// `arena`) and parts `split` into the network.
+    /// `arena`) and parts `split` (parameter occurrences in `occurrences`) into the network.
     #[allow(clippy::too_many_arguments)]
     fn shading_request(
         &mut self,
@@ -917,18 +933,20 @@ impl<'a> Assembler<'a, '_> {
         pieces: &[Piece],
         arena: &[Token],
         split: Split<'_>,
+        occurrences: &[Occurrence],
         diags: &mut Diagnostics,
     ) -> Result<(), Error> {
         let Split {
             shader,
             handle,
-            params: occurrences,
+            params: occurrences_at,
             items,
             mut comments,
             pending,
             end,
             error,
         } = split;
+        let occurrences = &occurrences[occurrences_at];
         if occurrences.is_empty() {
             if let Some(e) = error {
                 return Err(e);

@@ -11,7 +11,7 @@
 //! dropped, and the tokenizer stops at its next send). Emptied batches go back to the
 //! tokenizer, so their room is reused.
 
-use super::{Args, Assembler, Piece, RibOptions, Scanner, Split, Token, split_request};
+use super::{Args, Assembler, Occurrence, Piece, RibOptions, Scanner, Split, Token, split_request};
 use crate::diag::{Diagnostic, Diagnostics, Error};
 use crate::network::RequestKind;
 use std::ops::Range;
@@ -45,6 +45,8 @@ struct Request<'a> {
 #[derive(Default)]
 struct Batch<'a> {
     args: Args,
+    /// The parameter occurrences of all its requests ([`Split::params`]).
+    occurrences: Vec<Occurrence>,
     requests: Vec<Request<'a>>,
     diags: Vec<Diagnostic>,
     /// The end of the input (`Ok`) or the tokenizer's error, after the requests.
@@ -103,6 +105,7 @@ fn tokenize<'a>(
                         kind,
                         &keyword,
                         &batch.args.pieces[pieces.clone()],
+                        &mut batch.occurrences,
                     );
                     batch.requests.push(Request {
                         kind,
@@ -151,6 +154,7 @@ fn assemble<'a>(
                 pieces,
                 &batch.args.items,
                 r.split,
+                &batch.occurrences,
                 diags,
             )?;
             asm.check_nodes(&positions, &r.keyword, &options.limits)?;
@@ -161,6 +165,7 @@ fn assemble<'a>(
         }
         batch.args.pieces.clear();
         batch.args.items.clear();
+        batch.occurrences.clear();
         // The tokenizer may have stopped already: then the batch is dropped.
         let _ = free.send(batch);
     }
