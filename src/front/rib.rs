@@ -6,7 +6,10 @@
 //! stored: the writer ([`crate::back::rib`]) copies the bytes between interpreted requests from
 //! the input unchanged. Each node records the byte ranges of its request, parameters and
 //! comments ([`crate::network::NodeSource`]), never copies of the text, so reading a large
-//! scene costs about one copy of its shading requests.
+//! scene costs about one copy of its shading requests. An input from 1 MiB on is read on two
+//! threads when the `parallel` feature is on and rayon may use more than one: a second thread
+//! tokenizes the requests while the calling thread builds the network from them in file order,
+//! with the same network, diagnostics and errors as on one thread.
 //!
 //! Choices where the spec is silent (documented here, tested in `tests/front/rib_reader.rs`):
 //!
