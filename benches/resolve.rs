@@ -6,7 +6,9 @@
 //! reads the same network from its JSON form (issue 33: ≤ 1.5× `scene/parse`). `scene_cpu/resolve` is the same resolution measured as the
 //! thread's CPU time (ns): resolution is single-threaded, and on the shared development
 //! machine wall-clock time mostly measures the other processes. `scene_cpu/parse` is the RIB
-//! reader's thread CPU time, for the same reason.
+//! reader's CPU time on the calling thread, for the same reason: with the `parallel` feature a
+//! large input is tokenized on a second thread, whose time this row leaves out (the calling
+//! thread assembles the network, the longer of the two halves).
 
 use criterion::measurement::Measurement;
 use criterion::{

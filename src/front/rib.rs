@@ -6,7 +6,10 @@
 //! stored: the writer ([`crate::back::rib`]) copies the bytes between interpreted requests from
 //! the input unchanged. Each node records the byte ranges of its request, parameters and
 //! comments ([`crate::network::NodeSource`]), never copies of the text, so reading a large
-//! scene costs about one copy of its shading requests.
+//! scene costs about one copy of its shading requests. An input from 1 MiB on is read on two
+//! threads when the `parallel` feature is on and rayon may use more than one: a second thread
+//! tokenizes the requests while the calling thread builds the network from them in file order,
+//! with the same network, diagnostics and errors as on one thread.
 //!
 //! Choices where the spec is silent (documented here, tested in `tests/front/rib_reader.rs`):
 //!
@@ -27,6 +30,8 @@
 
 // The tokenizer: public under `testkit` for its unit tests.
 testkit_mods!(lexer);
+#[cfg(feature = "parallel")]
+mod pipeline;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
@@ -117,6 +122,18 @@ pub fn parse_rib(
     options: &RibOptions,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
+    parse_rib_path(bytes, path, types, options, diags, ReadPath::Auto)
+}
+
+/// [`parse_rib`], read along `read_path`.
+fn parse_rib_path(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    options: &RibOptions,
+    diags: &mut Diagnostics,
+    read_path: ReadPath,
+) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(path);
     options
         .limits
@@ -130,7 +147,6 @@ pub fn parse_rib(
         .at(Location::new(file, 1, 1))
         .into());
     }
-    let mut lx = Lexer::new(bytes, file.clone(), options.strict);
     // The reader asks about the type of every parameter of every node.
     let types = Memo::new(types);
     let mut net = Network::new();
@@ -144,31 +160,164 @@ pub fn parse_rib(
         shared_values: 0,
         outputs: FxHashMap::default(),
     };
-    // One argument buffer for every request: its room is reused.
+    read_requests(bytes, &file, options, &mut asm, diags, read_path)?;
+    let mut net = asm.net;
+    net.check_limits(&options.limits)?;
+    add_materials(&mut net);
+    Ok(net)
+}
+
+/// How [`read_requests`] reads a file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ReadPath {
+    /// Pipelined ([`pipeline`]) when the input is large and more than one thread may run;
+    /// on one thread otherwise.
+    Auto,
+    /// On the calling thread.
+    #[cfg(feature = "testkit")]
+    Serial,
+    /// Pipelined whatever the input's size, with at most this many requests per batch
+    /// (tests: every batch boundary behaves as within a batch).
+    #[cfg(feature = "testkit")]
+    Pipelined(usize),
+}
+
+/// Inputs from this size on are read pipelined (with the `parallel` feature and more than
+/// one thread): below, starting a thread costs about what it saves.
+#[cfg(feature = "parallel")]
+const PIPELINE_MIN_BYTES: usize = 1 << 20;
+
+/// Reads the requests of `bytes` into `asm`: tokenizing and assembling in turn on this
+/// thread, or pipelined on two ([`pipeline`]). Both give the same network, the same
+/// diagnostics in the same order and the same error.
+fn read_requests(
+    bytes: &[u8],
+    file: &Arc<str>,
+    options: &RibOptions,
+    asm: &mut Assembler<'_, '_>,
+    diags: &mut Diagnostics,
+    path: ReadPath,
+) -> Result<(), Error> {
+    #[cfg(feature = "parallel")]
+    {
+        let batch = match path {
+            ReadPath::Auto
+                if bytes.len() >= PIPELINE_MIN_BYTES && rayon::current_num_threads() > 1 =>
+            {
+                Some(pipeline::MAX_BATCH_REQUESTS)
+            }
+            #[cfg(feature = "testkit")]
+            ReadPath::Pipelined(n) => Some(n.max(1)),
+            _ => None,
+        };
+        if let Some(batch) = batch {
+            if let Some(result) = pipeline::read(bytes, file, options, asm, diags, batch) {
+                return result;
+            }
+        }
+    }
+    #[cfg(not(feature = "parallel"))]
+    let _ = path;
+    let mut scanner = Scanner::new(bytes, file.clone(), options.strict);
+    // One argument buffer and one occurrence buffer for every request: their room is reused.
     let mut args = Args::default();
-    let mut next = lx.next_token(diags)?;
-    while let Some(tok) = next {
-        match tok.kind {
-            TokKind::Comment => next = lx.next_token(diags)?,
-            TokKind::Ident => {
-                // Request names are ASCII: matched as bytes, no UTF-8 check.
-                let word = lx.bytes(&tok);
-                if let Some(kind) = RequestKind::ALL
-                    .into_iter()
-                    .find(|k| k.keyword().as_bytes() == word)
-                {
-                    let after = read_args(&mut lx, diags, true, &mut args)?;
-                    asm.shading_request(&lx, kind, &tok, &args, diags)?;
-                    // Stop at the first node too many, before the rest is read.
-                    options
-                        .limits
-                        .check(Limit::Nodes, asm.net.node_count() as u64)
-                        .map_err(|e| e.at(lx.tok_loc(&tok)))?;
-                    next = after;
-                } else {
+    let mut occurrences = Vec::new();
+    loop {
+        args.pieces.clear();
+        args.items.clear();
+        occurrences.clear();
+        let Some((kind, kw)) = scanner.next_request(&mut args, diags)? else {
+            return Ok(());
+        };
+        let split = split_request(
+            bytes,
+            &scanner.lx,
+            kind,
+            &kw,
+            &args.pieces,
+            &mut occurrences,
+        );
+        asm.shading_request(
+            &scanner.lx,
+            kind,
+            &kw,
+            &args.pieces,
+            &args.items,
+            split,
+            &occurrences,
+            diags,
+        )?;
+        asm.check_nodes(&scanner.lx, &kw, &options.limits)?;
+    }
+}
+
+/// [`parse_rib`] read on one thread ([`ReadPath::Serial`]) or pipelined in batches of at most
+/// `batch` requests ([`ReadPath::Pipelined`]), whatever the input's size: tests compare them.
+#[cfg(feature = "testkit")]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn parse_rib_with(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    options: &RibOptions,
+    diags: &mut Diagnostics,
+    batch: Option<usize>,
+) -> Result<Network, Error> {
+    let read_path = batch.map_or(ReadPath::Serial, ReadPath::Pipelined);
+    parse_rib_path(bytes, path, types, options, diags, read_path)
+}
+
+/// The request-level tokenizer: finds the shading requests and reads their arguments,
+/// passing every other request over (RB020 for a legacy request with `reference`
+/// parameters).
+struct Scanner<'a> {
+    lx: Lexer<'a>,
+    src: &'a [u8],
+    /// The token after the last request read (`None` at the end); `None` before the first.
+    next: Option<Option<Token>>,
+}
+
+impl<'a> Scanner<'a> {
+    fn new(src: &'a [u8], file: Arc<str>, strict: bool) -> Self {
+        Scanner {
+            lx: Lexer::new(src, file, strict),
+            src,
+            next: None,
+        }
+    }
+
+    /// The next shading request: its kind and keyword token, with its arguments appended to
+    /// `args` (array elements to [`Args::items`], so ranges stay valid across requests).
+    /// `None` at the end of input.
+    fn next_request(
+        &mut self,
+        args: &mut Args,
+        diags: &mut Diagnostics,
+    ) -> Result<Option<(RequestKind, Token)>, Error> {
+        let lx = &mut self.lx;
+        let mut next = match self.next.take() {
+            Some(next) => next,
+            None => lx.next_token(diags)?,
+        };
+        while let Some(tok) = next {
+            match tok.kind {
+                TokKind::Comment => next = lx.next_token(diags)?,
+                TokKind::Ident => {
+                    // Request names are ASCII: matched as bytes, no UTF-8 check.
+                    let word = lx.bytes(&tok);
+                    if let Some(kind) = RequestKind::ALL
+                        .into_iter()
+                        .find(|k| k.keyword().as_bytes() == word)
+                    {
+                        self.next = Some(read_args(lx, diags, true, args)?);
+                        return Ok(Some((kind, tok)));
+                    }
                     let legacy = LEGACY_REQUESTS.iter().find(|name| name.as_bytes() == word);
-                    let after = read_args(&mut lx, diags, legacy.is_some(), &mut args)?;
-                    if let Some(name) = legacy.filter(|_| has_reference_decl(bytes, &args.pieces)) {
+                    let (pieces, items) = (args.pieces.len(), args.items.len());
+                    let after = read_args(lx, diags, legacy.is_some(), args)?;
+                    if let Some(name) =
+                        legacy.filter(|_| has_reference_decl(self.src, &args.pieces[pieces..]))
+                    {
                         diags.push(
                             Diagnostic::info(
                                 "RB020",
@@ -177,23 +326,23 @@ pub fn parse_rib(
                             .at(lx.tok_loc(&tok)),
                         );
                     }
+                    args.pieces.truncate(pieces);
+                    args.items.truncate(items);
                     next = after;
                 }
-            }
-            _ => {
-                return Err(Diagnostic::error(
-                    "RB004",
-                    format!("unexpected {}: expected a request name", describe(&tok)),
-                )
-                .at(lx.tok_loc(&tok))
-                .into());
+                _ => {
+                    return Err(Diagnostic::error(
+                        "RB004",
+                        format!("unexpected {}: expected a request name", describe(&tok)),
+                    )
+                    .at(lx.tok_loc(&tok))
+                    .into());
+                }
             }
         }
+        self.next = Some(None);
+        Ok(None)
     }
-    let mut net = asm.net;
-    net.check_limits(&options.limits)?;
-    add_materials(&mut net);
-    Ok(net)
 }
 
 /// Bytes of RIB per shading node assumed when room for the nodes is reserved: a node request
@@ -267,7 +416,7 @@ impl Piece {
     }
 }
 
-/// Read the arguments of a request into `args` (emptied first) up to the next request name
+/// Read the arguments of a request, appended to `args`, up to the next request name
 /// (returned) or the end. Validates arrays (flat, homogeneous, closed). With `keep == false`
 /// nothing is stored, so pass-through requests of any size cost no memory.
 fn read_args(
@@ -276,8 +425,6 @@ fn read_args(
     keep: bool,
     args: &mut Args,
 ) -> Result<Option<Token>, Error> {
-    args.pieces.clear();
-    args.items.clear();
     let mut array: Option<(Token, usize, Option<TokKind>)> = None;
     loop {
         let Some(tok) = lx.next_token(diags)? else {
@@ -599,138 +746,237 @@ struct RawParam<'p> {
     origin: u32,
 }
 
+/// A parameter occurrence of a split request ([`Split::params`]).
+struct Occurrence {
+    decl_tok: Token,
+    /// Its value in the request's pieces.
+    value: usize,
+}
+
+/// A shading request split into its parts before any parameter is interpreted
+/// ([`split_request`]): the work that needs only the request's tokens, which the pipelined
+/// reader does on the tokenizer's thread.
+struct Split<'a> {
+    shader: Cow<'a, str>,
+    handle: Cow<'a, str>,
+    /// Its parameter occurrences in order, in the buffer given to [`split_request`]
+    /// ([`NodeSource::items`] has one item each).
+    params: Range<usize>,
+    items: Vec<SourceParam>,
+    /// Every comment of the request in source order; those from `pending` on belong to no
+    /// parameter occurrence.
+    comments: Vec<Range<usize>>,
+    pending: usize,
+    /// The end of the last occurrence (or of the handle).
+    end: usize,
+    /// The error that ends the request after `params` (reading them may stop earlier).
+    error: Option<Error>,
+}
+
+/// Splits the shading request of keyword `kw` and arguments `pieces` into its header, its
+/// parameter occurrences (appended to `occurrences`), their source items and its comments,
+/// up to the first error.
+fn split_request<'a>(
+    src: &'a [u8],
+    lx: &Lexer<'_>,
+    kind: RequestKind,
+    kw: &Token,
+    pieces: &[Piece],
+    occurrences: &mut Vec<Occurrence>,
+) -> Split<'a> {
+    let from = occurrences.len();
+    let mut split = Split {
+        shader: Cow::Borrowed(""),
+        handle: Cow::Borrowed(""),
+        params: from..from,
+        items: Vec::new(),
+        comments: Vec::new(),
+        pending: 0,
+        end: kw.end,
+        error: None,
+    };
+    if let Err(e) = split_into(src, lx, kind, kw, pieces, occurrences, &mut split) {
+        split.error = Some(e);
+    }
+    split.params = from..occurrences.len();
+    split
+}
+
+/// The body of [`split_request`]: fills `split` up to the first error.
+fn split_into<'a>(
+    src: &'a [u8],
+    lx: &Lexer<'_>,
+    kind: RequestKind,
+    kw: &Token,
+    pieces: &[Piece],
+    occurrences: &mut Vec<Occurrence>,
+    split: &mut Split<'a>,
+) -> Result<(), Error> {
+    let mut i = 0;
+    let comments = &mut split.comments;
+    let mut header_string = |what: &str, i: &mut usize| -> Result<(Cow<'a, str>, Token), Error> {
+        while let Some(Piece::Comment(c)) = pieces.get(*i) {
+            comments.push(c.start..c.end);
+            *i += 1;
+        }
+        match pieces.get(*i) {
+            Some(Piece::Value(t)) if t.kind == TokKind::Str => {
+                *i += 1;
+                Ok((decode_str(src, t), *t))
+            }
+            Some(p) => Err(Diagnostic::error(
+                "RB004",
+                format!(
+                    "unexpected {} after `{kind}`: expected the {what} string",
+                    piece_name(p)
+                ),
+            )
+            .at(lx.tok_loc(p.first()))
+            .into()),
+            None => Err(Diagnostic::error(
+                "RB004",
+                format!("`{kind}` request without {what} string"),
+            )
+            .at(lx.tok_loc(kw))
+            .into()),
+        }
+    };
+    let (shader, _) = header_string("shader name", &mut i)?;
+    split.shader = shader;
+    let (handle, handle_tok) = header_string("handle", &mut i)?;
+    split.handle = handle;
+    split.end = handle_tok.end;
+
+    // Exact room unless comments sit between parameters (a network of a million nodes
+    // keeps these tables).
+    let room = (pieces.len() - i) / 2;
+    occurrences.reserve(room);
+    split.items.reserve_exact(room);
+    let comments = &mut split.comments;
+    while i < pieces.len() {
+        let decl_tok = match &pieces[i] {
+            Piece::Comment(c) => {
+                comments.push(c.start..c.end);
+                i += 1;
+                continue;
+            }
+            Piece::Value(t) if t.kind == TokKind::Str => *t,
+            other => {
+                return Err(Diagnostic::error(
+                    "RB004",
+                    format!(
+                        "unexpected {}: expected a parameter declaration string",
+                        piece_name(other)
+                    ),
+                )
+                .at(lx.tok_loc(other.first()))
+                .into());
+            }
+        };
+        i += 1;
+        while let Some(Piece::Comment(c)) = pieces.get(i) {
+            comments.push(c.start..c.end);
+            i += 1;
+        }
+        let Some(value_piece) = pieces.get(i) else {
+            let decl_text = decode_string(src, &decl_tok);
+            return Err(Diagnostic::error(
+                "RB007",
+                format!("parameter `{}` has no value", decl_text.trim()),
+            )
+            .at(lx.tok_loc(&decl_tok))
+            .into());
+        };
+        let value = i;
+        i += 1;
+        let value_range = value_piece.range();
+        split.end = value_range.end;
+        let origin = split.items.len() as u32;
+        let (Some(decl), Some(value_at)) = (
+            in_request(kw.start, decl_tok.start..decl_tok.end),
+            in_request(kw.start, value_range),
+        ) else {
+            return Err(Diagnostic::error(
+                "RB021",
+                format!("request `{}` is longer than 4 GiB", split.handle),
+            )
+            .at(lx.tok_loc(kw))
+            .into());
+        };
+        let mut item = SourceParam::new(origin, decl, value_at);
+        let mut trailing = false;
+        if let Some(Piece::Comment(c)) = pieces.get(i) {
+            if c.line == value_piece.end_line() {
+                comments.push(c.start..c.end);
+                trailing = true;
+                split.end = c.end;
+                i += 1;
+            }
+        }
+        item.set_comments(
+            index_u32(split.pending)..index_u32(comments.len()),
+            trailing,
+        );
+        split.pending = comments.len();
+        split.items.push(item);
+        occurrences.push(Occurrence { decl_tok, value });
+    }
+    Ok(())
+}
+
 impl<'a> Assembler<'a, '_> {
+    /// Reads the shading request of keyword `kw`, arguments `pieces` (array elements in
+    /// `arena`) and parts `split` (parameter occurrences in `occurrences`) into the network.
+    #[allow(clippy::too_many_arguments)]
     fn shading_request(
         &mut self,
         lx: &Lexer<'_>,
         kind: RequestKind,
         kw: &Token,
-        args: &Args,
+        pieces: &[Piece],
+        arena: &[Token],
+        split: Split<'_>,
+        occurrences: &[Occurrence],
         diags: &mut Diagnostics,
     ) -> Result<(), Error> {
-        let pieces = &args.pieces[..];
-        let mut i = 0;
-        let mut header_comments: Vec<Range<usize>> = Vec::new();
-        let src: &'a [u8] = self.src;
-        let mut header_string =
-            |what: &str, i: &mut usize| -> Result<(Cow<'a, str>, Token), Error> {
-                while let Some(Piece::Comment(c)) = pieces.get(*i) {
-                    header_comments.push(c.start..c.end);
-                    *i += 1;
-                }
-                match pieces.get(*i) {
-                    Some(Piece::Value(t)) if t.kind == TokKind::Str => {
-                        *i += 1;
-                        Ok((decode_str(src, t), *t))
-                    }
-                    Some(p) => Err(Diagnostic::error(
-                        "RB004",
-                        format!(
-                            "unexpected {} after `{kind}`: expected the {what} string",
-                            piece_name(p)
-                        ),
-                    )
-                    .at(lx.tok_loc(p.first()))
-                    .into()),
-                    None => Err(Diagnostic::error(
-                        "RB004",
-                        format!("`{kind}` request without {what} string"),
-                    )
-                    .at(lx.tok_loc(kw))
-                    .into()),
-                }
-            };
-        let (shader, _) = header_string("shader name", &mut i)?;
-        let (handle, handle_tok) = header_string("handle", &mut i)?;
+        let Split {
+            shader,
+            handle,
+            params: occurrences_at,
+            items,
+            mut comments,
+            pending,
+            end,
+            error,
+        } = split;
+        let occurrences = &occurrences[occurrences_at];
+        if occurrences.is_empty() {
+            if let Some(e) = error {
+                return Err(e);
+            }
+        }
         // The network's copy: its address keys the declarations read for this shader.
         let shader = self.net.shared_shader(&shader);
-        let mut end = handle_tok.end;
-
         // One parameter per occurrence, built in place; the rare later duplicates are taken
-        // out once the request is read. Exact room unless comments sit between parameters
-        // (a network of a million nodes keeps these tables).
-        let room = (pieces.len() - i) / 2;
-        let mut params: Vec<Param> = Vec::with_capacity(room);
-        let mut items: Vec<SourceParam> = Vec::with_capacity(room);
-        // Every comment of the request in source order; those from `pending` on belong to no
-        // parameter occurrence yet.
-        let mut comments = header_comments;
-        let mut pending = 0;
-        while i < pieces.len() {
-            let decl_tok = match &pieces[i] {
-                Piece::Comment(c) => {
-                    comments.push(c.start..c.end);
-                    i += 1;
-                    continue;
-                }
-                Piece::Value(t) if t.kind == TokKind::Str => *t,
-                other => {
-                    return Err(Diagnostic::error(
-                        "RB004",
-                        format!(
-                            "unexpected {}: expected a parameter declaration string",
-                            piece_name(other)
-                        ),
-                    )
-                    .at(lx.tok_loc(other.first()))
-                    .into());
-                }
-            };
-            i += 1;
-            while let Some(Piece::Comment(c)) = pieces.get(i) {
-                comments.push(c.start..c.end);
-                i += 1;
-            }
+        // out once the request is read.
+        let mut params: Vec<Param> = Vec::with_capacity(occurrences.len());
+        for (origin, o) in occurrences.iter().enumerate() {
             let location = At {
                 file: lx.file(),
-                line: decl_tok.line,
-                column: decl_tok.col,
+                line: o.decl_tok.line,
+                column: o.decl_tok.col,
             };
-            let Some(value_piece) = pieces.get(i) else {
-                let decl_text = decode_string(self.src, &decl_tok);
-                return Err(Diagnostic::error(
-                    "RB007",
-                    format!("parameter `{}` has no value", decl_text.trim()),
-                )
-                .at(location.loc())
-                .into());
-            };
-            i += 1;
-            let value_range = value_piece.range();
-            end = value_range.end;
-            let origin = items.len() as u32;
-            let (Some(decl), Some(value)) = (
-                in_request(kw.start, decl_tok.start..decl_tok.end),
-                in_request(kw.start, value_range),
-            ) else {
-                return Err(Diagnostic::error(
-                    "RB021",
-                    format!("request `{handle}` is longer than 4 GiB"),
-                )
-                .at(lx.tok_loc(kw))
-                .into());
-            };
-            let mut item = SourceParam::new(origin, decl, value);
-            let mut trailing = false;
-            if let Some(Piece::Comment(c)) = pieces.get(i) {
-                if c.line == value_piece.end_line() {
-                    comments.push(c.start..c.end);
-                    trailing = true;
-                    end = c.end;
-                    i += 1;
-                }
-            }
-            item.set_comments(index_u32(pending)..index_u32(comments.len()), trailing);
-            pending = comments.len();
-            items.push(item);
             let raw = RawParam {
-                decl_tok,
+                decl_tok: o.decl_tok,
                 location,
-                value: value_piece,
-                arena: &args.items,
-                origin,
+                value: &pieces[o.value],
+                arena,
+                origin: origin as u32,
             };
             self.read_param(&shader, raw, &mut params, diags)?;
+        }
+        if let Some(e) = error {
+            return Err(e);
         }
         let (repeated, shadowed) = duplicates(&params);
         for (p, _) in params.iter().zip(&repeated).filter(|(_, r)| **r) {
@@ -795,6 +1041,13 @@ impl<'a> Assembler<'a, '_> {
             &shadowed,
         );
         Ok(())
+    }
+
+    /// Stops at the first node too many ([`Limit::Nodes`]), before the rest is read.
+    fn check_nodes(&self, lx: &Lexer<'_>, kw: &Token, limits: &Limits) -> Result<(), Error> {
+        limits
+            .check(Limit::Nodes, self.net.node_count() as u64)
+            .map_err(|e| e.at(lx.tok_loc(kw)).into())
     }
 
     /// A request whose handle is defined (`prev`, its latest version), for the same shader,

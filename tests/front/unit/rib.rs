@@ -145,3 +145,94 @@ fn request_offsets_fit_in_32_bits_or_are_refused() {
     assert_eq!(in_request(start, start..start + max + 1), None);
     assert_eq!(in_request(start, start - 1..start), None);
 }
+
+/// Everything a read gives, for comparing two ways of reading: the written RIB and JSON of
+/// the network (or the error) and the diagnostics.
+fn read_outcome(src: &[u8], options: &RibOptions, batch: Option<usize>) -> String {
+    use vstructc::back::json::write_json;
+    use vstructc::back::rib::write_rib_to_vec;
+    let reg = vstructc::registry::Registry::embedded();
+    let mut d = Diagnostics::new();
+    let read = parse_rib_with(src, "t.rib", &reg, options, &mut d, batch);
+    let net = match read {
+        Ok(net) => {
+            let rib = write_rib_to_vec(src, &net, &reg).map(String::from_utf8);
+            format!(
+                "{} nodes\n{rib:?}\n{:?}",
+                net.node_count(),
+                write_json(&net)
+            )
+        }
+        Err(e) => format!("error {:?}", e.diagnostic()),
+    };
+    format!("{net}\n{d:?}")
+}
+
+/// A scene of `materials` layered materials with findings of every stage of the reader
+/// between them: the tokenizer's (RB011), the pass-through requests' (RB020), the
+/// declarations' and values' (RB013, RB014), the request's (RB015) and the handles' (RB017),
+/// and comments inside and between requests.
+fn scene_with_findings(materials: usize) -> String {
+    let scene = vstructc::network::testgen::layered_scene(materials);
+    let mut out = String::new();
+    for (i, line) in scene.lines().enumerate() {
+        out.push_str(line);
+        out.push('\n');
+        match i % 97 {
+            5 => out.push_str("Pattern 'PxrFractal' 'q' \"float frequency\" [2] # note\n"),
+            17 => out.push_str("Surface \"plastic\" \"reference float Kd\" [\"q:resultF\"]\n"),
+            29 => out.push_str(
+                "Pattern \"PxrFractal\" \"q\" \"uniform bogus float x\" [1] \"int n\" [1.5]\n",
+            ),
+            41 => out.push_str("Pattern \"PxrFractal\" \"d\" \"float a\" [1] \"float a\" [2]\n"),
+            53 => out.push_str("# a comment between requests\nSphere 1 -1 1 360\n"),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The reader pipelined on two threads, in batches of any size, gives what it gives on one:
+/// the same network, the same diagnostics in the same order with the same positions, the
+/// same error (the tokenizer's or the assembler's, wherever it falls among the batches).
+#[test]
+fn pipelined_reading_is_the_one_thread_reading() {
+    let mut inputs: Vec<(String, Vec<u8>)> = Vec::new();
+    for dir in ["tests/data/rib", "examples"] {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "rib") {
+                inputs.push((path.display().to_string(), std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    assert!(inputs.len() > 10);
+    let scene = scene_with_findings(12);
+    inputs.push(("findings".into(), scene.clone().into_bytes()));
+    // A tokenizer's error near the end, after many batches.
+    inputs.push(("late ]".into(), format!("{scene}]\n").into_bytes()));
+    // An assembler's error in the middle.
+    let half = scene.len() / 2;
+    let cut = half + scene[half..].find("\n\tPattern").unwrap();
+    let mut middle = scene.clone();
+    middle.insert_str(cut + 1, "Pattern \"PxrFractal\"\n");
+    inputs.push(("middle RB004".into(), middle.into_bytes()));
+    let strict = RibOptions {
+        strict: true,
+        ..RibOptions::default()
+    };
+    let mut few_nodes = RibOptions::default();
+    few_nodes.limits.nodes = 40;
+    for (name, src) in &inputs {
+        for options in [&RibOptions::default(), &strict, &few_nodes] {
+            let serial = read_outcome(src, options, None);
+            for batch in [1, 2, 3, 7, 256] {
+                let pipelined = read_outcome(src, options, Some(batch));
+                assert!(
+                    serial == pipelined,
+                    "{name}, batches of {batch}, {options:?}:\n{serial}\n---\n{pipelined}"
+                );
+            }
+        }
+    }
+}
