@@ -48,7 +48,7 @@ fn read(src: &str, types: &dyn ParamTypes) -> Network {
     .unwrap()
 }
 
-fn write(src: &str, net: &Network, types: &dyn ParamTypes) -> String {
+fn write(src: &str, net: &Network, types: &(dyn ParamTypes + Sync)) -> String {
     String::from_utf8(write_rib_to_vec(src.as_bytes(), net, types).unwrap()).unwrap()
 }
 
@@ -260,4 +260,88 @@ fn writer_rejects_mismatched_source() {
     let net = read(SCENE, &NoDefinitions);
     let err = write_rib_to_vec(b"short", &net, &NoDefinitions).unwrap_err();
     assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+}
+
+/// `net` written over `source` in pieces of each size, on one thread and on rayon's pool:
+/// every way gives the bytes of `write_rib_to_vec`.
+fn assert_pieces_agree(source: &[u8], net: &Network, types: &(dyn ParamTypes + Sync)) {
+    use vstructc::back::rib::write_rib_chunked;
+    let whole = write_rib_to_vec(source, net, types).unwrap();
+    for nodes in [1, 2, 7, 32, 100_000] {
+        for parallel in [false, true] {
+            let mut out = Vec::new();
+            write_rib_chunked(source, net, types, &mut out, nodes, parallel).unwrap();
+            assert!(
+                out == whole,
+                "pieces of {nodes} nodes, parallel {parallel}: {} bytes, not the {} of one pass",
+                out.len(),
+                whole.len()
+            );
+        }
+    }
+}
+
+#[test]
+fn pieces_in_parallel_give_the_bytes_of_one_pass() {
+    use vstructc::network::testgen::layered_scene;
+    use vstructc::registry::Registry;
+    use vstructc::resolve::{ResolveOptions, resolve};
+    let reg = Registry::embedded();
+    let rib = layered_scene(40);
+    let mut net = read(&rib, &reg);
+    resolve(&mut net, &reg, &ResolveOptions::default());
+    assert!(net.node_ids().all(|id| net[id].source().is_some()));
+    assert_pieces_agree(rib.as_bytes(), &net, &reg);
+    // Every node fresh (no source): the block at the end, in pieces.
+    let fresh = vstructc::back::json::write_json(&net).unwrap();
+    let mut d = Diagnostics::new();
+    let from_json =
+        vstructc::front::json::parse_json(fresh.as_bytes(), "in.json", &reg, &mut d).unwrap();
+    assert!(
+        from_json
+            .node_ids()
+            .all(|id| from_json[id].source().is_none())
+    );
+    assert_pieces_agree(b"", &from_json, &reg);
+}
+
+#[test]
+fn pieces_keep_a_fresh_block_before_its_reader_and_source_after_the_last_node() {
+    let src = "# head\nPattern \"PxrFractal\" \"a\" \"int layers\" [1]\n\
+               Pattern \"PxrFractal\" \"b\" \"int layers\" [2]\n\
+               Bxdf \"PxrSurface\" \"s\" \"float diffuseGain\" [1]\nWorldEnd # tail";
+    let types = defs();
+    let mut net = read(src, &types);
+    let s = net.find("s").unwrap();
+    let t = net.add_node("t", "PxrTexture");
+    net.set_param(t, "filename", Value::Str("x.tex".into()));
+    net.connect(s, "diffuseColor", t, "resultRGB");
+    let out = write(src, &net, &types);
+    assert!(
+        out.find("\"t\"").unwrap() < out.find("\"s\"").unwrap(),
+        "{out}"
+    );
+    assert!(out.ends_with("WorldEnd # tail"), "{out}");
+    assert_pieces_agree(src.as_bytes(), &net, &types);
+    // Without a reader the fresh block follows the source.
+    let mut alone = read(src, &types);
+    let t = alone.add_node("t", "PxrTexture");
+    alone.set_param(t, "filename", Value::Str("x.tex".into()));
+    assert!(
+        write(src, &alone, &types)
+            .ends_with("# tail\nPattern \"PxrTexture\" \"t\"\n\t\"string filename\" [\"x.tex\"]\n")
+    );
+    assert_pieces_agree(src.as_bytes(), &alone, &types);
+}
+
+#[test]
+fn pieces_stop_at_the_first_error_in_output_order() {
+    use vstructc::back::rib::write_rib_chunked;
+    let net = read(SCENE, &NoDefinitions);
+    for parallel in [false, true] {
+        let mut out = Vec::new();
+        let err =
+            write_rib_chunked(b"short", &net, &NoDefinitions, &mut out, 1, parallel).unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+    }
 }
