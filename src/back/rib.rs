@@ -98,12 +98,12 @@ pub fn write_rib(
 
 /// Nodes per piece of output formatted on its own ([`write_rib_chunked`]): tens of kilobytes
 /// of a resolved scene.
-const CHUNK_NODES: usize = 32;
+const CHUNK_NODES: usize = 128;
 
 /// Pieces formatted ahead of the one being written, per thread of the pool: bounds the
 /// memory the parallel writer holds.
 #[cfg(feature = "parallel")]
-const AHEAD_PER_THREAD: usize = 2;
+const AHEAD_PER_THREAD: usize = 1;
 
 /// [`write_rib`] in pieces of `chunk_nodes` nodes (at least one). With `parallel` (and the
 /// `parallel` feature, more than one thread in rayon's pool, and a caller outside the pool)
