@@ -96,8 +96,8 @@ pub fn write_rib(
     )
 }
 
-/// Nodes per piece of output formatted on its own ([`write_rib_chunked`]): tens of kilobytes
-/// of a resolved scene.
+/// Nodes per piece of output formatted on its own ([`write_rib_chunked`]): about 200 KB of a
+/// resolved scene, few enough wake-ups of the threads and little memory held ahead.
 const CHUNK_NODES: usize = 128;
 
 /// Pieces formatted ahead of the one being written, per thread of the pool: bounds the
@@ -399,6 +399,8 @@ impl<'a> Plan<'a> {
     }
 }
 
+/// Formats requests; its answers about definitions are kept from one request to the next (one
+/// writer per thread that formats pieces).
 struct Writer<'a> {
     source: &'a [u8],
     net: &'a Network,
@@ -412,7 +414,14 @@ struct Writer<'a> {
     /// Declaration positions of added parameters ([`ParamTypes::input_position`]).
     positions: ByAddress<Option<usize>>,
     /// Definition types of connected parameters written anew ([`ParamTypes::input_type`]).
-    input_types: ByAddress<Option<Type>>,
+    input_types: ByAddress<Option<Defined>>,
+}
+
+/// The definition type of an input connected anew, and for a type that is not an array the
+/// decl of one connection to it (`"reference color diffuseColor"`), written once.
+struct Defined {
+    ty: Type,
+    single: Option<Box<[u8]>>,
 }
 
 /// Answers about one input of one shader, keyed by where the shader id and the input name
@@ -654,17 +663,50 @@ impl Writer<'_> {
     ) -> io::Result<()> {
         match (source_decl, p.decl()) {
             (Some(s), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&s)?),
-            _ => {
-                t.extend_from_slice(b"\"reference ");
-                self.connection_type(node, p, t);
-                t.push(b' ');
-                t.extend_from_slice(escape(p.name()).as_bytes());
-                t.push(b'"');
-            }
+            _ => self.connection_decl(node, p, t),
         }
         t.push(b' ');
         self.push_links(t, p.connections());
         Ok(())
+    }
+
+    /// Appends the decl of a connected parameter written anew: `"reference TYPE NAME"` with
+    /// the type of [`Writer::connection_type`]. The usual one (a defined input that is not an
+    /// array, one connection) is copied as it was written the first time.
+    fn connection_decl(&self, node: &Node, p: &Param, t: &mut Vec<u8>) {
+        let key = address_key(node.shader(), p.name());
+        let asked = {
+            let known = self.input_types.borrow();
+            match known.get(&key) {
+                Some(Some(Defined {
+                    single: Some(text), ..
+                })) if p.connections().len() <= 1 => {
+                    t.extend_from_slice(text);
+                    return;
+                }
+                Some(_) => true,
+                None => false,
+            }
+        };
+        if !asked {
+            let defined = self.types.input_type(node.shader(), p.name()).map(|ty| {
+                let single = matches!(ty.array, ArraySpec::None).then(|| {
+                    let mut text = b"\"reference ".to_vec();
+                    text.extend_from_slice(decl_word(&ty.base).as_bytes());
+                    text.push(b' ');
+                    text.extend_from_slice(escape(p.name()).as_bytes());
+                    text.push(b'"');
+                    text.into_boxed_slice()
+                });
+                Defined { ty, single }
+            });
+            self.input_types.borrow_mut().insert(key, defined);
+        }
+        t.extend_from_slice(b"\"reference ");
+        self.connection_type(node, p, t);
+        t.push(b' ');
+        t.extend_from_slice(escape(p.name()).as_bytes());
+        t.push(b'"');
     }
 
     fn fresh_param_text(&self, node: &Node, p: &Param, t: &mut Vec<u8>) -> io::Result<()> {
@@ -684,10 +726,11 @@ impl Writer<'_> {
             let up = self.net.get(link.upstream_node()?)?;
             self.types.output_type(up.shader(), link.output()?)
         };
-        let mut known = self.input_types.borrow_mut();
+        // Asked by `connection_decl` before.
+        let known = self.input_types.borrow();
         let defined = known
-            .entry(address_key(node.shader(), p.name()))
-            .or_insert_with(|| self.types.input_type(node.shader(), p.name()));
+            .get(&address_key(node.shader(), p.name()))
+            .and_then(|d| d.as_ref().map(|d| &d.ty));
         let ty: Cow<'_, Type> = match defined {
             Some(ty) => Cow::Borrowed(ty),
             None => upstream_type()

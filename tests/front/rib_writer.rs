@@ -345,3 +345,54 @@ fn pieces_stop_at_the_first_error_in_output_order() {
         assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
     }
 }
+
+/// A connection written anew is declared with the definition's type: `[n]` for several
+/// connections to a scalar input, and an array input's own size or the count of its
+/// connections, also after the same input was written with one connection.
+#[test]
+fn new_connections_are_declared_by_count_and_array_type() {
+    let types = defs().shader(
+        "Mix",
+        &[("colors", "color[2]"), ("gain", "float")],
+        &[("out", "color")],
+    );
+    let mut net = Network::new();
+    let f = net.add_node("f", "PxrFractal");
+    net.set_param(f, "layers", Value::Int(1));
+    let one = net.add_node("one", "Mix");
+    net.connect(one, "gain", f, "resultF");
+    net.connect(one, "colors", f, "resultRGB");
+    let two = net.add_node("two", "Mix");
+    net.connect(two, "gain", f, "resultF");
+    net.connect(two, "gain", f, "resultF");
+    net.connect(two, "colors", f, "resultRGB");
+    net.connect(two, "colors", f, "resultRGB");
+    let three = net.add_node("three", "Mix");
+    net.connect(three, "colors", f, "resultRGB");
+    let out = write("", &net, &types);
+    let request = |handle: &str| {
+        let at = out.find(&format!("\"{handle}\"\n")).unwrap();
+        out[at..].split("\n\n").next().unwrap().to_string()
+    };
+    let (one, two, three) = (request("one"), request("two"), request("three"));
+    assert!(
+        one.contains("\t\"reference float gain\" [\"f:resultF\"]"),
+        "{out}"
+    );
+    assert!(
+        one.contains("\t\"reference color[1] colors\" [\"f:resultRGB\"]"),
+        "{out}"
+    );
+    assert!(
+        two.contains("\t\"reference float[2] gain\" [\"f:resultF\" \"f:resultF\"]"),
+        "{out}"
+    );
+    assert!(
+        two.contains("\t\"reference color[2] colors\" [\"f:resultRGB\" \"f:resultRGB\"]"),
+        "{out}"
+    );
+    assert!(
+        three.contains("\t\"reference color[1] colors\" [\"f:resultRGB\"]"),
+        "{out}"
+    );
+}
