@@ -351,7 +351,7 @@ impl<'a> Plan<'a> {
                     // One writer per thread: its answers about definitions are kept.
                     let w = self.writer(types);
                     loop {
-                        let held = ticket.lock().map_or(false, |t| t.recv().is_ok());
+                        let held = ticket.lock().is_ok_and(|t| t.recv().is_ok());
                         let i = next.fetch_add(1, Ordering::Relaxed);
                         if !held || i >= pieces.len() {
                             break;
