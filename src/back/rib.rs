@@ -327,14 +327,14 @@ impl<'a> Plan<'a> {
         use std::sync::atomic::{AtomicUsize, Ordering};
         use std::sync::mpsc::{Receiver, SyncSender, channel, sync_channel};
         use std::sync::{Mutex, PoisonError};
-        type Formatted = io::Result<Vec<u8>>;
+        type Done<'s> = io::Result<PieceText<'s>>;
         let threads = rayon::current_num_threads();
-        let (mut senders, mut receivers): (Vec<Mutex<Option<SyncSender<Formatted>>>>, Vec<_>) = (
+        let (mut senders, mut receivers): (Vec<Mutex<Option<SyncSender<Done<'_>>>>>, Vec<_>) = (
             Vec::with_capacity(pieces.len()),
             Vec::with_capacity(pieces.len()),
         );
         for _ in pieces {
-            let (tx, rx): (SyncSender<Formatted>, Receiver<Formatted>) = sync_channel(1);
+            let (tx, rx): (SyncSender<Done<'_>>, Receiver<Done<'_>>) = sync_channel(1);
             senders.push(Mutex::new(Some(tx)));
             receivers.push(rx);
         }
@@ -361,13 +361,14 @@ impl<'a> Plan<'a> {
                         let Some(done) = senders[i].lock().ok().and_then(|mut s| s.take()) else {
                             break;
                         };
-                        let mut buf = spare
+                        let bytes = spare
                             .lock()
                             .unwrap_or_else(PoisonError::into_inner)
                             .pop()
                             .unwrap_or_default();
-                        buf.clear();
-                        let _ = done.send(self.write_piece(&w, &pieces[i], &mut buf).map(|()| buf));
+                        let mut text = PieceText::new(self.source, bytes);
+                        let _ =
+                            done.send(self.write_piece(&w, &pieces[i], &mut text).map(|()| text));
                     }
                 });
             }
@@ -381,12 +382,12 @@ impl<'a> Plan<'a> {
                     let Ok(formatted) = result.recv() else {
                         return Ok(());
                     };
-                    let buf = formatted?;
-                    out.write_all(&buf)?;
+                    let text = formatted?;
+                    text.write_to(out)?;
                     spare
                         .lock()
                         .unwrap_or_else(PoisonError::into_inner)
-                        .push(buf);
+                        .push(text.bytes);
                     let _ = tickets.send(());
                 }
                 Ok(())
@@ -415,6 +416,65 @@ struct Writer<'a> {
     positions: ByAddress<Option<usize>>,
     /// Definition types of connected parameters written anew ([`ParamTypes::input_type`]).
     input_types: ByAddress<Option<Defined>>,
+}
+
+/// Source runs at least this long are not copied into a piece's text ([`PieceText`]).
+#[cfg(feature = "parallel")]
+const SOURCE_RUN: usize = 16 << 10;
+
+/// The text of a piece formatted on another thread: its own bytes, with long runs of the
+/// source (pass-through bytes, unmodified requests) kept as ranges of the source, so a scene
+/// of mostly pass-through bytes is not copied a second time.
+#[cfg(feature = "parallel")]
+struct PieceText<'s> {
+    source: &'s [u8],
+    /// The formatted bytes, runs of the source left out.
+    bytes: Vec<u8>,
+    /// Each run of the source: where in `bytes` it goes, and its range in the source.
+    runs: Vec<(usize, Range<usize>)>,
+}
+
+#[cfg(feature = "parallel")]
+impl<'s> PieceText<'s> {
+    /// An empty text over `source`, in `bytes` (emptied first).
+    fn new(source: &'s [u8], mut bytes: Vec<u8>) -> Self {
+        bytes.clear();
+        PieceText {
+            source,
+            bytes,
+            runs: Vec::new(),
+        }
+    }
+
+    /// Writes the text, runs of the source in their places, to `out`.
+    fn write_to(&self, out: &mut dyn Write) -> io::Result<()> {
+        let mut from = 0;
+        for (at, run) in &self.runs {
+            out.write_all(&self.bytes[from..*at])?;
+            out.write_all(&self.source[run.clone()])?;
+            from = *at;
+        }
+        out.write_all(&self.bytes[from..])
+    }
+}
+
+#[cfg(feature = "parallel")]
+impl Write for PieceText<'_> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let source = self.source.as_ptr_range();
+        let within = source.start <= buf.as_ptr() && buf.as_ptr_range().end <= source.end;
+        if buf.len() >= SOURCE_RUN && within {
+            let at = buf.as_ptr() as usize - source.start as usize;
+            self.runs.push((self.bytes.len(), at..at + buf.len()));
+        } else {
+            self.bytes.extend_from_slice(buf);
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
 }
 
 /// The definition type of an input connected anew, and for a type that is not an array the
