@@ -108,7 +108,7 @@ const AHEAD_PER_THREAD: usize = 1;
 /// [`write_rib`] in pieces of `chunk_nodes` nodes (at least one). With `parallel` (and the
 /// `parallel` feature, more than one thread in rayon's pool, and a caller outside the pool)
 /// the pieces are formatted on the pool's threads, a bounded number ahead, while the calling
-/// thread writes the finished ones in order; otherwise they are written one after the other as they are formatted.
+/// thread writes the finished ones in order; otherwise each is written as it is formatted.
 /// Every way gives the same bytes: a piece's text depends only on the network, the source
 /// and the definitions.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
