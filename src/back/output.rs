@@ -36,6 +36,9 @@
 //!   system's message, as a shell redirection refuses it: the target is opened for writing
 //!   without truncation as a probe. Root may write a read-only file, as with `>`; its mode
 //!   stays as it was.
+//! * **Durability**: the temporary file is flushed to disk (`fsync`) before the rename. On
+//!   Linux the kernel is asked to start writing it out every few megabytes while it is
+//!   produced, so that flush waits for the last part only.
 //! * A replaced file is a new inode: other hard links to the old file keep the old content.
 //!   A process killed by a signal mid-write may leave its temporary file behind.
 //!
@@ -283,7 +286,7 @@ fn replace(
             format_args!("cannot create a temporary file in {}", folder.display()),
         )
     })?;
-    produce_into(tmp.as_file_mut(), produce)?;
+    produce_into_new(tmp.as_file_mut(), produce)?;
     if let Some(m) = existing {
         keep_owner_and_mode(tmp.as_file(), m)?;
     }
@@ -302,9 +305,92 @@ fn produce_into(
     file: &mut File,
     produce: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> io::Result<()> {
-    let mut out = BufWriter::with_capacity(BUFFER, file);
+    produce_into_writer(file, produce)
+}
+
+/// [`produce_into`] a new temporary `file` (written from its start), asking the kernel to
+/// start writing the output to disk every [`WRITEBACK_STEP`] bytes: the `fsync` before the
+/// rename then waits for the last few megabytes, not for the whole output, which the disk
+/// took while the rest was produced.
+fn produce_into_new(
+    file: &mut File,
+    produce: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut early = EarlyWriteback {
+        file,
+        written: 0,
+        started: 0,
+    };
+    produce_into_writer(&mut early, produce)
+}
+
+/// [`produce_into`] for any writer.
+fn produce_into_writer(
+    w: &mut dyn Write,
+    produce: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<()> {
+    let mut out = BufWriter::with_capacity(BUFFER, w);
     produce(&mut out)?;
     out.flush()
+}
+
+/// Bytes written to a temporary file between two requests to start writing it to disk.
+const WRITEBACK_STEP: u64 = 8 << 20;
+
+/// A file written from its start that has the kernel start writing out every
+/// [`WRITEBACK_STEP`] bytes it receives (Linux's `sync_file_range`; elsewhere a plain file).
+struct EarlyWriteback<'f> {
+    file: &'f mut File,
+    /// Bytes written so far: the file's length.
+    written: u64,
+    /// Where the bytes not yet handed to the disk start.
+    started: u64,
+}
+
+impl EarlyWriteback<'_> {
+    /// Starts writing out the bytes from `started` to `written`. Only a hint: a failure
+    /// leaves the work to the `fsync` that follows.
+    #[cfg(target_os = "linux")]
+    fn start_writeback(&mut self) {
+        use std::os::fd::AsRawFd;
+        let (Ok(from), Ok(len)) = (
+            i64::try_from(self.started),
+            i64::try_from(self.written - self.started),
+        ) else {
+            return;
+        };
+        // SAFETY: the descriptor is open for the borrow of `file`; the call reads no memory
+        // of this process and only starts the write-out of dirty pages in the range.
+        let _ = unsafe {
+            libc::sync_file_range(
+                self.file.as_raw_fd(),
+                from,
+                len,
+                libc::SYNC_FILE_RANGE_WRITE,
+            )
+        };
+        self.started = self.written;
+    }
+
+    #[cfg(not(target_os = "linux"))]
+    fn start_writeback(&mut self) {
+        self.started = self.written;
+    }
+}
+
+impl Write for EarlyWriteback<'_> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.file.write(buf)?;
+        self.written += n as u64;
+        if self.written - self.started >= WRITEBACK_STEP {
+            self.start_writeback();
+        }
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.file.flush()
+    }
 }
 
 /// Give `file` the owner, group and permission bits of `old` (as far as allowed).
@@ -348,7 +434,7 @@ fn staged(path: &Path, produce: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
     let mut target = OpenOptions::new().write(true).open(path)?;
     let mut stage = tempfile::tempfile()
         .map_err(|e| context(e, "cannot create a temporary file to stage the output"))?;
-    produce_into(&mut stage, produce)?;
+    produce_into_new(&mut stage, produce)?;
     stage.seek(SeekFrom::Start(0))?;
     target.set_len(0)?;
     target.seek(SeekFrom::Start(0))?;

@@ -53,6 +53,10 @@ use std::ops::Range;
 /// Fails with `InvalidInput` if a node's source span does not lie inside `source` (the network
 /// was read from other bytes), or with the error of `out`.
 ///
+/// With the `parallel` feature, a large network is formatted in pieces on rayon's pool while
+/// the calling thread writes the finished pieces in order; the bytes are the same as a single
+/// thread's, and a few pieces at a time are held in memory.
+///
 /// ```
 /// use vstructc::back::rib::write_rib;
 /// use vstructc::front::rib::{RibOptions, parse_rib};
@@ -79,8 +83,42 @@ use std::ops::Range;
 pub fn write_rib(
     source: &[u8],
     net: &Network,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     out: &mut dyn Write,
+) -> io::Result<()> {
+    write_rib_chunked(
+        source,
+        net,
+        types,
+        out,
+        CHUNK_NODES,
+        cfg!(feature = "parallel"),
+    )
+}
+
+/// Nodes per piece of output formatted on its own ([`write_rib_chunked`]): about 200 KB of a
+/// resolved scene, few enough wake-ups of the threads and little memory held ahead.
+const CHUNK_NODES: usize = 128;
+
+/// Pieces formatted ahead of the one being written, per thread of the pool: bounds the
+/// memory the parallel writer holds.
+#[cfg(feature = "parallel")]
+const AHEAD_PER_THREAD: usize = 1;
+
+/// [`write_rib`] in pieces of `chunk_nodes` nodes (at least one). With `parallel` (and the
+/// `parallel` feature, more than one thread in rayon's pool, and a caller outside the pool)
+/// the pieces are formatted on the pool's threads, a bounded number ahead, while the calling
+/// thread writes the finished ones in order; otherwise each is written as it is formatted.
+/// Every way gives the same bytes: a piece's text depends only on the network, the source
+/// and the definitions.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn write_rib_chunked(
+    source: &[u8],
+    net: &Network,
+    types: &(dyn ParamTypes + Sync),
+    out: &mut dyn Write,
+    chunk_nodes: usize,
+    parallel: bool,
 ) -> io::Result<()> {
     let mut surfaces = HashMap::new();
     for m in net.materials() {
@@ -90,18 +128,25 @@ pub fn write_rib(
             }
         }
     }
-    // The writer asks for the type and position of every new parameter.
-    let types = Memo::new(types);
-    let w = Writer {
-        source,
-        net,
-        types: &types,
-        surfaces,
-        scratch: Default::default(),
-        positions: Default::default(),
-        input_types: Default::default(),
-    };
-    w.write(out)
+    let plan = Plan::new(source, net, &surfaces);
+    let pieces = plan.pieces(chunk_nodes.max(1));
+    // Not from a thread of the pool itself: waiting there for pieces could hold the thread
+    // that would format them.
+    #[cfg(feature = "parallel")]
+    if parallel
+        && pieces.len() > 1
+        && rayon::current_num_threads() > 1
+        && rayon::current_thread_index().is_none()
+    {
+        return plan.write_parallel(types, &pieces, out);
+    }
+    let _ = parallel;
+    // One writer for every piece: its answers about definitions are kept from one to the next.
+    let w = plan.writer(types);
+    for piece in &pieces {
+        plan.write_piece(&w, piece, out)?;
+    }
+    Ok(())
 }
 
 /// [`write_rib`] into a new byte vector.
@@ -120,25 +165,323 @@ pub fn write_rib(
 pub fn write_rib_to_vec(
     source: &[u8],
     net: &Network,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
 ) -> io::Result<Vec<u8>> {
     let mut out = Vec::with_capacity(source.len() + 1024);
     write_rib(source, net, types, &mut out)?;
     Ok(out)
 }
 
+/// What the writer decides once for the whole output: the nodes read from the source in
+/// source order, the others in dependency order, and where the block of the others goes.
+struct Plan<'a> {
+    source: &'a [u8],
+    net: &'a Network,
+    /// The name of the first material whose `surface` terminal is each node.
+    surfaces: &'a HashMap<NodeId, &'a str>,
+    /// Nodes read from the source, with their spans, in source order.
+    sourced: Vec<(Range<usize>, NodeId)>,
+    /// Nodes not read from the source, upstream first.
+    fresh: Vec<NodeId>,
+    /// The index in `sourced` of the request the fresh block is written before (`None`: at
+    /// the end).
+    block_before: Option<usize>,
+}
+
+/// A piece of the output, formatted on its own; the pieces of [`Plan::pieces`] in order are
+/// the whole output.
+enum Piece {
+    /// The requests `sourced[k]` for these `k`, each after the source bytes before it.
+    Sourced(Range<usize>),
+    /// The source bytes after the last request (and the line break a fresh block at the end
+    /// may need).
+    Tail,
+    /// The nodes `fresh[i]` for these `i`, of a fresh block at the end.
+    Fresh(Range<usize>),
+}
+
+impl<'a> Plan<'a> {
+    fn new(source: &'a [u8], net: &'a Network, surfaces: &'a HashMap<NodeId, &'a str>) -> Self {
+        let mut sourced: Vec<(Range<usize>, NodeId)> = Vec::new();
+        let mut fresh: Vec<NodeId> = Vec::new();
+        for id in net.node_ids() {
+            match net[id].source() {
+                Some(s) => sourced.push((s.span.clone(), id)),
+                None => fresh.push(id),
+            }
+        }
+        sourced.sort_by_key(|(r, _)| r.start);
+        let fresh = dependency_order(net, &fresh);
+        let fresh_set: std::collections::HashSet<NodeId> = fresh.iter().copied().collect();
+        // The fresh block goes before the first source request that references a fresh node
+        // (no search when there is none: a resolved scene has millions of connections).
+        let block_before = (!fresh.is_empty()).then(|| {
+            sourced.iter().position(|(_, id)| {
+                net[*id]
+                    .params()
+                    .flat_map(|p| p.connections())
+                    .any(|l| l.upstream_node().is_some_and(|u| fresh_set.contains(&u)))
+            })
+        });
+        Plan {
+            source,
+            net,
+            surfaces,
+            sourced,
+            fresh,
+            block_before: block_before.flatten(),
+        }
+    }
+
+    /// The output in pieces of at most `nodes` nodes (at least one).
+    fn pieces(&self, nodes: usize) -> Vec<Piece> {
+        let nodes = nodes.max(1);
+        let ranges = |n: usize| (0..n).step_by(nodes).map(move |k| k..(k + nodes).min(n));
+        let mut pieces: Vec<Piece> = ranges(self.sourced.len()).map(Piece::Sourced).collect();
+        pieces.push(Piece::Tail);
+        if self.block_before.is_none() {
+            pieces.extend(ranges(self.fresh.len()).map(Piece::Fresh));
+        }
+        pieces
+    }
+
+    /// A writer of pieces of this plan, asking `types` about definitions.
+    fn writer<'p>(&'p self, types: &'p (dyn ParamTypes + Sync)) -> Writer<'p> {
+        Writer {
+            source: self.source,
+            net: self.net,
+            types: Memo::new(types),
+            surfaces: self.surfaces,
+            scratch: Default::default(),
+            positions: Default::default(),
+            input_types: Default::default(),
+        }
+    }
+
+    /// Writes `piece` with `w` to `out`.
+    fn write_piece(&self, w: &Writer<'_>, piece: &Piece, out: &mut dyn Write) -> io::Result<()> {
+        match piece {
+            Piece::Sourced(ks) => {
+                let mut cursor = match ks.start {
+                    0 => 0,
+                    k => self.sourced[k - 1].0.end,
+                };
+                for k in ks.clone() {
+                    let (span, id) = &self.sourced[k];
+                    if span.start < cursor {
+                        return Err(invalid("overlapping node source spans"));
+                    }
+                    out.write_all(w.bytes(&(cursor..span.start))?)?;
+                    let indent = w.indent_before(span.start);
+                    if self.block_before == Some(k) {
+                        for &f in &self.fresh {
+                            w.fresh_node(out, f, &indent)?;
+                            out.write_all(b"\n\n")?;
+                            out.write_all(&indent)?;
+                        }
+                    }
+                    if self.net[*id].is_modified() {
+                        w.reserialise(out, *id, &indent)?;
+                    } else {
+                        out.write_all(w.bytes(span)?)?;
+                    }
+                    cursor = span.end;
+                }
+            }
+            Piece::Tail => {
+                let cursor = self.sourced.last().map_or(0, |(span, _)| span.end);
+                out.write_all(w.bytes(&(cursor..self.source.len()))?)?;
+                if self.block_before.is_none()
+                    && !self.fresh.is_empty()
+                    && !self.source.is_empty()
+                    && !self.source.ends_with(b"\n")
+                {
+                    out.write_all(b"\n")?;
+                }
+            }
+            Piece::Fresh(is) => {
+                for i in is.clone() {
+                    if i > 0 {
+                        out.write_all(b"\n")?;
+                    }
+                    w.fresh_node(out, self.fresh[i], b"")?;
+                    out.write_all(b"\n")?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Formats `pieces` on rayon's pool and writes them to `out` in order from the calling
+    /// thread. Each thread of the pool takes the next piece when it holds a ticket; the
+    /// calling thread hands out [`AHEAD_PER_THREAD`] tickets per thread at first and one
+    /// more per piece written, so few pieces wait in memory. Stops at the first error in
+    /// output order.
+    #[cfg(feature = "parallel")]
+    fn write_parallel(
+        &self,
+        types: &(dyn ParamTypes + Sync),
+        pieces: &[Piece],
+        out: &mut dyn Write,
+    ) -> io::Result<()> {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        use std::sync::mpsc::{Receiver, SyncSender, channel, sync_channel};
+        use std::sync::{Mutex, PoisonError};
+        type Done<'s> = io::Result<PieceText<'s>>;
+        let threads = rayon::current_num_threads();
+        let (mut senders, mut receivers): (Vec<Mutex<Option<SyncSender<Done<'_>>>>>, Vec<_>) = (
+            Vec::with_capacity(pieces.len()),
+            Vec::with_capacity(pieces.len()),
+        );
+        for _ in pieces {
+            let (tx, rx): (SyncSender<Done<'_>>, Receiver<Done<'_>>) = sync_channel(1);
+            senders.push(Mutex::new(Some(tx)));
+            receivers.push(rx);
+        }
+        let (tickets, ticket) = channel::<()>();
+        let ticket = Mutex::new(ticket);
+        let next = AtomicUsize::new(0);
+        // Buffers of pieces already written, formatted into again: fresh memory costs a
+        // page fault per page.
+        let spare: Mutex<Vec<Vec<u8>>> = Mutex::new(Vec::new());
+        let (senders, ticket, next, spare) = (&senders, &ticket, &next, &spare);
+        rayon::in_place_scope(|scope| {
+            for _ in 0..threads {
+                scope.spawn(move |_| {
+                    // One writer per thread: its answers about definitions are kept.
+                    let w = self.writer(types);
+                    loop {
+                        let held = ticket.lock().is_ok_and(|t| t.recv().is_ok());
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        if !held || i >= pieces.len() {
+                            break;
+                        }
+                        // Taken before formatting: a panic drops it, which ends the wait of
+                        // the writing thread.
+                        let Some(done) = senders[i].lock().ok().and_then(|mut s| s.take()) else {
+                            break;
+                        };
+                        let bytes = spare
+                            .lock()
+                            .unwrap_or_else(PoisonError::into_inner)
+                            .pop()
+                            .unwrap_or_default();
+                        let mut text = PieceText::new(self.source, bytes);
+                        let _ =
+                            done.send(self.write_piece(&w, &pieces[i], &mut text).map(|()| text));
+                    }
+                });
+            }
+            let mut written = || -> io::Result<()> {
+                for _ in 0..AHEAD_PER_THREAD * threads {
+                    let _ = tickets.send(());
+                }
+                for result in receivers.drain(..) {
+                    // A piece whose formatting panicked sends nothing; the scope passes the
+                    // panic on when this closure returns.
+                    let Ok(formatted) = result.recv() else {
+                        return Ok(());
+                    };
+                    let text = formatted?;
+                    text.write_to(out)?;
+                    spare
+                        .lock()
+                        .unwrap_or_else(PoisonError::into_inner)
+                        .push(text.bytes);
+                    let _ = tickets.send(());
+                }
+                Ok(())
+            };
+            let result = written();
+            // The threads waiting for a ticket stop.
+            drop(tickets);
+            result
+        })
+    }
+}
+
+/// Formats requests; its answers about definitions are kept from one request to the next (one
+/// writer per thread that formats pieces).
 struct Writer<'a> {
     source: &'a [u8],
     net: &'a Network,
-    types: &'a dyn ParamTypes,
+    /// The definitions, with the answers already given (the writer asks for the type and
+    /// position of every new parameter).
+    types: Memo<'a>,
     /// The name of the first material whose `surface` terminal is each node.
-    surfaces: HashMap<NodeId, &'a str>,
+    surfaces: &'a HashMap<NodeId, &'a str>,
     /// The buffer of the request being written, kept from one request to the next.
     scratch: RefCell<Vec<u8>>,
     /// Declaration positions of added parameters ([`ParamTypes::input_position`]).
     positions: ByAddress<Option<usize>>,
     /// Definition types of connected parameters written anew ([`ParamTypes::input_type`]).
-    input_types: ByAddress<Option<Type>>,
+    input_types: ByAddress<Option<Defined>>,
+}
+
+/// Source runs at least this long are not copied into a piece's text ([`PieceText`]).
+#[cfg(feature = "parallel")]
+const SOURCE_RUN: usize = 16 << 10;
+
+/// The text of a piece formatted on another thread: its own bytes, with long runs of the
+/// source (pass-through bytes, unmodified requests) kept as ranges of the source, so a scene
+/// of mostly pass-through bytes is not copied a second time.
+#[cfg(feature = "parallel")]
+struct PieceText<'s> {
+    source: &'s [u8],
+    /// The formatted bytes, runs of the source left out.
+    bytes: Vec<u8>,
+    /// Each run of the source: where in `bytes` it goes, and its range in the source.
+    runs: Vec<(usize, Range<usize>)>,
+}
+
+#[cfg(feature = "parallel")]
+impl<'s> PieceText<'s> {
+    /// An empty text over `source`, in `bytes` (emptied first).
+    fn new(source: &'s [u8], mut bytes: Vec<u8>) -> Self {
+        bytes.clear();
+        PieceText {
+            source,
+            bytes,
+            runs: Vec::new(),
+        }
+    }
+
+    /// Writes the text, runs of the source in their places, to `out`.
+    fn write_to(&self, out: &mut dyn Write) -> io::Result<()> {
+        let mut from = 0;
+        for (at, run) in &self.runs {
+            out.write_all(&self.bytes[from..*at])?;
+            out.write_all(&self.source[run.clone()])?;
+            from = *at;
+        }
+        out.write_all(&self.bytes[from..])
+    }
+}
+
+#[cfg(feature = "parallel")]
+impl Write for PieceText<'_> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let source = self.source.as_ptr_range();
+        let within = source.start <= buf.as_ptr() && buf.as_ptr_range().end <= source.end;
+        if buf.len() >= SOURCE_RUN && within {
+            let at = buf.as_ptr() as usize - source.start as usize;
+            self.runs.push((self.bytes.len(), at..at + buf.len()));
+        } else {
+            self.bytes.extend_from_slice(buf);
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// The definition type of an input connected anew, and for a type that is not an array the
+/// decl of one connection to it (`"reference color diffuseColor"`), written once.
+struct Defined {
+    ty: Type,
+    single: Option<Box<[u8]>>,
 }
 
 /// Answers about one input of one shader, keyed by where the shader id and the input name
@@ -159,6 +502,40 @@ fn address_key(shader: &str, name: &str) -> [usize; 4] {
     ]
 }
 
+/// Kahn's algorithm over `nodes` (edges among them only), ties in the given order; nodes on
+/// cycles follow in the given order.
+fn dependency_order(net: &Network, nodes: &[NodeId]) -> Vec<NodeId> {
+    let pos: HashMap<NodeId, usize> = nodes.iter().enumerate().map(|(i, &n)| (n, i)).collect();
+    let mut indegree = vec![0usize; nodes.len()];
+    let mut downstream: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+    for (i, &n) in nodes.iter().enumerate() {
+        for u in net.upstream_nodes(n) {
+            if let Some(&j) = pos.get(&u) {
+                if j != i {
+                    indegree[i] += 1;
+                    downstream[j].push(i);
+                }
+            }
+        }
+    }
+    let mut ready: std::collections::BTreeSet<usize> =
+        (0..nodes.len()).filter(|&i| indegree[i] == 0).collect();
+    let mut done = vec![false; nodes.len()];
+    let mut order = Vec::with_capacity(nodes.len());
+    while let Some(i) = ready.pop_first() {
+        done[i] = true;
+        order.push(nodes[i]);
+        for &d in &downstream[i] {
+            indegree[d] -= 1;
+            if indegree[d] == 0 {
+                ready.insert(d);
+            }
+        }
+    }
+    order.extend((0..nodes.len()).filter(|&i| !done[i]).map(|i| nodes[i]));
+    order
+}
+
 fn invalid(msg: &str) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, msg.to_string())
 }
@@ -168,67 +545,6 @@ impl Writer<'_> {
         self.source.get(r.clone()).ok_or_else(|| {
             invalid("network source spans do not match the RIB bytes given to the writer")
         })
-    }
-
-    fn write(&self, out: &mut dyn Write) -> io::Result<()> {
-        let mut sourced: Vec<(Range<usize>, NodeId)> = Vec::new();
-        let mut fresh: Vec<NodeId> = Vec::new();
-        for id in self.net.node_ids() {
-            match self.net[id].source() {
-                Some(s) => sourced.push((s.span.clone(), id)),
-                None => fresh.push(id),
-            }
-        }
-        sourced.sort_by_key(|(r, _)| r.start);
-        let fresh = self.dependency_order(&fresh);
-        let fresh_set: std::collections::HashSet<NodeId> = fresh.iter().copied().collect();
-        // The fresh block goes before the first source request that references a fresh node
-        // (no search when there is none: a resolved scene has millions of connections).
-        let block_before = (!fresh.is_empty()).then(|| {
-            sourced.iter().position(|(_, id)| {
-                self.net[*id]
-                    .params()
-                    .flat_map(|p| p.connections())
-                    .any(|l| l.upstream_node().is_some_and(|u| fresh_set.contains(&u)))
-            })
-        });
-        let block_before = block_before.flatten();
-        let mut cursor = 0;
-        for (k, (span, id)) in sourced.iter().enumerate() {
-            if span.start < cursor {
-                return Err(invalid("overlapping node source spans"));
-            }
-            out.write_all(self.bytes(&(cursor..span.start))?)?;
-            let indent = self.indent_before(span.start);
-            if block_before == Some(k) {
-                for &f in &fresh {
-                    self.fresh_node(out, f, &indent)?;
-                    out.write_all(b"\n\n")?;
-                    out.write_all(&indent)?;
-                }
-            }
-            let node = &self.net[*id];
-            if node.is_modified() {
-                self.reserialise(out, *id, &indent)?;
-            } else {
-                out.write_all(self.bytes(span)?)?;
-            }
-            cursor = span.end;
-        }
-        out.write_all(self.bytes(&(cursor..self.source.len()))?)?;
-        if block_before.is_none() && !fresh.is_empty() {
-            if !self.source.is_empty() && !self.source.ends_with(b"\n") {
-                out.write_all(b"\n")?;
-            }
-            for (k, &f) in fresh.iter().enumerate() {
-                if k > 0 {
-                    out.write_all(b"\n")?;
-                }
-                self.fresh_node(out, f, b"")?;
-                out.write_all(b"\n")?;
-            }
-        }
-        Ok(())
     }
 
     /// The spaces and tabs between the start of the line and `at`, if only those.
@@ -243,40 +559,6 @@ impl Writer<'_> {
         } else {
             Vec::new()
         }
-    }
-
-    /// Kahn's algorithm over `nodes` (edges among them only), ties in the given order; nodes on
-    /// cycles follow in the given order.
-    fn dependency_order(&self, nodes: &[NodeId]) -> Vec<NodeId> {
-        let pos: HashMap<NodeId, usize> = nodes.iter().enumerate().map(|(i, &n)| (n, i)).collect();
-        let mut indegree = vec![0usize; nodes.len()];
-        let mut downstream: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
-        for (i, &n) in nodes.iter().enumerate() {
-            for u in self.net.upstream_nodes(n) {
-                if let Some(&j) = pos.get(&u) {
-                    if j != i {
-                        indegree[i] += 1;
-                        downstream[j].push(i);
-                    }
-                }
-            }
-        }
-        let mut ready: std::collections::BTreeSet<usize> =
-            (0..nodes.len()).filter(|&i| indegree[i] == 0).collect();
-        let mut done = vec![false; nodes.len()];
-        let mut order = Vec::with_capacity(nodes.len());
-        while let Some(i) = ready.pop_first() {
-            done[i] = true;
-            order.push(nodes[i]);
-            for &d in &downstream[i] {
-                indegree[d] -= 1;
-                if indegree[d] == 0 {
-                    ready.insert(d);
-                }
-            }
-        }
-        order.extend((0..nodes.len()).filter(|&i| !done[i]).map(|i| nodes[i]));
-        order
     }
 
     /// Appends the request line of `node` (keyword, shader and handle) to `h`.
@@ -441,17 +723,50 @@ impl Writer<'_> {
     ) -> io::Result<()> {
         match (source_decl, p.decl()) {
             (Some(s), Some(d)) if d.reference => t.extend_from_slice(self.bytes(&s)?),
-            _ => {
-                t.extend_from_slice(b"\"reference ");
-                self.connection_type(node, p, t);
-                t.push(b' ');
-                t.extend_from_slice(escape(p.name()).as_bytes());
-                t.push(b'"');
-            }
+            _ => self.connection_decl(node, p, t),
         }
         t.push(b' ');
         self.push_links(t, p.connections());
         Ok(())
+    }
+
+    /// Appends the decl of a connected parameter written anew: `"reference TYPE NAME"` with
+    /// the type of [`Writer::connection_type`]. The usual one (a defined input that is not an
+    /// array, one connection) is copied as it was written the first time.
+    fn connection_decl(&self, node: &Node, p: &Param, t: &mut Vec<u8>) {
+        let key = address_key(node.shader(), p.name());
+        let asked = {
+            let known = self.input_types.borrow();
+            match known.get(&key) {
+                Some(Some(Defined {
+                    single: Some(text), ..
+                })) if p.connections().len() <= 1 => {
+                    t.extend_from_slice(text);
+                    return;
+                }
+                Some(_) => true,
+                None => false,
+            }
+        };
+        if !asked {
+            let defined = self.types.input_type(node.shader(), p.name()).map(|ty| {
+                let single = matches!(ty.array, ArraySpec::None).then(|| {
+                    let mut text = b"\"reference ".to_vec();
+                    text.extend_from_slice(decl_word(&ty.base).as_bytes());
+                    text.push(b' ');
+                    text.extend_from_slice(escape(p.name()).as_bytes());
+                    text.push(b'"');
+                    text.into_boxed_slice()
+                });
+                Defined { ty, single }
+            });
+            self.input_types.borrow_mut().insert(key, defined);
+        }
+        t.extend_from_slice(b"\"reference ");
+        self.connection_type(node, p, t);
+        t.push(b' ');
+        t.extend_from_slice(escape(p.name()).as_bytes());
+        t.push(b'"');
     }
 
     fn fresh_param_text(&self, node: &Node, p: &Param, t: &mut Vec<u8>) -> io::Result<()> {
@@ -471,10 +786,11 @@ impl Writer<'_> {
             let up = self.net.get(link.upstream_node()?)?;
             self.types.output_type(up.shader(), link.output()?)
         };
-        let mut known = self.input_types.borrow_mut();
+        // Asked by `connection_decl` before.
+        let known = self.input_types.borrow();
         let defined = known
-            .entry(address_key(node.shader(), p.name()))
-            .or_insert_with(|| self.types.input_type(node.shader(), p.name()));
+            .get(&address_key(node.shader(), p.name()))
+            .and_then(|d| d.as_ref().map(|d| &d.ty));
         let ty: Cow<'_, Type> = match defined {
             Some(ty) => Cow::Borrowed(ty),
             None => upstream_type()

@@ -48,7 +48,7 @@ fn read(src: &str, types: &dyn ParamTypes) -> Network {
     .unwrap()
 }
 
-fn write(src: &str, net: &Network, types: &dyn ParamTypes) -> String {
+fn write(src: &str, net: &Network, types: &(dyn ParamTypes + Sync)) -> String {
     String::from_utf8(write_rib_to_vec(src.as_bytes(), net, types).unwrap()).unwrap()
 }
 
@@ -260,4 +260,145 @@ fn writer_rejects_mismatched_source() {
     let net = read(SCENE, &NoDefinitions);
     let err = write_rib_to_vec(b"short", &net, &NoDefinitions).unwrap_err();
     assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+}
+
+/// `net` written over `source` in pieces of each size, on one thread and on rayon's pool:
+/// every way gives the bytes of `write_rib_to_vec`.
+fn assert_pieces_agree(source: &[u8], net: &Network, types: &(dyn ParamTypes + Sync)) {
+    use vstructc::back::rib::write_rib_chunked;
+    let mut whole = Vec::new();
+    write_rib_chunked(source, net, types, &mut whole, usize::MAX, false).unwrap();
+    assert!(write_rib_to_vec(source, net, types).unwrap() == whole);
+    for nodes in [1, 2, 7, 32, 100_000] {
+        for parallel in [false, true] {
+            let mut out = Vec::new();
+            write_rib_chunked(source, net, types, &mut out, nodes, parallel).unwrap();
+            assert!(
+                out == whole,
+                "pieces of {nodes} nodes, parallel {parallel}: {} bytes, not the {} of one pass",
+                out.len(),
+                whole.len()
+            );
+        }
+    }
+}
+
+#[test]
+fn pieces_in_parallel_give_the_bytes_of_one_pass() {
+    use vstructc::network::testgen::layered_scene;
+    use vstructc::registry::Registry;
+    use vstructc::resolve::{ResolveOptions, resolve};
+    let reg = Registry::embedded();
+    // Long runs of pass-through bytes before the first request and after the last one.
+    let geometry =
+        "AttributeBegin\n  PointsPolygons [3] [0 1 2] \"P\" [0 0 0 1 0 0 0 1 0]\nAttributeEnd\n"
+            .repeat(500);
+    let rib = format!("{geometry}{}{geometry}", layered_scene(40));
+    let mut net = read(&rib, &reg);
+    resolve(&mut net, &reg, &ResolveOptions::default());
+    assert!(net.node_ids().all(|id| net[id].source().is_some()));
+    assert_pieces_agree(rib.as_bytes(), &net, &reg);
+    // Every node fresh (no source): the block at the end, in pieces.
+    let fresh = vstructc::back::json::write_json(&net).unwrap();
+    let mut d = Diagnostics::new();
+    let from_json =
+        vstructc::front::json::parse_json(fresh.as_bytes(), "in.json", &reg, &mut d).unwrap();
+    assert!(
+        from_json
+            .node_ids()
+            .all(|id| from_json[id].source().is_none())
+    );
+    assert_pieces_agree(b"", &from_json, &reg);
+}
+
+#[test]
+fn pieces_keep_a_fresh_block_before_its_reader_and_source_after_the_last_node() {
+    let src = "# head\nPattern \"PxrFractal\" \"a\" \"int layers\" [1]\n\
+               Pattern \"PxrFractal\" \"b\" \"int layers\" [2]\n\
+               Bxdf \"PxrSurface\" \"s\" \"float diffuseGain\" [1]\nWorldEnd # tail";
+    let types = defs();
+    let mut net = read(src, &types);
+    let s = net.find("s").unwrap();
+    let t = net.add_node("t", "PxrTexture");
+    net.set_param(t, "filename", Value::Str("x.tex".into()));
+    net.connect(s, "diffuseColor", t, "resultRGB");
+    let out = write(src, &net, &types);
+    assert!(
+        out.find("\"t\"").unwrap() < out.find("\"s\"").unwrap(),
+        "{out}"
+    );
+    assert!(out.ends_with("WorldEnd # tail"), "{out}");
+    assert_pieces_agree(src.as_bytes(), &net, &types);
+    // Without a reader the fresh block follows the source.
+    let mut alone = read(src, &types);
+    let t = alone.add_node("t", "PxrTexture");
+    alone.set_param(t, "filename", Value::Str("x.tex".into()));
+    assert!(
+        write(src, &alone, &types)
+            .ends_with("# tail\nPattern \"PxrTexture\" \"t\"\n\t\"string filename\" [\"x.tex\"]\n")
+    );
+    assert_pieces_agree(src.as_bytes(), &alone, &types);
+}
+
+#[test]
+fn pieces_stop_at_the_first_error_in_output_order() {
+    use vstructc::back::rib::write_rib_chunked;
+    let net = read(SCENE, &NoDefinitions);
+    for parallel in [false, true] {
+        let mut out = Vec::new();
+        let err =
+            write_rib_chunked(b"short", &net, &NoDefinitions, &mut out, 1, parallel).unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+    }
+}
+
+/// A connection written anew is declared with the definition's type: `[n]` for several
+/// connections to a scalar input, and an array input's own size or the count of its
+/// connections, also after the same input was written with one connection.
+#[test]
+fn new_connections_are_declared_by_count_and_array_type() {
+    let types = defs().shader(
+        "Mix",
+        &[("colors", "color[2]"), ("gain", "float")],
+        &[("out", "color")],
+    );
+    let mut net = Network::new();
+    let f = net.add_node("f", "PxrFractal");
+    net.set_param(f, "layers", Value::Int(1));
+    let one = net.add_node("one", "Mix");
+    net.connect(one, "gain", f, "resultF");
+    net.connect(one, "colors", f, "resultRGB");
+    let two = net.add_node("two", "Mix");
+    net.connect(two, "gain", f, "resultF");
+    net.connect(two, "gain", f, "resultF");
+    net.connect(two, "colors", f, "resultRGB");
+    net.connect(two, "colors", f, "resultRGB");
+    let three = net.add_node("three", "Mix");
+    net.connect(three, "colors", f, "resultRGB");
+    let out = write("", &net, &types);
+    let request = |handle: &str| {
+        let at = out.find(&format!("\"{handle}\"\n")).unwrap();
+        out[at..].split("\n\n").next().unwrap().to_string()
+    };
+    let (one, two, three) = (request("one"), request("two"), request("three"));
+    assert!(
+        one.contains("\t\"reference float gain\" [\"f:resultF\"]"),
+        "{out}"
+    );
+    assert!(
+        one.contains("\t\"reference color[1] colors\" [\"f:resultRGB\"]"),
+        "{out}"
+    );
+    assert!(
+        two.contains("\t\"reference float[2] gain\" [\"f:resultF\" \"f:resultF\"]"),
+        "{out}"
+    );
+    assert!(
+        two.contains("\t\"reference color[2] colors\" [\"f:resultRGB\" \"f:resultRGB\"]"),
+        "{out}"
+    );
+    assert!(
+        three.contains("\t\"reference color[1] colors\" [\"f:resultRGB\"]"),
+        "{out}"
+    );
 }

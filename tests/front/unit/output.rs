@@ -176,3 +176,28 @@ fn a_descriptor_link_to_a_deleted_file_is_written_in_place() {
     file.read_to_string(&mut text).unwrap();
     assert_eq!(text, "new");
 }
+
+/// Outputs of tens of megabytes are written to disk in steps while they are produced: the
+/// file gets every byte in order, a new one or a replaced one, and a producer failing after
+/// several steps leaves the old file as it was.
+#[test]
+fn a_large_output_written_out_in_steps_is_whole() {
+    let dir = folder("large");
+    let target = dir.path().join("out.rib");
+    // 20 MB in writes of an odd size, each byte telling its place.
+    let data: Vec<u8> = (0..20_000_017u32).map(|i| (i % 251) as u8).collect();
+    let produce = |out: &mut dyn Write| data.chunks(100_003).try_for_each(|c| out.write_all(c));
+    write_file(&target, produce).unwrap();
+    assert!(std::fs::read(&target).unwrap() == data);
+    std::fs::write(&target, "old").unwrap();
+    write_file(&target, produce).unwrap();
+    assert!(std::fs::read(&target).unwrap() == data);
+    std::fs::write(&target, "old").unwrap();
+    let failing = write_file(&target, |out| {
+        produce(out)?;
+        Err(io::Error::other("late failure"))
+    });
+    assert!(failing.is_err());
+    assert_eq!(std::fs::read(&target).unwrap(), b"old");
+    assert!(leftovers(dir.path()).is_empty());
+}
