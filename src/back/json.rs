@@ -106,25 +106,132 @@ fn check_materials(net: &Network) -> Result<(), NoMaterials> {
 /// assert_eq!(out, write_json(&net).unwrap().into_bytes());
 /// ```
 pub fn write_json_to(net: &Network, out: &mut dyn Write) -> io::Result<()> {
+    write_json_chunked(net, out, PIECE_MATERIALS, true)
+}
+
+/// Materials per piece of the document formatted on one thread: tens of kilobytes of text
+/// for the bench scene's materials, so that handing pieces to the pool costs little.
+const PIECE_MATERIALS: usize = 64;
+
+/// Pieces formatted ahead of the writing, per thread of the pool: enough to keep every
+/// thread busy while the calling thread writes, few enough that the text waiting in memory
+/// stays a few megabytes.
+#[cfg(feature = "parallel")]
+const WINDOW_PER_THREAD: usize = 4;
+
+/// [`write_json_to`] with its materials formatted in pieces of `chunk_materials` (at least
+/// one). With `parallel` (and the `parallel` feature, more than one thread in rayon's pool,
+/// and a caller outside the pool) a window of pieces is formatted on the pool's threads
+/// while the calling thread writes the window before it; otherwise each piece is written as
+/// it is formatted. Every way gives the same bytes: a piece's text depends only on the
+/// network and on whether it holds the first material.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn write_json_chunked(
+    net: &Network,
+    out: &mut dyn Write,
+    chunk_materials: usize,
+    parallel: bool,
+) -> io::Result<()> {
     check_materials(net).map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
-    let mut w = Stream {
-        out: Vec::with_capacity(1 << 16),
-    };
-    w.out.extend_from_slice(b"{\n  \"materials\": ");
     let mut named: Vec<(String, usize)> = material_names(net).into_iter().zip(0..).collect();
     named.sort_unstable();
-    let mut first = true;
-    for (name, k) in &named {
+    let pieces: Vec<&[(String, usize)]> = named.chunks(chunk_materials.max(1)).collect();
+    out.write_all(b"{\n  \"materials\": ")?;
+    write_pieces(net, &pieces, out, parallel)?;
+    let mut tail = Stream { out: Vec::new() };
+    tail.end(named.is_empty(), 1, b'}');
+    tail.out
+        .extend_from_slice(b",\n  \"vstructcNetwork\": 1\n}\n");
+    out.write_all(&tail.out)
+}
+
+/// The text of one piece of the materials object: its materials, each after the `{` that
+/// opens the object (the first material of the document) or the `,` that separates it from
+/// the one before.
+fn format_piece(net: &Network, piece: &[(String, usize)], starts: bool, out: Vec<u8>) -> Vec<u8> {
+    let mut w = Stream { out };
+    let mut first = starts;
+    for (name, k) in piece {
         w.entry(&mut first, 1, name);
         w.material(net, *k, 2);
-        if w.out.len() >= 1 << 16 {
-            out.write_all(&w.out)?;
-            w.out.clear();
-        }
     }
-    w.end(first, 1, b'}');
-    w.out.extend_from_slice(b",\n  \"vstructcNetwork\": 1\n}\n");
-    out.write_all(&w.out)
+    w.out
+}
+
+/// Writes the pieces in order: formatted on the calling thread, or on rayon's pool a window
+/// ahead of the writing (see [`write_json_chunked`]).
+fn write_pieces(
+    net: &Network,
+    pieces: &[&[(String, usize)]],
+    out: &mut dyn Write,
+    parallel: bool,
+) -> io::Result<()> {
+    // Not from a thread of the pool itself: it would wait for work queued behind it.
+    #[cfg(feature = "parallel")]
+    if parallel
+        && pieces.len() > 1
+        && rayon::current_num_threads() > 1
+        && rayon::current_thread_index().is_none()
+    {
+        return write_pieces_parallel(net, pieces, out);
+    }
+    let _ = parallel;
+    let mut buffer = Vec::with_capacity(1 << 16);
+    for (i, piece) in pieces.iter().enumerate() {
+        buffer.clear();
+        buffer = format_piece(net, piece, i == 0, buffer);
+        out.write_all(&buffer)?;
+    }
+    Ok(())
+}
+
+/// One window of pieces at a time is formatted on the pool (its pieces in parallel) while
+/// the calling thread writes the window formatted before it.
+#[cfg(feature = "parallel")]
+fn write_pieces_parallel(
+    net: &Network,
+    pieces: &[&[(String, usize)]],
+    out: &mut dyn Write,
+) -> io::Result<()> {
+    use rayon::prelude::*;
+    let window = WINDOW_PER_THREAD * rayon::current_num_threads();
+    let format = |start: usize, spare: Vec<Vec<u8>>| -> Vec<Vec<u8>> {
+        let end = (start + window).min(pieces.len());
+        let mut spare = spare.into_iter();
+        let buffers: Vec<Vec<u8>> = (start..end)
+            .map(|_| {
+                spare.next().map_or_else(Vec::new, |mut b| {
+                    b.clear();
+                    b
+                })
+            })
+            .collect();
+        (start..end)
+            .into_par_iter()
+            .zip(buffers)
+            .map(|(i, buffer)| format_piece(net, pieces[i], i == 0, buffer))
+            .collect()
+    };
+    let mut ready = format(0, Vec::new());
+    let mut start = ready.len();
+    // The buffers of the window written last, formatted into again: fresh memory costs a
+    // page fault per page.
+    let mut spare = Vec::new();
+    while !ready.is_empty() {
+        let mut next = Vec::new();
+        let mut written = Ok(());
+        rayon::in_place_scope(|scope| {
+            if start < pieces.len() {
+                let (next, spare) = (&mut next, std::mem::take(&mut spare));
+                scope.spawn(move |_| *next = format(start, spare));
+            }
+            written = ready.iter().try_for_each(|text| out.write_all(text));
+        });
+        written?;
+        start += next.len();
+        spare = std::mem::replace(&mut ready, next);
+    }
+    Ok(())
 }
 
 /// The JSON name of each material, in material order: its name, with `#1`, `#2`, … added

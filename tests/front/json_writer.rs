@@ -172,3 +172,44 @@ fn golden_fixture_to_json() {
     let mixer = back.find("PxrLayerMixer1").unwrap();
     assert_eq!(back.connected_inputs(mixer).len(), 25);
 }
+
+/// A resolved scene's document written in pieces of every size, on one thread and on
+/// rayon's pool, is the document of one pass (which `write_json` also gives); an empty
+/// network's too.
+#[test]
+fn pieces_in_parallel_give_the_document_of_one_pass() {
+    use vstructc::back::json::write_json_chunked;
+    use vstructc::network::testgen::layered_scene;
+    use vstructc::registry::Registry;
+    use vstructc::resolve::{ResolveOptions, resolve};
+    let reg = Registry::embedded();
+    let mut d = Diagnostics::new();
+    let text = layered_scene(50);
+    let mut net = parse_rib(
+        text.as_bytes(),
+        "n.rib",
+        &reg,
+        &RibOptions::default(),
+        &mut d,
+    )
+    .unwrap();
+    resolve(&mut net, &reg, &ResolveOptions::default());
+    for net in [net, Network::new()] {
+        let mut whole = Vec::new();
+        write_json_chunked(&net, &mut whole, usize::MAX, false).unwrap();
+        assert!(write_json(&net).unwrap().into_bytes() == whole);
+        for materials in [1, 2, 7, 64, 100_000] {
+            for parallel in [false, true] {
+                let mut out = Vec::new();
+                write_json_chunked(&net, &mut out, materials, parallel).unwrap();
+                assert!(
+                    out == whole,
+                    "pieces of {materials} materials, parallel {parallel}: {} bytes, not the \
+                     {} of one pass",
+                    out.len(),
+                    whole.len()
+                );
+            }
+        }
+    }
+}
