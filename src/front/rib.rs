@@ -251,8 +251,8 @@ fn read_requests(
     }
 }
 
-/// [`parse_rib`] read on one thread ([`ReadPath::Serial`]) or pipelined in batches of at most
-/// `batch` requests ([`ReadPath::Pipelined`]), whatever the input's size: tests compare them.
+/// [`parse_rib`] read on one thread (`batch` `None`) or pipelined in batches of at most
+/// `batch` requests, whatever the input's size: tests compare them.
 #[cfg(feature = "testkit")]
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn parse_rib_with(
