@@ -147,9 +147,10 @@ fn write_json_chunked(
 
 /// The text of one piece of the materials object: its materials, each after the `{` that
 /// opens the object (the first material of the document) or the `,` that separates it from
-/// the one before.
+/// the one before. Formatted into `out`, emptied first (its room is reused).
 fn format_piece(net: &Network, piece: &[(String, usize)], starts: bool, out: Vec<u8>) -> Vec<u8> {
     let mut w = Stream { out };
+    w.out.clear();
     let mut first = starts;
     for (name, k) in piece {
         w.entry(&mut first, 1, name);
@@ -178,8 +179,7 @@ fn write_pieces(
     let _ = parallel;
     let mut buffer = Vec::with_capacity(1 << 16);
     for (i, piece) in pieces.iter().enumerate() {
-        buffer.clear();
-        buffer = format_piece(net, piece, i == 0, buffer);
+        buffer = format_piece(net, piece, i == 0, std::mem::take(&mut buffer));
         out.write_all(&buffer)?;
     }
     Ok(())
@@ -195,17 +195,9 @@ fn write_pieces_parallel(
 ) -> io::Result<()> {
     use rayon::prelude::*;
     let window = WINDOW_PER_THREAD * rayon::current_num_threads();
-    let format = |start: usize, spare: Vec<Vec<u8>>| -> Vec<Vec<u8>> {
+    let format = |start: usize, mut buffers: Vec<Vec<u8>>| -> Vec<Vec<u8>> {
         let end = (start + window).min(pieces.len());
-        let mut spare = spare.into_iter();
-        let buffers: Vec<Vec<u8>> = (start..end)
-            .map(|_| {
-                spare.next().map_or_else(Vec::new, |mut b| {
-                    b.clear();
-                    b
-                })
-            })
-            .collect();
+        buffers.resize_with(end - start, Vec::new);
         (start..end)
             .into_par_iter()
             .zip(buffers)
