@@ -167,13 +167,8 @@ fn write_pieces(
     out: &mut dyn Write,
     parallel: bool,
 ) -> io::Result<()> {
-    // Not from a thread of the pool itself: it would wait for work queued behind it.
     #[cfg(feature = "parallel")]
-    if parallel
-        && pieces.len() > 1
-        && rayon::current_num_threads() > 1
-        && rayon::current_thread_index().is_none()
-    {
+    if super::pool_helps(parallel, pieces.len()) {
         return write_pieces_parallel(net, pieces, out);
     }
     let _ = parallel;

@@ -130,14 +130,8 @@ fn write_rib_chunked(
     }
     let plan = Plan::new(source, net, &surfaces);
     let pieces = plan.pieces(chunk_nodes.max(1));
-    // Not from a thread of the pool itself: waiting there for pieces could hold the thread
-    // that would format them.
     #[cfg(feature = "parallel")]
-    if parallel
-        && pieces.len() > 1
-        && rayon::current_num_threads() > 1
-        && rayon::current_thread_index().is_none()
-    {
+    if super::pool_helps(parallel, pieces.len()) {
         return plan.write_parallel(types, &pieces, out);
     }
     let _ = parallel;
