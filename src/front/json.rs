@@ -150,6 +150,7 @@ impl Ctx {
     }
 
     /// `read`, the value under `segment`: a duplicate inside it gets `segment` in its pointer.
+    #[inline]
     fn within<T, E>(&self, segment: impl FnOnce() -> String, read: Result<T, E>) -> Result<T, E> {
         if read.is_err()
             && let Some(segments) = self.duplicate.borrow_mut().as_mut()
@@ -840,6 +841,7 @@ struct FewKeys {
 
 impl FewKeys {
     /// Record `key` (`slot`: the expected key's index, if it is one); false if seen before.
+    #[inline]
     fn insert(&mut self, slot: Option<u8>, key: &str) -> bool {
         match slot {
             Some(i) => {
@@ -1001,6 +1003,7 @@ impl<'de> ParamSeed<'_, '_, '_, 'de, '_> {
 
 impl<'de> NodeState<'de> {
     /// Keep parameter `index`'s value, or its error.
+    #[inline]
     fn settle(&mut self, index: usize, read: Result<Typed, Error>) {
         match read {
             Ok(typed) => self.values[index] = Some(typed),
@@ -1504,11 +1507,8 @@ fn parse_json_path(
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    // Valid UTF-8 (checked once, in bulk) is read as text, which spares serde_json a check
-    // per string; other input goes through the byte reader, which reports where it breaks.
-    let text = std::str::from_utf8(bytes).ok();
     #[cfg(feature = "parallel")]
-    if let Some(text) = text {
+    {
         let piece = match read_path {
             ReadPath::Auto
                 if bytes.len() >= PIECES_MIN_BYTES
@@ -1522,7 +1522,7 @@ fn parse_json_path(
             _ => None,
         };
         if let Some(piece) = piece
-            && let Some(found) = pieces::read(text, &file, types, piece)
+            && let Some(found) = pieces::read(bytes, &file, types, piece)
         {
             let (net, found) = found;
             return report(net, found, limits, diags);
@@ -1530,6 +1530,9 @@ fn parse_json_path(
     }
     #[cfg(not(feature = "parallel"))]
     let _ = read_path;
+    // Valid UTF-8 (checked once, in bulk) is read as text, which spares serde_json a check
+    // per string; other input goes through the byte reader, which reports where it breaks.
+    let text = std::str::from_utf8(bytes).ok();
     let mut r = Reader::new(file.clone(), Some(types), Some(Network::new()));
     let read = match text {
         Some(text) => {
@@ -1569,8 +1572,7 @@ fn parse_json_with(
 #[cfg(feature = "testkit")]
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn json_reads_in_pieces(bytes: &[u8], types: &dyn ParamTypes, piece: usize) -> bool {
-    std::str::from_utf8(bytes)
-        .is_ok_and(|text| pieces::read(text, &Arc::from("t.json"), types, piece.max(1)).is_some())
+    pieces::read(bytes, &Arc::from("t.json"), types, piece.max(1)).is_some()
 }
 
 /// The end of a read whose text is valid JSON: the findings in the order of the checks, not
@@ -1738,6 +1740,9 @@ impl MaterialOut {
     }
 }
 
+/// Type strings of the canonical form whose declarations a reader finds by a scan.
+const FEW_DECLS: usize = 8;
+
 /// The network being built while serde reads the text.
 struct Reader<'t> {
     file: Arc<str>,
@@ -1760,7 +1765,9 @@ struct Reader<'t> {
     order: Order,
     /// Materials read so far.
     materials: u32,
-    /// One declaration per type string of the canonical form, shared by its parameters.
+    /// One declaration per type string of the canonical form, shared by its parameters: the
+    /// first [`FEW_DECLS`] found by a scan (a document uses a few), the others by a map.
+    few_decls: Vec<Arc<Decl>>,
     inline_decls: FxHashMap<Box<str>, Arc<Decl>>,
     /// One declaration per declared type of the shorthand form, shared likewise.
     declared_decls: FxHashMap<Type, Arc<Decl>>,
@@ -1779,6 +1786,7 @@ impl<'t> Reader<'t> {
             found: Vec::new(),
             order: Order::default(),
             materials: 0,
+            few_decls: Vec::new(),
             inline_decls: Default::default(),
             declared_decls: Default::default(),
         }
@@ -2148,6 +2156,9 @@ impl<'t> Reader<'t> {
     /// The declaration shared by the parameters whose `type` is `text` (`None` if `text` is
     /// not a type).
     fn inline_decl(&mut self, text: &str) -> Option<Arc<Decl>> {
+        if let Some(decl) = self.few_decls.iter().find(|d| d.text == text) {
+            return Some(decl.clone());
+        }
         if let Some(decl) = self.inline_decls.get(text) {
             return Some(decl.clone());
         }
@@ -2158,7 +2169,11 @@ impl<'t> Reader<'t> {
             ty: parse_type(text)?,
             inline_type: true,
         });
-        self.inline_decls.insert(Box::from(text), decl.clone());
+        if self.few_decls.len() < FEW_DECLS {
+            self.few_decls.push(decl.clone());
+        } else {
+            self.inline_decls.insert(Box::from(text), decl.clone());
+        }
         Some(decl)
     }
 

@@ -69,14 +69,15 @@ struct PieceRead {
 }
 
 /// Reads `text` in pieces of about `piece` bytes: the network and the findings (unsorted),
-/// or `None` when the document must be read on one thread (module docs).
+/// or `None` when the document must be read on one thread (module docs). The text is checked
+/// to be UTF-8 piece by piece, on the threads that read it.
 pub(super) fn read(
-    text: &str,
+    text: &[u8],
     file: &Arc<str>,
     types: &dyn ParamTypes,
     piece: usize,
 ) -> Option<(Network, Findings)> {
-    let b = text.as_bytes();
+    let b = text;
     let (open, pattern) = locate_materials(b)?;
     let mut starts = vec![open];
     let mut target = open + piece;
@@ -149,10 +150,11 @@ pub(super) fn read(
     }
     let close = asm.close?;
     // The document's own members, with an empty `materials` in place of the one read.
-    let mut skeleton = String::with_capacity(open + 2 + (b.len() - close));
-    skeleton.push_str(&text[..open]);
-    skeleton.push_str("{}");
-    skeleton.push_str(&text[close + 1..]);
+    let mut skeleton = Vec::with_capacity(open + 2 + (b.len() - close));
+    skeleton.extend_from_slice(&b[..open]);
+    skeleton.extend_from_slice(b"{}");
+    skeleton.extend_from_slice(&b[close + 1..]);
+    let skeleton = String::from_utf8(skeleton).ok()?;
     let mut doc = Reader::new(file.clone(), Some(types), None);
     let mut de = serde_json::Deserializer::from_str(&skeleton);
     DocSeed(&mut doc)
@@ -167,7 +169,7 @@ pub(super) fn read(
 
 /// The calling thread's side: adds the pieces to the network in document order.
 struct Assembler<'a, 't> {
-    text: &'a str,
+    text: &'a [u8],
     net: Network,
     found: Findings,
     /// Reads the materials that need the declared types.
@@ -192,18 +194,20 @@ impl Assembler<'_, '_> {
         for m in p.materials {
             self.materials += 1;
             let name = match &m {
-                Read::Done { name, .. } | Read::NeedsTypes { name, .. } => &self.text[name.clone()],
+                Read::Done { name, .. } | Read::NeedsTypes { name, .. } => {
+                    utf8(&self.text[name.clone()])
+                }
             };
-            if !self.names.insert(name) {
+            let Some(name) = name.filter(|name| self.names.insert(name)) else {
                 self.failed = true;
                 return;
-            }
+            };
             match m {
                 Read::Done { out, .. } => out.add_to(&mut self.net),
                 Read::NeedsTypes { value, .. } => {
-                    let read =
-                        read_material(&mut self.main, name, &self.text[value], self.materials);
-                    if read.is_err() || self.main.ctx.deepest.get() > MAX_DEPTH {
+                    let read = utf8(&self.text[value])
+                        .map(|value| read_material(&mut self.main, name, value, self.materials));
+                    if !matches!(read, Some(Ok(()))) || self.main.ctx.deepest.get() > MAX_DEPTH {
                         self.failed = true;
                         return;
                     }
@@ -229,13 +233,13 @@ impl Assembler<'_, '_> {
 /// the `,` at or after `stop`, or the end of `materials`. `None` when the text there is not
 /// what the one-thread reader would accept the same way.
 fn read_piece(
-    text: &str,
+    text: &[u8],
     file: &Arc<str>,
     start: usize,
     stop: usize,
     pattern: &[u8],
 ) -> Option<PieceRead> {
-    let b = text.as_bytes();
+    let b = text;
     let mut r = Reader::new(file.clone(), None, None);
     let mut materials = Vec::new();
     let mut pos = start;
@@ -243,6 +247,7 @@ fn read_piece(
         let k = skip_ws(b, pos + 1);
         let key_end = string_end(b, k)?;
         let name = k + 1..key_end;
+        let name_text = utf8(&b[name.clone()])?;
         let colon = skip_ws(b, key_end + 1);
         if b.get(colon) != Some(&b':') {
             return None;
@@ -255,7 +260,8 @@ fn read_piece(
         let (found, done) = (r.found.len(), r.done.len());
         let mut end = None;
         if let Some(q) = memmem::find(&b[v..], pattern).map(|k| v + k) {
-            if read_material(&mut r, &text[name.clone()], &text[v..q], group).is_ok() {
+            let read = utf8(&b[v..q]).map(|value| read_material(&mut r, name_text, value, group));
+            if matches!(read, Some(Ok(()))) {
                 end = Some(q);
             } else {
                 r.found.truncate(found);
@@ -266,7 +272,7 @@ fn read_piece(
             Some(end) => end,
             None => {
                 let end = value_end(b, v)?;
-                read_material(&mut r, &text[name.clone()], &text[v..end], group).ok()?;
+                read_material(&mut r, name_text, utf8(&b[v..end])?, group).ok()?;
                 end
             }
         };
@@ -336,6 +342,11 @@ fn locate_materials(b: &[u8]) -> Option<(usize, Vec<u8>)> {
             return None;
         }
     }
+}
+
+/// `bytes` as text, if they are UTF-8.
+fn utf8(bytes: &[u8]) -> Option<&str> {
+    std::str::from_utf8(bytes).ok()
 }
 
 /// The position after the JSON whitespace from `i`.

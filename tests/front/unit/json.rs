@@ -305,7 +305,7 @@ fn scenes_with_findings(reg: &vstructc::registry::Registry) -> Vec<(String, Stri
 #[test]
 fn reading_in_pieces_is_the_one_thread_reading() {
     let reg = vstructc::registry::Registry::embedded();
-    let mut inputs: Vec<(String, String)> = Vec::new();
+    let mut inputs: Vec<(String, Vec<u8>)> = Vec::new();
     // Every JSON file of the tests, and every RIB example written as JSON.
     for dir in [
         "tests",
@@ -318,10 +318,7 @@ fn reading_in_pieces_is_the_one_thread_reading() {
             let path = entry.unwrap().path();
             let bytes = std::fs::read(&path).unwrap_or_default();
             if path.extension().is_some_and(|e| e == "json") {
-                inputs.push((
-                    path.display().to_string(),
-                    String::from_utf8_lossy(&bytes).into(),
-                ));
+                inputs.push((path.display().to_string(), bytes));
             } else if path.extension().is_some_and(|e| e == "rib") {
                 let mut d = Diagnostics::new();
                 let options = vstructc::front::rib::RibOptions::default();
@@ -329,13 +326,31 @@ fn reading_in_pieces_is_the_one_thread_reading() {
                     vstructc::front::rib::parse_rib(&bytes, "x.rib", &reg, &options, &mut d)
                     && let Ok(json) = vstructc::back::json::write_json(&net)
                 {
-                    inputs.push((path.display().to_string(), json));
+                    inputs.push((path.display().to_string(), json.into_bytes()));
                 }
             }
         }
     }
     assert!(inputs.len() > 10, "{}", inputs.len());
-    inputs.extend(scenes_with_findings(&reg));
+    let scenes = scenes_with_findings(&reg);
+    // Text that is not UTF-8 in a material's name, in a value, and in the document's members.
+    let scene = scenes[0].1.as_bytes();
+    for (name, at) in [
+        ("bad name", 0.3),
+        ("bad value", 0.6),
+        ("bad document", 0.999),
+    ] {
+        let mut bad = scene.to_vec();
+        let at = (scene.len() as f64 * at) as usize;
+        let k = match name {
+            "bad name" => material_at(&scenes[0].1, 0.3) + 2,
+            "bad document" => scenes[0].1.rfind("vstructcNetwork").unwrap() + 3,
+            _ => at + scene[at..].iter().position(|&c| c == b'"').unwrap() + 1,
+        };
+        bad.insert(k, 0xff);
+        inputs.push((name.into(), bad));
+    }
+    inputs.extend(scenes.into_iter().map(|(n, t)| (n, t.into_bytes())));
     let few_nodes = vstructc::limits::Limits {
         nodes: 60,
         ..Default::default()
@@ -343,16 +358,16 @@ fn reading_in_pieces_is_the_one_thread_reading() {
     let mut pieced = 0;
     for (name, src) in &inputs {
         for limits in [&vstructc::limits::Limits::default(), &few_nodes] {
-            let serial = read_outcome(src.as_bytes(), &reg, limits, None);
+            let serial = read_outcome(src, &reg, limits, None);
             for piece in [1, 100, 3000, 20_000, 1 << 20] {
-                let pieces = read_outcome(src.as_bytes(), &reg, limits, Some(piece));
+                let pieces = read_outcome(src, &reg, limits, Some(piece));
                 assert!(
                     serial == pieces,
                     "{name}, pieces of {piece} bytes, {limits:?}:\n{serial}\n---\n{pieces}"
                 );
             }
         }
-        if json_reads_in_pieces(src.as_bytes(), &reg, 3000) {
+        if json_reads_in_pieces(src, &reg, 3000) {
             pieced += 1;
         }
     }
@@ -367,7 +382,7 @@ fn reading_in_pieces_is_the_one_thread_reading() {
         "deep 0",
     ] {
         let (_, src) = inputs.iter().find(|(n, _)| n == name).unwrap();
-        assert!(json_reads_in_pieces(src.as_bytes(), &reg, 3000), "{name}");
+        assert!(json_reads_in_pieces(src, &reg, 3000), "{name}");
     }
     for name in [
         "one line",
@@ -376,9 +391,12 @@ fn reading_in_pieces_is_the_one_thread_reading() {
         "escaped name 0",
         "deeper 2",
         "too deep 1",
+        "bad name",
+        "bad value",
+        "bad document",
     ] {
         let (_, src) = inputs.iter().find(|(n, _)| n == name).unwrap();
-        assert!(!json_reads_in_pieces(src.as_bytes(), &reg, 3000), "{name}");
+        assert!(!json_reads_in_pieces(src, &reg, 3000), "{name}");
     }
     assert!(pieced > 20, "{pieced}");
 }
