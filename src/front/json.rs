@@ -8,9 +8,10 @@
 //!
 //! The network is built while serde reads the text: custom `DeserializeSeed`s for the
 //! document, `materials`, each material, its `nodes`, each node, its parameters (a value whose
-//! `type` came first is converted as it is read) and its connections create nodes as they
-//! come; only a material's `terminals` and `primvars`, a value read before its `type` and
-//! unknown members are held as small trees. Keys and strings borrow from the text unless they
+//! `type` came first is converted as it is read) and its connections build each node as it
+//! comes; a material's nodes and connections enter the network when the material closes
+//! (`MaterialOut`). Only a material's `terminals` and `primvars`, a value read before its
+//! `type` and unknown members are held as small trees. Keys and strings borrow from the text unless they
 //! hold escapes, and a JSON Pointer is composed only when a diagnostic needs one.
 //! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
 //! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
@@ -28,6 +29,11 @@
 //! node's own keys (a `nodeTypeId` that is not a string), not when it comes after. A node's kind is set when its material's terminals are read (they may
 //! follow the nodes, as in the order the JSON writer uses).
 //!
+//! With the `parallel` feature, an input of 1 MiB or more is read in pieces of materials on
+//! rayon's pool and assembled in document order on the calling thread (`pieces`); whatever
+//! that path cannot settle exactly as above goes to the one-thread reading, so the network,
+//! the diagnostics and the errors are the same either way.
+//!
 //! Choices where the spec is silent:
 //!
 //! * `terminals` and `primvars` are optional; `upstreamOutputName` is required (use `""` for a
@@ -40,17 +46,20 @@
 //! * A node's request kind comes from the terminals naming it (`surface`/`volume` → `Bxdf`,
 //!   `displacement` → `Displace`, `light`, `lightFilter`); other nodes are `Pattern`s.
 
+#[cfg(feature = "parallel")]
+mod pieces;
+
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes,
-    RequestKind, Sym, Terminal,
+    RequestKind, Sym, Terminal, name_hash,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use rustc_hash::{FxHashMap, FxHashSet};
 use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
 use std::borrow::Cow;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::fmt;
 use std::sync::Arc;
 
@@ -114,9 +123,26 @@ impl J<'_> {
 struct Ctx {
     /// The duplicate key's pointer segments, innermost first.
     duplicate: RefCell<Option<Vec<String>>>,
+    /// How deep the value trees being read are nested now, and at most (a material read on
+    /// its own must stay well within serde_json's nesting limit, which it meets shallower
+    /// than within the document).
+    depth: Cell<u32>,
+    deepest: Cell<u32>,
 }
 
 impl Ctx {
+    /// One level deeper into a value tree.
+    fn enter(&self) {
+        let d = self.depth.get() + 1;
+        self.depth.set(d);
+        self.deepest.set(self.deepest.get().max(d));
+    }
+
+    /// Out of a level entered with [`Ctx::enter`].
+    fn leave(&self) {
+        self.depth.set(self.depth.get().saturating_sub(1));
+    }
+
     /// The error for a duplicate `key` (a serde error: JS002 with line and column).
     fn duplicate_key<E: de::Error>(&self, key: &str) -> E {
         *self.duplicate.borrow_mut() = Some(vec![key.to_string()]);
@@ -124,6 +150,7 @@ impl Ctx {
     }
 
     /// `read`, the value under `segment`: a duplicate inside it gets `segment` in its pointer.
+    #[inline]
     fn within<T, E>(&self, segment: impl FnOnce() -> String, read: Result<T, E>) -> Result<T, E> {
         if read.is_err()
             && let Some(segments) = self.duplicate.borrow_mut().as_mut()
@@ -287,15 +314,20 @@ impl<'de> Visitor<'de> for Seed<'_> {
     }
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<J<'de>, A::Error> {
         let mut items = Vec::new();
+        self.0.enter();
         loop {
             let next = seq.next_element_seed(Seed(self.0));
             match self.0.within(|| items.len().to_string(), next)? {
                 Some(v) => items.push(v),
-                None => return Ok(J::Arr(items)),
+                None => {
+                    self.0.leave();
+                    return Ok(J::Arr(items));
+                }
             }
         }
     }
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<J<'de>, A::Error> {
+        self.0.enter();
         let mut members: Vec<(Cow<'de, str>, J<'de>)> = Vec::new();
         // Duplicates: a scan of the members while the object is small, a set beyond (built
         // from the members when first needed), so a small object allocates nothing for it.
@@ -316,22 +348,25 @@ impl<'de> Visitor<'de> for Seed<'_> {
             let value = self.0.within(|| key.to_string(), value)?;
             members.push((key, value));
         }
+        self.0.leave();
         Ok(J::Obj(members))
     }
 }
 
-/// Nodes of one material by name; `None` for a node whose reading failed.
-type NodesByName<'de> = FxHashMap<Cow<'de, str>, Option<NodeId>>;
+/// Nodes of one material by name (their index in [`MaterialState::nodes`]); `None` for a
+/// node whose reading failed.
+type NodesByName<'de> = FxHashMap<Cow<'de, str>, Option<u32>>;
 
 /// One material while its members are read.
 struct MaterialState<'de> {
     name: String,
     pointer: String,
     has_nodes: bool,
-    ids: Vec<NodeId>,
+    /// Its nodes in document order, inserted into the network when the material closes.
+    nodes: Vec<Node>,
     by_name: NodesByName<'de>,
-    /// Each node read, its name and its connections.
-    pending: Vec<(NodeId, Cow<'de, str>, NodeConns<'de>)>,
+    /// Each node read (its index in `nodes`), its name and its connections.
+    pending: Vec<(u32, Cow<'de, str>, NodeConns<'de>)>,
     terminals: Option<J<'de>>,
     primvars: Vec<String>,
 }
@@ -522,27 +557,59 @@ impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
             check_duplicate(&r.ctx, &mut seen, name.clone())?;
             r.materials += 1;
             let group = r.materials;
-            let m = MaterialState {
-                pointer: P::Key(&P::Root("/materials"), &name).render(),
-                has_nodes: false,
-                // Room for a material's usual few nodes without growing.
-                ids: Vec::with_capacity(8),
-                by_name: FxHashMap::with_capacity_and_hasher(8, Default::default()),
-                pending: Vec::with_capacity(8),
-                terminals: None,
-                primvars: Vec::new(),
-                name: name.into_owned(),
-            };
-            let name = m.name.clone();
+            let m = MaterialState::new(&name);
             let read = map.next_value_seed(MaterialSeed {
                 r: &mut *r,
                 m: Some(m),
                 group,
             });
-            r.ctx.within(|| name, read)?;
+            r.ctx.within(|| name.to_string(), read)?;
         }
         Ok(())
     }
+}
+
+impl MaterialState<'_> {
+    /// The material `name`, before its members.
+    fn new(name: &str) -> Self {
+        MaterialState {
+            pointer: P::Key(&P::Root("/materials"), name).render(),
+            has_nodes: false,
+            // Room for a material's usual few nodes without growing.
+            nodes: Vec::with_capacity(8),
+            by_name: FxHashMap::with_capacity_and_hasher(8, Default::default()),
+            pending: Vec::with_capacity(8),
+            terminals: None,
+            primvars: Vec::new(),
+            name: name.to_string(),
+        }
+    }
+}
+
+/// Reads the material `name` from `value`, the text of its value alone, as the
+/// `group`-th material (1 for the first): the material goes where `r` sends closed
+/// materials, its findings to `r`'s. An error is serde_json's (its position is within
+/// `value`).
+#[cfg(feature = "parallel")]
+fn read_material(
+    r: &mut Reader<'_>,
+    name: &str,
+    value: &str,
+    group: u32,
+) -> Result<(), serde_json::Error> {
+    r.materials = group;
+    r.needs_types = false;
+    r.ctx.depth.set(0);
+    r.ctx.deepest.set(0);
+    r.ctx.duplicate.borrow_mut().take();
+    let mut de = serde_json::Deserializer::from_str(value);
+    MaterialSeed {
+        r: &mut *r,
+        m: Some(MaterialState::new(name)),
+        group,
+    }
+    .deserialize(&mut de)
+    .and_then(|()| de.end())
 }
 
 /// One material object.
@@ -665,8 +732,9 @@ impl<'de> Visitor<'de> for NodesSeed<'_, '_, '_, 'de> {
             r.ctx.within(|| name.to_string(), read)?;
             r.at(self.group, MAT_NODES);
             match r.close_node(&name, &mut n, RequestKind::Pattern, &pointer) {
-                Ok((id, conns)) => {
-                    m.ids.push(id);
+                Ok((node, conns)) => {
+                    let id = m.nodes.len() as u32;
+                    m.nodes.push(node);
                     m.pending.push((id, name.clone(), conns));
                     m.by_name.insert(name, Some(id));
                 }
@@ -773,6 +841,7 @@ struct FewKeys {
 
 impl FewKeys {
     /// Record `key` (`slot`: the expected key's index, if it is one); false if seen before.
+    #[inline]
     fn insert(&mut self, slot: Option<u8>, key: &str) -> bool {
         match slot {
             Some(i) => {
@@ -891,7 +960,7 @@ impl<'de> Visitor<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, n, pointer) = (self.r, self.n, self.pointer);
         while let Some(name) = map.next_key_seed(Key)? {
-            if !n.add_parameter(Sym::new(&name)) {
+            if !n.add_parameter(r.sym(&name)) {
                 return Err(r.ctx.duplicate_key(&name));
             }
             let p = P::Key(pointer, &name);
@@ -934,6 +1003,7 @@ impl<'de> ParamSeed<'_, '_, '_, 'de, '_> {
 
 impl<'de> NodeState<'de> {
     /// Keep parameter `index`'s value, or its error.
+    #[inline]
     fn settle(&mut self, index: usize, read: Result<Typed, Error>) {
         match read {
             Ok(typed) => self.values[index] = Some(typed),
@@ -1400,29 +1470,76 @@ pub(crate) fn parse_json_limited(
     limits: &Limits,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
+    parse_json_path(bytes, path, types, limits, diags, ReadPath::Auto)
+}
+
+/// How [`parse_json_path`] reads a document.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ReadPath {
+    /// In pieces on rayon's pool ([`pieces`]) when the input is large and more than one
+    /// thread may run; on the calling thread otherwise.
+    Auto,
+    /// On the calling thread.
+    #[cfg(feature = "testkit")]
+    Serial,
+    /// In pieces of about this many bytes whatever the input's size (tests: every piece
+    /// boundary behaves as the text within a piece).
+    #[cfg(feature = "testkit")]
+    Pieces(usize),
+}
+
+/// Inputs from this size on are read in pieces (with the `parallel` feature and more than
+/// one thread): below, handing pieces to the pool costs about what it saves.
+#[cfg(feature = "parallel")]
+const PIECES_MIN_BYTES: usize = 1 << 20;
+
+/// [`parse_json_limited`], read along `read_path`. Every path gives the same network, the
+/// same diagnostics in the same order and the same error.
+fn parse_json_path(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+    read_path: ReadPath,
+) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(path);
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    let mut r = Reader {
-        file: file.clone(),
-        types,
-        net: Network::new(),
-        ctx: Ctx::default(),
-        found: Vec::new(),
-        order: Order::default(),
-        materials: 0,
-        inline_decls: Default::default(),
-        declared_decls: Default::default(),
-    };
+    #[cfg(feature = "parallel")]
+    {
+        let piece = match read_path {
+            ReadPath::Auto
+                if bytes.len() >= PIECES_MIN_BYTES
+                    && rayon::current_num_threads() > 1
+                    && rayon::current_thread_index().is_none() =>
+            {
+                Some(pieces::PIECE_BYTES)
+            }
+            #[cfg(feature = "testkit")]
+            ReadPath::Pieces(n) => Some(n.max(1)),
+            _ => None,
+        };
+        if let Some(piece) = piece
+            && let Some(found) = pieces::read(bytes, &file, types, piece)
+        {
+            let (net, found) = found;
+            return report(net, found, limits, diags);
+        }
+    }
+    #[cfg(not(feature = "parallel"))]
+    let _ = read_path;
     // Valid UTF-8 (checked once, in bulk) is read as text, which spares serde_json a check
     // per string; other input goes through the byte reader, which reports where it breaks.
-    let read = match std::str::from_utf8(bytes) {
-        Ok(text) => {
+    let text = std::str::from_utf8(bytes).ok();
+    let mut r = Reader::new(file.clone(), Some(types), Some(Network::new()));
+    let read = match text {
+        Some(text) => {
             let mut de = serde_json::Deserializer::from_str(text);
             DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end())
         }
-        Err(_) => {
+        None => {
             let mut de = serde_json::Deserializer::from_slice(bytes);
             DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end())
         }
@@ -1430,17 +1547,52 @@ pub(crate) fn parse_json_limited(
     if let Err(e) = read {
         return Err(syntax_error(&e, bytes, &file, &r.ctx));
     }
-    // Report in the order of the checks, not of the document: a material's terminals are
-    // checked before its nodes, the version before the materials (module docs).
-    r.found.sort_by_key(|(order, _)| *order);
-    for (_, found) in r.found {
+    let net = r.net.unwrap_or_default();
+    report(net, r.found, limits, diags)
+}
+
+/// [`parse_json_limited`] on the calling thread (`piece` `None`) or in pieces of about
+/// `piece` bytes, whatever the input's size: tests compare them.
+#[cfg(feature = "testkit")]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn parse_json_with(
+    bytes: &[u8],
+    path: &str,
+    types: &dyn ParamTypes,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+    piece: Option<usize>,
+) -> Result<Network, Error> {
+    let read_path = piece.map_or(ReadPath::Serial, ReadPath::Pieces);
+    parse_json_path(bytes, path, types, limits, diags, read_path)
+}
+
+/// Whether `bytes` is read in pieces of about `piece` bytes rather than handed to the
+/// one-thread reader (tests: the pieces are really read).
+#[cfg(feature = "testkit")]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn json_reads_in_pieces(bytes: &[u8], types: &dyn ParamTypes, piece: usize) -> bool {
+    pieces::read(bytes, &Arc::from("t.json"), types, piece.max(1)).is_some()
+}
+
+/// The end of a read whose text is valid JSON: the findings in the order of the checks, not
+/// of the document (a material's terminals are checked before its nodes, the version before
+/// the materials; module docs), warnings up to the first error, then the limits.
+fn report(
+    net: Network,
+    mut found: Vec<(Order, Found)>,
+    limits: &Limits,
+    diags: &mut Diagnostics,
+) -> Result<Network, Error> {
+    found.sort_by_key(|(order, _)| *order);
+    for (_, found) in found {
         match found {
             Found::Warning(d) => diags.push(d),
             Found::Error(e) => return Err(e),
         }
     }
-    r.net.check_limits(limits)?;
-    Ok(r.net)
+    net.check_limits(limits)?;
+    Ok(net)
 }
 
 /// A syntax error (JS001) or a duplicate key (JS002), with line and column.
@@ -1526,11 +1678,86 @@ enum Found {
     Error(Error),
 }
 
+/// A material read: its nodes, the connections between them (by their index among its nodes),
+/// its terminals; what the network receives when the material closes ([`MaterialOut::add_to`]).
+struct MaterialOut {
+    /// Its nodes in document order.
+    nodes: Vec<Node>,
+    /// Node kinds set by its terminals.
+    kinds: Vec<(u32, RequestKind)>,
+    /// Each input's connections: the node, the parameter's index, the links.
+    links: Vec<(u32, usize, Vec<LocalLink>)>,
+    terminals: Vec<(String, LocalLink)>,
+    name: String,
+    primvars: Vec<String>,
+    location: Option<Location>,
+}
+
+/// A connection of a material not yet in a network: to one of its nodes (by index) or
+/// dangling.
+enum LocalLink {
+    Node(u32, Option<Sym>),
+    Missing(Link),
+}
+
+impl LocalLink {
+    /// The link, the material's nodes having received the ids `ids`.
+    fn link(self, ids: &[NodeId]) -> Link {
+        match self {
+            LocalLink::Node(k, output) => Link::node_sym(ids[k as usize], output),
+            LocalLink::Missing(link) => link,
+        }
+    }
+}
+
+impl MaterialOut {
+    /// Inserts the material's nodes, connections and the material into `net`: the same calls
+    /// in the same order whichever thread read it.
+    fn add_to(self, net: &mut Network) {
+        let ids: Vec<NodeId> = self.nodes.into_iter().map(|n| net.insert_node(n)).collect();
+        for (k, kind) in self.kinds {
+            net.set_node_kind(ids[k as usize], kind);
+        }
+        for (k, param, links) in self.links {
+            let links = links.into_iter().map(|l| l.link(&ids)).collect();
+            net.push_source_links(ids[k as usize], param, links);
+        }
+        let terminals = self
+            .terminals
+            .into_iter()
+            .map(|(name, l)| Terminal {
+                name,
+                link: l.link(&ids),
+            })
+            .collect();
+        net.materials_mut().push(Material {
+            name: self.name,
+            terminals,
+            nodes: MaterialNodes::Explicit(ids),
+            primvars: self.primvars,
+            location: self.location,
+        });
+    }
+}
+
+/// Type strings of the canonical form whose declarations a reader finds by a scan.
+const FEW_DECLS: usize = 8;
+
 /// The network being built while serde reads the text.
 struct Reader<'t> {
     file: Arc<str>,
-    types: &'t dyn ParamTypes,
-    net: Network,
+    /// Declared types for shorthand values; `None` on a thread that reads pieces of the
+    /// materials, which leaves a material with a shorthand value to the calling thread
+    /// (`needs_types`).
+    types: Option<&'t dyn ParamTypes>,
+    /// Where closed materials go: into the network, or (`None`) to `done`.
+    net: Option<Network>,
+    done: Vec<MaterialOut>,
+    /// A shorthand value was met while `types` is `None`.
+    needs_types: bool,
+    /// The names this reader interned: the process-wide table takes a lock per look-up,
+    /// which the threads reading pieces would contend for.
+    syms: hashbrown::HashTable<Sym>,
     /// The key path, for the pointer of a duplicate key.
     ctx: Ctx,
     found: Vec<(Order, Found)>,
@@ -1538,13 +1765,44 @@ struct Reader<'t> {
     order: Order,
     /// Materials read so far.
     materials: u32,
-    /// One declaration per type string of the canonical form, shared by its parameters.
+    /// One declaration per type string of the canonical form, shared by its parameters: the
+    /// first [`FEW_DECLS`] found by a scan (a document uses a few), the others by a map.
+    few_decls: Vec<Arc<Decl>>,
     inline_decls: FxHashMap<Box<str>, Arc<Decl>>,
     /// One declaration per declared type of the shorthand form, shared likewise.
     declared_decls: FxHashMap<Type, Arc<Decl>>,
 }
 
-impl Reader<'_> {
+impl<'t> Reader<'t> {
+    fn new(file: Arc<str>, types: Option<&'t dyn ParamTypes>, net: Option<Network>) -> Self {
+        Reader {
+            file,
+            types,
+            net,
+            done: Vec::new(),
+            needs_types: false,
+            syms: hashbrown::HashTable::new(),
+            ctx: Ctx::default(),
+            found: Vec::new(),
+            order: Order::default(),
+            materials: 0,
+            few_decls: Vec::new(),
+            inline_decls: Default::default(),
+            declared_decls: Default::default(),
+        }
+    }
+
+    /// The interned `name`.
+    fn sym(&mut self, name: &str) -> Sym {
+        let hash = name_hash(name);
+        if let Some(&sym) = self.syms.find(hash, |s| s.as_str() == name) {
+            return sym;
+        }
+        let sym = Sym::with_hash(name, hash);
+        self.syms.insert_unique(hash, sym, |s| s.name_hash());
+        sym
+    }
+
     fn loc(&self, pointer: &str) -> Location {
         Location {
             file: self.file.clone(),
@@ -1671,44 +1929,51 @@ impl Reader<'_> {
         }
         // A node's kind comes from the first terminal naming it.
         let mut named: FxHashSet<&str> = Default::default();
+        let mut kinds = Vec::new();
         for (t, c) in &terms {
             if named.insert(&c.node)
                 && let Some(&Some(id)) = m.by_name.get(&*c.node)
             {
-                self.net
-                    .set_node_kind(id, RequestKind::from_terminal_name(t));
+                kinds.push((id, RequestKind::from_terminal_name(t)));
             }
         }
         self.at(group, MAT_BIND);
         let nodes = P::Key(&root, "nodes");
+        let mut links = Vec::new();
         for (id, name, conns) in &m.pending {
             let node = P::Key(&nodes, name);
             let inputs = P::Key(&node, "inputConnections");
             for (param, input, list) in conns {
                 let input = P::Key(&inputs, input);
-                let links = list
+                let bound = list
                     .iter()
                     .enumerate()
                     .map(|(i, c)| self.bind(c, &P::Index(&input, i), &m.by_name, &m.name))
                     .collect();
-                self.net.push_source_links(*id, *param, links);
+                links.push((*id, *param, bound));
             }
         }
         let terminals = terms
             .iter()
-            .map(|(t, c)| Terminal {
-                name: t.to_string(),
-                link: self.bind(c, &P::Key(&tpointer, t), &m.by_name, &m.name),
+            .map(|(t, c)| {
+                let link = self.bind(c, &P::Key(&tpointer, t), &m.by_name, &m.name);
+                (t.to_string(), link)
             })
             .collect();
         let location = Some(self.loc(&pointer));
-        self.net.materials_mut().push(Material {
-            name: m.name,
+        let out = MaterialOut {
+            nodes: m.nodes,
+            kinds,
+            links,
             terminals,
-            nodes: MaterialNodes::Explicit(m.ids),
+            name: m.name,
             primvars: m.primvars,
             location,
-        });
+        };
+        match &mut self.net {
+            Some(net) => out.add_to(net),
+            None => self.done.push(out),
+        }
     }
 
     fn primvars(&self, j: &J, pointer: &P) -> Result<Vec<String>, Error> {
@@ -1730,9 +1995,9 @@ impl Reader<'_> {
     }
 
     /// Bind a connection to a node of the material, or keep it dangling (JS010).
-    fn bind(&mut self, c: &Conn, pointer: &P, by_name: &NodesByName, material: &str) -> Link {
+    fn bind(&mut self, c: &Conn, pointer: &P, by_name: &NodesByName, material: &str) -> LocalLink {
         match by_name.get(&*c.node) {
-            Some(&Some(id)) => Link::node(id, c.output.as_deref()),
+            Some(&Some(id)) => LocalLink::Node(id, c.output.as_deref().map(|o| self.sym(o))),
             _ => {
                 let d = Diagnostic::warning(
                     "JS010",
@@ -1743,7 +2008,7 @@ impl Reader<'_> {
                 )
                 .at(self.loc(&pointer.render()));
                 self.warn(d);
-                Link::missing(&c.node, c.output.as_deref())
+                LocalLink::Missing(Link::missing(&c.node, c.output.as_deref()))
             }
         }
     }
@@ -1782,16 +2047,16 @@ impl Reader<'_> {
         })
     }
 
-    /// Close a node once all its members are read: report its findings (module docs), bind
-    /// its inputs to its parameters and insert it. Returns its id and its connections (per
-    /// parameter index), to bind once every node of the material exists.
+    /// Close a node once all its members are read: report its findings (module docs) and bind
+    /// its inputs to its parameters. Returns the node and its connections (per parameter
+    /// index), to bind once every node of the material exists.
     fn close_node<'de>(
         &mut self,
         name: &str,
         n: &mut NodeState<'de>,
         kind: RequestKind,
         pointer: &P,
-    ) -> Result<(NodeId, NodeConns<'de>), Error> {
+    ) -> Result<(Node, NodeConns<'de>), Error> {
         match n.shader.clone() {
             Some(shader) => {
                 let ppointer = P::Key(pointer, "parameters");
@@ -1835,7 +2100,7 @@ impl Reader<'_> {
         // Inputs name parameters given above, or add their own.
         let mut conns: NodeConns<'de> = Vec::with_capacity(n.inputs.len());
         for (input, list) in std::mem::take(&mut n.inputs) {
-            let sym = Sym::new(&input);
+            let sym = self.sym(&input);
             let k = n.parameter_index(sym).unwrap_or_else(|| {
                 params.push(Param::from_shared(sym, None, None, ParamAt::Unknown, None));
                 params.len() - 1
@@ -1845,7 +2110,7 @@ impl Reader<'_> {
         let mut node = Node::new_raw(name, &shader, kind);
         node.set_raw_params(params);
         node.set_origin(Some(self.loc(&pointer.render())), None);
-        Ok((self.net.insert_node(node), conns))
+        Ok((node, conns))
     }
 
     /// A parameter in the canonical `{ "type", "value" }` form (`ty` and `value`: its members,
@@ -1891,6 +2156,9 @@ impl Reader<'_> {
     /// The declaration shared by the parameters whose `type` is `text` (`None` if `text` is
     /// not a type).
     fn inline_decl(&mut self, text: &str) -> Option<Arc<Decl>> {
+        if let Some(decl) = self.few_decls.iter().find(|d| d.text == text) {
+            return Some(decl.clone());
+        }
         if let Some(decl) = self.inline_decls.get(text) {
             return Some(decl.clone());
         }
@@ -1901,13 +2169,21 @@ impl Reader<'_> {
             ty: parse_type(text)?,
             inline_type: true,
         });
-        self.inline_decls.insert(Box::from(text), decl.clone());
+        if self.few_decls.len() < FEW_DECLS {
+            self.few_decls.push(decl.clone());
+        } else {
+            self.inline_decls.insert(Box::from(text), decl.clone());
+        }
         Some(decl)
     }
 
     /// A shorthand (bare) parameter value, typed by the shader's definition.
     fn shorthand(&mut self, shader: &str, name: &str, j: &J, pointer: &P) -> Result<Typed, Error> {
-        let Some(t) = self.types.input_type(shader, name) else {
+        let Some(types) = self.types else {
+            self.needs_types = true;
+            return Err(self.error("JS006", &pointer.render(), "no declared types here"));
+        };
+        let Some(t) = types.input_type(shader, name) else {
             return Err(self.error(
                 "JS006",
                 &pointer.render(),

@@ -93,3 +93,310 @@ fn types_and_values() {
     );
     assert!(to_value(&Type::scalar(BaseType::Float), &J::Num(Num::F(1e39))).is_err());
 }
+
+/// Everything a read gives, for comparing two ways of reading: the network (its JSON form
+/// and its full debug form) or the error, and the diagnostics.
+fn read_outcome(
+    src: &[u8],
+    reg: &vstructc::registry::Registry,
+    limits: &vstructc::limits::Limits,
+    piece: Option<usize>,
+) -> String {
+    let mut d = Diagnostics::new();
+    let net = match parse_json_with(src, "t.json", reg, limits, &mut d, piece) {
+        Ok(net) => format!(
+            "{} nodes\n{:?}\n{net:?}",
+            net.node_count(),
+            vstructc::back::json::write_json(&net)
+        ),
+        Err(e) => format!("error {e:?}"),
+    };
+    format!("{net}\n{d:?}")
+}
+
+/// The JSON form of the layered scene of `materials` materials, as the writer lays it out.
+fn scene_json(materials: usize, reg: &vstructc::registry::Registry) -> String {
+    let rib = vstructc::network::testgen::layered_scene(materials);
+    let mut d = Diagnostics::new();
+    let options = vstructc::front::rib::RibOptions::default();
+    let net =
+        vstructc::front::rib::parse_rib(rib.as_bytes(), "s.rib", reg, &options, &mut d).unwrap();
+    vstructc::back::json::write_json(&net).unwrap()
+}
+
+/// The position of the start of the material nearest after `frac` of `text` (its name's
+/// quote), in the writer's layout.
+fn material_at(text: &str, frac: f64) -> usize {
+    let from = (text.len() as f64 * frac) as usize;
+    from + text[from..].find(",\n    \"").unwrap() + 6
+}
+
+/// `text` with the first `what` at or after `at` replaced by `with`.
+fn replace_after(text: &str, at: usize, what: &str, with: &str) -> String {
+    let k = at + text[at..].find(what).unwrap();
+    format!("{}{with}{}", &text[..k], &text[k + what.len()..])
+}
+
+/// `text` with a bare value in place of the first canonical `float` parameter after `at`.
+fn shorthand_after(text: &str, at: usize) -> String {
+    let ty = at + text[at..].find("\"type\": \"float\"").unwrap();
+    let open = text[..ty].rfind('{').unwrap();
+    let close = ty + text[ty..].find('}').unwrap();
+    let v = ty + text[ty..].find("\"value\": ").unwrap() + 9;
+    let value = text[v..].lines().next().unwrap().trim();
+    format!("{}{value}{}", &text[..open], &text[close + 1..])
+}
+
+/// Inputs for comparing the two readers: a scene with findings of every kind placed early,
+/// in the middle and late, errors of every kind there, and layouts the pieces leave to one
+/// thread.
+fn scenes_with_findings(reg: &vstructc::registry::Registry) -> Vec<(String, String)> {
+    let scene = scene_json(40, reg);
+    let spots = [0.02, 0.5, 0.9].map(|f| material_at(&scene, f));
+    let mut out = vec![("scene".to_string(), scene.clone())];
+    // Warnings: unknown keys of nodes and connections, dangling connections, shorthand
+    // values (read again with the declared types), in every third of the scene.
+    let mut warned = scene.clone();
+    for &f in [0.9, 0.5, 0.02].iter() {
+        let at = material_at(&warned, f);
+        warned = replace_after(
+            &warned,
+            at,
+            "\"nodeTypeId\": ",
+            "\"bogus\": [1, {\"x\": null}],\n \"nodeTypeId\": ",
+        );
+        warned = replace_after(
+            &warned,
+            at,
+            "\"upstreamNode\": \"",
+            "\"upstreamNode\": \"ghost",
+        );
+        warned = replace_after(
+            &warned,
+            at,
+            "\"upstreamOutputName\"",
+            "\"extra\": 1, \"upstreamOutputName\"",
+        );
+        warned = shorthand_after(&warned, at);
+    }
+    out.push(("warnings".into(), warned.clone()));
+    for (i, &at) in spots.iter().enumerate() {
+        let at_w = material_at(&warned, [0.02, 0.5, 0.9][i]);
+        let cases = [
+            (
+                "JS004",
+                replace_after(&warned, at_w, "\"value\": 0.5\n", "\"value\": \"x\"\n"),
+            ),
+            (
+                "JS006",
+                replace_after(
+                    &warned,
+                    at_w,
+                    "\"parameters\": {",
+                    "\"parameters\": {\"bogus\": 1,",
+                ),
+            ),
+            (
+                "no nodeTypeId",
+                replace_after(&warned, at_w, "\"nodeTypeId\": ", "\"nodeType\": "),
+            ),
+            ("syntax", replace_after(&scene, at, "\": ", "\" ")),
+            ("stray ]", replace_after(&scene, at, "}", "}]")),
+            (
+                "duplicate key",
+                replace_after(
+                    &scene,
+                    at,
+                    "\"nodeTypeId\": ",
+                    "\"nodeTypeId\": \"X\", \"nodeTypeId\": ",
+                ),
+            ),
+            (
+                "duplicate material",
+                replace_after(&scene, at, "\"m", "\"m0_SG\": {\"nodes\": {}},\n    \"m"),
+            ),
+            (
+                "escaped name",
+                replace_after(&scene, at, "_SG\"", "\\u005fSG\""),
+            ),
+            (
+                "deep",
+                replace_after(
+                    &scene,
+                    at,
+                    "\"nodes\": {",
+                    &format!(
+                        "\"deep\": {}1{},\n      \"nodes\": {{",
+                        "[".repeat(40),
+                        "]".repeat(40)
+                    ),
+                ),
+            ),
+            (
+                "deeper",
+                replace_after(
+                    &scene,
+                    at,
+                    "\"nodes\": {",
+                    &format!(
+                        "\"deep\": {}1{},\n      \"nodes\": {{",
+                        "[".repeat(100),
+                        "]".repeat(100)
+                    ),
+                ),
+            ),
+            (
+                "too deep",
+                replace_after(
+                    &scene,
+                    at,
+                    "\"nodes\": {",
+                    &format!(
+                        "\"deep\": {}1{},\n      \"nodes\": {{",
+                        "[".repeat(127),
+                        "]".repeat(127)
+                    ),
+                ),
+            ),
+            (
+                "not an object",
+                replace_after(
+                    &scene,
+                    at,
+                    "{\n      \"nodes\"",
+                    "[],\n \"x\": {\n      \"nodes\"",
+                ),
+            ),
+            (
+                "spaces",
+                replace_after(&scene, at, "},\n    \"", "} \t,\n    \""),
+            ),
+        ];
+        out.extend(
+            cases
+                .into_iter()
+                .map(|(name, text)| (format!("{name} {i}"), text)),
+        );
+    }
+    // The document's own members around `materials`, with a finding of their own.
+    let doc = scene.replacen(
+        "{\n  \"materials\"",
+        "{\n  \"zzz\": {\"a\": [1, \"}\"]}, \"vstructcNetwork\": 2,\n  \"materials\"",
+        1,
+    );
+    out.push((
+        "document members".into(),
+        doc.replacen("\"vstructcNetwork\": 1", "\"more\": null", 1),
+    ));
+    out.push(("CRLF".into(), warned.replace('\n', "\r\n")));
+    let compact: serde_json::Value = serde_json::from_str(&scene).unwrap();
+    out.push(("one line".into(), compact.to_string()));
+    out.push((
+        "no materials".into(),
+        "{\n  \"materials\": {\n  },\n  \"vstructcNetwork\": 1\n}\n".into(),
+    ));
+    out.push(("truncated".into(), scene[..scene.len() / 2].to_string()));
+    out
+}
+
+/// The reader in pieces on the pool, of any size, gives what it gives on one thread: the same
+/// network, the same diagnostics in the same order with the same positions, the same error
+/// (a syntax error or a duplicate key with its line and column, wherever it falls).
+#[test]
+fn reading_in_pieces_is_the_one_thread_reading() {
+    let reg = vstructc::registry::Registry::embedded();
+    let mut inputs: Vec<(String, Vec<u8>)> = Vec::new();
+    // Every JSON file of the tests, and every RIB example written as JSON.
+    for dir in [
+        "tests",
+        "tests/hostile/corpus",
+        "tests/vectors/cond",
+        "tests/data/rib",
+        "examples",
+    ] {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap_or_default();
+            if path.extension().is_some_and(|e| e == "json") {
+                inputs.push((path.display().to_string(), bytes));
+            } else if path.extension().is_some_and(|e| e == "rib") {
+                let mut d = Diagnostics::new();
+                let options = vstructc::front::rib::RibOptions::default();
+                if let Ok(net) =
+                    vstructc::front::rib::parse_rib(&bytes, "x.rib", &reg, &options, &mut d)
+                    && let Ok(json) = vstructc::back::json::write_json(&net)
+                {
+                    inputs.push((path.display().to_string(), json.into_bytes()));
+                }
+            }
+        }
+    }
+    assert!(inputs.len() > 10, "{}", inputs.len());
+    let scenes = scenes_with_findings(&reg);
+    // Text that is not UTF-8 in a material's name, in a value, and in the document's members.
+    let scene = scenes[0].1.as_bytes();
+    for (name, at) in [
+        ("bad name", 0.3),
+        ("bad value", 0.6),
+        ("bad document", 0.999),
+    ] {
+        let mut bad = scene.to_vec();
+        let at = (scene.len() as f64 * at) as usize;
+        let k = match name {
+            "bad name" => material_at(&scenes[0].1, 0.3) + 2,
+            "bad document" => scenes[0].1.rfind("vstructcNetwork").unwrap() + 3,
+            _ => at + scene[at..].iter().position(|&c| c == b'"').unwrap() + 1,
+        };
+        bad.insert(k, 0xff);
+        inputs.push((name.into(), bad));
+    }
+    inputs.extend(scenes.into_iter().map(|(n, t)| (n, t.into_bytes())));
+    let few_nodes = vstructc::limits::Limits {
+        nodes: 60,
+        ..Default::default()
+    };
+    let mut pieced = 0;
+    for (name, src) in &inputs {
+        for limits in [&vstructc::limits::Limits::default(), &few_nodes] {
+            let serial = read_outcome(src, &reg, limits, None);
+            for piece in [1, 100, 3000, 20_000, 1 << 20] {
+                let pieces = read_outcome(src, &reg, limits, Some(piece));
+                assert!(
+                    serial == pieces,
+                    "{name}, pieces of {piece} bytes, {limits:?}:\n{serial}\n---\n{pieces}"
+                );
+            }
+        }
+        if json_reads_in_pieces(src, &reg, 3000) {
+            pieced += 1;
+        }
+    }
+    // The scenes were read in pieces, not handed to the one-thread reader.
+    for name in [
+        "scene",
+        "warnings",
+        "CRLF",
+        "document members",
+        "JS004 1",
+        "spaces 2",
+        "deep 0",
+    ] {
+        let (_, src) = inputs.iter().find(|(n, _)| n == name).unwrap();
+        assert!(json_reads_in_pieces(src, &reg, 3000), "{name}");
+    }
+    for name in [
+        "one line",
+        "syntax 1",
+        "duplicate material 2",
+        "escaped name 0",
+        "deeper 2",
+        "too deep 1",
+        "bad name",
+        "bad value",
+        "bad document",
+    ] {
+        let (_, src) = inputs.iter().find(|(n, _)| n == name).unwrap();
+        assert!(!json_reads_in_pieces(src, &reg, 3000), "{name}");
+    }
+    assert!(pieced > 20, "{pieced}");
+}
