@@ -291,11 +291,11 @@ impl Reader<'_> {
                 };
                 let mut seen = rustc_hash::FxHashSet::default();
                 let mut out = Vec::new();
-                for n in names {
+                for n in &names {
                     let Some(input) = n.as_str().strip_prefix("inputs:") else {
                         continue;
                     };
-                    if !seen.insert(input.to_string()) {
+                    if !seen.insert(input) {
                         continue;
                     }
                     if let Some(p) = property_path(path, n.as_str()) {
@@ -421,14 +421,19 @@ impl Reader<'_> {
             if fields.samples > 0 {
                 self.sampled.push(apath.clone());
             }
-            let declared = self.types.input_type(shader, &input);
+            // The declared type, looked up only for a value.
+            let types = self.types;
+            let mut declared: Option<Option<Type>> = None;
             let targets = fields.targets;
             let mut value = None;
             let mut links = Vec::new();
             if targets.is_empty() {
                 let usd_type = fields.type_name;
                 match fields.default {
-                    Ok(Some(v)) => value = self.value(&v, declared.as_ref(), &usd_type, &apath),
+                    Ok(Some(v)) => {
+                        let declared = types.input_type(shader, &input);
+                        value = self.value(&v, declared.as_ref(), &usd_type, &apath);
+                    }
                     Ok(None) => {}
                     Err(e) => self.warn(
                         "US006",
@@ -445,6 +450,8 @@ impl Reader<'_> {
                     match s {
                         Source::Output(prim, output) => links.push((prim, Some(output), false)),
                         Source::Value(v, from) => {
+                            let declared =
+                                declared.get_or_insert_with(|| types.input_type(shader, &input));
                             if let Some(v) = self.value(&v, declared.as_ref(), "", &from) {
                                 value = Some(v);
                             }
@@ -508,9 +515,9 @@ impl Reader<'_> {
         let read = |this: &mut Self, names: &[(&str, &str)]| -> Vec<Terminal> {
             let mut out = Vec::new();
             for &(attr_name, terminal) in names {
-                let targets = match prim.append_property(attr_name) {
-                    Ok(attr) => this.connections(&attr),
-                    Err(_) => Vec::new(),
+                let targets = match property_path(&prim, attr_name) {
+                    Some(attr) => this.connections(&attr),
+                    None => Vec::new(),
                 };
                 let apath = format!("{path}.{attr_name}");
                 let mut sources = Vec::new();
@@ -861,6 +868,23 @@ fn property_path(prim: &sdf::Path, name: &str) -> Option<sdf::Path> {
     Some(sdf::Path::from(p))
 }
 
+/// The path of child `name` of prim `prim` (the root or a prim path that is no variant
+/// selection), as [`sdf::Path::append_path`] makes it: a name that is an identifier is
+/// appended directly, any other through `append_path`, which refuses what is no prim name.
+fn child_path(prim: &sdf::Path, name: &str) -> Option<sdf::Path> {
+    if !sdf::Path::is_valid_identifier(name) {
+        return prim.append_path(name).ok();
+    }
+    let parent = prim.as_str();
+    let mut p = String::with_capacity(parent.len() + 1 + name.len());
+    p.push_str(parent);
+    if parent != "/" {
+        p.push('/');
+    }
+    p.push_str(name);
+    Some(sdf::Path::from(p))
+}
+
 /// A field read from a layer alone.
 type FieldRead<'a> = Result<Option<std::borrow::Cow<'a, sdf::Value>>, sdf::DataError>;
 
@@ -937,6 +961,15 @@ trait Specs {
     ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError>;
     /// The names of the fields of the spec at `path`.
     fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>>;
+    /// Whether every field of the spec at `path` is named in `allowed`; nothing when there
+    /// is no spec there.
+    fn fields_within(&self, path: &sdf::Path, allowed: &[&str]) -> Option<bool> {
+        Some(
+            self.list_fields(path)?
+                .iter()
+                .all(|f| allowed.contains(&f.as_str())),
+        )
+    }
     /// What the reader reads of the attribute at `path`, or nothing when there is no
     /// attribute spec there.
     fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
@@ -970,6 +1003,14 @@ impl Specs for sdf::LayerData {
     }
 }
 
+/// The crate file type [`CrateLayer`] reads through.
+type CrateFile = openusd::usdc::CrateFile<io::Cursor<Arc<[u8]>>>;
+
+/// The value types of a token and of a token vector (a prim's children, its properties)
+/// in a crate file's value representations (bits 48 to 55).
+const CRATE_TOKEN: u64 = 11;
+const CRATE_TOKEN_VECTOR: u64 = 41;
+
 /// The hash [`CrateLayer`] finds a spec by: its path's text, hashed with FxHash.
 fn path_hash(path: &sdf::Path) -> u64 {
     use std::hash::BuildHasher;
@@ -981,7 +1022,16 @@ fn path_hash(path: &sdf::Path) -> u64 {
 /// set (`openusd`'s own crate data compares names and hashes paths with SipHash); values
 /// are decoded from the file when asked for.
 struct CrateLayer {
-    file: std::cell::RefCell<openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>>,
+    file: std::cell::RefCell<CrateFile>,
+    /// The file's bytes (shared with `file`'s reader), for the values decoded here.
+    bytes: Arc<[u8]>,
+    /// The file's version: whether it is at least 0.5.0, and at least 0.7.0 (the layout of
+    /// array headers).
+    v05: bool,
+    v07: bool,
+    /// The file's tokens, each made a token once (values that are tokens, or arrays of
+    /// tokens, are answered with clones of these).
+    tokens: Vec<openusd::tf::Token>,
     /// Each spec: its path's index in the file's paths, its type and the start of its
     /// field set in the file's field sets, found by the hash of its path (so the paths are
     /// not copied).
@@ -1000,8 +1050,16 @@ impl CrateLayer {
     /// The crate file `bytes`, or nothing when it does not read or is not sound (then the
     /// stage is composed, and reports why).
     fn open(bytes: &[u8]) -> Option<Self> {
-        let mut file = openusd::usdc::CrateFile::open(io::Cursor::new(bytes.to_vec())).ok()?;
+        let bytes: Arc<[u8]> = Arc::from(bytes);
+        let mut file = CrateFile::open(io::Cursor::new(bytes.clone())).ok()?;
         file.validate().ok()?;
+        let v05 = file.version() >= openusd::usdc::version(0, 5, 0);
+        let v07 = file.version() >= openusd::usdc::version(0, 7, 0);
+        let tokens = file
+            .tokens
+            .iter()
+            .map(|t| openusd::tf::Token::from(t.as_str()))
+            .collect();
         let specs_in = std::mem::take(&mut file.specs);
         let mut specs = hashbrown::HashTable::with_capacity(specs_in.len());
         let paths = &file.paths;
@@ -1041,6 +1099,10 @@ impl CrateLayer {
         .map(|k| names.get(k.as_str()).copied());
         Some(CrateLayer {
             file: std::cell::RefCell::new(file),
+            bytes,
+            v05,
+            v07,
+            tokens,
             specs,
             names,
             field_names,
@@ -1056,11 +1118,92 @@ impl CrateLayer {
             .map(|&(_, ty, start)| (ty, start))
     }
 
+    /// The value of field `field` when it is a token or an array of tokens, from the tokens
+    /// made once; nothing for any other value (or a token value laid out otherwise), which
+    /// `openusd` decodes.
+    fn token_value(&self, file: &CrateFile, field: usize) -> Option<sdf::Value> {
+        let rep = file.fields.get(field)?.value_rep;
+        if rep.is_compressed() {
+            return None;
+        }
+        match ((rep.0 >> 48) & 0xff, rep.is_array(), rep.is_inlined()) {
+            (CRATE_TOKEN, false, true) => self
+                .tokens
+                .get((rep.payload() & 0xffff_ffff) as usize)
+                .map(|t| sdf::Value::Token(t.clone())),
+            (CRATE_TOKEN, true, false) => self.token_array(rep.payload()).map(sdf::Value::TokenVec),
+            (CRATE_TOKEN_VECTOR, false, false) => {
+                let at = usize::try_from(rep.payload()).ok()?;
+                let count = self.bytes.get(at..at.checked_add(8)?)?;
+                let count = usize::try_from(u64::from_le_bytes(count.try_into().ok()?)).ok()?;
+                self.token_indices(at + 8, count).map(sdf::Value::TokenVec)
+            }
+            _ => None,
+        }
+    }
+
+    /// The `count` tokens whose 32-bit indices start at byte `at`; nothing when any lies
+    /// outside the file or names no token.
+    fn token_indices(&self, at: usize, count: usize) -> Option<Vec<openusd::tf::Token>> {
+        let items = self.bytes.get(at..at.checked_add(count.checked_mul(4)?)?)?;
+        items
+            .chunks_exact(4)
+            .map(|c| {
+                let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
+                self.tokens.get(i).cloned()
+            })
+            .collect()
+    }
+
+    /// The array of tokens stored at `at`: its header (before 0.5.0 a 32-bit shape, then
+    /// the count, 32-bit before 0.7.0, else 64-bit) and one 32-bit token index per element;
+    /// nothing when any of it lies outside the file or names no token.
+    fn token_array(&self, at: u64) -> Option<Vec<openusd::tf::Token>> {
+        if at == 0 {
+            return Some(Vec::new());
+        }
+        let mut pos = usize::try_from(at).ok()?;
+        if !self.v05 {
+            pos = pos.checked_add(4)?;
+        }
+        let count = if self.v07 {
+            let b = self.bytes.get(pos..pos.checked_add(8)?)?;
+            pos += 8;
+            usize::try_from(u64::from_le_bytes(b.try_into().ok()?)).ok()?
+        } else {
+            let b = self.bytes.get(pos..pos.checked_add(4)?)?;
+            pos += 4;
+            u32::from_le_bytes(b.try_into().ok()?) as usize
+        };
+        self.token_indices(pos, count)
+    }
+
+    /// The value of field `field` (the field `name` of the spec at `path`).
+    fn read_field(
+        &self,
+        file: &mut CrateFile,
+        field: usize,
+        path: &sdf::Path,
+        name: &str,
+    ) -> FieldRead<'static> {
+        if let Some(v) = self.token_value(file, field) {
+            return Ok(Some(std::borrow::Cow::Owned(v)));
+        }
+        let Some(rep) = file.fields.get(field).map(|f| f.value_rep) else {
+            return Ok(None);
+        };
+        match file.value(rep) {
+            Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
+            Err(e) => Err(sdf::DataError::Decode {
+                path: path.clone(),
+                field: name.to_string(),
+                source: e.into(),
+            }),
+        }
+    }
+
     /// The field indices of the field set starting at `start`.
-    fn field_set(
-        file: &openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>,
-        start: usize,
-    ) -> &[Option<usize>] {
+    fn field_set(file: &CrateFile, start: usize) -> &[Option<usize>] {
         let rest = file.fieldsets.get(start..).unwrap_or(&[]);
         let end = rest.iter().position(Option::is_none).unwrap_or(rest.len());
         &rest[..end]
@@ -1081,22 +1224,14 @@ impl Specs for CrateLayer {
             return Ok(None);
         };
         let mut file = self.file.borrow_mut();
-        let rep = Self::field_set(&file, start)
+        let found = Self::field_set(&file, start)
             .iter()
             .flatten()
-            .filter_map(|&i| file.fields.get(i))
-            .find(|f| f.token_index == token)
-            .map(|f| f.value_rep);
-        let Some(rep) = rep else {
-            return Ok(None);
-        };
-        match file.value(rep) {
-            Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
-            Err(e) => Err(sdf::DataError::Decode {
-                path: path.clone(),
-                field: field.to_string(),
-                source: e.into(),
-            }),
+            .copied()
+            .find(|&i| file.fields.get(i).is_some_and(|f| f.token_index == token));
+        match found {
+            Some(i) => self.read_field(&mut file, i, path, field),
+            None => Ok(None),
         }
     }
 
@@ -1108,18 +1243,17 @@ impl Specs for CrateLayer {
         }
         let mut file = self.file.borrow_mut();
         let mut reps = [None; 4];
-        for f in Self::field_set(&file, start)
-            .iter()
-            .flatten()
-            .filter_map(|&i| file.fields.get(i))
-        {
+        for &i in Self::field_set(&file, start).iter().flatten() {
+            let Some(f) = file.fields.get(i) else {
+                continue;
+            };
             if let Some(k) = self
                 .attribute_fields
                 .iter()
                 .position(|&t| t == Some(f.token_index))
                 && reps[k].is_none()
             {
-                reps[k] = Some(f.value_rep);
+                reps[k] = Some(i);
             }
         }
         let keys = [
@@ -1129,16 +1263,9 @@ impl Specs for CrateLayer {
             sdf::FieldKey::TimeSamples,
         ];
         let mut read = |k: usize| -> FieldRead<'static> {
-            let Some(rep) = reps[k] else {
-                return Ok(None);
-            };
-            match file.value(rep) {
-                Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
-                Err(e) => Err(sdf::DataError::Decode {
-                    path: path.clone(),
-                    field: keys[k].as_str().to_string(),
-                    source: e.into(),
-                }),
+            match reps[k] {
+                Some(i) => self.read_field(&mut file, i, path, keys[k].as_str()),
+                None => Ok(None),
             }
         };
         Some(AttrFields {
@@ -1147,6 +1274,21 @@ impl Specs for CrateLayer {
             targets: targets_of(read(2)),
             samples: samples_of(read(3)),
         })
+    }
+
+    /// One look-up and one walk of the spec's field set, comparing names without copying
+    /// them.
+    fn fields_within(&self, path: &sdf::Path, allowed: &[&str]) -> Option<bool> {
+        let (_, start) = self.spec(path)?;
+        let file = self.file.borrow();
+        Some(
+            Self::field_set(&file, start)
+                .iter()
+                .flatten()
+                .filter_map(|&i| file.fields.get(i))
+                .filter_map(|f| self.field_names.get(&f.token_index))
+                .all(|name| allowed.contains(&name.as_str())),
+        )
     }
 
     fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>> {
@@ -1263,6 +1405,28 @@ pub fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
     open_flat(name, bytes).is_some()
 }
 
+/// Checks the values a crate file's reader decodes itself (tokens, arrays of tokens, token
+/// vectors) against `openusd`'s decoding of the same fields: the number of fields decoded
+/// both ways, or the first that differs (or a file that does not open).
+#[cfg(feature = "testkit")]
+pub fn crate_values_agree(bytes: &[u8]) -> Result<usize, String> {
+    let layer = CrateLayer::open(bytes).ok_or("the crate file does not open")?;
+    let mut file = layer.file.borrow_mut();
+    let mut checked = 0;
+    for i in 0..file.fields.len() {
+        let Some(ours) = layer.token_value(&file, i) else {
+            continue;
+        };
+        let rep = file.fields[i].value_rep;
+        let theirs = file.value(rep).map_err(|e| format!("field {i}: {e}"))?;
+        if ours != theirs {
+            return Err(format!("field {i}: {ours:?} against {theirs:?}"));
+        }
+        checked += 1;
+    }
+    Ok(checked)
+}
+
 /// [`parse_usd`], reading the root layer alone when `direct` and nothing in it composes.
 fn read_usd(
     bytes: &[u8],
@@ -1371,14 +1535,17 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
         r.net.set_node_location(id, r.at(&path));
         r.nodes.insert(path.clone(), id);
         pending.push((id, links));
-        // The nearest enclosing Material owns the shader.
-        let owner = p
-            .strict_ancestors()
-            .find(|a| r.kinds.get(a.as_str()) == Some(&PrimKind::Material));
-        if let Some(owner) = owner
-            && let Some(&m) = material_at.get(owner.as_str())
-        {
-            materials[m].1.push(id);
+        // The nearest enclosing Material owns the shader (a prim path's ancestors are its
+        // prefixes up to each `/`).
+        let mut owner = path.as_str();
+        while let Some(cut) = owner.rfind('/') {
+            owner = &owner[..cut];
+            if r.kinds.get(owner) == Some(&PrimKind::Material) {
+                if let Some(&m) = material_at.get(owner) {
+                    materials[m].1.push(id);
+                }
+                break;
+            }
         }
     }
     // Connections bind to their prims wherever they are: once every node exists.
@@ -1475,10 +1642,9 @@ fn flat_prims(data: &dyn Specs) -> Option<Vec<sdf::Path>> {
         match data.try_field(path, "primChildren").ok()? {
             None => Some(Vec::new()),
             Some(v) => match v.as_ref() {
-                sdf::Value::TokenVec(names) => names
-                    .iter()
-                    .map(|n| path.append_path(n.as_str()).ok())
-                    .collect(),
+                sdf::Value::TokenVec(names) => {
+                    names.iter().map(|n| child_path(path, n.as_str())).collect()
+                }
                 _ => None,
             },
         }
@@ -1490,8 +1656,7 @@ fn flat_prims(data: &dyn Specs) -> Option<Vec<sdf::Path>> {
         if data.spec_type(&path) != Some(sdf::SpecType::Prim) {
             return None;
         }
-        let fields = data.list_fields(&path)?;
-        if fields.iter().any(|f| !PRIM_KEEPS.contains(&f.as_str())) {
+        if !data.fields_within(&path, &PRIM_KEEPS)? {
             return None;
         }
         match data.try_field(&path, "specifier").ok()?.as_deref() {
