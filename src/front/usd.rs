@@ -162,6 +162,8 @@ struct Reader<'a> {
     net: Network,
     /// Attributes with time samples (reported once, US004).
     sampled: Vec<String>,
+    /// The declared type of each input looked up so far, by shader type and input name.
+    declared: FxHashMap<String, FxHashMap<String, Option<Type>>>,
 }
 
 impl Reader<'_> {
@@ -172,6 +174,20 @@ impl Reader<'_> {
             column: 0,
             pointer: Some(path.to_string()),
         }
+    }
+
+    /// The type `shader`'s definition declares for input `input` (looked up once per
+    /// shader type and input).
+    fn declared_type(&mut self, shader: &str, input: &str) -> Option<Type> {
+        if let Some(t) = self.declared.get(shader).and_then(|m| m.get(input)) {
+            return t.clone();
+        }
+        let t = self.types.input_type(shader, input);
+        self.declared
+            .entry(shader.to_string())
+            .or_default()
+            .insert(input.to_string(), t.clone());
+        t
     }
 
     fn warn(&mut self, code: &'static str, path: &str, message: String) {
@@ -366,11 +382,10 @@ impl Reader<'_> {
             return;
         };
         let prim_path = prim.as_str().to_string();
-        let prop = prop.to_string();
         let base = prop
             .strip_prefix("outputs:")
             .or_else(|| prop.strip_prefix("inputs:"))
-            .unwrap_or(&prop)
+            .unwrap_or(prop)
             .to_string();
         match self.kinds.get(&prim_path).copied() {
             Some(PrimKind::Shader) => out.push(Source::Output(prim_path, base)),
@@ -422,7 +437,6 @@ impl Reader<'_> {
                 self.sampled.push(apath.clone());
             }
             // The declared type, looked up only for a value.
-            let types = self.types;
             let mut declared: Option<Option<Type>> = None;
             let targets = fields.targets;
             let mut value = None;
@@ -431,7 +445,7 @@ impl Reader<'_> {
                 let usd_type = fields.type_name;
                 match fields.default {
                     Ok(Some(v)) => {
-                        let declared = types.input_type(shader, &input);
+                        let declared = self.declared_type(shader, &input);
                         value = self.value(&v, declared.as_ref(), &usd_type, &apath);
                     }
                     Ok(None) => {}
@@ -450,9 +464,11 @@ impl Reader<'_> {
                     match s {
                         Source::Output(prim, output) => links.push((prim, Some(output), false)),
                         Source::Value(v, from) => {
-                            let declared =
-                                declared.get_or_insert_with(|| types.input_type(shader, &input));
-                            if let Some(v) = self.value(&v, declared.as_ref(), "", &from) {
+                            if declared.is_none() {
+                                declared = Some(self.declared_type(shader, &input));
+                            }
+                            let declared = declared.as_ref().and_then(Option::as_ref);
+                            if let Some(v) = self.value(&v, declared, "", &from) {
                                 value = Some(v);
                             }
                         }
@@ -1079,15 +1095,25 @@ impl CrateLayer {
                 }
             }
         }
+        // Each token that names a field once (fields repeat their name, once per value): a
+        // name given by two tokens keeps the token of its last field, as in file order.
         let mut names = FxHashMap::default();
         let mut field_names = FxHashMap::default();
-        for f in &file.fields {
-            let token = file.tokens.get(f.token_index)?;
+        let mut seen = vec![false; file.tokens.len()];
+        for f in file.fields.iter().rev() {
+            let (Some(token), Some(seen)) =
+                (file.tokens.get(f.token_index), seen.get_mut(f.token_index))
+            else {
+                return None;
+            };
+            if std::mem::replace(seen, true) {
+                continue;
+            }
             let name = match token.as_str() {
                 "properties" => "propertyChildren",
                 t => t,
             };
-            names.insert(name.to_string(), f.token_index);
+            names.entry(name.to_string()).or_insert(f.token_index);
             field_names.insert(f.token_index, name.to_string());
         }
         let attribute_fields = [
@@ -1466,6 +1492,7 @@ fn read_usd(
         nodes: FxHashMap::default(),
         net: Network::new(),
         sampled: Vec::new(),
+        declared: FxHashMap::default(),
     };
     let walked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         read_stage(&mut reader, prims)
