@@ -613,6 +613,76 @@ fn generated_crate_files_read_alone_match_the_composed_stage() {
     }
 }
 
+/// `bytes` (a crate file whose table of contents ends it) with a second table-of-contents
+/// entry for its first section: `openusd` takes the first, the reader's own decoding of
+/// the tables refuses the file, so that `openusd` reads its tables.
+fn with_a_second_entry(bytes: &[u8]) -> Vec<u8> {
+    let toc = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+    let count = u64::from_le_bytes(bytes[toc..toc + 8].try_into().unwrap()) as usize;
+    assert_eq!(
+        toc + 8 + count * 32,
+        bytes.len(),
+        "the table of contents ends the file"
+    );
+    let mut out = bytes.to_vec();
+    out[toc..toc + 8].copy_from_slice(&(count as u64 + 1).to_le_bytes());
+    out.extend_from_slice(&bytes[toc + 8..toc + 40]);
+    out
+}
+
+/// Crate files whose tables the reader does not decode itself (`openusd` reads them) read
+/// alone as the composed stage reads them.
+#[test]
+fn crate_files_read_through_openusd_match_the_composed_stage() {
+    let reg = Registry::embedded();
+    for (name, bytes) in generated_crate_files(&reg, 5) {
+        let bytes = with_a_second_entry(&bytes);
+        assert_eq!(
+            crate_values_agree(&bytes),
+            Err("the tables are not decoded here".to_string()),
+            "{name}"
+        );
+        assert!(reads_layer_alone(&bytes, &name), "{name}");
+        let mut d1 = Diagnostics::new();
+        let direct = parse_usd(&bytes, &name, &reg, &Limits::default(), &mut d1).unwrap();
+        let mut d2 = Diagnostics::new();
+        let composed =
+            parse_usd_composed(&bytes, &name, &reg, &Limits::default(), &mut d2).unwrap();
+        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
+        assert_eq!(d1, d2, "{name}");
+    }
+}
+
+/// A crate file with one byte changed, anywhere, or cut short: when the reader decodes its
+/// tables itself, `openusd` reads the same tables and the same values from it (the reader
+/// accepts no damage that `openusd` refuses); else `openusd` reads it, as before.
+#[test]
+fn damaged_crate_files_decode_as_openusd_reads_them() {
+    let reg = Registry::embedded();
+    let (name, bytes) = generated_crate_files(&reg, 2).remove(0);
+    let mut decoded = 0;
+    let mut refused = 0;
+    for i in 0..bytes.len() {
+        let mut damaged = vec![bytes[..i].to_vec()];
+        for x in [0x01u8, 0x80, 0xff] {
+            let mut b = bytes.clone();
+            b[i] ^= x;
+            damaged.push(b);
+        }
+        for b in damaged {
+            match crate_values_agree(&b) {
+                Ok(_) => decoded += 1,
+                Err(e) if e == "the tables are not decoded here" => refused += 1,
+                Err(e) => panic!("{name}, byte {i}: {e}"),
+            }
+        }
+    }
+    assert!(
+        decoded > 0 && refused > 0,
+        "{decoded} decoded, {refused} refused"
+    );
+}
+
 /// The values the crate reader decodes itself (tokens, token arrays and vectors) equal
 /// `openusd`'s decoding of the same fields, in the corpus's crate file and generated ones;
 /// a corrupt or truncated file is refused, not a panic.
