@@ -1241,31 +1241,39 @@ impl CrateTables {
         let (data, end) = Self::compressed(bytes, at, max)?;
         let common = i32::from_le_bytes(data.get(..4)?.try_into().ok()?);
         let codes = data.get(4..4 + code_bytes)?;
-        let mut rest = data.get(4 + code_bytes..)?;
+        let deltas = data.get(4 + code_bytes..)?;
+        // The codes after the last value must say "common", so that nothing is read for
+        // them.
+        let used = count - (code_bytes - 1) * 4;
+        if used < 4 && codes.last().is_some_and(|&last| last >> (2 * used) != 0) {
+            return None;
+        }
         let mut out = Vec::with_capacity(count);
         let mut prev = 0i32;
-        for i in 0..code_bytes * 4 {
-            let code = (codes[i / 4] >> (2 * (i % 4))) & 3;
-            if i >= count {
-                // The codes after the last value must say "common", so that nothing is
-                // read for them.
-                if code != 0 {
-                    return None;
-                }
-                continue;
+        let mut pos = 0usize;
+        for (k, &byte) in codes.iter().enumerate() {
+            let n = if k + 1 == code_bytes { used } else { 4 };
+            for j in 0..n {
+                let delta = match (byte >> (2 * j)) & 3 {
+                    0 => common,
+                    1 => {
+                        pos += 1;
+                        i32::from(*deltas.get(pos - 1)? as i8)
+                    }
+                    2 => {
+                        pos += 2;
+                        let b = deltas.get(pos - 2..pos)?;
+                        i32::from(i16::from_le_bytes([b[0], b[1]]))
+                    }
+                    _ => {
+                        pos += 4;
+                        let b = deltas.get(pos - 4..pos)?;
+                        i32::from_le_bytes([b[0], b[1], b[2], b[3]])
+                    }
+                };
+                prev = prev.wrapping_add(delta);
+                out.push(prev);
             }
-            let (delta, used) = match code {
-                0 => (common, 0),
-                1 => (i32::from(*rest.first()? as i8), 1),
-                2 => (
-                    i32::from(i16::from_le_bytes(rest.get(..2)?.try_into().ok()?)),
-                    2,
-                ),
-                _ => (i32::from_le_bytes(rest.get(..4)?.try_into().ok()?), 4),
-            };
-            rest = &rest[used..];
-            prev = prev.wrapping_add(delta);
-            out.push(prev);
         }
         Some((out, end))
     }
