@@ -1947,8 +1947,9 @@ pub fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
 }
 
 /// Checks the crate file tables and values the reader decodes itself against `openusd`'s
-/// reading of the same file: every table equal, and every value decoded here (see
-/// [`CrateLayer`]) equal to `openusd`'s decoding of that field. The number of values
+/// reading of the same file: every table equal, and every value decoded here (tokens,
+/// strings, numbers, 3-vectors of floats, specifiers, path list operations) equal to
+/// `openusd`'s decoding of that field. The number of values
 /// compared, or the first difference (or a file whose tables are not decoded here, or that
 /// `openusd` does not read).
 #[cfg(feature = "testkit")]
