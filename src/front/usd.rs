@@ -1051,29 +1051,6 @@ struct CrateTables {
     specs: Vec<(usize, usize, sdf::SpecType)>,
 }
 
-/// Crate files with at least this many paths have their tables decoded on two threads
-/// (with the `parallel` feature and more than one thread): below, the second thread costs
-/// about what it saves.
-#[cfg(feature = "parallel")]
-const PARALLEL_MIN_PATHS: usize = 4096;
-#[cfg(not(feature = "parallel"))]
-const PARALLEL_MIN_PATHS: usize = usize::MAX;
-
-/// `a()` and `b()`: side by side on rayon's pool when `parallel` (and the `parallel` feature
-/// gives more than one thread), else one after the other.
-fn both<A: Send, B: Send>(
-    parallel: bool,
-    a: impl FnOnce() -> A + Send,
-    b: impl FnOnce() -> B + Send,
-) -> (A, B) {
-    #[cfg(feature = "parallel")]
-    if parallel && rayon::current_num_threads() > 1 {
-        return rayon::join(a, b);
-    }
-    let _ = parallel;
-    (a(), b())
-}
-
 /// A little-endian `u64` at `at`, if the bytes are there.
 fn le_u64(bytes: &[u8], at: usize) -> Option<u64> {
     Some(u64::from_le_bytes(
@@ -1152,69 +1129,57 @@ impl CrateTables {
             _ => return None,
         };
 
-        // The paths (the longest part) on one thread, the other tables on another, when
-        // there are many.
-        let paths_at = section(b"PATHS")?;
-        let many = le_size(bytes, paths_at + 8).is_some_and(|n| n >= PARALLEL_MIN_PATHS);
-        let token_list = tokens.as_slice();
-        let (paths, rest) = both(
-            many,
-            || Self::paths(bytes, paths_at, token_list),
-            || {
-                // STRINGS: count (as `openusd` bounds it), then each string's token index.
-                let at = section(b"STRINGS")?;
-                let count = le_size(bytes, at)?;
-                if count >= 128 * 1024 * 1024 {
-                    return None;
-                }
-                let start = at.checked_add(8)?;
-                let strings = bytes
-                    .get(start..start.checked_add(count * 4)?)?
-                    .chunks_exact(4)
-                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize)
-                    .collect();
+        // STRINGS: count (as `openusd` bounds it), then each string's token index.
+        let at = section(b"STRINGS")?;
+        let count = le_size(bytes, at)?;
+        if count >= 128 * 1024 * 1024 {
+            return None;
+        }
+        let start = at.checked_add(8)?;
+        let strings = bytes
+            .get(start..start.checked_add(count * 4)?)?
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize)
+            .collect();
 
-                // FIELDS: count, the name tokens (integer coded), the value representations.
-                let at = section(b"FIELDS")?;
-                let count = le_size(bytes, at)?;
-                let (names, at) = Self::ints(bytes, at + 8, count)?;
-                let (reps, _) = Self::compressed(bytes, at, count.checked_mul(8)?)?;
-                if reps.len() != count * 8 {
-                    return None;
-                }
-                let fields: Vec<(usize, u64)> = names
-                    .iter()
-                    .zip(reps.chunks_exact(8))
-                    .map(|(&t, r)| {
-                        let t = t as u32 as usize;
-                        let rep = u64::from_le_bytes(r.try_into().ok()?);
-                        (t < token_list.len()).then_some((t, rep))
-                    })
-                    .collect::<Option<_>>()?;
+        // FIELDS: count, the name tokens (integer coded), the value representations.
+        let at = section(b"FIELDS")?;
+        let count = le_size(bytes, at)?;
+        let (names, at) = Self::ints(bytes, at + 8, count)?;
+        let (reps, _) = Self::compressed(bytes, at, count.checked_mul(8)?)?;
+        if reps.len() != count * 8 {
+            return None;
+        }
+        let fields: Vec<(usize, u64)> = names
+            .iter()
+            .zip(reps.chunks_exact(8))
+            .map(|(&t, r)| {
+                let t = t as u32 as usize;
+                let rep = u64::from_le_bytes(r.try_into().ok()?);
+                (t < tokens.len()).then_some((t, rep))
+            })
+            .collect::<Option<_>>()?;
 
-                // FIELDSETS: count, the field indices (integer coded; all ones ends a set).
-                let at = section(b"FIELDSETS")?;
-                let count = le_size(bytes, at)?;
-                let (sets, _) = Self::ints(bytes, at + 8, count)?;
-                let fieldsets: Vec<Option<usize>> = sets
-                    .iter()
-                    .map(|&i| match i as u32 {
-                        u32::MAX => Some(None),
-                        i => ((i as usize) < fields.len()).then_some(Some(i as usize)),
-                    })
-                    .collect::<Option<_>>()?;
+        // FIELDSETS: count, the field indices (integer coded; all ones ends a set).
+        let at = section(b"FIELDSETS")?;
+        let count = le_size(bytes, at)?;
+        let (sets, _) = Self::ints(bytes, at + 8, count)?;
+        let fieldsets: Vec<Option<usize>> = sets
+            .iter()
+            .map(|&i| match i as u32 {
+                u32::MAX => Some(None),
+                i => ((i as usize) < fields.len()).then_some(Some(i as usize)),
+            })
+            .collect::<Option<_>>()?;
 
-                // SPECS: count, then path indices, field set starts and types (integer coded).
-                let at = section(b"SPECS")?;
-                let count = le_size(bytes, at)?;
-                let (path_of, at) = Self::ints(bytes, at + 8, count)?;
-                let (set_of, at) = Self::ints(bytes, at, count)?;
-                let (type_of, _) = Self::ints(bytes, at, count)?;
-                Some((strings, fields, fieldsets, count, path_of, set_of, type_of))
-            },
-        );
-        let paths = paths?;
-        let (strings, fields, fieldsets, count, path_of, set_of, type_of) = rest?;
+        let paths = Self::paths(bytes, section(b"PATHS")?, &tokens)?;
+
+        // SPECS: count, then path indices, field set starts and types (integer coded).
+        let at = section(b"SPECS")?;
+        let count = le_size(bytes, at)?;
+        let (path_of, at) = Self::ints(bytes, at + 8, count)?;
+        let (set_of, at) = Self::ints(bytes, at, count)?;
+        let (type_of, _) = Self::ints(bytes, at, count)?;
         let mut specs = Vec::with_capacity(count);
         for i in 0..count {
             let path = path_of[i] as u32 as usize;
