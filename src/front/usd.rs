@@ -20,7 +20,9 @@
 //! directly, without composing a stage; the result is the same, and it is much faster. A
 //! crate file is then indexed once from its tables (each spec's type and field set by path,
 //! each field name's token), and an attribute's fields are found in one walk of its field
-//! set.
+//! set. The reader decodes a crate file's tables and its usual values itself when the file
+//! is laid out as USD's writers lay it out, and leaves anything else to `openusd`, which
+//! reads (or refuses) it as it would alone.
 //!
 //! Diagnostics name the file and the prim or property path (in [`Location::pointer`]);
 //! `openusd` keeps no line numbers, so USD diagnostics have none.
@@ -162,6 +164,8 @@ struct Reader<'a> {
     net: Network,
     /// Attributes with time samples (reported once, US004).
     sampled: Vec<String>,
+    /// The declared type of each input looked up so far, by shader type and input name.
+    declared: FxHashMap<String, FxHashMap<String, Option<Type>>>,
 }
 
 impl Reader<'_> {
@@ -172,6 +176,20 @@ impl Reader<'_> {
             column: 0,
             pointer: Some(path.to_string()),
         }
+    }
+
+    /// The type `shader`'s definition declares for input `input` (looked up once per
+    /// shader type and input).
+    fn declared_type(&mut self, shader: &str, input: &str) -> Option<Type> {
+        if let Some(t) = self.declared.get(shader).and_then(|m| m.get(input)) {
+            return t.clone();
+        }
+        let t = self.types.input_type(shader, input);
+        self.declared
+            .entry(shader.to_string())
+            .or_default()
+            .insert(input.to_string(), t.clone());
+        t
     }
 
     fn warn(&mut self, code: &'static str, path: &str, message: String) {
@@ -291,11 +309,11 @@ impl Reader<'_> {
                 };
                 let mut seen = rustc_hash::FxHashSet::default();
                 let mut out = Vec::new();
-                for n in names {
+                for n in &names {
                     let Some(input) = n.as_str().strip_prefix("inputs:") else {
                         continue;
                     };
-                    if !seen.insert(input.to_string()) {
+                    if !seen.insert(input) {
                         continue;
                     }
                     if let Some(p) = property_path(path, n.as_str()) {
@@ -366,11 +384,10 @@ impl Reader<'_> {
             return;
         };
         let prim_path = prim.as_str().to_string();
-        let prop = prop.to_string();
         let base = prop
             .strip_prefix("outputs:")
             .or_else(|| prop.strip_prefix("inputs:"))
-            .unwrap_or(&prop)
+            .unwrap_or(prop)
             .to_string();
         match self.kinds.get(&prim_path).copied() {
             Some(PrimKind::Shader) => out.push(Source::Output(prim_path, base)),
@@ -421,14 +438,18 @@ impl Reader<'_> {
             if fields.samples > 0 {
                 self.sampled.push(apath.clone());
             }
-            let declared = self.types.input_type(shader, &input);
+            // The declared type, looked up only for a value.
+            let mut declared: Option<Option<Type>> = None;
             let targets = fields.targets;
             let mut value = None;
             let mut links = Vec::new();
             if targets.is_empty() {
                 let usd_type = fields.type_name;
                 match fields.default {
-                    Ok(Some(v)) => value = self.value(&v, declared.as_ref(), &usd_type, &apath),
+                    Ok(Some(v)) => {
+                        let declared = self.declared_type(shader, &input);
+                        value = self.value(&v, declared.as_ref(), &usd_type, &apath);
+                    }
                     Ok(None) => {}
                     Err(e) => self.warn(
                         "US006",
@@ -445,7 +466,11 @@ impl Reader<'_> {
                     match s {
                         Source::Output(prim, output) => links.push((prim, Some(output), false)),
                         Source::Value(v, from) => {
-                            if let Some(v) = self.value(&v, declared.as_ref(), "", &from) {
+                            if declared.is_none() {
+                                declared = Some(self.declared_type(shader, &input));
+                            }
+                            let declared = declared.as_ref().and_then(Option::as_ref);
+                            if let Some(v) = self.value(&v, declared, "", &from) {
                                 value = Some(v);
                             }
                         }
@@ -508,9 +533,9 @@ impl Reader<'_> {
         let read = |this: &mut Self, names: &[(&str, &str)]| -> Vec<Terminal> {
             let mut out = Vec::new();
             for &(attr_name, terminal) in names {
-                let targets = match prim.append_property(attr_name) {
-                    Ok(attr) => this.connections(&attr),
-                    Err(_) => Vec::new(),
+                let targets = match property_path(&prim, attr_name) {
+                    Some(attr) => this.connections(&attr),
+                    None => Vec::new(),
                 };
                 let apath = format!("{path}.{attr_name}");
                 let mut sources = Vec::new();
@@ -861,6 +886,35 @@ fn property_path(prim: &sdf::Path, name: &str) -> Option<sdf::Path> {
     Some(sdf::Path::from(p))
 }
 
+/// Whether no name in `names` is given twice.
+fn all_differ(names: &[openusd::tf::Token]) -> bool {
+    if names.len() <= 8 {
+        return names
+            .iter()
+            .enumerate()
+            .all(|(i, a)| names[..i].iter().all(|b| a.as_str() != b.as_str()));
+    }
+    let mut seen = rustc_hash::FxHashSet::default();
+    names.iter().all(|n| seen.insert(n.as_str()))
+}
+
+/// The path of child `name` of prim `prim` (the root or a prim path that is no variant
+/// selection), as [`sdf::Path::append_path`] makes it: a name that is an identifier is
+/// appended directly, any other through `append_path`, which refuses what is no prim name.
+fn child_path(prim: &sdf::Path, name: &str) -> Option<sdf::Path> {
+    if !sdf::Path::is_valid_identifier(name) {
+        return prim.append_path(name).ok();
+    }
+    let parent = prim.as_str();
+    let mut p = String::with_capacity(parent.len() + 1 + name.len());
+    p.push_str(parent);
+    if parent != "/" {
+        p.push('/');
+    }
+    p.push_str(name);
+    Some(sdf::Path::from(p))
+}
+
 /// A field read from a layer alone.
 type FieldRead<'a> = Result<Option<std::borrow::Cow<'a, sdf::Value>>, sdf::DataError>;
 
@@ -937,6 +991,15 @@ trait Specs {
     ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError>;
     /// The names of the fields of the spec at `path`.
     fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>>;
+    /// Whether every field of the spec at `path` is named in `allowed`; nothing when there
+    /// is no spec there.
+    fn fields_within(&self, path: &sdf::Path, allowed: &[&str]) -> Option<bool> {
+        Some(
+            self.list_fields(path)?
+                .iter()
+                .all(|f| allowed.contains(&f.as_str())),
+        )
+    }
     /// What the reader reads of the attribute at `path`, or nothing when there is no
     /// attribute spec there.
     fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
@@ -970,6 +1033,386 @@ impl Specs for sdf::LayerData {
     }
 }
 
+/// A crate file's tables, decoded here when the file is laid out as the USD writer and
+/// Pixar's library write it (see [`CrateTables::decode`]); anything else is left to
+/// `openusd`, which reads it (or refuses it) as before.
+struct CrateTables {
+    /// Major, minor and patch version.
+    version: [u8; 3],
+    tokens: Vec<openusd::tf::Token>,
+    /// The token index of each string.
+    strings: Vec<usize>,
+    /// Each field: its name's token index and its value representation.
+    fields: Vec<(usize, u64)>,
+    /// Field indices, each field set ended by nothing.
+    fieldsets: Vec<Option<usize>>,
+    paths: Vec<sdf::Path>,
+    /// Each spec: its path index, its field set's start and its type.
+    specs: Vec<(usize, usize, sdf::SpecType)>,
+}
+
+/// A little-endian `u64` at `at`, if the bytes are there.
+fn le_u64(bytes: &[u8], at: usize) -> Option<u64> {
+    Some(u64::from_le_bytes(
+        bytes.get(at..at.checked_add(8)?)?.try_into().ok()?,
+    ))
+}
+
+/// A little-endian `u64` at `at` as a size, if the bytes are there.
+fn le_size(bytes: &[u8], at: usize) -> Option<usize> {
+    usize::try_from(le_u64(bytes, at)?).ok()
+}
+
+/// More bytes than one byte of an LZ4 block may stand for (a match grows by at most 255
+/// bytes a length byte), so that a size a file claims for decompressed data is believed
+/// only as far as its compressed data could fill it.
+const LZ4_MAX_RATIO: usize = 256;
+
+impl CrateTables {
+    /// The tables of crate file `bytes`, or nothing when anything in them is not as the
+    /// writers lay it out: a version before 0.4.0 or after what `openusd` reads, a section
+    /// missing or given twice, chunked compression, sizes that do not agree, indices out of
+    /// range, a path element that is not an identifier (variant selections, relational
+    /// targets), a path given twice or never, or what `openusd`'s validation refuses.
+    fn decode(bytes: &[u8]) -> Option<Self> {
+        if bytes.get(..8)? != b"PXR-USDC" {
+            return None;
+        }
+        let version = [*bytes.get(8)?, *bytes.get(9)?, *bytes.get(10)?];
+        // 0.4.0 (compressed tables) up to what `openusd` reads (0.12).
+        if version[0] != 0 || !(4..=12).contains(&version[1]) {
+            return None;
+        }
+        let toc = le_size(bytes, 16)?;
+        if toc == 0 {
+            return None;
+        }
+        let count = le_size(bytes, toc)?;
+        if count == 0 || count >= 64 {
+            return None;
+        }
+        let mut sections: FxHashMap<&[u8], usize> = FxHashMap::default();
+        for i in 0..count {
+            // Each entry: a name (16 bytes, ended by a NUL), a start and a size.
+            let at = toc.checked_add(8)?.checked_add(i.checked_mul(32)?)?;
+            bytes.get(at..at.checked_add(32)?)?;
+            let name = &bytes[at..at + 16];
+            let name = &name[..name.iter().position(|&b| b == 0)?];
+            let start = le_size(bytes, at + 16)?;
+            if sections.insert(name, start).is_some() {
+                return None;
+            }
+        }
+        let section = |name: &[u8]| sections.get(name).copied();
+
+        // TOKENS: count, decompressed size, then the compressed text, each token ended by
+        // a NUL.
+        let at = section(b"TOKENS")?;
+        let count = le_size(bytes, at)?;
+        let size = le_size(bytes, at + 8)?;
+        let (text, _) = Self::compressed(bytes, at.checked_add(16)?, size)?;
+        if text.len() != size {
+            return None;
+        }
+        let tokens: Vec<openusd::tf::Token> = match text.split_last() {
+            None if count == 0 => Vec::new(),
+            Some((0, text)) => {
+                let tokens = text
+                    .split(|&b| b == 0)
+                    .map(|t| std::str::from_utf8(t).ok().map(openusd::tf::Token::from))
+                    .collect::<Option<Vec<_>>>()?;
+                if tokens.len() != count {
+                    return None;
+                }
+                tokens
+            }
+            _ => return None,
+        };
+
+        // STRINGS: count (as `openusd` bounds it), then each string's token index.
+        let at = section(b"STRINGS")?;
+        let count = le_size(bytes, at)?;
+        if count >= 128 * 1024 * 1024 {
+            return None;
+        }
+        let start = at.checked_add(8)?;
+        let strings = bytes
+            .get(start..start.checked_add(count * 4)?)?
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize)
+            .collect();
+
+        // FIELDS: count, the name tokens (integer coded), the value representations.
+        let at = section(b"FIELDS")?;
+        let count = le_size(bytes, at)?;
+        let (names, at) = Self::ints(bytes, at + 8, count)?;
+        let (reps, _) = Self::compressed(bytes, at, count.checked_mul(8)?)?;
+        if reps.len() != count * 8 {
+            return None;
+        }
+        let fields: Vec<(usize, u64)> = names
+            .iter()
+            .zip(reps.chunks_exact(8))
+            .map(|(&t, r)| {
+                let t = t as u32 as usize;
+                let rep = u64::from_le_bytes(r.try_into().ok()?);
+                (t < tokens.len()).then_some((t, rep))
+            })
+            .collect::<Option<_>>()?;
+
+        // FIELDSETS: count, the field indices (integer coded; all ones ends a set).
+        let at = section(b"FIELDSETS")?;
+        let count = le_size(bytes, at)?;
+        let (sets, _) = Self::ints(bytes, at + 8, count)?;
+        let fieldsets: Vec<Option<usize>> = sets
+            .iter()
+            .map(|&i| match i as u32 {
+                u32::MAX => Some(None),
+                i => ((i as usize) < fields.len()).then_some(Some(i as usize)),
+            })
+            .collect::<Option<_>>()?;
+
+        let paths = Self::paths(bytes, section(b"PATHS")?, &tokens)?;
+
+        // SPECS: count, then path indices, field set starts and types (integer coded).
+        let at = section(b"SPECS")?;
+        let count = le_size(bytes, at)?;
+        let (path_of, at) = Self::ints(bytes, at + 8, count)?;
+        let (set_of, at) = Self::ints(bytes, at, count)?;
+        let (type_of, _) = Self::ints(bytes, at, count)?;
+        let mut specs = Vec::with_capacity(count);
+        for i in 0..count {
+            let path = path_of[i] as u32 as usize;
+            let set = set_of[i] as u32 as usize;
+            let ty = sdf::SpecType::from_repr(type_of[i] as u32)?;
+            // As `openusd` validates: the path and the set exist, a set starts after the
+            // end of another, and the type is known.
+            if path >= paths.len()
+                || set >= fieldsets.len()
+                || (set > 0 && fieldsets[set - 1].is_some())
+                || ty == sdf::SpecType::Unknown
+            {
+                return None;
+            }
+            specs.push((path, set, ty));
+        }
+        Some(CrateTables {
+            version,
+            tokens,
+            strings,
+            fields,
+            fieldsets,
+            paths,
+            specs,
+        })
+    }
+
+    /// The compressed block at `at` (its compressed size, then the data: a chunk count of
+    /// zero and one LZ4 block) decompressed into at most `max` bytes, and where the block
+    /// ends.
+    fn compressed(bytes: &[u8], at: usize, max: usize) -> Option<(Vec<u8>, usize)> {
+        let size = le_size(bytes, at)?;
+        let start = at.checked_add(8)?;
+        let end = start.checked_add(size)?;
+        let block = bytes.get(start..end)?;
+        let (&chunks, block) = block.split_first()?;
+        if chunks != 0 {
+            return None;
+        }
+        // No more room than the block could fill: a size the file claims is not believed.
+        let room = max.min(block.len().saturating_mul(LZ4_MAX_RATIO).saturating_add(64));
+        let mut out = vec![0u8; room];
+        let n = lz4_flex::block::decompress_into(block, &mut out).ok()?;
+        out.truncate(n);
+        Some((out, end))
+    }
+
+    /// `count` 32-bit integers coded as USD codes them (a common value; two bits a value
+    /// saying whether it is that common value or a delta of 8, 16 or 32 bits; the deltas)
+    /// in the compressed block at `at`, and where the block ends.
+    fn ints(bytes: &[u8], at: usize, count: usize) -> Option<(Vec<i32>, usize)> {
+        if count == 0 {
+            // Nothing is coded, but the block is there.
+            let (_, end) = Self::compressed(bytes, at, 0)?;
+            return Some((Vec::new(), end));
+        }
+        let code_bytes = count.checked_mul(2)?.div_ceil(8);
+        let max = 4usize
+            .checked_add(code_bytes)?
+            .checked_add(count.checked_mul(4)?)?;
+        let (data, end) = Self::compressed(bytes, at, max)?;
+        let common = i32::from_le_bytes(data.get(..4)?.try_into().ok()?);
+        let codes = data.get(4..4 + code_bytes)?;
+        let deltas = data.get(4 + code_bytes..)?;
+        // The codes after the last value must say "common", so that nothing is read for
+        // them.
+        let used = count - (code_bytes - 1) * 4;
+        if used < 4 && codes.last().is_some_and(|&last| last >> (2 * used) != 0) {
+            return None;
+        }
+        let mut out = Vec::with_capacity(count);
+        let mut prev = 0i32;
+        let mut pos = 0usize;
+        for (k, &byte) in codes.iter().enumerate() {
+            let n = if k + 1 == code_bytes { used } else { 4 };
+            for j in 0..n {
+                let delta = match (byte >> (2 * j)) & 3 {
+                    0 => common,
+                    1 => {
+                        pos += 1;
+                        i32::from(*deltas.get(pos - 1)? as i8)
+                    }
+                    2 => {
+                        pos += 2;
+                        let b = deltas.get(pos - 2..pos)?;
+                        i32::from(i16::from_le_bytes([b[0], b[1]]))
+                    }
+                    _ => {
+                        pos += 4;
+                        let b = deltas.get(pos - 4..pos)?;
+                        i32::from_le_bytes([b[0], b[1], b[2], b[3]])
+                    }
+                };
+                prev = prev.wrapping_add(delta);
+                out.push(prev);
+            }
+        }
+        Some((out, end))
+    }
+
+    /// The PATHS section at `at`: the number of paths, the number of entries, then each
+    /// entry's path index, element token (negative for a property) and jump (to its next
+    /// sibling: 0 when the next entry is its sibling, -1 when it is its child, -2 when it
+    /// has neither), integer coded. Every path must be given once.
+    fn paths(bytes: &[u8], at: usize, tokens: &[openusd::tf::Token]) -> Option<Vec<sdf::Path>> {
+        let count = le_size(bytes, at)?;
+        let entries = le_size(bytes, at + 8)?;
+        let (index, at) = Self::ints(bytes, at + 16, entries)?;
+        let (element, at) = Self::ints(bytes, at, entries)?;
+        let (jump, _) = Self::ints(bytes, at, entries)?;
+        if count != entries {
+            return None;
+        }
+        let mut paths: Vec<Option<(sdf::Path, bool)>> = vec![None; count];
+        if entries == 0 {
+            return Some(Vec::new());
+        }
+        // (entry, its parent's path index, or nothing for the root).
+        let mut pending: Vec<(usize, Option<usize>)> = vec![(0, None)];
+        let mut visited = vec![false; entries];
+        // Whether each token is a prim name and a property name, checked once.
+        let mut names: Vec<Option<(bool, bool)>> = vec![None; tokens.len()];
+        while let Some((mut entry, mut parent)) = pending.pop() {
+            loop {
+                if std::mem::replace(visited.get_mut(entry)?, true) {
+                    return None;
+                }
+                let this = index[entry] as u32 as usize;
+                let made = match parent {
+                    None => (sdf::Path::abs_root(), false),
+                    Some(p) => {
+                        let (parent_path, parent_is_property) = paths.get(p)?.as_ref()?;
+                        if *parent_is_property {
+                            return None;
+                        }
+                        let e = element[entry];
+                        let t = e.unsigned_abs() as usize;
+                        let name = tokens.get(t)?.as_str();
+                        let property = e < 0;
+                        let (prim_name, property_name) =
+                            *names.get_mut(t)?.get_or_insert_with(|| {
+                                (
+                                    sdf::Path::is_valid_identifier(name),
+                                    sdf::Path::is_valid_namespace_identifier(name),
+                                )
+                            });
+                        if !(if property { property_name } else { prim_name }) {
+                            return None;
+                        }
+                        let parent = parent_path.as_str();
+                        let mut p = String::with_capacity(parent.len() + 1 + name.len());
+                        p.push_str(parent);
+                        if property {
+                            p.push('.');
+                        } else if parent != "/" {
+                            p.push('/');
+                        }
+                        p.push_str(name);
+                        (sdf::Path::from(p), property)
+                    }
+                };
+                let slot = paths.get_mut(this)?;
+                if slot.is_some() {
+                    return None;
+                }
+                *slot = Some(made);
+                let j = jump[entry];
+                let has_child = j > 0 || j == -1;
+                let has_sibling = j >= 0;
+                // The root has no siblings.
+                if parent.is_none() && has_sibling {
+                    return None;
+                }
+                if has_child && has_sibling {
+                    pending.push((entry.checked_add(usize::try_from(j).ok()?)?, parent));
+                }
+                if has_child {
+                    parent = Some(this);
+                }
+                if !has_child && !has_sibling {
+                    break;
+                }
+                entry += 1;
+            }
+        }
+        paths.into_iter().map(|p| p.map(|(p, _)| p)).collect()
+    }
+}
+
+/// The crate file type [`CrateLayer`] reads values through when it does not decode them.
+type CrateFile = openusd::usdc::CrateFile<io::Cursor<Arc<[u8]>>>;
+
+/// The value types in a crate file's value representations (bits 48 to 55) that
+/// [`CrateLayer`] decodes itself.
+const CRATE_BOOL: u64 = 1;
+const CRATE_INT: u64 = 3;
+const CRATE_FLOAT: u64 = 8;
+const CRATE_DOUBLE: u64 = 9;
+const CRATE_STRING: u64 = 10;
+const CRATE_TOKEN: u64 = 11;
+const CRATE_VEC3F: u64 = 24;
+const CRATE_PATH_LIST_OP: u64 = 34;
+const CRATE_TOKEN_VECTOR: u64 = 41;
+const CRATE_SPECIFIER: u64 = 42;
+
+/// The parts of a crate file's value representation: its type, whether it is an array,
+/// inlined or compressed, and its payload (the value itself when inlined, else where it
+/// lies in the file).
+#[derive(Clone, Copy)]
+struct Rep(u64);
+
+impl Rep {
+    fn ty(self) -> u64 {
+        (self.0 >> 48) & 0xff
+    }
+    fn is_array(self) -> bool {
+        self.0 & (1 << 63) != 0
+    }
+    fn is_inlined(self) -> bool {
+        self.0 & (1 << 62) != 0
+    }
+    fn is_compressed(self) -> bool {
+        self.0 & (1 << 61) != 0
+    }
+    fn payload(self) -> u64 {
+        self.0 & ((1 << 48) - 1)
+    }
+    /// An inlined value's 32 bits.
+    fn low(self) -> u32 {
+        (self.0 & 0xffff_ffff) as u32
+    }
+}
+
 /// The hash [`CrateLayer`] finds a spec by: its path's text, hashed with FxHash.
 fn path_hash(path: &sdf::Path) -> u64 {
     use std::hash::BuildHasher;
@@ -978,13 +1421,33 @@ fn path_hash(path: &sdf::Path) -> u64 {
 
 /// A crate file's specs, indexed once: each spec's type and fields by path, each field
 /// name's token, so that a field is found by comparing token indices in the spec's field
-/// set (`openusd`'s own crate data compares names and hashes paths with SipHash); values
-/// are decoded from the file when asked for.
+/// set (`openusd`'s own crate data compares names and hashes paths with SipHash). The
+/// tables are decoded here ([`CrateTables`]) when the file is laid out as writers lay it
+/// out, else by `openusd`; the values the reader reads most (tokens, token arrays and
+/// vectors, specifiers, booleans, ints, floats, doubles, 3-vectors of floats, path list
+/// operations) are decoded here, any other by `openusd`, which then reads the file once.
 struct CrateLayer {
-    file: std::cell::RefCell<openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>>,
-    /// Each spec: its path's index in the file's paths, its type and the start of its
-    /// field set in the file's field sets, found by the hash of its path (so the paths are
-    /// not copied).
+    /// `openusd`'s reading of the file: at once when the tables are not decoded here, else
+    /// when a value not decoded here is first asked for.
+    file: std::cell::RefCell<Option<CrateFile>>,
+    /// The file's bytes (shared with `file`'s reader), for the values decoded here.
+    bytes: Arc<[u8]>,
+    /// The file's version: whether it is at least 0.5.0, and at least 0.7.0 (the layout of
+    /// array headers).
+    v05: bool,
+    v07: bool,
+    /// The file's tokens, each made a token once (values that are tokens, or arrays of
+    /// tokens, are answered with clones of these).
+    tokens: Vec<openusd::tf::Token>,
+    /// The token index of each string.
+    strings: Vec<usize>,
+    /// Each field: its name's token index and its value representation.
+    fields: Vec<(usize, u64)>,
+    /// Field indices, each field set ended by nothing.
+    fieldsets: Vec<Option<usize>>,
+    paths: Vec<sdf::Path>,
+    /// Each spec: its path's index in `paths`, its type and the start of its field set in
+    /// `fieldsets`, found by the hash of its path (so the paths are not copied).
     specs: hashbrown::HashTable<(usize, sdf::SpecType, usize)>,
     /// The token index of each field name (under the names `openusd`'s layers use:
     /// `propertyChildren` for the crate's `properties`).
@@ -1000,15 +1463,50 @@ impl CrateLayer {
     /// The crate file `bytes`, or nothing when it does not read or is not sound (then the
     /// stage is composed, and reports why).
     fn open(bytes: &[u8]) -> Option<Self> {
-        let mut file = openusd::usdc::CrateFile::open(io::Cursor::new(bytes.to_vec())).ok()?;
-        file.validate().ok()?;
-        let specs_in = std::mem::take(&mut file.specs);
+        let bytes: Arc<[u8]> = Arc::from(bytes);
+        let (tables, file) = match CrateTables::decode(&bytes) {
+            Some(tables) => (tables, None),
+            None => {
+                let mut file = CrateFile::open(io::Cursor::new(bytes.clone())).ok()?;
+                file.validate().ok()?;
+                let v = file.version();
+                let tables = CrateTables {
+                    version: [v.major, v.minor, v.patch],
+                    tokens: file
+                        .tokens
+                        .iter()
+                        .map(|t| openusd::tf::Token::from(t.as_str()))
+                        .collect(),
+                    strings: file.strings.clone(),
+                    fields: file
+                        .fields
+                        .iter()
+                        .map(|f| (f.token_index, f.value_rep.0))
+                        .collect(),
+                    fieldsets: std::mem::take(&mut file.fieldsets),
+                    paths: std::mem::take(&mut file.paths),
+                    specs: std::mem::take(&mut file.specs)
+                        .into_iter()
+                        .map(|s| (s.path_index, s.fieldset_index, s.spec_type))
+                        .collect(),
+                };
+                (tables, Some(file))
+            }
+        };
+        let CrateTables {
+            version,
+            tokens,
+            strings,
+            fields,
+            fieldsets,
+            paths,
+            specs: specs_in,
+        } = tables;
         let mut specs = hashbrown::HashTable::with_capacity(specs_in.len());
-        let paths = &file.paths;
-        for spec in &specs_in {
-            let path = paths.get(spec.path_index)?;
-            file.fieldsets.get(spec.fieldset_index)?;
-            let entry = (spec.path_index, spec.spec_type, spec.fieldset_index);
+        for &(path_index, fieldset_index, spec_type) in &specs_in {
+            let path = paths.get(path_index)?;
+            fieldsets.get(fieldset_index)?;
+            let entry = (path_index, spec_type, fieldset_index);
             // A path given twice keeps its last spec, as a map would.
             match specs.entry(
                 path_hash(path),
@@ -1021,16 +1519,25 @@ impl CrateLayer {
                 }
             }
         }
+        // Each token that names a field once (fields repeat their name, once per value): a
+        // name given by two tokens keeps the token of its last field, as in file order.
         let mut names = FxHashMap::default();
         let mut field_names = FxHashMap::default();
-        for f in &file.fields {
-            let token = file.tokens.get(f.token_index)?;
+        let mut seen = vec![false; tokens.len()];
+        for &(token_index, _) in fields.iter().rev() {
+            let (Some(token), Some(seen)) = (tokens.get(token_index), seen.get_mut(token_index))
+            else {
+                return None;
+            };
+            if std::mem::replace(seen, true) {
+                continue;
+            }
             let name = match token.as_str() {
                 "properties" => "propertyChildren",
                 t => t,
             };
-            names.insert(name.to_string(), f.token_index);
-            field_names.insert(f.token_index, name.to_string());
+            names.entry(name.to_string()).or_insert(token_index);
+            field_names.insert(token_index, name.to_string());
         }
         let attribute_fields = [
             sdf::FieldKey::TypeName,
@@ -1041,6 +1548,14 @@ impl CrateLayer {
         .map(|k| names.get(k.as_str()).copied());
         Some(CrateLayer {
             file: std::cell::RefCell::new(file),
+            bytes,
+            v05: version[1] >= 5,
+            v07: version[1] >= 7,
+            tokens,
+            strings,
+            fields,
+            fieldsets,
+            paths,
             specs,
             names,
             field_names,
@@ -1050,20 +1565,175 @@ impl CrateLayer {
 
     /// The type and the field set start of the spec at `path`.
     fn spec(&self, path: &sdf::Path) -> Option<(sdf::SpecType, usize)> {
-        let file = self.file.borrow();
         self.specs
-            .find(path_hash(path), |&(i, ..)| file.paths[i] == *path)
+            .find(path_hash(path), |&(i, ..)| self.paths[i] == *path)
             .map(|&(_, ty, start)| (ty, start))
     }
 
+    /// The value of field `field` when it is of a type decoded here (see [`CrateLayer`])
+    /// and laid out as writers lay it out; nothing for any other, which `openusd` decodes.
+    fn own_value(&self, field: usize) -> Option<sdf::Value> {
+        let rep = Rep(self.fields.get(field)?.1);
+        if rep.is_compressed() {
+            return None;
+        }
+        let at = usize::try_from(rep.payload()).ok()?;
+        match (rep.ty(), rep.is_array(), rep.is_inlined()) {
+            (CRATE_TOKEN, false, true) => self
+                .tokens
+                .get(rep.low() as usize)
+                .map(|t| sdf::Value::Token(t.clone())),
+            (CRATE_TOKEN, true, false) => self.token_array(at).map(sdf::Value::TokenVec),
+            (CRATE_TOKEN_VECTOR, false, false) => {
+                let count = le_size(&self.bytes, at)?;
+                self.token_indices(at.checked_add(8)?, count)
+                    .map(sdf::Value::TokenVec)
+            }
+            (CRATE_STRING, false, true) => {
+                let token = self.strings.get(rep.low() as usize)?;
+                Some(sdf::Value::String(
+                    self.tokens.get(*token)?.as_str().to_string(),
+                ))
+            }
+            (CRATE_SPECIFIER, false, true) => {
+                sdf::Specifier::from_repr(rep.low() as i32).map(sdf::Value::Specifier)
+            }
+            (CRATE_BOOL, false, true) => Some(sdf::Value::Bool(rep.low() != 0)),
+            (CRATE_INT, false, true) => Some(sdf::Value::Int(rep.low() as i32)),
+            (CRATE_FLOAT, false, true) => Some(sdf::Value::Float(f32::from_bits(rep.low()))),
+            // An inlined double is kept as a float.
+            (CRATE_DOUBLE, false, true) => {
+                Some(sdf::Value::Double(f64::from(f32::from_bits(rep.low()))))
+            }
+            // Inlined, each component is a signed byte.
+            (CRATE_VEC3F, false, true) => {
+                let [x, y, z, _] = rep.low().to_le_bytes().map(|b| f32::from(b as i8));
+                Some(sdf::Value::Vec3f(openusd::gf::vec3f(x, y, z)))
+            }
+            (CRATE_VEC3F, false, false) => {
+                let b = self.bytes.get(at..at.checked_add(12)?)?;
+                let f = |i: usize| f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
+                Some(sdf::Value::Vec3f(openusd::gf::vec3f(f(0), f(4), f(8))))
+            }
+            (CRATE_PATH_LIST_OP, false, false) => self.path_list_op(at).map(sdf::Value::PathListOp),
+            _ => None,
+        }
+    }
+
+    /// The list operation on paths at `at`: a header byte saying which lists follow (and
+    /// whether the operation is explicit), then each list present (explicit, added,
+    /// prepended, appended, deleted, ordered) as a 64-bit count and 32-bit path indices.
+    fn path_list_op(&self, at: usize) -> Option<sdf::ListOp<sdf::Path>> {
+        let header = *self.bytes.get(at)?;
+        let mut pos = at + 1;
+        let mut list = |bit: u8| -> Option<Vec<sdf::Path>> {
+            if header & bit == 0 {
+                return Some(Vec::new());
+            }
+            let count = le_size(&self.bytes, pos)?;
+            let start = pos.checked_add(8)?;
+            let end = start.checked_add(count.checked_mul(4)?)?;
+            let items = self.bytes.get(start..end)?;
+            pos = end;
+            items
+                .chunks_exact(4)
+                .map(|c| {
+                    let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
+                    self.paths.get(i).cloned()
+                })
+                .collect()
+        };
+        let mut op = sdf::ListOp::<sdf::Path> {
+            explicit: header & 1 != 0,
+            ..Default::default()
+        };
+        op.explicit_items = list(1 << 1)?;
+        op.added_items = list(1 << 2)?;
+        op.prepended_items = list(1 << 5)?;
+        op.appended_items = list(1 << 6)?;
+        op.deleted_items = list(1 << 3)?;
+        op.ordered_items = list(1 << 4)?;
+        Some(op)
+    }
+
+    /// The array of tokens stored at `at`: its header (before 0.5.0 a 32-bit shape, then
+    /// the count, 32-bit before 0.7.0, else 64-bit) and one 32-bit token index per element;
+    /// nothing when any of it lies outside the file or names no token.
+    fn token_array(&self, at: usize) -> Option<Vec<openusd::tf::Token>> {
+        if at == 0 {
+            return Some(Vec::new());
+        }
+        let mut pos = at;
+        if !self.v05 {
+            pos = pos.checked_add(4)?;
+        }
+        let count = if self.v07 {
+            let count = le_size(&self.bytes, pos)?;
+            pos += 8;
+            count
+        } else {
+            let b = self.bytes.get(pos..pos.checked_add(4)?)?;
+            pos += 4;
+            u32::from_le_bytes(b.try_into().ok()?) as usize
+        };
+        self.token_indices(pos, count)
+    }
+
+    /// The `count` tokens whose 32-bit indices start at byte `at`; nothing when any lies
+    /// outside the file or names no token.
+    fn token_indices(&self, at: usize, count: usize) -> Option<Vec<openusd::tf::Token>> {
+        let items = self.bytes.get(at..at.checked_add(count.checked_mul(4)?)?)?;
+        items
+            .chunks_exact(4)
+            .map(|c| {
+                let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
+                self.tokens.get(i).cloned()
+            })
+            .collect()
+    }
+
+    /// The value of field `field` (the field `name` of the spec at `path`): decoded here,
+    /// or by `openusd` (which reads the file the first time).
+    fn read_field(&self, field: usize, path: &sdf::Path, name: &str) -> FieldRead<'static> {
+        if let Some(v) = self.own_value(field) {
+            return Ok(Some(std::borrow::Cow::Owned(v)));
+        }
+        let failed = |source: Box<dyn std::error::Error + Send + Sync>| sdf::DataError::Decode {
+            path: path.clone(),
+            field: name.to_string(),
+            source,
+        };
+        let mut slot = self.file.borrow_mut();
+        if slot.is_none() {
+            let opened = CrateFile::open(io::Cursor::new(self.bytes.clone()));
+            *slot = Some(opened.map_err(|e| failed(e.into()))?);
+        }
+        let Some(file) = slot.as_mut() else {
+            return Ok(None);
+        };
+        let Some(rep) = file.fields.get(field).map(|f| f.value_rep) else {
+            return Ok(None);
+        };
+        match file.value(rep) {
+            Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
+            Err(e) => Err(failed(e.into())),
+        }
+    }
+
     /// The field indices of the field set starting at `start`.
-    fn field_set(
-        file: &openusd::usdc::CrateFile<io::Cursor<Vec<u8>>>,
-        start: usize,
-    ) -> &[Option<usize>] {
-        let rest = file.fieldsets.get(start..).unwrap_or(&[]);
+    fn field_set(&self, start: usize) -> &[Option<usize>] {
+        let rest = self.fieldsets.get(start..).unwrap_or(&[]);
         let end = rest.iter().position(Option::is_none).unwrap_or(rest.len());
         &rest[..end]
+    }
+
+    /// The token indices of the fields of the field set starting at `start`, with each
+    /// field's index.
+    fn set_fields(&self, start: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.field_set(start)
+            .iter()
+            .flatten()
+            .filter_map(|&i| self.fields.get(i).map(|&(token, _)| (i, token)))
     }
 }
 
@@ -1080,23 +1750,9 @@ impl Specs for CrateLayer {
         let (Some((_, start)), Some(&token)) = (self.spec(path), self.names.get(field)) else {
             return Ok(None);
         };
-        let mut file = self.file.borrow_mut();
-        let rep = Self::field_set(&file, start)
-            .iter()
-            .flatten()
-            .filter_map(|&i| file.fields.get(i))
-            .find(|f| f.token_index == token)
-            .map(|f| f.value_rep);
-        let Some(rep) = rep else {
-            return Ok(None);
-        };
-        match file.value(rep) {
-            Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
-            Err(e) => Err(sdf::DataError::Decode {
-                path: path.clone(),
-                field: field.to_string(),
-                source: e.into(),
-            }),
+        match self.set_fields(start).find(|&(_, t)| t == token) {
+            Some((i, _)) => self.read_field(i, path, field),
+            None => Ok(None),
         }
     }
 
@@ -1106,20 +1762,12 @@ impl Specs for CrateLayer {
         if ty != sdf::SpecType::Attribute {
             return None;
         }
-        let mut file = self.file.borrow_mut();
-        let mut reps = [None; 4];
-        for f in Self::field_set(&file, start)
-            .iter()
-            .flatten()
-            .filter_map(|&i| file.fields.get(i))
-        {
-            if let Some(k) = self
-                .attribute_fields
-                .iter()
-                .position(|&t| t == Some(f.token_index))
-                && reps[k].is_none()
+        let mut found = [None; 4];
+        for (i, token) in self.set_fields(start) {
+            if let Some(k) = self.attribute_fields.iter().position(|&t| t == Some(token))
+                && found[k].is_none()
             {
-                reps[k] = Some(f.value_rep);
+                found[k] = Some(i);
             }
         }
         let keys = [
@@ -1128,17 +1776,10 @@ impl Specs for CrateLayer {
             sdf::FieldKey::ConnectionPaths,
             sdf::FieldKey::TimeSamples,
         ];
-        let mut read = |k: usize| -> FieldRead<'static> {
-            let Some(rep) = reps[k] else {
-                return Ok(None);
-            };
-            match file.value(rep) {
-                Ok(v) => Ok(Some(std::borrow::Cow::Owned(v))),
-                Err(e) => Err(sdf::DataError::Decode {
-                    path: path.clone(),
-                    field: keys[k].as_str().to_string(),
-                    source: e.into(),
-                }),
+        let read = |k: usize| -> FieldRead<'static> {
+            match found[k] {
+                Some(i) => self.read_field(i, path, keys[k].as_str()),
+                None => Ok(None),
             }
         };
         Some(AttrFields {
@@ -1149,15 +1790,22 @@ impl Specs for CrateLayer {
         })
     }
 
+    /// One look-up and one walk of the spec's field set, comparing names without copying
+    /// them.
+    fn fields_within(&self, path: &sdf::Path, allowed: &[&str]) -> Option<bool> {
+        let (_, start) = self.spec(path)?;
+        Some(
+            self.set_fields(start)
+                .filter_map(|(_, token)| self.field_names.get(&token))
+                .all(|name| allowed.contains(&name.as_str())),
+        )
+    }
+
     fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>> {
         let (_, start) = self.spec(path)?;
-        let file = self.file.borrow();
         Some(
-            Self::field_set(&file, start)
-                .iter()
-                .flatten()
-                .filter_map(|&i| file.fields.get(i))
-                .filter_map(|f| self.field_names.get(&f.token_index).cloned())
+            self.set_fields(start)
+                .filter_map(|(_, token)| self.field_names.get(&token).cloned())
                 .collect(),
         )
     }
@@ -1263,6 +1911,67 @@ pub fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
     open_flat(name, bytes).is_some()
 }
 
+/// Checks the crate file tables and values the reader decodes itself against `openusd`'s
+/// reading of the same file: every table equal, and every value decoded here (tokens,
+/// strings, numbers, 3-vectors of floats, specifiers, path list operations) equal to
+/// `openusd`'s decoding of that field. The number of values
+/// compared, or the first difference (or a file whose tables are not decoded here, or that
+/// `openusd` does not read).
+#[cfg(feature = "testkit")]
+pub fn crate_values_agree(bytes: &[u8]) -> Result<usize, String> {
+    let ours = CrateTables::decode(bytes).ok_or("the tables are not decoded here")?;
+    let layer = CrateLayer::open(bytes).ok_or("the crate file does not open")?;
+    let compared = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut file =
+            CrateFile::open(io::Cursor::new(Arc::from(bytes))).map_err(|e| format!("{e:#}"))?;
+        file.validate().map_err(|e| format!("{e:#}"))?;
+        let v = file.version();
+        if ours.version != [v.major, v.minor, v.patch] {
+            return Err("versions differ".to_string());
+        }
+        let tokens: Vec<&str> = ours.tokens.iter().map(|t| t.as_str()).collect();
+        if tokens != file.tokens || ours.strings != file.strings {
+            return Err("tokens or strings differ".to_string());
+        }
+        let fields: Vec<(usize, u64)> = file
+            .fields
+            .iter()
+            .map(|f| (f.token_index, f.value_rep.0))
+            .collect();
+        if ours.fields != fields {
+            return Err("fields differ".to_string());
+        }
+        if ours.fieldsets != file.fieldsets {
+            return Err("field sets differ".to_string());
+        }
+        if ours.paths != file.paths {
+            return Err("paths differ".to_string());
+        }
+        let specs: Vec<(usize, usize, sdf::SpecType)> = file
+            .specs
+            .iter()
+            .map(|s| (s.path_index, s.fieldset_index, s.spec_type))
+            .collect();
+        if ours.specs != specs {
+            return Err("specs differ".to_string());
+        }
+        let mut checked = 0;
+        for i in 0..file.fields.len() {
+            let Some(own) = layer.own_value(i) else {
+                continue;
+            };
+            let rep = file.fields[i].value_rep;
+            let theirs = file.value(rep).map_err(|e| format!("field {i}: {e:#}"))?;
+            if own != theirs {
+                return Err(format!("field {i}: {own:?} against {theirs:?}"));
+            }
+            checked += 1;
+        }
+        Ok(checked)
+    }));
+    compared.unwrap_or_else(|_| Err("openusd failed on this file".to_string()))
+}
+
 /// [`parse_usd`], reading the root layer alone when `direct` and nothing in it composes.
 fn read_usd(
     bytes: &[u8],
@@ -1302,6 +2011,7 @@ fn read_usd(
         nodes: FxHashMap::default(),
         net: Network::new(),
         sampled: Vec::new(),
+        declared: FxHashMap::default(),
     };
     let walked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         read_stage(&mut reader, prims)
@@ -1371,14 +2081,17 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
         r.net.set_node_location(id, r.at(&path));
         r.nodes.insert(path.clone(), id);
         pending.push((id, links));
-        // The nearest enclosing Material owns the shader.
-        let owner = p
-            .strict_ancestors()
-            .find(|a| r.kinds.get(a.as_str()) == Some(&PrimKind::Material));
-        if let Some(owner) = owner
-            && let Some(&m) = material_at.get(owner.as_str())
-        {
-            materials[m].1.push(id);
+        // The nearest enclosing Material owns the shader (a prim path's ancestors are its
+        // prefixes up to each `/`).
+        let mut owner = path.as_str();
+        while let Some(cut) = owner.rfind('/') {
+            owner = &owner[..cut];
+            if r.kinds.get(owner) == Some(&PrimKind::Material) {
+                if let Some(&m) = material_at.get(owner) {
+                    materials[m].1.push(id);
+                }
+                break;
+            }
         }
     }
     // Connections bind to their prims wherever they are: once every node exists.
@@ -1475,10 +2188,10 @@ fn flat_prims(data: &dyn Specs) -> Option<Vec<sdf::Path>> {
         match data.try_field(path, "primChildren").ok()? {
             None => Some(Vec::new()),
             Some(v) => match v.as_ref() {
-                sdf::Value::TokenVec(names) => names
-                    .iter()
-                    .map(|n| path.append_path(n.as_str()).ok())
-                    .collect(),
+                // A name given twice is for the composed stage to settle.
+                sdf::Value::TokenVec(names) if all_differ(names) => {
+                    names.iter().map(|n| child_path(path, n.as_str())).collect()
+                }
                 _ => None,
             },
         }
@@ -1490,8 +2203,7 @@ fn flat_prims(data: &dyn Specs) -> Option<Vec<sdf::Path>> {
         if data.spec_type(&path) != Some(sdf::SpecType::Prim) {
             return None;
         }
-        let fields = data.list_fields(&path)?;
-        if fields.iter().any(|f| !PRIM_KEEPS.contains(&f.as_str())) {
+        if !data.fields_within(&path, &PRIM_KEEPS)? {
             return None;
         }
         match data.try_field(&path, "specifier").ok()?.as_deref() {

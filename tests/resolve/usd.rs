@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::back::usd::{UsdMode, write_usd};
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::front::usd::{parse_usd, parse_usd_composed, reads_layer_alone};
+use vstructc::front::usd::{crate_values_agree, parse_usd, parse_usd_composed, reads_layer_alone};
 use vstructc::limits::Limits;
 use vstructc::network::Network;
 use vstructc::registry::Registry;
@@ -575,6 +575,141 @@ def Scope "Off" (active = false) {
             "odd.usdc",
         ]
     );
+}
+
+/// The crate files the USD writer makes of `materials` generated layered materials, and of
+/// the RIB examples.
+fn generated_crate_files(reg: &Registry, materials: usize) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let scene = vstructc::network::testgen::layered_scene(materials).into_bytes();
+    let mut inputs = vec![("scene.rib".to_string(), scene)];
+    for example in ["chain.rib", "layered.rib", "override.rib"] {
+        let path = common::repo_dir().join("examples").join(example);
+        inputs.push((example.to_string(), std::fs::read(&path).unwrap()));
+    }
+    for (name, rib) in inputs {
+        let net = read_rib(&rib, &name, reg);
+        let mut usdc = Vec::new();
+        write_usd(&net, reg, UsdMode::Flatten, "usdc", &mut usdc).unwrap();
+        out.push((format!("{name}.usdc"), usdc));
+    }
+    out
+}
+
+/// A large generated crate file is read alone, and that reading gives exactly the network
+/// and diagnostics the composed stage gives.
+#[test]
+fn generated_crate_files_read_alone_match_the_composed_stage() {
+    let reg = Registry::embedded();
+    for (name, bytes) in generated_crate_files(&reg, 40) {
+        assert!(reads_layer_alone(&bytes, &name), "{name}");
+        let mut d1 = Diagnostics::new();
+        let direct = parse_usd(&bytes, &name, &reg, &Limits::default(), &mut d1).unwrap();
+        let mut d2 = Diagnostics::new();
+        let composed =
+            parse_usd_composed(&bytes, &name, &reg, &Limits::default(), &mut d2).unwrap();
+        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
+        assert_eq!(d1, d2, "{name}");
+    }
+}
+
+/// `bytes` (a crate file whose table of contents ends it) with a second table-of-contents
+/// entry for its first section: `openusd` takes the first, the reader's own decoding of
+/// the tables refuses the file, so that `openusd` reads its tables.
+fn with_a_second_entry(bytes: &[u8]) -> Vec<u8> {
+    let toc = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+    let count = u64::from_le_bytes(bytes[toc..toc + 8].try_into().unwrap()) as usize;
+    assert_eq!(
+        toc + 8 + count * 32,
+        bytes.len(),
+        "the table of contents ends the file"
+    );
+    let mut out = bytes.to_vec();
+    out[toc..toc + 8].copy_from_slice(&(count as u64 + 1).to_le_bytes());
+    out.extend_from_slice(&bytes[toc + 8..toc + 40]);
+    out
+}
+
+/// Crate files whose tables the reader does not decode itself (`openusd` reads them) read
+/// alone as the composed stage reads them.
+#[test]
+fn crate_files_read_through_openusd_match_the_composed_stage() {
+    let reg = Registry::embedded();
+    for (name, bytes) in generated_crate_files(&reg, 5) {
+        let bytes = with_a_second_entry(&bytes);
+        assert_eq!(
+            crate_values_agree(&bytes),
+            Err("the tables are not decoded here".to_string()),
+            "{name}"
+        );
+        assert!(reads_layer_alone(&bytes, &name), "{name}");
+        let mut d1 = Diagnostics::new();
+        let direct = parse_usd(&bytes, &name, &reg, &Limits::default(), &mut d1).unwrap();
+        let mut d2 = Diagnostics::new();
+        let composed =
+            parse_usd_composed(&bytes, &name, &reg, &Limits::default(), &mut d2).unwrap();
+        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
+        assert_eq!(d1, d2, "{name}");
+    }
+}
+
+/// A crate file with one byte changed, anywhere, or cut short: when the reader decodes its
+/// tables itself, `openusd` reads the same tables and the same values from it (the reader
+/// accepts no damage that `openusd` refuses); else `openusd` reads it, as before.
+#[test]
+fn damaged_crate_files_decode_as_openusd_reads_them() {
+    let reg = Registry::embedded();
+    let (name, bytes) = generated_crate_files(&reg, 2).remove(0);
+    let mut decoded = 0;
+    let mut refused = 0;
+    for i in 0..bytes.len() {
+        let mut damaged = vec![bytes[..i].to_vec()];
+        for x in [0x01u8, 0x80, 0xff] {
+            let mut b = bytes.clone();
+            b[i] ^= x;
+            damaged.push(b);
+        }
+        for b in damaged {
+            match crate_values_agree(&b) {
+                Ok(_) => decoded += 1,
+                Err(e) if e == "the tables are not decoded here" => refused += 1,
+                Err(e) => panic!("{name}, byte {i}: {e}"),
+            }
+        }
+    }
+    assert!(
+        decoded > 0 && refused > 0,
+        "{decoded} decoded, {refused} refused"
+    );
+}
+
+/// The values the crate reader decodes itself (tokens, token arrays and vectors) equal
+/// `openusd`'s decoding of the same fields, in the corpus's crate file and generated ones;
+/// a corrupt or truncated file is refused, not a panic.
+#[test]
+fn crate_token_values_match_openusd() {
+    let reg = Registry::embedded();
+    let mut files = generated_crate_files(&reg, 10);
+    files.push((
+        "layered.usdc".to_string(),
+        std::fs::read(usd_dir().join("layered.usdc")).unwrap(),
+    ));
+    for (name, bytes) in &files {
+        let n = crate_values_agree(bytes).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(n > 0, "{name}");
+        // Cut short, or with a byte changed here and there: refused or read, never a
+        // panic.
+        for cut in [bytes.len() / 2, bytes.len() - 1] {
+            let _ = crate_values_agree(&bytes[..cut]);
+        }
+        let mut bad = bytes.clone();
+        for i in (0..bad.len()).step_by(97) {
+            bad[i] ^= 0x5a;
+        }
+        let _ = crate_values_agree(&bad);
+        let mut d = Diagnostics::new();
+        let _ = parse_usd(&bad, name, &reg, &Limits::default(), &mut d);
+    }
 }
 
 /// Materials as comparable text: name, terminals and the prim path each leads to.
