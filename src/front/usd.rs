@@ -278,10 +278,9 @@ impl Reader<'_> {
 
     /// Attribute `path`'s USD type name on the stage, or nothing (a layer read alone answers
     /// through [`Specs::attribute`]).
-    fn value_type(&self, path: &sdf::Path) -> String {
+    fn value_type(&self, path: &sdf::Path) -> openusd::tf::Token {
         self.stage
             .and_then(|stage| stage.attribute(path.clone()).type_name().ok().flatten())
-            .map(|t| t.as_str().to_string())
             .unwrap_or_default()
     }
 
@@ -300,7 +299,7 @@ impl Reader<'_> {
         let (type_name, default) = if targets.is_empty() {
             (self.value_type(path), self.default_value(path))
         } else {
-            (String::new(), Ok(None))
+            (openusd::tf::Token::default(), Ok(None))
         };
         Some(AttrFields {
             type_name,
@@ -479,7 +478,7 @@ impl Reader<'_> {
                 match fields.default {
                     Ok(Some(v)) => {
                         let declared = self.declared_type(shader, &input);
-                        value = self.value(&v, declared.as_ref(), &usd_type, &apath);
+                        value = self.value(&v, declared.as_ref(), usd_type.as_str(), &apath);
                     }
                     Ok(None) => {}
                     Err(e) => self.warn(
@@ -988,22 +987,26 @@ fn samples_of(field: FieldRead<'_>) -> usize {
     }
 }
 
-/// An attribute's USD type name from its `typeName` field, or nothing.
-fn type_name_of(field: FieldRead<'_>) -> String {
+/// An attribute's USD type name from its `typeName` field, or nothing (a token read from
+/// a crate file is shared, not copied).
+fn type_name_of(field: FieldRead<'_>) -> openusd::tf::Token {
     match field {
-        Ok(Some(v)) => match v.as_ref() {
-            sdf::Value::Token(t) => t.as_str().to_string(),
-            sdf::Value::String(t) => t.clone(),
-            _ => String::new(),
+        Ok(Some(v)) => match v {
+            std::borrow::Cow::Owned(sdf::Value::Token(t)) => t,
+            std::borrow::Cow::Borrowed(sdf::Value::Token(t)) => t.clone(),
+            _ => match v.as_ref() {
+                sdf::Value::String(t) => openusd::tf::Token::from(t.as_str()),
+                _ => openusd::tf::Token::default(),
+            },
         },
-        _ => String::new(),
+        _ => openusd::tf::Token::default(),
     }
 }
 
 /// What the reader reads of an attribute ([`Reader::attr_fields`]).
 struct AttrFields {
     /// Its USD type name, or nothing.
-    type_name: String,
+    type_name: openusd::tf::Token,
     /// Its default value (a blocked value is none), or why it cannot be read.
     default: Result<Option<sdf::Value>, String>,
     /// Its connection targets.
