@@ -148,6 +148,19 @@ enum PrimKind {
     Shader,
 }
 
+/// The kind of a prim whose `typeName` is `t`.
+fn prim_kind(t: &sdf::Value) -> Option<PrimKind> {
+    let sdf::Value::Token(t) = t else {
+        return None;
+    };
+    match t.as_str() {
+        "Material" => Some(PrimKind::Material),
+        "NodeGraph" => Some(PrimKind::NodeGraph),
+        "Shader" => Some(PrimKind::Shader),
+        _ => None,
+    }
+}
+
 /// Reading state: the stage, the prims it holds and where findings go.
 struct Reader<'a> {
     /// The composed stage, or nothing when `flat` is read instead.
@@ -156,6 +169,9 @@ struct Reader<'a> {
     /// read directly, they are what the composed stage would give, without composing
     /// each prim.
     flat: Option<&'a dyn Specs>,
+    /// The crate file read alone, when its prims were walked by path index
+    /// ([`CrateLayer::flat_prims_by_index`]): prims and attributes are then found by index.
+    indexed: Option<&'a CrateLayer>,
     file: Arc<str>,
     types: &'a dyn ParamTypes,
     diags: &'a mut Diagnostics,
@@ -210,23 +226,20 @@ impl Reader<'_> {
         );
     }
 
-    fn kind_of(&self, prim: &sdf::Path) -> Option<PrimKind> {
-        let t = match self.flat {
-            Some(data) => match data
-                .try_field(prim, sdf::FieldKey::TypeName.as_str())
-                .ok()??
-            {
-                std::borrow::Cow::Borrowed(sdf::Value::Token(t)) => t.clone(),
-                std::borrow::Cow::Owned(sdf::Value::Token(t)) => t,
-                _ => return None,
-            },
-            None => self.stage?.prim(prim.clone()).type_name().ok()??,
-        };
-        match t.as_str() {
-            "Material" => Some(PrimKind::Material),
-            "NodeGraph" => Some(PrimKind::NodeGraph),
-            "Shader" => Some(PrimKind::Shader),
-            _ => None,
+    /// The kind of prim `prim` (at path index `index` of a crate file walked by index).
+    fn kind_of(&self, prim: &sdf::Path, index: Option<usize>) -> Option<PrimKind> {
+        if let (Some(layer), Some(index)) = (self.indexed, index) {
+            return layer.kind_at(index);
+        }
+        match self.flat {
+            Some(data) => prim_kind(
+                data.try_field(prim, sdf::FieldKey::TypeName.as_str())
+                    .ok()??
+                    .as_ref(),
+            ),
+            None => prim_kind(&sdf::Value::Token(
+                self.stage?.prim(prim.clone()).type_name().ok()??,
+            )),
         }
     }
 
@@ -265,17 +278,19 @@ impl Reader<'_> {
 
     /// Attribute `path`'s USD type name on the stage, or nothing (a layer read alone answers
     /// through [`Specs::attribute`]).
-    fn value_type(&self, path: &sdf::Path) -> String {
+    fn value_type(&self, path: &sdf::Path) -> openusd::tf::Token {
         self.stage
             .and_then(|stage| stage.attribute(path.clone()).type_name().ok().flatten())
-            .map(|t| t.as_str().to_string())
             .unwrap_or_default()
     }
 
     /// What the reader reads of attribute `path`, or nothing when the layer read alone
     /// has no attribute there. Through the stage, the type name and the default value are
     /// looked up only for an attribute without connections, the only one that uses them.
-    fn attr_fields(&self, path: &sdf::Path) -> Option<AttrFields> {
+    fn attr_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
+        if let (Some(layer), Some(index)) = (self.indexed, index) {
+            return layer.attribute_at(index);
+        }
         if let Some(data) = self.flat {
             return data.attribute(path);
         }
@@ -284,7 +299,7 @@ impl Reader<'_> {
         let (type_name, default) = if targets.is_empty() {
             (self.value_type(path), self.default_value(path))
         } else {
-            (String::new(), Ok(None))
+            (openusd::tf::Token::default(), Ok(None))
         };
         Some(AttrFields {
             type_name,
@@ -297,7 +312,14 @@ impl Reader<'_> {
     /// The `inputs:` attributes of prim `path` in composed order: each one's path and
     /// input name (read alone, every property so named: [`Reader::attr_fields`] leaves out
     /// those that are not attributes).
-    fn inputs(&self, path: &sdf::Path) -> Vec<(sdf::Path, String)> {
+    fn inputs(
+        &self,
+        path: &sdf::Path,
+        index: Option<usize>,
+    ) -> Vec<(sdf::Path, String, Option<usize>)> {
+        if let (Some(layer), Some(index)) = (self.indexed, index) {
+            return layer.inputs_at(index);
+        }
         match self.flat {
             Some(data) => {
                 let names = match data.try_field(path, "propertyChildren") {
@@ -317,7 +339,7 @@ impl Reader<'_> {
                         continue;
                     }
                     if let Some(p) = property_path(path, n.as_str()) {
-                        out.push((p, input.to_string()));
+                        out.push((p, input.to_string(), None));
                     }
                 }
                 out
@@ -330,16 +352,19 @@ impl Reader<'_> {
                 .filter_map(|a| {
                     let input = a.path().split_property()?.1.strip_prefix("inputs:")?;
                     let input = input.to_string();
-                    Some((a.path().clone(), input))
+                    Some((a.path().clone(), input, None))
                 })
                 .collect(),
         }
     }
 
     /// A token or string attribute's default value.
-    fn text_attr(&self, prim: &sdf::Path, name: &str) -> Option<String> {
-        let path = property_path(prim, name)?;
-        match self.default_value(&path).ok()?? {
+    fn text_attr(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
+        let value = match (self.indexed, index) {
+            (Some(layer), Some(index)) => layer.property_default(index, name),
+            _ => self.default_value(&property_path(prim, name)?),
+        };
+        match value.ok()?? {
             sdf::Value::Token(t) => Some(t.as_str().to_string()),
             sdf::Value::String(s) => Some(s),
             _ => None,
@@ -348,10 +373,10 @@ impl Reader<'_> {
 
     /// The node type of shader `prim`: its `info:id`, or a marker of what it has instead
     /// (US003).
-    fn shader_id(&mut self, prim: &sdf::Path, path: &str) -> String {
-        let source = self.text_attr(prim, "info:implementationSource");
+    fn shader_id(&mut self, prim: &sdf::Path, index: Option<usize>, path: &str) -> String {
+        let source = self.text_attr(prim, index, "info:implementationSource");
         match source.as_deref() {
-            None | Some("id") => match self.text_attr(prim, "info:id") {
+            None | Some("id") => match self.text_attr(prim, index, "info:id") {
                 Some(id) if !id.is_empty() => id,
                 _ => {
                     self.warn(
@@ -427,11 +452,16 @@ impl Reader<'_> {
 
     /// The inputs of shader `path` (of type `shader`) as parameters read from the source,
     /// with the connections to bind once every node exists: (parameter index, sources).
-    fn read_inputs(&mut self, path: &sdf::Path, shader: &str) -> (Vec<Param>, PendingLinks) {
+    fn read_inputs(
+        &mut self,
+        path: &sdf::Path,
+        index: Option<usize>,
+        shader: &str,
+    ) -> (Vec<Param>, PendingLinks) {
         let mut params: Vec<Param> = Vec::new();
         let mut pending: PendingLinks = Vec::new();
-        for (attr, input) in self.inputs(path) {
-            let Some(fields) = self.attr_fields(&attr) else {
+        for (attr, input, at) in self.inputs(path, index) {
+            let Some(fields) = self.attr_fields(&attr, at) else {
                 continue;
             };
             let apath = attr.as_str().to_string();
@@ -448,7 +478,7 @@ impl Reader<'_> {
                 match fields.default {
                     Ok(Some(v)) => {
                         let declared = self.declared_type(shader, &input);
-                        value = self.value(&v, declared.as_ref(), &usd_type, &apath);
+                        value = self.value(&v, declared.as_ref(), usd_type.as_str(), &apath);
                     }
                     Ok(None) => {}
                     Err(e) => self.warn(
@@ -528,14 +558,18 @@ impl Reader<'_> {
     }
 
     /// The terminals of Material `path`: `outputs:ri:*`, else the universal outputs.
-    fn terminals(&mut self, path: &str) -> Vec<Terminal> {
+    /// (`index`: its path index in a crate file walked by index.)
+    fn terminals(&mut self, path: &str, index: Option<usize>) -> Vec<Terminal> {
         let prim = sdf::Path::from(path);
         let read = |this: &mut Self, names: &[(&str, &str)]| -> Vec<Terminal> {
             let mut out = Vec::new();
             for &(attr_name, terminal) in names {
-                let targets = match property_path(&prim, attr_name) {
-                    Some(attr) => this.connections(&attr),
-                    None => Vec::new(),
+                let targets = match (this.indexed, index) {
+                    (Some(layer), Some(index)) => layer.property_targets(index, attr_name),
+                    _ => match property_path(&prim, attr_name) {
+                        Some(attr) => this.connections(&attr),
+                        None => Vec::new(),
+                    },
                 };
                 let apath = format!("{path}.{attr_name}");
                 let mut sources = Vec::new();
@@ -799,7 +833,7 @@ pub(crate) fn prim_types(name: &str, bytes: &[u8], paths: &[String]) -> FxHashMa
         let flat = (!(flavour(bytes) == "usda" && may_compose(bytes)))
             .then(|| open_flat(name, bytes))
             .flatten();
-        if let Some((data, _)) = &flat {
+        if let Some((data, ..)) = &flat {
             for p in paths {
                 let path = sdf::Path::from(p.as_str());
                 if data.spec_type(&path) != Some(sdf::SpecType::Prim) {
@@ -953,22 +987,26 @@ fn samples_of(field: FieldRead<'_>) -> usize {
     }
 }
 
-/// An attribute's USD type name from its `typeName` field, or nothing.
-fn type_name_of(field: FieldRead<'_>) -> String {
+/// An attribute's USD type name from its `typeName` field, or nothing (a token read from
+/// a crate file is shared, not copied).
+fn type_name_of(field: FieldRead<'_>) -> openusd::tf::Token {
     match field {
-        Ok(Some(v)) => match v.as_ref() {
-            sdf::Value::Token(t) => t.as_str().to_string(),
-            sdf::Value::String(t) => t.clone(),
-            _ => String::new(),
+        Ok(Some(v)) => match v {
+            std::borrow::Cow::Owned(sdf::Value::Token(t)) => t,
+            std::borrow::Cow::Borrowed(sdf::Value::Token(t)) => t.clone(),
+            _ => match v.as_ref() {
+                sdf::Value::String(t) => openusd::tf::Token::from(t.as_str()),
+                _ => openusd::tf::Token::default(),
+            },
         },
-        _ => String::new(),
+        _ => openusd::tf::Token::default(),
     }
 }
 
 /// What the reader reads of an attribute ([`Reader::attr_fields`]).
 struct AttrFields {
     /// Its USD type name, or nothing.
-    type_name: String,
+    type_name: openusd::tf::Token,
     /// Its default value (a blocked value is none), or why it cannot be read.
     default: Result<Option<sdf::Value>, String>,
     /// Its connection targets.
@@ -991,6 +1029,10 @@ trait Specs {
     ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError>;
     /// The names of the fields of the spec at `path`.
     fn list_fields(&self, path: &sdf::Path) -> Option<Vec<String>>;
+    /// The crate file these specs are, if they are one.
+    fn as_crate(&self) -> Option<&CrateLayer> {
+        None
+    }
     /// Whether every field of the spec at `path` is named in `allowed`; nothing when there
     /// is no spec there.
     fn fields_within(&self, path: &sdf::Path, allowed: &[&str]) -> Option<bool> {
@@ -1047,8 +1089,39 @@ struct CrateTables {
     /// Field indices, each field set ended by nothing.
     fieldsets: Vec<Option<usize>>,
     paths: Vec<sdf::Path>,
+    /// The path tree by path index, when decoded here and no two paths are the same.
+    tree: Option<PathTree>,
     /// Each spec: its path index, its field set's start and its type.
     specs: Vec<(usize, usize, sdf::SpecType)>,
+}
+
+/// A crate file's paths as a tree of path indices: each path's element token (negative
+/// for a property), first child and next sibling (`NO_PATH` for none), and the root's
+/// index. Made only when no parent has two children of the same name and kind, so that
+/// every path is told apart by its index: then finding a child by name among its
+/// parent's children finds the spec a look-up by the path's text would.
+struct PathTree {
+    root: usize,
+    element: Vec<i32>,
+    first_child: Vec<u32>,
+    next_sibling: Vec<u32>,
+}
+
+/// No path (in [`PathTree`]).
+const NO_PATH: u32 = u32::MAX;
+
+impl PathTree {
+    /// The children of path `parent`, in file order.
+    fn children(&self, parent: usize) -> impl Iterator<Item = usize> + '_ {
+        let first = self.first_child.get(parent).copied().unwrap_or(NO_PATH);
+        std::iter::successors(
+            (first != NO_PATH).then_some(first as usize),
+            |&c| match self.next_sibling.get(c).copied() {
+                Some(NO_PATH) | None => None,
+                Some(n) => Some(n as usize),
+            },
+        )
+    }
 }
 
 /// A little-endian `u64` at `at`, if the bytes are there.
@@ -1172,7 +1245,7 @@ impl CrateTables {
             })
             .collect::<Option<_>>()?;
 
-        let paths = Self::paths(bytes, section(b"PATHS")?, &tokens)?;
+        let (paths, tree) = Self::paths(bytes, section(b"PATHS")?, &tokens)?;
 
         // SPECS: count, then path indices, field set starts and types (integer coded).
         let at = section(b"SPECS")?;
@@ -1203,6 +1276,7 @@ impl CrateTables {
             fields,
             fieldsets,
             paths,
+            tree,
             specs,
         })
     }
@@ -1284,7 +1358,12 @@ impl CrateTables {
     /// entry's path index, element token (negative for a property) and jump (to its next
     /// sibling: 0 when the next entry is its sibling, -1 when it is its child, -2 when it
     /// has neither), integer coded. Every path must be given once.
-    fn paths(bytes: &[u8], at: usize, tokens: &[openusd::tf::Token]) -> Option<Vec<sdf::Path>> {
+    /// With the paths, their tree ([`PathTree`]) when no two are the same.
+    fn paths(
+        bytes: &[u8],
+        at: usize,
+        tokens: &[openusd::tf::Token],
+    ) -> Option<(Vec<sdf::Path>, Option<PathTree>)> {
         let count = le_size(bytes, at)?;
         let entries = le_size(bytes, at + 8)?;
         let (index, at) = Self::ints(bytes, at + 16, entries)?;
@@ -1295,8 +1374,13 @@ impl CrateTables {
         }
         let mut paths: Vec<Option<(sdf::Path, bool)>> = vec![None; count];
         if entries == 0 {
-            return Some(Vec::new());
+            return Some((Vec::new(), None));
         }
+        let mut elements = vec![0i32; count];
+        let mut first_child = vec![NO_PATH; count];
+        let mut last_child = vec![NO_PATH; count];
+        let mut next_sibling = vec![NO_PATH; count];
+        let root = index[0] as u32 as usize;
         // (entry, its parent's path index, or nothing for the root).
         let mut pending: Vec<(usize, Option<usize>)> = vec![(0, None)];
         let mut visited = vec![false; entries];
@@ -1346,6 +1430,14 @@ impl CrateTables {
                     return None;
                 }
                 *slot = Some(made);
+                if let Some(p) = parent {
+                    elements[this] = element[entry];
+                    match last_child[p] {
+                        NO_PATH => first_child[p] = this as u32,
+                        last => next_sibling[last as usize] = this as u32,
+                    }
+                    last_child[p] = this as u32;
+                }
                 let j = jump[entry];
                 let has_child = j > 0 || j == -1;
                 let has_sibling = j >= 0;
@@ -1365,7 +1457,31 @@ impl CrateTables {
                 entry += 1;
             }
         }
-        paths.into_iter().map(|p| p.map(|(p, _)| p)).collect()
+        let paths: Vec<sdf::Path> = paths
+            .into_iter()
+            .map(|p| p.map(|(p, _)| p))
+            .collect::<Option<_>>()?;
+        let tree = PathTree {
+            root,
+            element: elements,
+            first_child,
+            next_sibling,
+        };
+        // Whether some parent has two children of the same element (a token and its
+        // sign): each parent's children are checked together, each token marked with
+        // the parent's index.
+        let mut marks = vec![[NO_PATH; 2]; tokens.len()];
+        for parent in 0..count {
+            for child in tree.children(parent) {
+                let e = tree.element[child];
+                let mark = &mut marks.get_mut(e.unsigned_abs() as usize)?[usize::from(e < 0)];
+                if *mark == parent as u32 {
+                    return Some((paths, None));
+                }
+                *mark = parent as u32;
+            }
+        }
+        Some((paths, Some(tree)))
     }
 }
 
@@ -1447,8 +1563,19 @@ struct CrateLayer {
     fieldsets: Vec<Option<usize>>,
     paths: Vec<sdf::Path>,
     /// Each spec: its path's index in `paths`, its type and the start of its field set in
-    /// `fieldsets`, found by the hash of its path (so the paths are not copied).
-    specs: hashbrown::HashTable<(usize, sdf::SpecType, usize)>,
+    /// `fieldsets`, found by the hash of its path (so the paths are not copied): made
+    /// from `specs_in` when a spec is first looked up by path.
+    specs: std::cell::OnceCell<hashbrown::HashTable<(usize, sdf::SpecType, usize)>>,
+    /// Each spec: its path index, its field set's start and its type.
+    specs_in: Vec<(usize, usize, sdf::SpecType)>,
+    /// The path tree, when the tables are decoded here and no two paths are the same.
+    tree: Option<PathTree>,
+    /// Whether values not decoded here are read as none rather than by `openusd` (set
+    /// only to compare the walks by index and by text on damaged files, where `openusd`
+    /// may fail).
+    decoded_only: std::cell::Cell<bool>,
+    /// With the tree: the type and field set start of the spec of each path index.
+    spec_at: Vec<Option<(sdf::SpecType, usize)>>,
     /// The token index of each field name (under the names `openusd`'s layers use:
     /// `propertyChildren` for the crate's `properties`).
     names: FxHashMap<String, usize>,
@@ -1457,6 +1584,9 @@ struct CrateLayer {
     /// The token indices of the fields [`Specs::attribute`] reads: `typeName`, `default`,
     /// `connectionPaths`, `timeSamples`.
     attribute_fields: [Option<usize>; 4],
+    /// The token indices of the prim fields the walk by path index reads: `specifier`,
+    /// `primChildren`, `propertyChildren`.
+    prim_fields: [Option<usize>; 3],
 }
 
 impl CrateLayer {
@@ -1485,6 +1615,7 @@ impl CrateLayer {
                         .collect(),
                     fieldsets: std::mem::take(&mut file.fieldsets),
                     paths: std::mem::take(&mut file.paths),
+                    tree: None,
                     specs: std::mem::take(&mut file.specs)
                         .into_iter()
                         .map(|s| (s.path_index, s.fieldset_index, s.spec_type))
@@ -1500,23 +1631,16 @@ impl CrateLayer {
             fields,
             fieldsets,
             paths,
+            tree,
             specs: specs_in,
         } = tables;
-        let mut specs = hashbrown::HashTable::with_capacity(specs_in.len());
+        let mut spec_at = vec![None; if tree.is_some() { paths.len() } else { 0 }];
         for &(path_index, fieldset_index, spec_type) in &specs_in {
-            let path = paths.get(path_index)?;
+            paths.get(path_index)?;
             fieldsets.get(fieldset_index)?;
-            let entry = (path_index, spec_type, fieldset_index);
-            // A path given twice keeps its last spec, as a map would.
-            match specs.entry(
-                path_hash(path),
-                |&(i, ..): &(usize, _, _)| paths[i] == *path,
-                |&(i, ..)| path_hash(&paths[i]),
-            ) {
-                hashbrown::hash_table::Entry::Occupied(mut e) => *e.get_mut() = entry,
-                hashbrown::hash_table::Entry::Vacant(e) => {
-                    e.insert(entry);
-                }
+            // Paths all differ here: the last spec of a path index is its path's.
+            if let Some(slot) = spec_at.get_mut(path_index) {
+                *slot = Some((spec_type, fieldset_index));
             }
         }
         // Each token that names a field once (fields repeat their name, once per value): a
@@ -1546,6 +1670,8 @@ impl CrateLayer {
             sdf::FieldKey::TimeSamples,
         ]
         .map(|k| names.get(k.as_str()).copied());
+        let prim_fields =
+            ["specifier", "primChildren", "propertyChildren"].map(|k| names.get(k).copied());
         Some(CrateLayer {
             file: std::cell::RefCell::new(file),
             bytes,
@@ -1556,16 +1682,41 @@ impl CrateLayer {
             fields,
             fieldsets,
             paths,
-            specs,
+            tree,
+            decoded_only: std::cell::Cell::new(false),
+            spec_at,
+            specs_in,
+            specs: std::cell::OnceCell::new(),
             names,
             field_names,
             attribute_fields,
+            prim_fields,
         })
     }
 
     /// The type and the field set start of the spec at `path`.
     fn spec(&self, path: &sdf::Path) -> Option<(sdf::SpecType, usize)> {
         self.specs
+            .get_or_init(|| {
+                let paths = &self.paths;
+                let mut specs = hashbrown::HashTable::with_capacity(self.specs_in.len());
+                for &(path_index, fieldset_index, spec_type) in &self.specs_in {
+                    let path = &paths[path_index];
+                    let entry = (path_index, spec_type, fieldset_index);
+                    // A path given twice keeps its last spec, as a map would.
+                    match specs.entry(
+                        path_hash(path),
+                        |&(i, ..): &(usize, _, _)| paths[i] == *path,
+                        |&(i, ..)| path_hash(&paths[i]),
+                    ) {
+                        hashbrown::hash_table::Entry::Occupied(mut e) => *e.get_mut() = entry,
+                        hashbrown::hash_table::Entry::Vacant(e) => {
+                            e.insert(entry);
+                        }
+                    }
+                }
+                specs
+            })
             .find(path_hash(path), |&(i, ..)| self.paths[i] == *path)
             .map(|&(_, ty, start)| (ty, start))
     }
@@ -1698,6 +1849,9 @@ impl CrateLayer {
         if let Some(v) = self.own_value(field) {
             return Ok(Some(std::borrow::Cow::Owned(v)));
         }
+        if self.decoded_only.get() {
+            return Ok(None);
+        }
         let failed = |source: Box<dyn std::error::Error + Send + Sync>| sdf::DataError::Decode {
             path: path.clone(),
             field: name.to_string(),
@@ -1735,33 +1889,27 @@ impl CrateLayer {
             .flatten()
             .filter_map(|&i| self.fields.get(i).map(|&(token, _)| (i, token)))
     }
-}
-
-impl Specs for CrateLayer {
-    fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType> {
-        self.spec(path).map(|s| s.0)
-    }
-
-    fn try_field(
+    /// The first field of the field set at `start` named by token `token`, read (`path`
+    /// and `name`: the spec's path and the field's name, for errors).
+    fn field_in(
         &self,
+        start: usize,
+        token: Option<usize>,
         path: &sdf::Path,
-        field: &str,
-    ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError> {
-        let (Some((_, start)), Some(&token)) = (self.spec(path), self.names.get(field)) else {
+        name: &str,
+    ) -> FieldRead<'static> {
+        let Some(token) = token else {
             return Ok(None);
         };
         match self.set_fields(start).find(|&(_, t)| t == token) {
-            Some((i, _)) => self.read_field(i, path, field),
+            Some((i, _)) => self.read_field(i, path, name),
             None => Ok(None),
         }
     }
 
-    /// One look-up and one walk of the spec's field set for the four fields.
-    fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
-        let (ty, start) = self.spec(path)?;
-        if ty != sdf::SpecType::Attribute {
-            return None;
-        }
+    /// What the reader reads of the attribute spec at `path` whose field set starts at
+    /// `start`: one walk of the field set for the four fields.
+    fn attribute_fields_of(&self, start: usize, path: &sdf::Path) -> AttrFields {
         let mut found = [None; 4];
         for (i, token) in self.set_fields(start) {
             if let Some(k) = self.attribute_fields.iter().position(|&t| t == Some(token))
@@ -1782,12 +1930,253 @@ impl Specs for CrateLayer {
                 None => Ok(None),
             }
         };
-        Some(AttrFields {
+        AttrFields {
             type_name: type_name_of(read(0)),
             default: default_of(read(1)),
             targets: targets_of(read(2)),
             samples: samples_of(read(3)),
-        })
+        }
+    }
+
+    /// The type and field set start of the spec of path index `index` (with the tree).
+    fn spec_of(&self, index: usize) -> Option<(sdf::SpecType, usize)> {
+        self.spec_at.get(index).copied().flatten()
+    }
+
+    /// The path index of child `name` of path index `parent` (a property when
+    /// `property`), trying `hint` first (the sibling after the child found before).
+    fn child_named(
+        &self,
+        parent: usize,
+        name: &str,
+        property: bool,
+        hint: Option<usize>,
+    ) -> Option<usize> {
+        let tree = self.tree.as_ref()?;
+        let is = |c: usize| {
+            let e = tree.element[c];
+            (e < 0) == property
+                && self
+                    .tokens
+                    .get(e.unsigned_abs() as usize)
+                    .is_some_and(|t| t.as_str() == name)
+        };
+        // From the hint to the last child, then from the first: children are mostly
+        // listed in the order their paths are.
+        let from_hint = std::iter::successors(hint, |&c| match tree.next_sibling.get(c) {
+            Some(&n) if n != NO_PATH => Some(n as usize),
+            _ => None,
+        });
+        from_hint
+            .chain(tree.children(parent).take_while(|&c| Some(c) != hint))
+            .find(|&c| is(c))
+    }
+
+    /// The sibling after path index `index` (a hint for [`CrateLayer::child_named`]).
+    fn next_of(&self, index: usize) -> Option<usize> {
+        let n = *self.tree.as_ref()?.next_sibling.get(index)?;
+        (n != NO_PATH).then_some(n as usize)
+    }
+
+    /// The kind of the prim at path index `index`, as [`Reader::kind_of`] reads it.
+    fn kind_at(&self, index: usize) -> Option<PrimKind> {
+        let (_, start) = self.spec_of(index)?;
+        let path = self.paths.get(index)?;
+        let t = self
+            .field_in(
+                start,
+                self.attribute_fields[0],
+                path,
+                sdf::FieldKey::TypeName.as_str(),
+            )
+            .ok()??;
+        prim_kind(t.as_ref())
+    }
+
+    /// The `default` of property `name` of the prim at path index `prim`.
+    fn property_default(&self, prim: usize, name: &str) -> Result<Option<sdf::Value>, String> {
+        let Some(index) = self.child_named(prim, name, true, None) else {
+            return Ok(None);
+        };
+        let (Some((_, start)), Some(path)) = (self.spec_of(index), self.paths.get(index)) else {
+            return Ok(None);
+        };
+        default_of(self.field_in(
+            start,
+            self.attribute_fields[1],
+            path,
+            sdf::FieldKey::Default.as_str(),
+        ))
+    }
+
+    /// The connection targets of property `name` of the prim at path index `prim`.
+    fn property_targets(&self, prim: usize, name: &str) -> Vec<sdf::Path> {
+        let Some(index) = self.child_named(prim, name, true, None) else {
+            return Vec::new();
+        };
+        let (Some((_, start)), Some(path)) = (self.spec_of(index), self.paths.get(index)) else {
+            return Vec::new();
+        };
+        targets_of(self.field_in(
+            start,
+            self.attribute_fields[2],
+            path,
+            sdf::FieldKey::ConnectionPaths.as_str(),
+        ))
+    }
+
+    /// The `inputs:` attributes of the prim at path index `prim`, as [`Reader::inputs`]
+    /// gives them, each with its path index; those without a spec are left out, as
+    /// [`Reader::attr_fields`] would leave them.
+    fn inputs_at(&self, prim: usize) -> Vec<(sdf::Path, String, Option<usize>)> {
+        let (Some((_, start)), Some(path)) = (self.spec_of(prim), self.paths.get(prim)) else {
+            return Vec::new();
+        };
+        let names = match self.field_in(start, self.prim_fields[2], path, "propertyChildren") {
+            Ok(Some(v)) => match v.into_owned() {
+                sdf::Value::TokenVec(names) => names,
+                _ => Vec::new(),
+            },
+            _ => Vec::new(),
+        };
+        let mut seen = rustc_hash::FxHashSet::default();
+        let mut out = Vec::new();
+        let mut hint = None;
+        for n in &names {
+            let Some(input) = n.as_str().strip_prefix("inputs:") else {
+                continue;
+            };
+            if !seen.insert(input) {
+                continue;
+            }
+            let Some(index) = self.child_named(prim, n.as_str(), true, hint) else {
+                continue;
+            };
+            hint = self.next_of(index);
+            if let Some(p) = self.paths.get(index) {
+                out.push((p.clone(), input.to_string(), Some(index)));
+            }
+        }
+        out
+    }
+
+    /// What the reader reads of the attribute at path index `index`, or nothing when its
+    /// spec is not an attribute's.
+    fn attribute_at(&self, index: usize) -> Option<AttrFields> {
+        let (ty, start) = self.spec_of(index)?;
+        if ty != sdf::SpecType::Attribute {
+            return None;
+        }
+        Some(self.attribute_fields_of(start, self.paths.get(index)?))
+    }
+
+    /// [`flat_prims`] by path index, each prim with its path index: one spec found per
+    /// prim, its children found among its path's children. Nothing when there is no tree
+    /// or a child's name is no identifier (then [`flat_prims`] decides); `Some(None)` when
+    /// something composes.
+    fn flat_prims_by_index(&self) -> Option<Option<(Vec<sdf::Path>, Vec<usize>)>> {
+        let tree = self.tree.as_ref()?;
+        let Some((_, start)) = self.spec_of(tree.root) else {
+            return Some(None);
+        };
+        if self
+            .set_fields(start)
+            .filter_map(|(_, token)| self.field_names.get(&token))
+            .any(|name| ROOT_CHANGES.contains(&name.as_str()))
+        {
+            return Some(None);
+        }
+        // A prim's children by path index; `Err` when a name is no identifier.
+        let children = |index: usize, start: usize| -> Result<Option<Vec<usize>>, ()> {
+            let path = &self.paths[index];
+            let names = match self.field_in(start, self.prim_fields[1], path, "primChildren") {
+                Err(_) => return Ok(None),
+                Ok(None) => return Ok(Some(Vec::new())),
+                Ok(Some(v)) => match v.into_owned() {
+                    sdf::Value::TokenVec(names) if all_differ(&names) => names,
+                    _ => return Ok(None),
+                },
+            };
+            let mut out = Vec::with_capacity(names.len());
+            let mut hint = None;
+            for n in &names {
+                if !sdf::Path::is_valid_identifier(n.as_str()) {
+                    return Err(());
+                }
+                match self.child_named(index, n.as_str(), false, hint) {
+                    Some(c) => {
+                        hint = self.next_of(c);
+                        out.push(c);
+                    }
+                    // No path of that text, so no spec: not a flat prim.
+                    None => return Ok(None),
+                }
+            }
+            Ok(Some(out))
+        };
+        let Some(mut stack) = children(tree.root, start).ok()? else {
+            return Some(None);
+        };
+        stack.reverse();
+        let mut paths = Vec::new();
+        let mut indices = Vec::new();
+        while let Some(index) = stack.pop() {
+            let Some((sdf::SpecType::Prim, start)) = self.spec_of(index) else {
+                return Some(None);
+            };
+            let within = self
+                .set_fields(start)
+                .filter_map(|(_, token)| self.field_names.get(&token))
+                .all(|name| PRIM_KEEPS.contains(&name.as_str()));
+            if !within {
+                return Some(None);
+            }
+            let path = &self.paths[index];
+            match self
+                .field_in(start, self.prim_fields[0], path, "specifier")
+                .ok()
+                .flatten()
+                .as_deref()
+            {
+                Some(sdf::Value::Specifier(sdf::Specifier::Def)) => {}
+                _ => return Some(None),
+            }
+            let Some(mut kids) = children(index, start).ok()? else {
+                return Some(None);
+            };
+            kids.reverse();
+            stack.extend(kids);
+            paths.push(path.clone());
+            indices.push(index);
+        }
+        Some(Some((paths, indices)))
+    }
+}
+
+impl Specs for CrateLayer {
+    fn as_crate(&self) -> Option<&CrateLayer> {
+        Some(self)
+    }
+
+    fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType> {
+        self.spec(path).map(|s| s.0)
+    }
+
+    fn try_field(
+        &self,
+        path: &sdf::Path,
+        field: &str,
+    ) -> Result<Option<std::borrow::Cow<'_, sdf::Value>>, sdf::DataError> {
+        let Some((_, start)) = self.spec(path) else {
+            return Ok(None);
+        };
+        self.field_in(start, self.names.get(field).copied(), path, field)
+    }
+
+    /// One look-up and one walk of the spec's field set for the four fields.
+    fn attribute(&self, path: &sdf::Path) -> Option<AttrFields> {
+        let (ty, start) = self.spec(path)?;
+        (ty == sdf::SpecType::Attribute).then(|| self.attribute_fields_of(start, path))
     }
 
     /// One look-up and one walk of the spec's field set, comparing names without copying
@@ -1811,10 +2200,16 @@ impl Specs for CrateLayer {
     }
 }
 
+/// A layer read alone: its specs, its prims in traversal order and, for a crate file
+/// walked by index, each prim's path index.
+type FlatLayer = (Box<dyn Specs>, Vec<sdf::Path>, Vec<usize>);
+
 /// The root layer `bytes` (a `.usda` or `.usdc`, named so and holding that encoding) read
 /// alone, with its prims in traversal order, when nothing in it composes
 /// ([`flat_prims`]); else nothing, and the stage is composed instead.
-fn open_flat(name: &str, bytes: &[u8]) -> Option<(Box<dyn Specs>, Vec<sdf::Path>)> {
+/// A crate file's prims come with their path indices when walked by index
+/// ([`CrateLayer::flat_prims_by_index`]); else the indices are empty.
+fn open_flat(name: &str, bytes: &[u8]) -> Option<FlatLayer> {
     let (resolver, root) = mem_resolver(name, bytes);
     let ext = root.rsplit('.').next()?.to_ascii_lowercase();
     if ext != flavour(bytes) {
@@ -1823,14 +2218,21 @@ fn open_flat(name: &str, bytes: &[u8]) -> Option<(Box<dyn Specs>, Vec<sdf::Path>
     let resolved = ar::ResolvedPath::new(&root);
     let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let data: Box<dyn Specs> = match ext.as_str() {
-            "usdc" => Box::new(CrateLayer::open(bytes)?),
+            "usdc" => {
+                let layer = CrateLayer::open(bytes)?;
+                if let Some(walked) = layer.flat_prims_by_index() {
+                    let (prims, indices) = walked?;
+                    return Some((Box::new(layer) as Box<dyn Specs>, prims, indices));
+                }
+                Box::new(layer)
+            }
             "usda" => Box::new(
                 sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved).ok()?,
             ),
             _ => return None,
         };
         let prims = flat_prims(data.as_ref())?;
-        Some((data, prims))
+        Some((data, prims, Vec::new()))
     }));
     read.ok().flatten()
 }
@@ -1914,7 +2316,8 @@ pub fn reads_layer_alone(bytes: &[u8], name: &str) -> bool {
 /// Checks the crate file tables and values the reader decodes itself against `openusd`'s
 /// reading of the same file: every table equal, and every value decoded here (tokens,
 /// strings, numbers, 3-vectors of floats, specifiers, path list operations) equal to
-/// `openusd`'s decoding of that field. The number of values
+/// `openusd`'s decoding of that field; and the prims and attributes found by path index
+/// as found by path text. The number of values
 /// compared, or the first difference (or a file whose tables are not decoded here, or that
 /// `openusd` does not read).
 #[cfg(feature = "testkit")]
@@ -1967,9 +2370,111 @@ pub fn crate_values_agree(bytes: &[u8]) -> Result<usize, String> {
             }
             checked += 1;
         }
+        walks_agree(&layer)?;
         Ok(checked)
     }));
     compared.unwrap_or_else(|_| Err("openusd failed on this file".to_string()))
+}
+
+/// Whether crate file `layer`, walked by path index, gives what it gives looked up by
+/// path text: the same prims, kinds, inputs and what is read of them, `info:` texts and
+/// terminal connections (nothing to compare when there is no path tree). Only values
+/// decoded here are read (`openusd` may fail on a damaged file's); each side is read on
+/// its own.
+#[cfg(feature = "testkit")]
+fn walks_agree(layer: &CrateLayer) -> Result<(), String> {
+    fn caught<T>(f: impl FnOnce() -> T) -> Option<T> {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).ok()
+    }
+    layer.decoded_only.set(true);
+    let walked = caught(|| layer.flat_prims_by_index());
+    if walked.as_ref().is_some_and(Option::is_none) {
+        return Ok(());
+    }
+    let walked = walked.flatten();
+    if caught(|| flat_prims(layer)) != walked.as_ref().map(|w| w.as_ref().map(|(p, _)| p.clone())) {
+        return Err("the prims walked by index differ".to_string());
+    }
+    let Some(Some((prims, indices))) = walked else {
+        return Ok(());
+    };
+    let seen = |a: &AttrFields| {
+        format!(
+            "{} {:?} {:?} {}",
+            a.type_name, a.default, a.targets, a.samples
+        )
+    };
+    for (prim, &index) in prims.iter().zip(&indices) {
+        let kind = caught(|| {
+            layer
+                .try_field(prim, sdf::FieldKey::TypeName.as_str())
+                .ok()
+                .flatten()
+                .and_then(|t| prim_kind(t.as_ref()))
+        });
+        if caught(|| layer.kind_at(index)) != kind {
+            return Err(format!("`{prim}`: kinds differ"));
+        }
+        for name in [
+            "info:id",
+            "info:implementationSource",
+            "outputs:surface",
+            "outputs:ri:surface",
+        ] {
+            let Some(path) = property_path(prim, name) else {
+                continue;
+            };
+            let by_text = caught(|| {
+                (
+                    default_of(layer.try_field(&path, sdf::FieldKey::Default.as_str())),
+                    targets_of(layer.try_field(&path, sdf::FieldKey::ConnectionPaths.as_str())),
+                )
+            });
+            let by_index = caught(|| {
+                (
+                    layer.property_default(index, name),
+                    layer.property_targets(index, name),
+                )
+            });
+            if by_text != by_index {
+                return Err(format!("`{path}`: read by index, it differs"));
+            }
+        }
+        let by_text = caught(|| {
+            let names = match layer.try_field(prim, "propertyChildren") {
+                Ok(Some(v)) => match v.into_owned() {
+                    sdf::Value::TokenVec(names) => names,
+                    _ => Vec::new(),
+                },
+                _ => Vec::new(),
+            };
+            let mut unique = rustc_hash::FxHashSet::default();
+            names
+                .iter()
+                .filter_map(|n| {
+                    let input = n.as_str().strip_prefix("inputs:")?;
+                    unique.insert(input).then_some(())?;
+                    let path = property_path(prim, n.as_str())?;
+                    let a = layer.attribute(&path)?;
+                    Some(format!("{path} {input} {}", seen(&a)))
+                })
+                .collect::<Vec<String>>()
+        });
+        let by_index = caught(|| {
+            layer
+                .inputs_at(index)
+                .into_iter()
+                .filter_map(|(path, input, at)| {
+                    let a = layer.attribute_at(at?)?;
+                    Some(format!("{path} {input} {}", seen(&a)))
+                })
+                .collect::<Vec<String>>()
+        });
+        if by_text != by_index {
+            return Err(format!("`{prim}`: the inputs read by index differ"));
+        }
+    }
+    Ok(())
 }
 
 /// [`parse_usd`], reading the root layer alone when `direct` and nothing in it composes.
@@ -1997,13 +2502,21 @@ fn read_usd(
             )
         })?),
     };
-    let (flat, prims) = match &flat {
-        Some((data, prims)) => (Some(data.as_ref()), Some(prims.as_slice())),
-        None => (None, None),
+    let (flat, prims, indices) = match &flat {
+        Some((data, prims, indices)) => (
+            Some(data.as_ref()),
+            Some(prims.as_slice()),
+            indices.as_slice(),
+        ),
+        None => (None, None, &[][..]),
     };
+    let indexed = flat
+        .and_then(|f| f.as_crate())
+        .filter(|_| !indices.is_empty());
     let mut reader = Reader {
         stage: stage.as_ref(),
         flat,
+        indexed,
         file: file.clone(),
         types,
         diags,
@@ -2014,7 +2527,7 @@ fn read_usd(
         declared: FxHashMap::default(),
     };
     let walked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        read_stage(&mut reader, prims)
+        read_stage(&mut reader, prims, indices)
     }));
     let outcome = match walked {
         Ok(r) => r,
@@ -2031,7 +2544,12 @@ fn read_usd(
 
 /// The walk: prims, nodes, materials, inputs, composition errors.
 /// `prims` are the prims of the flat layer, in traversal order, when it is read.
-fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Error> {
+/// `indices`: their path indices when the crate file was walked by index, else empty.
+fn read_stage(
+    r: &mut Reader<'_>,
+    prims: Option<&[sdf::Path]>,
+    indices: &[usize],
+) -> Result<(), Error> {
     let traversed;
     let paths = match (prims, r.stage) {
         (Some(paths), _) => paths,
@@ -2052,29 +2570,30 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
     };
     // Depth-first order: a material comes before its shaders.
     let mut shaders = Vec::new();
-    let mut materials: Vec<(String, Vec<NodeId>)> = Vec::new();
+    let mut materials: Vec<(String, Option<usize>, Vec<NodeId>)> = Vec::new();
     // Each material's place in `materials`, by prim path.
     let mut material_at: FxHashMap<String, usize> = FxHashMap::default();
-    for p in paths {
-        let Some(kind) = r.kind_of(p) else {
+    for (n, p) in paths.iter().enumerate() {
+        let index = indices.get(n).copied();
+        let Some(kind) = r.kind_of(p, index) else {
             continue;
         };
         r.kinds.insert(p.as_str().to_string(), kind);
         match kind {
             PrimKind::Material => {
                 material_at.insert(p.as_str().to_string(), materials.len());
-                materials.push((p.as_str().to_string(), Vec::new()));
+                materials.push((p.as_str().to_string(), index, Vec::new()));
             }
-            PrimKind::Shader => shaders.push(p.clone()),
+            PrimKind::Shader => shaders.push((p.clone(), index)),
             PrimKind::NodeGraph => {}
         }
     }
     let mut pending = Vec::with_capacity(shaders.len());
-    for p in &shaders {
+    for (p, index) in &shaders {
         let path = p.as_str().to_string();
-        let shader = r.shader_id(p, &path);
+        let shader = r.shader_id(p, *index, &path);
         let kind = r.types.shader_kind(&shader).unwrap_or(RequestKind::Pattern);
-        let (params, links) = r.read_inputs(p, &shader);
+        let (params, links) = r.read_inputs(p, *index, &shader);
         let mut node = Node::new_raw(&path, &shader, kind);
         node.set_raw_params(params);
         let id = r.net.insert_node(node);
@@ -2088,7 +2607,7 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
             owner = &owner[..cut];
             if r.kinds.get(owner) == Some(&PrimKind::Material) {
                 if let Some(&m) = material_at.get(owner) {
-                    materials[m].1.push(id);
+                    materials[m].2.push(id);
                 }
                 break;
             }
@@ -2110,8 +2629,8 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
             r.net.push_source_links(id, param, links);
         }
     }
-    for (name, ids) in materials {
-        let terminals = r.terminals(&name);
+    for (name, index, ids) in materials {
+        let terminals = r.terminals(&name, index);
         for t in &terminals {
             if let Some(id) = t.link.upstream_node()
                 && r.types.shader_kind(r.net[id].shader()).is_none()
@@ -2153,6 +2672,29 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
     Ok(())
 }
 
+/// The layer fields that change what a layer read alone gives ([`flat_prims`]).
+const ROOT_CHANGES: [&str; 5] = [
+    "subLayers",
+    "subLayerOffsets",
+    "layerRelocates",
+    "relocates",
+    "expressionVariables",
+];
+
+/// The only fields a prim of a layer read alone may have ([`flat_prims`]).
+const PRIM_KEEPS: [&str; 10] = [
+    "specifier",
+    "typeName",
+    "primChildren",
+    "propertyChildren",
+    "kind",
+    "documentation",
+    "comment",
+    "customData",
+    "displayName",
+    "hidden",
+];
+
 /// The prims of a stage whose only layer is `data`, in the stage's traversal order, when
 /// nothing in the layer composes: every prim is a `def` whose only fields are its type,
 /// children, properties and metadata that changes nothing the reader reads. Anything else
@@ -2160,25 +2702,6 @@ fn read_stage(r: &mut Reader<'_>, prims: Option<&[sdf::Path]>) -> Result<(), Err
 /// property reordering, sublayers or relocates on the layer) gives nothing, and the
 /// composed stage is read instead.
 fn flat_prims(data: &dyn Specs) -> Option<Vec<sdf::Path>> {
-    const ROOT_CHANGES: [&str; 5] = [
-        "subLayers",
-        "subLayerOffsets",
-        "layerRelocates",
-        "relocates",
-        "expressionVariables",
-    ];
-    const PRIM_KEEPS: [&str; 10] = [
-        "specifier",
-        "typeName",
-        "primChildren",
-        "propertyChildren",
-        "kind",
-        "documentation",
-        "comment",
-        "customData",
-        "displayName",
-        "hidden",
-    ];
     let root = sdf::Path::abs_root();
     let fields = data.list_fields(&root)?;
     if fields.iter().any(|f| ROOT_CHANGES.contains(&f.as_str())) {
