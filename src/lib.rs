@@ -75,3 +75,12 @@ pub use glam;
 /// indices): use `vstructc::petgraph` to get the same version.
 pub use petgraph;
 pub use types::{ArraySpec, BaseType, Type, Value};
+
+/// Whether handing work to rayon's pool and waiting for it can help: the pool has more
+/// than one thread, and the caller is not one of them (waiting there for the work could
+/// hold the very thread that would do it). The readers and writers that split their work
+/// into pieces ask this first.
+#[cfg(feature = "parallel")]
+fn pool_can_help() -> bool {
+    rayon::current_num_threads() > 1 && rayon::current_thread_index().is_none()
+}

@@ -1510,11 +1510,7 @@ fn parse_json_path(
     #[cfg(feature = "parallel")]
     {
         let piece = match read_path {
-            ReadPath::Auto
-                if bytes.len() >= PIECES_MIN_BYTES
-                    && rayon::current_num_threads() > 1
-                    && rayon::current_thread_index().is_none() =>
-            {
+            ReadPath::Auto if bytes.len() >= PIECES_MIN_BYTES && crate::pool_can_help() => {
                 Some(pieces::PIECE_BYTES)
             }
             #[cfg(feature = "testkit")]

@@ -329,27 +329,12 @@ impl Reader<'_> {
         }
         match self.flat {
             Some(data) => {
-                let names = match data.try_field(path, "propertyChildren") {
-                    Ok(Some(v)) => match v.into_owned() {
-                        sdf::Value::TokenVec(names) => names,
-                        _ => Vec::new(),
-                    },
-                    _ => Vec::new(),
-                };
-                let mut seen = rustc_hash::FxHashSet::default();
-                let mut out = Vec::new();
-                for n in &names {
-                    let Some(input) = n.as_str().strip_prefix("inputs:") else {
-                        continue;
-                    };
-                    if !seen.insert(input) {
-                        continue;
-                    }
-                    if let Some(p) = property_path(path, n.as_str()) {
-                        out.push((p, input.to_string(), None));
-                    }
-                }
-                out
+                let names = tokens_of(data.try_field(path, "propertyChildren"));
+                distinct_inputs(&names)
+                    .filter_map(|(name, input)| {
+                        Some((property_path(path, name)?, input.to_string(), None))
+                    })
+                    .collect()
             }
             None => self
                 .stage
@@ -972,6 +957,28 @@ fn default_of(field: FieldRead<'_>) -> Result<Option<sdf::Value>, String> {
     }
 }
 
+/// A token list field's tokens (`propertyChildren`), or none when it is missing, unreadable
+/// or of another type.
+fn tokens_of(field: FieldRead<'_>) -> Vec<openusd::tf::Token> {
+    match field {
+        Ok(Some(v)) => match v.into_owned() {
+            sdf::Value::TokenVec(names) => names,
+            _ => Vec::new(),
+        },
+        _ => Vec::new(),
+    }
+}
+
+/// The `inputs:` properties among `names`, each input once (its first), in order: the
+/// property's name and the input's.
+fn distinct_inputs(names: &[openusd::tf::Token]) -> impl Iterator<Item = (&str, &str)> {
+    let mut seen = rustc_hash::FxHashSet::default();
+    names.iter().filter_map(move |n| {
+        let input = n.as_str().strip_prefix("inputs:")?;
+        seen.insert(input).then_some((n.as_str(), input))
+    })
+}
+
 /// An attribute's connection targets from its `connectionPaths` field.
 fn targets_of(field: FieldRead<'_>) -> Vec<sdf::Path> {
     match field {
@@ -1588,24 +1595,11 @@ impl CrateLayer {
         let (Some((_, start)), Some(path)) = (self.spec_of(prim), self.paths.get(prim)) else {
             return Vec::new();
         };
-        let names = match self.field_in(start, self.prim_fields[2], path, "propertyChildren") {
-            Ok(Some(v)) => match v.into_owned() {
-                sdf::Value::TokenVec(names) => names,
-                _ => Vec::new(),
-            },
-            _ => Vec::new(),
-        };
-        let mut seen = rustc_hash::FxHashSet::default();
+        let names = tokens_of(self.field_in(start, self.prim_fields[2], path, "propertyChildren"));
         let mut out = Vec::new();
         let mut hint = None;
-        for n in &names {
-            let Some(input) = n.as_str().strip_prefix("inputs:") else {
-                continue;
-            };
-            if !seen.insert(input) {
-                continue;
-            }
-            let Some(index) = self.child_named(prim, n.as_str(), true, hint) else {
+        for (name, input) in distinct_inputs(&names) {
+            let Some(index) = self.child_named(prim, name, true, hint) else {
                 continue;
             };
             hint = self.next_of(index);
@@ -1997,13 +1991,7 @@ fn walks_agree(layer: &CrateLayer) -> Result<(), String> {
             }
         }
         let by_text = caught(|| {
-            let names = match layer.try_field(prim, "propertyChildren") {
-                Ok(Some(v)) => match v.into_owned() {
-                    sdf::Value::TokenVec(names) => names,
-                    _ => Vec::new(),
-                },
-                _ => Vec::new(),
-            };
+            let names = tokens_of(layer.try_field(prim, "propertyChildren"));
             let mut unique = rustc_hash::FxHashSet::default();
             names
                 .iter()

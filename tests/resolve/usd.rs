@@ -550,12 +550,7 @@ def Scope "Off" (active = false) {
         if reads_layer_alone(bytes, name) {
             alone.push(name.rsplit('/').next().unwrap().to_string());
         }
-        let mut d1 = Diagnostics::new();
-        let direct = parse_usd(bytes, name, &reg, &Limits::default(), &mut d1).unwrap();
-        let mut d2 = Diagnostics::new();
-        let composed = parse_usd_composed(bytes, name, &reg, &Limits::default(), &mut d2).unwrap();
-        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
-        assert_eq!(d1, d2, "{name}");
+        assert_read_alone_as_composed(bytes, name, &reg);
     }
     assert_eq!(
         alone,
@@ -575,6 +570,17 @@ def Scope "Off" (active = false) {
             "odd.usdc",
         ]
     );
+}
+
+/// `parse_usd` (which reads a layer alone when nothing in it composes) gives the network
+/// and diagnostics the composed stage gives.
+fn assert_read_alone_as_composed(bytes: &[u8], name: &str, reg: &Registry) {
+    let mut d1 = Diagnostics::new();
+    let direct = parse_usd(bytes, name, reg, &Limits::default(), &mut d1).unwrap();
+    let mut d2 = Diagnostics::new();
+    let composed = parse_usd_composed(bytes, name, reg, &Limits::default(), &mut d2).unwrap();
+    assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
+    assert_eq!(d1, d2, "{name}");
 }
 
 /// The crate files the USD writer makes of `materials` generated layered materials, and of
@@ -603,13 +609,7 @@ fn generated_crate_files_read_alone_match_the_composed_stage() {
     let reg = Registry::embedded();
     for (name, bytes) in generated_crate_files(&reg, 40) {
         assert!(reads_layer_alone(&bytes, &name), "{name}");
-        let mut d1 = Diagnostics::new();
-        let direct = parse_usd(&bytes, &name, &reg, &Limits::default(), &mut d1).unwrap();
-        let mut d2 = Diagnostics::new();
-        let composed =
-            parse_usd_composed(&bytes, &name, &reg, &Limits::default(), &mut d2).unwrap();
-        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
-        assert_eq!(d1, d2, "{name}");
+        assert_read_alone_as_composed(&bytes, &name, &reg);
     }
 }
 
@@ -643,13 +643,7 @@ fn crate_files_read_through_openusd_match_the_composed_stage() {
             "{name}"
         );
         assert!(reads_layer_alone(&bytes, &name), "{name}");
-        let mut d1 = Diagnostics::new();
-        let direct = parse_usd(&bytes, &name, &reg, &Limits::default(), &mut d1).unwrap();
-        let mut d2 = Diagnostics::new();
-        let composed =
-            parse_usd_composed(&bytes, &name, &reg, &Limits::default(), &mut d2).unwrap();
-        assert_eq!(format!("{direct:?}"), format!("{composed:?}"), "{name}");
-        assert_eq!(d1, d2, "{name}");
+        assert_read_alone_as_composed(&bytes, &name, &reg);
     }
 }
 
