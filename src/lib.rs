@@ -84,3 +84,112 @@ pub use types::{ArraySpec, BaseType, Type, Value};
 fn pool_can_help() -> bool {
     rayon::current_num_threads() > 1 && rayon::current_thread_index().is_none()
 }
+
+/// Items `0..count` made by `make` in pieces of `piece` consecutive items on rayon's pool,
+/// and handed to `take` on the calling thread in order as they arrive, so that the calling
+/// thread uses each item while the pool makes the next ones. Each thread of the pool takes
+/// the next piece; a piece that arrives early waits for the ones before it. When `take`
+/// panics, the pool stops after the pieces it is making.
+#[cfg(all(feature = "parallel", feature = "usd"))]
+fn make_in_order<T: Send>(
+    count: usize,
+    piece: usize,
+    make: impl Fn(usize) -> T + Sync,
+    mut take: impl FnMut(T),
+) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let piece = piece.max(1);
+    let pieces = count.div_ceil(piece);
+    let next = AtomicUsize::new(0);
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Vec<T>)>();
+    rayon::in_place_scope(|scope| {
+        for _ in 0..rayon::current_num_threads().min(pieces) {
+            let (tx, next, make) = (tx.clone(), &next, &make);
+            scope.spawn(move |_| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= pieces {
+                        return;
+                    }
+                    let items = (i * piece..count.min((i + 1) * piece)).map(make).collect();
+                    if tx.send((i, items)).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut early: Vec<Option<Vec<T>>> = Vec::new();
+        let mut want = 0;
+        for (i, items) in &rx {
+            if i >= early.len() {
+                early.resize_with(i + 1, || None);
+            }
+            early[i] = Some(items);
+            while let Some(items) = early.get_mut(want).and_then(Option::take) {
+                items.into_iter().for_each(&mut take);
+                want += 1;
+            }
+        }
+    });
+}
+
+/// `a` and `b`, on two of rayon's threads when the pool has more than one (feature
+/// `parallel`), else one after the other: for two independent pieces of one reading.
+#[cfg(feature = "usd")]
+fn both<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B) {
+    #[cfg(feature = "parallel")]
+    if rayon::current_num_threads() > 1 {
+        return rayon::join(a, b);
+    }
+    (a(), b())
+}
+
+#[cfg(all(test, feature = "parallel", feature = "usd"))]
+mod tests {
+    use super::make_in_order;
+
+    /// Every item is taken once, in order, whatever the piece size and however long each
+    /// item takes to make.
+    #[test]
+    fn items_made_on_the_pool_are_taken_in_order() {
+        for count in [0, 1, 63, 64, 65, 1000] {
+            for piece in [0, 1, 7, 64, 5000] {
+                let mut taken = Vec::new();
+                make_in_order(
+                    count,
+                    piece,
+                    |i| {
+                        // Uneven work, so that pieces arrive out of order.
+                        let spin = (i * 7919) % 257 * 50;
+                        std::hint::black_box((0..spin).map(std::hint::black_box).count());
+                        i
+                    },
+                    |v| taken.push(v),
+                );
+                let expected: Vec<usize> = (0..count).collect();
+                assert_eq!(taken.len(), count, "count {count}, piece {piece}");
+                assert_eq!(taken, expected, "count {count}, piece {piece}");
+            }
+        }
+    }
+
+    /// A panic while taking an item reaches the caller, and the pool stops.
+    #[test]
+    fn a_panic_while_taking_reaches_the_caller() {
+        let caught = std::panic::catch_unwind(|| {
+            make_in_order(
+                10_000,
+                8,
+                |i| i,
+                |i| {
+                    if i == 100 {
+                        std::panic::panic_any("stop");
+                    }
+                },
+            )
+        });
+        let payload = caught.expect_err("the panic reaches the caller");
+        assert_eq!(payload.downcast_ref::<&str>(), Some(&"stop"));
+    }
+}

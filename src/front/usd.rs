@@ -31,7 +31,7 @@ use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes, RequestKind,
-    Terminal,
+    Sym, Terminal,
 };
 use crate::types::{BaseType, Type, Value, saturate_f32};
 use openusd::{ar, sdf, usd};
@@ -356,19 +356,14 @@ impl Reader<'_> {
             (Some(layer), Some(index)) => layer.property_default(index, name),
             _ => self.default_value(&property_path(prim, name)?),
         };
-        match value.ok()?? {
-            sdf::Value::Token(t) => Some(t.as_str().to_string()),
-            sdf::Value::String(s) => Some(s),
-            _ => None,
-        }
+        text_of(value)
     }
 
-    /// The node type of shader `prim`: its `info:id`, or a marker of what it has instead
-    /// (US003).
-    fn shader_id(&mut self, prim: &sdf::Path, index: Option<usize>, path: &str) -> String {
-        let source = self.text_attr(prim, index, "info:implementationSource");
+    /// The node type of shader `path` from its texts read before ([`ShaderRead`]): its
+    /// `info:id`, or a marker of what it has instead (US003).
+    fn shader_id(&mut self, path: &str, source: Option<String>, id: Option<String>) -> String {
         match source.as_deref() {
-            None | Some("id") => match self.text_attr(prim, index, "info:id") {
+            None | Some("id") => match id {
                 Some(id) if !id.is_empty() => id,
                 _ => {
                     self.warn(
@@ -442,20 +437,17 @@ impl Reader<'_> {
         }
     }
 
-    /// The inputs of shader `path` (of type `shader`) as parameters read from the source,
-    /// with the connections to bind once every node exists: (parameter index, sources).
+    /// The inputs of a shader of type `shader`, read before ([`ShaderRead`]), as
+    /// parameters read from the source, with the connections to bind once every node
+    /// exists: (parameter index, sources).
     fn read_inputs(
         &mut self,
-        path: &sdf::Path,
-        index: Option<usize>,
+        inputs: Vec<(sdf::Path, Sym, AttrFields)>,
         shader: &str,
     ) -> (Vec<Param>, PendingLinks) {
-        let mut params: Vec<Param> = Vec::new();
+        let mut params: Vec<Param> = Vec::with_capacity(inputs.len());
         let mut pending: PendingLinks = Vec::new();
-        for (attr, input, at) in self.inputs(path, index) {
-            let Some(fields) = self.attr_fields(&attr, at) else {
-                continue;
-            };
+        for (attr, input, fields) in inputs {
             let apath = attr.as_str().to_string();
             if fields.samples > 0 {
                 self.sampled.push(apath.clone());
@@ -509,9 +501,9 @@ impl Reader<'_> {
             // A position as the source item: the parameter was read, so resolution's edits
             // to it are changes ([`crate::network::ParamChange`]).
             let index = params.len();
-            params.push(Param::from_source(
+            params.push(Param::from_shared(
                 input,
-                value,
+                value.map(Arc::new),
                 None,
                 ParamAt::Unknown,
                 Some(index as u32),
@@ -606,6 +598,159 @@ impl Reader<'_> {
         )
     }
 }
+
+/// A token or string value as text; nothing for another value, none or an error.
+fn text_of(value: Result<Option<sdf::Value>, String>) -> Option<String> {
+    match value.ok()?? {
+        sdf::Value::Token(t) => Some(t.as_str().to_string()),
+        sdf::Value::String(s) => Some(s),
+        _ => None,
+    }
+}
+
+/// Where shader prims are read from ([`ShaderRead`]): the reader (any layer or stage), or
+/// a crate file walked by index, which several threads may read at once.
+trait ShaderSource {
+    /// The text of property `name` of prim `prim` ([`Reader::text_attr`]).
+    fn shader_text(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String>;
+    /// The `inputs:` attributes of prim `prim` ([`Reader::inputs`]).
+    fn shader_inputs(
+        &self,
+        prim: &sdf::Path,
+        index: Option<usize>,
+    ) -> Vec<(sdf::Path, String, Option<usize>)>;
+    /// What is read of attribute `path` ([`Reader::attr_fields`]).
+    fn input_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields>;
+}
+
+impl ShaderSource for Reader<'_> {
+    fn shader_text(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
+        self.text_attr(prim, index, name)
+    }
+    fn shader_inputs(
+        &self,
+        prim: &sdf::Path,
+        index: Option<usize>,
+    ) -> Vec<(sdf::Path, String, Option<usize>)> {
+        Reader::inputs(self, prim, index)
+    }
+    fn input_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
+        self.attr_fields(path, index)
+    }
+}
+
+/// The walk by index: what [`Reader`] reads through the layer when it was walked by index.
+impl ShaderSource for CrateLayer {
+    fn shader_text(&self, _: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
+        text_of(self.property_default(index?, name))
+    }
+    fn shader_inputs(
+        &self,
+        _: &sdf::Path,
+        index: Option<usize>,
+    ) -> Vec<(sdf::Path, String, Option<usize>)> {
+        index.map(|i| self.inputs_at(i)).unwrap_or_default()
+    }
+    fn input_fields(&self, _: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
+        self.attribute_at(index?)
+    }
+}
+
+/// A panic of the USD library caught while reading, raised again where the reading in
+/// order reaches it (so that what was reported before it is what the one-by-one reading
+/// reports), or nothing.
+struct Stop(Option<Box<dyn std::any::Any + Send>>);
+
+impl Stop {
+    /// Raises the panic again, if there was one.
+    fn raise(self) {
+        if let Some(payload) = self.0 {
+            std::panic::resume_unwind(payload);
+        }
+    }
+}
+
+/// What is read of a shader prim before its node is built: its `info:implementationSource`
+/// and (when that is none or `id`) its `info:id`, then its `inputs:` attributes that are
+/// attributes, each with its path and input name. Reading stops at a panic of the USD
+/// library, kept to be raised where the walk in order reaches it. Being pure reads, these
+/// can be read for many shaders at once ([`read_shaders`]).
+struct ShaderRead {
+    texts: Result<(Option<String>, Option<String>), Box<dyn std::any::Any + Send>>,
+    /// Each input's attribute path, name (made a symbol here, off the thread that builds
+    /// the network) and fields.
+    inputs: Vec<(sdf::Path, Sym, AttrFields)>,
+    stop: Stop,
+}
+
+impl ShaderRead {
+    /// Reads shader prim `prim` (at path index `index` of a crate file walked by index).
+    fn of(source: &impl ShaderSource, prim: &sdf::Path, index: Option<usize>) -> Self {
+        use std::panic::{AssertUnwindSafe, catch_unwind};
+        let texts = catch_unwind(AssertUnwindSafe(|| {
+            let impl_source = source.shader_text(prim, index, "info:implementationSource");
+            let id = match impl_source.as_deref() {
+                None | Some("id") => source.shader_text(prim, index, "info:id"),
+                Some(_) => None,
+            };
+            (impl_source, id)
+        }));
+        let mut read = ShaderRead {
+            texts,
+            inputs: Vec::new(),
+            stop: Stop(None),
+        };
+        if read.texts.is_err() {
+            return read;
+        }
+        let inputs = &mut read.inputs;
+        let walked = catch_unwind(AssertUnwindSafe(|| {
+            for (attr, input, at) in source.shader_inputs(prim, index) {
+                if let Some(fields) = source.input_fields(&attr, at) {
+                    inputs.push((attr, Sym::new(&input), fields));
+                }
+            }
+        }));
+        read.stop = Stop(walked.err());
+        read
+    }
+}
+
+/// Shaders `shaders`, each read ([`ShaderRead`]) and handed to `take` in order. A crate
+/// file walked by index (`layer`) is read on rayon's pool when it can help (feature
+/// `parallel`), in pieces of consecutive shaders, while the calling thread takes the ones
+/// read; anything else is read on the calling thread through the reader.
+fn read_shaders(
+    r: &mut Reader<'_>,
+    shaders: &[(sdf::Path, Option<usize>)],
+    mut take: impl FnMut(&mut Reader<'_>, usize, ShaderRead),
+) {
+    #[cfg(feature = "parallel")]
+    if let Some(layer) = r.indexed
+        && crate::pool_can_help()
+    {
+        let mut n = 0;
+        crate::make_in_order(
+            shaders.len(),
+            SHADERS_PER_PIECE,
+            |i| ShaderRead::of(layer, &shaders[i].0, shaders[i].1),
+            |read| {
+                take(r, n, read);
+                n += 1;
+            },
+        );
+        return;
+    }
+    for (n, (p, index)) in shaders.iter().enumerate() {
+        let read = ShaderRead::of(&*r, p, *index);
+        take(r, n, read);
+    }
+}
+
+/// How many shaders a piece read on rayon's pool holds ([`read_shaders`]): enough that
+/// handing a piece over costs little against reading it.
+#[cfg(feature = "parallel")]
+const SHADERS_PER_PIECE: usize = 64;
 
 /// The connections of a shader's parameters, bound once every node exists: each
 /// parameter's index and its sources (prim path, output, whether the prim is not a shader).
@@ -1108,7 +1253,7 @@ fn path_hash(path: &sdf::Path) -> u64 {
 struct CrateLayer {
     /// `openusd`'s reading of the file: at once when the tables are not decoded here, else
     /// when a value not decoded here is first asked for.
-    file: std::cell::RefCell<Option<CrateFile>>,
+    file: std::sync::Mutex<Option<CrateFile>>,
     /// The file's bytes (shared with `file`'s reader), for the values decoded here.
     bytes: Arc<[u8]>,
     /// The file's version: whether it is at least 0.5.0, and at least 0.7.0 (the layout of
@@ -1128,7 +1273,7 @@ struct CrateLayer {
     /// Each spec: its path's index in `paths`, its type and the start of its field set in
     /// `fieldsets`, found by the hash of its path (so the paths are not copied): made
     /// from `specs_in` when a spec is first looked up by path.
-    specs: std::cell::OnceCell<hashbrown::HashTable<(usize, sdf::SpecType, usize)>>,
+    specs: std::sync::OnceLock<hashbrown::HashTable<(usize, sdf::SpecType, usize)>>,
     /// Each spec: its path index, its field set's start and its type.
     specs_in: Vec<(usize, usize, sdf::SpecType)>,
     /// The path tree, when the tables are decoded here and no two paths are the same.
@@ -1136,7 +1281,7 @@ struct CrateLayer {
     /// Whether values not decoded here are read as none rather than by `openusd` (set
     /// only to compare the walks by index and by text on damaged files, where `openusd`
     /// may fail).
-    decoded_only: std::cell::Cell<bool>,
+    decoded_only: std::sync::atomic::AtomicBool,
     /// With the tree: the type and field set start of the spec of each path index.
     spec_at: Vec<Option<(sdf::SpecType, usize)>>,
     /// The token index of each field name (under the names `openusd`'s layers use:
@@ -1236,7 +1381,7 @@ impl CrateLayer {
         let prim_fields =
             ["specifier", "primChildren", "propertyChildren"].map(|k| names.get(k).copied());
         Some(CrateLayer {
-            file: std::cell::RefCell::new(file),
+            file: std::sync::Mutex::new(file),
             bytes,
             v05: version[1] >= 5,
             v07: version[1] >= 7,
@@ -1246,10 +1391,10 @@ impl CrateLayer {
             fieldsets,
             paths,
             tree,
-            decoded_only: std::cell::Cell::new(false),
+            decoded_only: std::sync::atomic::AtomicBool::new(false),
             spec_at,
             specs_in,
-            specs: std::cell::OnceCell::new(),
+            specs: std::sync::OnceLock::new(),
             names,
             field_names,
             attribute_fields,
@@ -1412,7 +1557,7 @@ impl CrateLayer {
         if let Some(v) = self.own_value(field) {
             return Ok(Some(std::borrow::Cow::Owned(v)));
         }
-        if self.decoded_only.get() {
+        if self.decoded_only.load(std::sync::atomic::Ordering::Relaxed) {
             return Ok(None);
         }
         let failed = |source: Box<dyn std::error::Error + Send + Sync>| sdf::DataError::Decode {
@@ -1420,7 +1565,12 @@ impl CrateLayer {
             field: name.to_string(),
             source,
         };
-        let mut slot = self.file.borrow_mut();
+        // A poisoned lock is taken as it is: a panic of `openusd` is raised again where
+        // the walk reaches the read that panicked ([`ShaderRead`]), which ends the reading.
+        let mut slot = self
+            .file
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         if slot.is_none() {
             let opened = CrateFile::open(io::Cursor::new(self.bytes.clone()));
             *slot = Some(opened.map_err(|e| failed(e.into()))?);
@@ -1936,7 +2086,9 @@ fn walks_agree(layer: &CrateLayer) -> Result<(), String> {
     fn caught<T>(f: impl FnOnce() -> T) -> Option<T> {
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).ok()
     }
-    layer.decoded_only.set(true);
+    layer
+        .decoded_only
+        .store(true, std::sync::atomic::Ordering::Relaxed);
     let walked = caught(|| layer.flat_prims_by_index());
     if walked.as_ref().is_some_and(Option::is_none) {
         return Ok(());
@@ -2133,11 +2285,22 @@ fn read_stage(
         }
     }
     let mut pending = Vec::with_capacity(shaders.len());
-    for (p, index) in &shaders {
-        let path = p.as_str().to_string();
-        let shader = r.shader_id(p, *index, &path);
-        let kind = r.types.shader_kind(&shader).unwrap_or(RequestKind::Pattern);
-        let (params, links) = r.read_inputs(p, *index, &shader);
+    // Each shader type's kind, asked of the definitions once.
+    let mut kind_of_type: FxHashMap<String, RequestKind> = FxHashMap::default();
+    read_shaders(r, &shaders, |r, n, read| {
+        let path = shaders[n].0.as_str().to_string();
+        let (source, id) = read.texts.unwrap_or_else(|p| std::panic::resume_unwind(p));
+        let shader = r.shader_id(&path, source, id);
+        let kind = match kind_of_type.get(&shader) {
+            Some(&kind) => kind,
+            None => {
+                let kind = r.types.shader_kind(&shader).unwrap_or(RequestKind::Pattern);
+                kind_of_type.insert(shader.clone(), kind);
+                kind
+            }
+        };
+        let (params, links) = r.read_inputs(read.inputs, &shader);
+        read.stop.raise();
         let mut node = Node::new_raw(&path, &shader, kind);
         node.set_raw_params(params);
         let id = r.net.insert_node(node);
@@ -2156,7 +2319,7 @@ fn read_stage(
                 break;
             }
         }
-    }
+    });
     // Connections bind to their prims wherever they are: once every node exists.
     for (id, links) in pending {
         for (param, sources) in links {

@@ -421,8 +421,9 @@ impl Param {
         }
     }
 
-    /// A parameter as read from a file (crate-internal: used by the USD reader).
-    #[cfg(any(feature = "usd", feature = "testkit"))]
+    /// A parameter as read from a file (for tests; the readers make theirs from names
+    /// and values they may share with other parameters).
+    #[cfg(feature = "testkit")]
     #[cfg_attr(feature = "testkit", visibility::make(pub))]
     pub(crate) fn from_source(
         name: String,
@@ -440,8 +441,8 @@ impl Param {
         )
     }
 
-    /// [`Param::from_source`] with a name, value and declaration that may be shared with
-    /// other parameters (the RIB reader shares repeated ones).
+    /// A parameter as read from a file, with a name, value and declaration that may be
+    /// shared with other parameters (the RIB reader shares repeated ones).
     pub(crate) fn from_shared(
         name: Sym,
         value: Option<Arc<Value>>,

@@ -25,8 +25,14 @@ pub(super) struct CrateTables {
     /// The path tree by path index, when decoded here and no two paths are the same.
     pub(super) tree: Option<PathTree>,
     /// Each spec: its path index, its field set's start and its type.
-    pub(super) specs: Vec<(usize, usize, sdf::SpecType)>,
+    pub(super) specs: Vec<Spec>,
 }
+
+/// A spec in a crate file's SPECS table: its path index, its field set's start and its type.
+pub(super) type Spec = (usize, usize, sdf::SpecType);
+
+/// The strings, fields, field sets and specs of [`CrateTables`], decoded together.
+type OtherTables = (Vec<usize>, Vec<(usize, u64)>, Vec<Option<usize>>, Vec<Spec>);
 
 /// A crate file's paths as a tree of path indices: each path's element token (negative
 /// for a property), first child and next sibling (`NO_PATH` for none), and the root's
@@ -135,6 +141,37 @@ impl CrateTables {
             _ => return None,
         };
 
+        // The paths (the largest table) are decoded beside the others.
+        let (paths, rest) = crate::both(
+            || Self::paths(bytes, section(b"PATHS")?, &tokens),
+            || Self::other_tables(bytes, &section, tokens.len()),
+        );
+        let (paths, tree) = paths?;
+        let (strings, fields, fieldsets, specs) = rest?;
+        // As `openusd` validates: each spec's path exists.
+        if specs.iter().any(|&(path, ..)| path >= paths.len()) {
+            return None;
+        }
+        Some(CrateTables {
+            version,
+            tokens,
+            strings,
+            fields,
+            fieldsets,
+            paths,
+            tree,
+            specs,
+        })
+    }
+
+    /// The STRINGS, FIELDS, FIELDSETS and SPECS tables (see [`CrateTables::decode`]), given
+    /// where each section starts and how many tokens there are; the specs' path indices are
+    /// checked against the paths by the caller.
+    fn other_tables(
+        bytes: &[u8],
+        section: &(impl Fn(&[u8]) -> Option<usize> + Sync),
+        tokens: usize,
+    ) -> Option<OtherTables> {
         // STRINGS: count (as `openusd` bounds it), then each string's token index.
         let at = section(b"STRINGS")?;
         let count = le_size(bytes, at)?;
@@ -162,7 +199,7 @@ impl CrateTables {
             .map(|(&t, r)| {
                 let t = t as u32 as usize;
                 let rep = u64::from_le_bytes(r.try_into().ok()?);
-                (t < tokens.len()).then_some((t, rep))
+                (t < tokens).then_some((t, rep))
             })
             .collect::<Option<_>>()?;
 
@@ -178,8 +215,6 @@ impl CrateTables {
             })
             .collect::<Option<_>>()?;
 
-        let (paths, tree) = Self::paths(bytes, section(b"PATHS")?, &tokens)?;
-
         // SPECS: count, then path indices, field set starts and types (integer coded).
         let at = section(b"SPECS")?;
         let count = le_size(bytes, at)?;
@@ -191,10 +226,9 @@ impl CrateTables {
             let path = path_of[i] as u32 as usize;
             let set = set_of[i] as u32 as usize;
             let ty = sdf::SpecType::from_repr(type_of[i] as u32)?;
-            // As `openusd` validates: the path and the set exist, a set starts after the
-            // end of another, and the type is known.
-            if path >= paths.len()
-                || set >= fieldsets.len()
+            // As `openusd` validates: the set exists, a set starts after the end of
+            // another, and the type is known.
+            if set >= fieldsets.len()
                 || (set > 0 && fieldsets[set - 1].is_some())
                 || ty == sdf::SpecType::Unknown
             {
@@ -202,16 +236,7 @@ impl CrateTables {
             }
             specs.push((path, set, ty));
         }
-        Some(CrateTables {
-            version,
-            tokens,
-            strings,
-            fields,
-            fieldsets,
-            paths,
-            tree,
-            specs,
-        })
+        Some((strings, fields, fieldsets, specs))
     }
 
     /// The compressed block at `at` (its compressed size, then the data: a chunk count of
