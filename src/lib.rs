@@ -91,6 +91,7 @@ fn pool_can_help() -> bool {
 /// the next piece; a piece that arrives early waits for the ones before it. When `take`
 /// panics, the pool stops after the pieces it is making.
 #[cfg(all(feature = "parallel", feature = "usd"))]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn make_in_order<T: Send>(
     count: usize,
     piece: usize,
@@ -143,53 +144,4 @@ fn both<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + 
         return rayon::join(a, b);
     }
     (a(), b())
-}
-
-#[cfg(all(test, feature = "parallel", feature = "usd"))]
-mod tests {
-    use super::make_in_order;
-
-    /// Every item is taken once, in order, whatever the piece size and however long each
-    /// item takes to make.
-    #[test]
-    fn items_made_on_the_pool_are_taken_in_order() {
-        for count in [0, 1, 63, 64, 65, 1000] {
-            for piece in [0, 1, 7, 64, 5000] {
-                let mut taken = Vec::new();
-                make_in_order(
-                    count,
-                    piece,
-                    |i| {
-                        // Uneven work, so that pieces arrive out of order.
-                        let spin = (i * 7919) % 257 * 50;
-                        std::hint::black_box((0..spin).map(std::hint::black_box).count());
-                        i
-                    },
-                    |v| taken.push(v),
-                );
-                let expected: Vec<usize> = (0..count).collect();
-                assert_eq!(taken.len(), count, "count {count}, piece {piece}");
-                assert_eq!(taken, expected, "count {count}, piece {piece}");
-            }
-        }
-    }
-
-    /// A panic while taking an item reaches the caller, and the pool stops.
-    #[test]
-    fn a_panic_while_taking_reaches_the_caller() {
-        let caught = std::panic::catch_unwind(|| {
-            make_in_order(
-                10_000,
-                8,
-                |i| i,
-                |i| {
-                    if i == 100 {
-                        std::panic::panic_any("stop");
-                    }
-                },
-            )
-        });
-        let payload = caught.expect_err("the panic reaches the caller");
-        assert_eq!(payload.downcast_ref::<&str>(), Some(&"stop"));
-    }
 }

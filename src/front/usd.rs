@@ -188,7 +188,7 @@ struct Reader<'a> {
     /// Attributes with time samples (reported once, US004).
     sampled: Vec<String>,
     /// The declared type of each input looked up so far, by shader type and input name.
-    declared: FxHashMap<String, FxHashMap<String, Option<Type>>>,
+    declared: FxHashMap<(Sym, Sym), Option<Type>>,
 }
 
 impl Reader<'_> {
@@ -203,15 +203,12 @@ impl Reader<'_> {
 
     /// The type `shader`'s definition declares for input `input` (looked up once per
     /// shader type and input).
-    fn declared_type(&mut self, shader: &str, input: &str) -> Option<Type> {
-        if let Some(t) = self.declared.get(shader).and_then(|m| m.get(input)) {
+    fn declared_type(&mut self, shader: Sym, input: Sym) -> Option<Type> {
+        if let Some(t) = self.declared.get(&(shader, input)) {
             return t.clone();
         }
-        let t = self.types.input_type(shader, input);
-        self.declared
-            .entry(shader.to_string())
-            .or_default()
-            .insert(input.to_string(), t.clone());
+        let t = self.types.input_type(&shader, &input);
+        self.declared.insert((shader, input), t.clone());
         t
     }
 
@@ -391,11 +388,11 @@ impl Reader<'_> {
     /// What feeds connection target `target`: shader outputs (prim path, output name),
     /// values authored on NodeGraph or Material inputs, or targets that are not a shader's.
     fn sources(&mut self, target: &sdf::Path, from: &str, out: &mut Vec<Source>, hops: usize) {
-        let Some((prim, prop)) = target.split_property() else {
+        let Some((prim, prop)) = split_property(target) else {
             out.push(Source::Missing(target.as_str().to_string(), None));
             return;
         };
-        let prim_path = prim.as_str().to_string();
+        let prim_path = prim.into_owned();
         let base = prop
             .strip_prefix("outputs:")
             .or_else(|| prop.strip_prefix("inputs:"))
@@ -443,7 +440,7 @@ impl Reader<'_> {
     fn read_inputs(
         &mut self,
         inputs: Vec<(sdf::Path, Sym, AttrFields)>,
-        shader: &str,
+        shader: Sym,
     ) -> (Vec<Param>, PendingLinks) {
         let mut params: Vec<Param> = Vec::with_capacity(inputs.len());
         let mut pending: PendingLinks = Vec::new();
@@ -461,7 +458,7 @@ impl Reader<'_> {
                 let usd_type = fields.type_name;
                 match fields.default {
                     Ok(Some(v)) => {
-                        let declared = self.declared_type(shader, &input);
+                        let declared = self.declared_type(shader, input);
                         value = self.value(&v, declared.as_ref(), usd_type.as_str(), &apath);
                     }
                     Ok(None) => {}
@@ -481,7 +478,7 @@ impl Reader<'_> {
                         Source::Output(prim, output) => links.push((prim, Some(output), false)),
                         Source::Value(v, from) => {
                             if declared.is_none() {
-                                declared = Some(self.declared_type(shader, &input));
+                                declared = Some(self.declared_type(shader, input));
                             }
                             let declared = declared.as_ref().and_then(Option::as_ref);
                             if let Some(v) = self.value(&v, declared, "", &from) {
@@ -555,6 +552,9 @@ impl Reader<'_> {
                         None => Vec::new(),
                     },
                 };
+                if targets.is_empty() {
+                    continue;
+                }
                 let apath = format!("{path}.{attr_name}");
                 let mut sources = Vec::new();
                 for t in &targets {
@@ -597,6 +597,39 @@ impl Reader<'_> {
             ],
         )
     }
+}
+
+/// Property path `path` split into its prim's path and the property's name, exactly as
+/// `openusd`'s `Path::split_property` splits it; the usual `/…/prim.name` (no variant
+/// selection, target or second dot in its last element) is split here without copying.
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+pub(crate) fn split_property(path: &sdf::Path) -> Option<(std::borrow::Cow<'_, str>, &str)> {
+    let text = path.as_str();
+    let bytes = text.as_bytes();
+    let slash = bytes.iter().rposition(|&b| b == b'/');
+    let last = &bytes[slash.map_or(0, |s| s + 1)..];
+    let mut dots = last.iter().enumerate().filter(|&(_, &b)| b == b'.');
+    if let (Some(slash), Some((dot, _)), None) = (slash, dots.next(), dots.next())
+        && dot > 0
+        && !last.iter().any(|b| b"{}[]".contains(b))
+    {
+        let property = &text[slash + 1 + dot + 1..];
+        // As `openusd` tells a property path: a name of alphanumerics, `_` and `:`.
+        let named = !property.is_empty()
+            && if property.is_ascii() {
+                property
+                    .bytes()
+                    .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b':')
+            } else {
+                property
+                    .chars()
+                    .all(|c| c.is_alphanumeric() || c == '_' || c == ':')
+            };
+        let prim = &text[..slash + 1 + dot];
+        return named.then_some((std::borrow::Cow::Borrowed(prim), property));
+    }
+    let (prim, property) = path.split_property()?;
+    Some((std::borrow::Cow::Owned(prim.as_str().to_string()), property))
 }
 
 /// A token or string value as text; nothing for another value, none or an error.
@@ -2299,7 +2332,7 @@ fn read_stage(
                 kind
             }
         };
-        let (params, links) = r.read_inputs(read.inputs, &shader);
+        let (params, links) = r.read_inputs(read.inputs, Sym::new(&shader));
         read.stop.raise();
         let mut node = Node::new_raw(&path, &shader, kind);
         node.set_raw_params(params);

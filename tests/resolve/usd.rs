@@ -1152,3 +1152,58 @@ def Xform "World" {
     assert!(plain.contains("def Scope \"World\""), "{plain}");
     assert!(plain.contains("def NodeGraph \"G\""), "{plain}");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+
+    /// The reader's own split of a connection target into prim and property is `openusd`'s,
+    /// for any text made of path characters (variant selections, targets, dots, namespaces
+    /// and non-ASCII letters included).
+    #[test]
+    fn property_paths_split_as_openusd_splits_them(
+        text in "[/./A-Ba-c0-9_:{}=\\[\\]é-]{0,14}",
+    ) {
+        let path = openusd::sdf::Path::from(text.as_str());
+        let ours = vstructc::front::usd::split_property(&path)
+            .map(|(prim, name)| (prim.into_owned(), name.to_string()));
+        let theirs = path
+            .split_property()
+            .map(|(prim, name)| (prim.as_str().to_string(), name.to_string()));
+        proptest::prop_assert_eq!(ours, theirs, "{}", text);
+    }
+}
+
+/// The usual connection targets take the reader's own split (and agree with `openusd`'s).
+#[test]
+fn usual_property_paths_split_at_their_last_element() {
+    for (text, prim, name) in [
+        (
+            "/Mat/Layer.outputs:pxrMaterialOut",
+            "/Mat/Layer",
+            "outputs:pxrMaterialOut",
+        ),
+        ("/A.b", "/A", "b"),
+        ("/Looks/é1.inputs:x_y", "/Looks/é1", "inputs:x_y"),
+    ] {
+        let path = openusd::sdf::Path::from(text);
+        let (p, n) = vstructc::front::usd::split_property(&path).unwrap();
+        assert!(matches!(p, std::borrow::Cow::Borrowed(_)), "{text}");
+        assert_eq!((p.as_ref(), n), (prim, name), "{text}");
+    }
+    for text in [
+        "/Mat/Layer",
+        "/A.b.c",
+        "/A{v=x}.b",
+        "/A.rel[/B].c",
+        "/A.",
+        "/A.b-c",
+    ] {
+        let path = openusd::sdf::Path::from(text);
+        let ours = vstructc::front::usd::split_property(&path)
+            .map(|(p, n)| (p.into_owned(), n.to_string()));
+        let theirs = path
+            .split_property()
+            .map(|(p, n)| (p.as_str().to_string(), n.to_string()));
+        assert_eq!(ours, theirs, "{text}");
+    }
+}

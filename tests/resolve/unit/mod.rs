@@ -6,5 +6,6 @@ mod limits;
 mod network;
 mod pipeline;
 mod plan;
+mod pool;
 mod registry;
 mod types;

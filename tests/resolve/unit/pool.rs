@@ -1,0 +1,46 @@
+//! The crate's helper that makes items on rayon's pool and hands them over in order.
+
+use vstructc::make_in_order;
+
+/// Every item is taken once, in order, whatever the piece size and however long each item
+/// takes to make.
+#[test]
+fn items_made_on_the_pool_are_taken_in_order() {
+    for count in [0, 1, 63, 64, 65, 1000] {
+        for piece in [0, 1, 7, 64, 5000] {
+            let mut taken = Vec::new();
+            make_in_order(
+                count,
+                piece,
+                |i| {
+                    // Uneven work, so that pieces arrive out of order.
+                    let spin = (i * 7919) % 257 * 50;
+                    std::hint::black_box((0..spin).map(std::hint::black_box).count());
+                    i
+                },
+                |v| taken.push(v),
+            );
+            let expected: Vec<usize> = (0..count).collect();
+            assert_eq!(taken, expected, "count {count}, piece {piece}");
+        }
+    }
+}
+
+/// A panic while taking an item reaches the caller, and the pool stops.
+#[test]
+fn a_panic_while_taking_reaches_the_caller() {
+    let caught = std::panic::catch_unwind(|| {
+        make_in_order(
+            10_000,
+            8,
+            |i| i,
+            |i| {
+                if i == 100 {
+                    std::panic::panic_any("stop");
+                }
+            },
+        )
+    });
+    let payload = caught.expect_err("the panic reaches the caller");
+    assert_eq!(payload.downcast_ref::<&str>(), Some(&"stop"));
+}
