@@ -36,6 +36,7 @@ use crate::network::{
 use crate::types::{BaseType, Type, Value, saturate_f32};
 use openusd::{ar, sdf, usd};
 use rustc_hash::FxHashMap;
+use std::borrow::Cow;
 use std::io::{self, Read};
 use std::sync::Arc;
 
@@ -191,7 +192,7 @@ struct Reader<'a> {
     declared: FxHashMap<(Sym, Sym), Option<Type>>,
 }
 
-impl Reader<'_> {
+impl<'a> Reader<'a> {
     fn at(&self, path: &str) -> Location {
         Location {
             file: self.file.clone(),
@@ -316,11 +317,7 @@ impl Reader<'_> {
     /// The `inputs:` attributes of prim `path` in composed order: each one's path and
     /// input name (read alone, every property so named: [`Reader::attr_fields`] leaves out
     /// those that are not attributes).
-    fn inputs(
-        &self,
-        path: &sdf::Path,
-        index: Option<usize>,
-    ) -> Vec<(sdf::Path, String, Option<usize>)> {
+    fn inputs(&self, path: &sdf::Path, index: Option<usize>) -> Vec<InputAt<'a>> {
         if let (Some(layer), Some(index)) = (self.indexed, index) {
             return layer.inputs_at(index);
         }
@@ -329,7 +326,8 @@ impl Reader<'_> {
                 let names = tokens_of(data.try_field(path, "propertyChildren"));
                 distinct_inputs(&names)
                     .filter_map(|(name, input)| {
-                        Some((property_path(path, name)?, input.to_string(), None))
+                        let path = property_path(path, name)?;
+                        Some((Cow::Owned(path), Cow::Owned(input.to_string()), None))
                     })
                     .collect()
             }
@@ -340,8 +338,8 @@ impl Reader<'_> {
                 .into_iter()
                 .filter_map(|a| {
                     let input = a.path().split_property()?.1.strip_prefix("inputs:")?;
-                    let input = input.to_string();
-                    Some((a.path().clone(), input, None))
+                    let input = Cow::Owned(input.to_string());
+                    Some((Cow::Owned(a.path().clone()), input, None))
                 })
                 .collect(),
         }
@@ -439,15 +437,15 @@ impl Reader<'_> {
     /// exists: (parameter index, sources).
     fn read_inputs(
         &mut self,
-        inputs: Vec<(sdf::Path, Sym, AttrFields)>,
+        inputs: Vec<(Cow<'_, sdf::Path>, Sym, AttrFields)>,
         shader: Sym,
     ) -> (Vec<Param>, PendingLinks) {
         let mut params: Vec<Param> = Vec::with_capacity(inputs.len());
         let mut pending: PendingLinks = Vec::new();
         for (attr, input, fields) in inputs {
-            let apath = attr.as_str().to_string();
+            let apath = attr.as_str();
             if fields.samples > 0 {
-                self.sampled.push(apath.clone());
+                self.sampled.push(apath.to_string());
             }
             // The declared type, looked up only for a value.
             let mut declared: Option<Option<Type>> = None;
@@ -459,19 +457,19 @@ impl Reader<'_> {
                 match fields.default {
                     Ok(Some(v)) => {
                         let declared = self.declared_type(shader, input);
-                        value = self.value(&v, declared.as_ref(), usd_type.as_str(), &apath);
+                        value = self.value(&v, declared.as_ref(), usd_type.as_str(), apath);
                     }
                     Ok(None) => {}
                     Err(e) => self.warn(
                         "US006",
-                        &apath,
+                        apath,
                         format!("the value of `{apath}` cannot be read: {e}; left out"),
                     ),
                 }
             } else {
                 let mut sources = Vec::new();
                 for t in &targets {
-                    self.sources(t, &apath, &mut sources, 0);
+                    self.sources(t, apath, &mut sources, 0);
                 }
                 for s in sources {
                     match s {
@@ -486,7 +484,7 @@ impl Reader<'_> {
                             }
                         }
                         Source::Missing(prim, output) => {
-                            self.warn_not_a_shader(&apath, &prim, "connection");
+                            self.warn_not_a_shader(apath, &prim, "connection");
                             links.push((prim, output, true));
                         }
                     }
@@ -641,30 +639,26 @@ fn text_of(value: Result<Option<sdf::Value>, String>) -> Option<String> {
     }
 }
 
+/// An `inputs:` attribute of a prim: its path, the input's name and its path index in a
+/// crate file walked by index (borrowed from that file when read from it).
+type InputAt<'a> = (Cow<'a, sdf::Path>, Cow<'a, str>, Option<usize>);
+
 /// Where shader prims are read from ([`ShaderRead`]): the reader (any layer or stage), or
 /// a crate file walked by index, which several threads may read at once.
-trait ShaderSource {
+trait ShaderSource<'a> {
     /// The text of property `name` of prim `prim` ([`Reader::text_attr`]).
     fn shader_text(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String>;
     /// The `inputs:` attributes of prim `prim` ([`Reader::inputs`]).
-    fn shader_inputs(
-        &self,
-        prim: &sdf::Path,
-        index: Option<usize>,
-    ) -> Vec<(sdf::Path, String, Option<usize>)>;
+    fn shader_inputs(&self, prim: &sdf::Path, index: Option<usize>) -> Vec<InputAt<'a>>;
     /// What is read of attribute `path` ([`Reader::attr_fields`]).
     fn input_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields>;
 }
 
-impl ShaderSource for Reader<'_> {
+impl<'a> ShaderSource<'a> for Reader<'a> {
     fn shader_text(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
         self.text_attr(prim, index, name)
     }
-    fn shader_inputs(
-        &self,
-        prim: &sdf::Path,
-        index: Option<usize>,
-    ) -> Vec<(sdf::Path, String, Option<usize>)> {
+    fn shader_inputs(&self, prim: &sdf::Path, index: Option<usize>) -> Vec<InputAt<'a>> {
         Reader::inputs(self, prim, index)
     }
     fn input_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
@@ -673,16 +667,13 @@ impl ShaderSource for Reader<'_> {
 }
 
 /// The walk by index: what [`Reader`] reads through the layer when it was walked by index.
-impl ShaderSource for CrateLayer {
+impl<'a> ShaderSource<'a> for &'a CrateLayer {
     fn shader_text(&self, _: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
         text_of(self.property_default(index?, name))
     }
-    fn shader_inputs(
-        &self,
-        _: &sdf::Path,
-        index: Option<usize>,
-    ) -> Vec<(sdf::Path, String, Option<usize>)> {
-        index.map(|i| self.inputs_at(i)).unwrap_or_default()
+    fn shader_inputs(&self, _: &sdf::Path, index: Option<usize>) -> Vec<InputAt<'a>> {
+        let layer: &'a CrateLayer = self;
+        index.map(|i| layer.inputs_at(i)).unwrap_or_default()
     }
     fn input_fields(&self, _: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
         self.attribute_at(index?)
@@ -708,17 +699,17 @@ impl Stop {
 /// attributes, each with its path and input name. Reading stops at a panic of the USD
 /// library, kept to be raised where the walk in order reaches it. Being pure reads, these
 /// can be read for many shaders at once ([`read_shaders`]).
-struct ShaderRead {
+struct ShaderRead<'a> {
     texts: Result<(Option<String>, Option<String>), Box<dyn std::any::Any + Send>>,
     /// Each input's attribute path, name (made a symbol here, off the thread that builds
     /// the network) and fields.
-    inputs: Vec<(sdf::Path, Sym, AttrFields)>,
+    inputs: Vec<(Cow<'a, sdf::Path>, Sym, AttrFields)>,
     stop: Stop,
 }
 
-impl ShaderRead {
+impl<'a> ShaderRead<'a> {
     /// Reads shader prim `prim` (at path index `index` of a crate file walked by index).
-    fn of(source: &impl ShaderSource, prim: &sdf::Path, index: Option<usize>) -> Self {
+    fn of(source: &impl ShaderSource<'a>, prim: &sdf::Path, index: Option<usize>) -> Self {
         use std::panic::{AssertUnwindSafe, catch_unwind};
         let texts = catch_unwind(AssertUnwindSafe(|| {
             let impl_source = source.shader_text(prim, index, "info:implementationSource");
@@ -753,10 +744,10 @@ impl ShaderRead {
 /// file walked by index (`layer`) is read on rayon's pool when it can help (feature
 /// `parallel`), in pieces of consecutive shaders, while the calling thread takes the ones
 /// read; anything else is read on the calling thread through the reader.
-fn read_shaders(
-    r: &mut Reader<'_>,
+fn read_shaders<'a>(
+    r: &mut Reader<'a>,
     shaders: &[(sdf::Path, Option<usize>)],
-    mut take: impl FnMut(&mut Reader<'_>, usize, ShaderRead),
+    mut take: impl FnMut(&mut Reader<'a>, usize, ShaderRead<'a>),
 ) {
     #[cfg(feature = "parallel")]
     if let Some(layer) = r.indexed
@@ -766,7 +757,7 @@ fn read_shaders(
         crate::make_in_order(
             shaders.len(),
             SHADERS_PER_PIECE,
-            |i| ShaderRead::of(layer, &shaders[i].0, shaders[i].1),
+            |i| ShaderRead::of(&layer, &shaders[i].0, shaders[i].1),
             |read| {
                 take(r, n, read);
                 n += 1;
@@ -1225,6 +1216,9 @@ trait Specs {
     fn as_crate(&self) -> Option<&CrateLayer> {
         None
     }
+    /// Drops these specs (a crate file's, which hold a string per path, on rayon's pool
+    /// when it can help, so that the reader returns without freeing them).
+    fn drop_soon(self: Box<Self>) {}
     /// Whether every field of the spec at `path` is named in `allowed`; nothing when there
     /// is no spec there.
     fn fields_within(&self, path: &sdf::Path, allowed: &[&str]) -> Option<bool> {
@@ -1774,7 +1768,7 @@ impl CrateLayer {
     /// The `inputs:` attributes of the prim at path index `prim`, as [`Reader::inputs`]
     /// gives them, each with its path index; those without a spec are left out, as
     /// [`Reader::attr_fields`] would leave them.
-    fn inputs_at(&self, prim: usize) -> Vec<(sdf::Path, String, Option<usize>)> {
+    fn inputs_at(&self, prim: usize) -> Vec<InputAt<'_>> {
         let (Some((_, start)), Some(path)) = (self.spec_of(prim), self.paths.get(prim)) else {
             return Vec::new();
         };
@@ -1786,8 +1780,18 @@ impl CrateLayer {
                 continue;
             };
             hint = self.next_of(index);
+            // The input's name from the file's own token (the child's element), so that
+            // it is not copied.
+            let input = self
+                .tree
+                .as_ref()
+                .and_then(|tree| tree.element.get(index))
+                .and_then(|&e| self.tokens.get(e.unsigned_abs() as usize))
+                .and_then(|t| t.as_str().strip_prefix("inputs:"))
+                .filter(|own| *own == input)
+                .map_or_else(|| Cow::Owned(input.to_string()), Cow::Borrowed);
             if let Some(p) = self.paths.get(index) {
-                out.push((p.clone(), input.to_string(), Some(index)));
+                out.push((Cow::Borrowed(p), input, Some(index)));
             }
         }
         out
@@ -1889,6 +1893,13 @@ impl CrateLayer {
 impl Specs for CrateLayer {
     fn as_crate(&self) -> Option<&CrateLayer> {
         Some(self)
+    }
+
+    fn drop_soon(self: Box<Self>) {
+        #[cfg(feature = "parallel")]
+        if crate::pool_can_help() {
+            rayon::spawn(move || drop(self));
+        }
     }
 
     fn spec_type(&self, path: &sdf::Path) -> Option<sdf::SpecType> {
@@ -2219,10 +2230,10 @@ fn read_usd(
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    let flat = (direct && !(flavour(bytes) == "usda" && may_compose(bytes)))
+    let flat_layer = (direct && !(flavour(bytes) == "usda" && may_compose(bytes)))
         .then(|| open_flat(name, bytes))
         .flatten();
-    let stage = match flat {
+    let stage = match flat_layer {
         Some(_) => None,
         None => Some(open_stage(name, bytes).map_err(|why| {
             Error::from(
@@ -2231,7 +2242,7 @@ fn read_usd(
             )
         })?),
     };
-    let (flat, prims, indices) = match &flat {
+    let (flat, prims, indices) = match &flat_layer {
         Some((data, prims, indices)) => (
             Some(data.as_ref()),
             Some(prims.as_slice()),
@@ -2268,6 +2279,9 @@ fn read_usd(
     outcome?;
     let net = reader.net;
     net.check_limits(limits)?;
+    if let Some((data, ..)) = flat_layer {
+        data.drop_soon();
+    }
     Ok(net)
 }
 
