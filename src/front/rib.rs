@@ -159,6 +159,7 @@ fn parse_rib_path(
         params: HashTable::new(),
         shared_values: 0,
         outputs: FxHashMap::default(),
+        known: FxHashMap::default(),
     };
     read_requests(bytes, &file, options, &mut asm, diags, read_path)?;
     let mut net = asm.net;
@@ -649,6 +650,10 @@ struct Assembler<'a, 't> {
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
     /// a look-up here takes no lock.
     outputs: FxHashMap<Box<str>, Sym>,
+    /// Whether the definitions know a shader, per address of its shared id (alive until
+    /// the file is read): asked once per request, and a shader's address is quicker to
+    /// look up than its name.
+    known: FxHashMap<usize, bool>,
 }
 
 /// A parameter name and declaration shared by the parameters that repeat a decl token.
@@ -667,31 +672,49 @@ struct Remembered<T> {
     shared: T,
 }
 
-/// The hash of an owner's address and a text, for [`Remembered`] entries.
-fn remembered_hash(owner: usize, text: &[u8]) -> u64 {
+/// The hash of a text alone: the part of a [`Remembered`] entry's hash that needs no owner,
+/// computed for each parameter occurrence on the tokenizer's thread ([`Occurrence::text`]).
+fn text_hash(text: &[u8]) -> u64 {
     let mut h = FxHasher::default();
-    h.write_usize(owner);
     h.write(text);
     h.finish()
 }
 
-/// The entry of `table` for `owner` and `text`, if remembered.
-fn recall<'t, T>(table: &'t HashTable<Remembered<T>>, owner: usize, text: &[u8]) -> Option<&'t T> {
-    let hash = remembered_hash(owner, text);
+/// The hash of an owner's address and a text (given by its [`text_hash`]), for
+/// [`Remembered`] entries.
+fn remembered_hash(owner: usize, text_hash: u64) -> u64 {
+    let mut h = FxHasher::default();
+    h.write_usize(owner);
+    h.write_u64(text_hash);
+    h.finish()
+}
+
+/// The entry of `table` for `owner` and `text` (of hash `hash`, [`text_hash`]), if
+/// remembered.
+fn recall<'t, T>(
+    table: &'t HashTable<Remembered<T>>,
+    owner: usize,
+    text: &[u8],
+    hash: u64,
+) -> Option<&'t T> {
     table
-        .find(hash, |e| e.owner == owner && *e.text == *text)
+        .find(remembered_hash(owner, hash), |e| {
+            e.owner == owner && *e.text == *text
+        })
         .map(|e| &e.shared)
 }
 
 /// Remember `shared` for `owner` and `text` (not remembered yet).
 fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
-    let hash = remembered_hash(owner, text);
+    let hash = remembered_hash(owner, text_hash(text));
     let entry = Remembered {
         owner,
         text: Box::from(text),
         shared,
     };
-    table.insert_unique(hash, entry, |e| remembered_hash(e.owner, &e.text));
+    table.insert_unique(hash, entry, |e| {
+        remembered_hash(e.owner, text_hash(&e.text))
+    });
 }
 
 /// At most this many distinct values are remembered for sharing while a file is read.
@@ -744,6 +767,8 @@ struct RawParam<'p> {
     arena: &'p [Token],
     /// The index of this occurrence in the request ([`NodeSource::items`]).
     origin: u32,
+    /// [`Occurrence::text`].
+    text: Option<(Range<usize>, u64)>,
 }
 
 /// A parameter occurrence of a split request ([`Split::params`]).
@@ -751,6 +776,10 @@ struct Occurrence {
     decl_tok: Token,
     /// Its value in the request's pieces.
     value: usize,
+    /// The parameter as written (decl string to the end of the value) and its
+    /// [`text_hash`], when it is short enough to be remembered
+    /// ([`MAX_SHARED_PARAM_BYTES`]): hashed here, on the tokenizer's thread when pipelined.
+    text: Option<(Range<usize>, u64)>,
 }
 
 /// A shading request split into its parts before any parameter is interpreted
@@ -894,7 +923,7 @@ fn split_into<'a>(
         let origin = split.items.len() as u32;
         let (Some(decl), Some(value_at)) = (
             in_request(kw.start, decl_tok.start..decl_tok.end),
-            in_request(kw.start, value_range),
+            in_request(kw.start, value_range.clone()),
         ) else {
             return Err(Diagnostic::error(
                 "RB021",
@@ -919,7 +948,15 @@ fn split_into<'a>(
         );
         split.pending = comments.len();
         split.items.push(item);
-        occurrences.push(Occurrence { decl_tok, value });
+        let whole = decl_tok.start..value_range.end;
+        let text = (whole.len() <= MAX_SHARED_PARAM_BYTES)
+            .then(|| src.get(whole.clone()).map(|w| (whole, text_hash(w))))
+            .flatten();
+        occurrences.push(Occurrence {
+            decl_tok,
+            value,
+            text,
+        });
     }
     Ok(())
 }
@@ -957,10 +994,36 @@ impl<'a> Assembler<'a, '_> {
         }
         // The network's copy: its address keys the declarations read for this shader.
         let shader = self.net.shared_shader(&shader);
+        // The parameters remembered before this request, their shared parts cloned one
+        // after the other: each clone is an atomic increment, which waits for every store
+        // before it, and between two parameters' stores it was most of a parameter's time.
+        // (Entries are never changed or removed, so what this finds is what reading the
+        // occurrences in turn would find.)
+        let owner = shader.as_ptr() as usize;
+        // (Filled in place: collected, the list was copied once more.)
+        let mut recalled: SmallVec<[Option<SharedParam>; 16]> = SmallVec::new();
+        recalled.extend(occurrences.iter().map(|o| {
+            let (whole, hash) = o.text.as_ref()?;
+            let text = self.src.get(whole.clone())?;
+            let (name, decl, value) = recall(&self.params, owner, text, *hash)?;
+            Some((*name, decl.clone(), value.clone()))
+        }));
         // One parameter per occurrence, built in place; the rare later duplicates are taken
         // out once the request is read.
         let mut params: Vec<Param> = Vec::with_capacity(occurrences.len());
-        for (origin, o) in occurrences.iter().enumerate() {
+        for (origin, (o, recalled)) in occurrences.iter().zip(recalled).enumerate() {
+            let at = ParamAt::LineColumn(o.decl_tok.line, o.decl_tok.col);
+            if let Some((name, decl, value)) = recalled {
+                let origin = Some(origin as u32);
+                params.push(Param::from_shared(
+                    name,
+                    Some(value),
+                    Some(decl),
+                    at,
+                    origin,
+                ));
+                continue;
+            }
             let location = At {
                 file: lx.file(),
                 line: o.decl_tok.line,
@@ -972,6 +1035,7 @@ impl<'a> Assembler<'a, '_> {
                 value: &pieces[o.value],
                 arena,
                 origin: origin as u32,
+                text: o.text.clone(),
             };
             self.read_param(&shader, raw, &mut params, diags)?;
         }
@@ -1013,7 +1077,7 @@ impl<'a> Assembler<'a, '_> {
             }
             diags.push(d);
         }
-        if self.types.has_definitions() && !self.types.shader_known(&shader) {
+        if self.types.has_definitions() && !self.shader_known(&shader) {
             diags.push(
                 Diagnostic::warning(
                     "RB019",
@@ -1111,15 +1175,16 @@ impl<'a> Assembler<'a, '_> {
             value,
             arena,
             origin,
+            text,
         } = raw;
         let at = ParamAt::LineColumn(location.line, location.column);
-        // The whole parameter as written, when it may have been read before.
+        // The whole parameter as written, when it may have been read before (an earlier
+        // occurrence of this request may have remembered it).
         let owner = shader.as_ptr() as usize;
-        let whole = self
-            .src
-            .get(decl_tok.start..value.range().end)
-            .filter(|w| w.len() <= MAX_SHARED_PARAM_BYTES);
-        if let Some((name, decl, value)) = whole.and_then(|w| recall(&self.params, owner, w)) {
+        let whole = text.and_then(|(whole, hash)| Some((self.src.get(whole)?, hash)));
+        if let Some((name, decl, value)) =
+            whole.and_then(|(w, hash)| recall(&self.params, owner, w, hash))
+        {
             let param = Param::from_shared(
                 *name,
                 Some(value.clone()),
@@ -1153,7 +1218,7 @@ impl<'a> Assembler<'a, '_> {
         let value = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
         // Remembered only when reading it again would report nothing (the declaration and
         // the value read cleanly, and a `reference` with numbers is RB014 each time).
-        if let Some(whole) = whole.filter(|_| {
+        if let Some((whole, _)) = whole.filter(|_| {
             remembered
                 && !decl.reference
                 && diags.len() == before
@@ -1172,6 +1237,16 @@ impl<'a> Assembler<'a, '_> {
             Some(origin),
         ));
         Ok(())
+    }
+
+    /// Whether the definitions know `shared_shader`, the network's shared id (see
+    /// [`Assembler::known`]).
+    fn shader_known(&mut self, shared_shader: &Arc<str>) -> bool {
+        let types = self.types;
+        *self
+            .known
+            .entry(shared_shader.as_ptr() as usize)
+            .or_insert_with(|| types.shader_known(shared_shader))
     }
 
     /// The interned output name `name` (see [`Assembler::outputs`]).
@@ -1198,7 +1273,7 @@ impl<'a> Assembler<'a, '_> {
     ) -> Result<(Sym, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
         let owner = shared_shader.as_ptr() as usize;
-        if let Some((name, decl)) = recall(&self.decls, owner, raw) {
+        if let Some((name, decl)) = recall(&self.decls, owner, raw, text_hash(raw)) {
             return Ok((*name, decl.clone(), true));
         }
         let shader: &str = shared_shader;

@@ -442,7 +442,10 @@ impl Param {
     }
 
     /// A parameter as read from a file, with a name, value and declaration that may be
-    /// shared with other parameters (the RIB reader shares repeated ones).
+    /// shared with other parameters (the RIB reader shares repeated ones). Always inlined:
+    /// called, it read its position back in one load from two stores that had not landed
+    /// yet, and that stall was most of its time.
+    #[inline(always)]
     pub(crate) fn from_shared(
         name: Sym,
         value: Option<Arc<Value>>,

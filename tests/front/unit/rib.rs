@@ -40,6 +40,31 @@ fn repeated_findings_are_reported_each_time() {
     assert_eq!((at.line, at.column), (2, 53));
 }
 
+/// A parameter repeated within one request is read like any other: the occurrence after
+/// the first shares what the first remembered, keeps its own position and source item, and
+/// wins (RB015 once); a later request shares it too.
+#[test]
+fn a_parameter_repeated_within_a_request_is_shared() {
+    let (net, d) = read(
+        "Pattern \"P\" \"a\" \"float f\" [2] \"float g\" [3] \"float f\" [2]\n\
+         Pattern \"P\" \"b\" \"float g\" [3] \"float f\" [2]\n",
+    );
+    assert_eq!(d.count("RB015"), 1, "{d:?}");
+    assert_eq!(d.len(), 1, "{d:?}");
+    let a = &net[net.find("a").unwrap()];
+    let b = &net[net.find("b").unwrap()];
+    let (af, bf) = (a.param("f").unwrap(), b.param("f").unwrap());
+    assert_eq!(af.source_item(), Some(2));
+    assert_eq!(bf.source_item(), Some(1));
+    let at = a.param_location(af).unwrap();
+    assert_eq!((at.line, at.column), (1, 45));
+    let at = b.param_location(bf).unwrap();
+    assert_eq!((at.line, at.column), (2, 31));
+    assert_eq!(af.value(), Some(&Value::Float(2.0)));
+    assert!(std::ptr::eq(af.value().unwrap(), bf.value().unwrap()));
+    assert!(std::ptr::eq(af.decl().unwrap(), bf.decl().unwrap()));
+}
+
 /// Parameters of different nodes with the same declaration and value share them, and
 /// read the same as when each is read alone.
 #[test]
