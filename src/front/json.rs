@@ -30,9 +30,10 @@
 //! follow the nodes, as in the order the JSON writer uses).
 //!
 //! With the `parallel` feature, an input of 1 MiB or more is read in pieces of materials on
-//! rayon's pool and assembled in document order on the calling thread (`pieces`); whatever
-//! that path cannot settle exactly as above goes to the one-thread reading, so the network,
-//! the diagnostics and the errors are the same either way.
+//! rayon's pool and assembled in document order on the calling thread (`pieces`), each
+//! material by a byte scanner making the visitors' calls (`scan`) unless it needs serde_json;
+//! whatever that path cannot settle exactly as above goes to the one-thread reading, so the
+//! network, the diagnostics and the errors are the same either way.
 //!
 //! Choices where the spec is silent:
 //!
@@ -48,6 +49,8 @@
 
 #[cfg(feature = "parallel")]
 mod pieces;
+#[cfg(feature = "parallel")]
+mod scan;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
@@ -1569,6 +1572,16 @@ fn parse_json_with(
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn json_reads_in_pieces(bytes: &[u8], types: &dyn ParamTypes, piece: usize) -> bool {
     pieces::read(bytes, &Arc::from("t.json"), types, piece.max(1)).is_some()
+}
+
+/// Whether the scanner of the pieces settles `material`, a material's value alone, without
+/// serde_json (tests: the writer's layout takes the scanner, what it does not read exactly as
+/// serde_json does leaves it).
+#[cfg(feature = "testkit")]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn json_scans_material(material: &str) -> bool {
+    let mut r = Reader::new(Arc::from("t.json"), None, None);
+    scan::read_material(&mut r, "m", material, 1).is_some()
 }
 
 /// The end of a read whose text is valid JSON: the findings in the order of the checks, not

@@ -11,7 +11,8 @@
 //! thread checks that it ended exactly there, so a guess that was not a boundary is found
 //! out, never trusted. Each material's value is read alone, as the text up to the next
 //! occurrence of the pattern (a complete JSON value there, or the guess was wrong and the
-//! value's end is found by matching brackets).
+//! value's end is found by matching brackets): by the byte scanner of `scan` when it settles
+//! it, else by serde_json.
 //!
 //! Anything this path does not settle the way the one-thread reader does (a syntax error, a
 //! duplicate key, a name with escapes, text on one line, a misplaced guess, deeply nested
@@ -22,7 +23,7 @@
 //! Materials with shorthand values need the declared types, which the pool's threads do not
 //! get (`ParamTypes` is not `Sync`): the calling thread reads those again.
 
-use super::{DocSeed, Found, MaterialOut, Order, Reader, read_material};
+use super::{DocSeed, Found, MaterialOut, Order, Reader, read_material, scan};
 use crate::network::{Network, ParamTypes};
 use memchr::memmem;
 use rustc_hash::FxHashSet;
@@ -260,8 +261,8 @@ fn read_piece(
         let (found, done) = (r.found.len(), r.done.len());
         let mut end = None;
         if let Some(q) = memmem::find(&b[v..], pattern).map(|k| v + k) {
-            let read = utf8(&b[v..q]).map(|value| read_material(&mut r, name_text, value, group));
-            if matches!(read, Some(Ok(()))) {
+            let read = utf8(&b[v..q]).map(|value| read_one(&mut r, name_text, value, group));
+            if read == Some(true) {
                 end = Some(q);
             } else {
                 r.found.truncate(found);
@@ -272,7 +273,9 @@ fn read_piece(
             Some(end) => end,
             None => {
                 let end = value_end(b, v)?;
-                read_material(&mut r, name_text, utf8(&b[v..end])?, group).ok()?;
+                if !read_one(&mut r, name_text, utf8(&b[v..end])?, group) {
+                    return None;
+                }
                 end
             }
         };
@@ -305,6 +308,19 @@ fn read_piece(
             closed,
         });
     }
+}
+
+/// Reads the material `name` from `value` (its text alone) as the `group`-th material: by
+/// the scanner when it settles it, else by serde_json; false when `value` is not one JSON
+/// object the one-thread reader would read the same way.
+fn read_one(r: &mut Reader<'_>, name: &str, value: &str, group: u32) -> bool {
+    let (found, done) = (r.found.len(), r.done.len());
+    if scan::read_material(r, name, value, group).is_some() {
+        return true;
+    }
+    r.found.truncate(found);
+    r.done.truncate(done);
+    read_material(r, name, value, group).is_ok()
 }
 
 /// The position of the `{` that opens the document's `materials`, and the separator pattern
