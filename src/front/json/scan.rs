@@ -41,15 +41,42 @@ fn special(x: u64) -> u64 {
         | (x.wrapping_sub(ONES * 0x20) & !x & HIGHS)
 }
 
+/// `rest` past its leading spaces, eight bytes at a time.
+#[inline]
+fn skip_spaces(mut rest: &[u8]) -> &[u8] {
+    while let Some((chunk, tail)) = rest.split_first_chunk::<8>() {
+        let x = u64::from_le_bytes(*chunk) ^ (ONES * u64::from(b' '));
+        if x != 0 {
+            return rest
+                .get((x.trailing_zeros() / 8) as usize..)
+                .unwrap_or(tail);
+        }
+        rest = tail;
+    }
+    while let [b' ', tail @ ..] = rest {
+        rest = tail;
+    }
+    rest
+}
+
 /// Exact powers of ten as doubles.
 const POW10: [f64; 23] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// Reads the material `name` from `text` (its value alone) as the `group`-th material, as
-/// [`super::read_material`] does; `None` when serde_json must read it (module docs).
-pub(super) fn read_material(r: &mut Reader<'_>, name: &str, text: &str, group: u32) -> Option<()> {
+/// Reads the material `name` whose value starts at `at` in `text` as the `group`-th material,
+/// as [`super::read_material`] does with the value alone: the position after the value, or
+/// `None` when serde_json must read it (module docs). `n` is scratch room for one node, kept
+/// from one material to the next.
+pub(super) fn read_material<'de>(
+    r: &mut Reader<'_>,
+    n: &mut NodeState<'de>,
+    name: &str,
+    text: &'de str,
+    at: usize,
+    group: u32,
+) -> Option<usize> {
     r.materials = group;
     r.needs_types = false;
     r.ctx.depth.set(0);
@@ -57,11 +84,10 @@ pub(super) fn read_material(r: &mut Reader<'_>, name: &str, text: &str, group: u
     let mut s = Scan {
         s: text,
         b: text.as_bytes(),
-        i: 0,
+        i: at,
     };
-    s.material(r, MaterialState::new(name), group)?;
-    s.ws();
-    (s.i == s.b.len()).then_some(())
+    s.material(r, n, MaterialState::new(name), group)?;
+    Some(s.i)
 }
 
 /// The text and the position in it.
@@ -81,30 +107,19 @@ impl<'de> Scan<'de> {
         self.ws_run();
     }
 
-    /// Past a run of whitespace; spaces (indentation) eight at a time.
+    /// Past a run of whitespace; the indentation after a line break eight bytes at a time.
     fn ws_run(&mut self) {
-        let b = self.b;
-        let mut i = self.i;
-        while let Some(&c) = b.get(i) {
-            if c == b' ' {
-                match b.get(i..).and_then(|r| r.first_chunk::<8>()) {
-                    Some(chunk) => {
-                        let x = u64::from_le_bytes(*chunk) ^ (ONES * u64::from(b' '));
-                        if x != 0 {
-                            i += (x.trailing_zeros() / 8) as usize;
-                        } else {
-                            i += 8;
-                        }
-                    }
-                    None => i += 1,
-                }
-            } else if c == b'\n' || c == b'\r' || c == b'\t' {
-                i += 1;
-            } else {
-                break;
+        let Some(mut rest) = self.b.get(self.i..) else {
+            return;
+        };
+        loop {
+            match rest {
+                [b'\n', tail @ ..] => rest = skip_spaces(tail),
+                [b' ' | b'\r' | b'\t', tail @ ..] => rest = tail,
+                _ => break,
             }
         }
-        self.i = i;
+        self.i = self.b.len() - rest.len();
     }
 
     /// The next byte after whitespace (not consumed).
@@ -146,35 +161,29 @@ impl<'de> Scan<'de> {
         if self.peek()? != b'"' {
             return None;
         }
-        let b = self.b;
         let start = self.i + 1;
-        let mut j = start;
-        loop {
-            match b.get(j..).and_then(|r| r.first_chunk::<8>()) {
-                Some(c) => {
-                    let m = special(u64::from_le_bytes(*c));
-                    if m != 0 {
-                        j += (m.trailing_zeros() / 8) as usize;
-                        break;
-                    }
-                    j += 8;
-                }
-                None => {
-                    while b
-                        .get(j)
-                        .is_some_and(|&c| c >= 0x20 && c != b'"' && c != b'\\')
-                    {
-                        j += 1;
-                    }
-                    break;
-                }
+        let text = self.b.get(start..)?;
+        let mut rest = text;
+        while let Some((chunk, tail)) = rest.split_first_chunk::<8>() {
+            let m = special(u64::from_le_bytes(*chunk));
+            if m != 0 {
+                rest = rest.get((m.trailing_zeros() / 8) as usize..)?;
+                break;
             }
+            rest = tail;
         }
-        if b.get(j) != Some(&b'"') {
+        while let [c, tail @ ..] = rest {
+            if *c < 0x20 || *c == b'"' || *c == b'\\' {
+                break;
+            }
+            rest = tail;
+        }
+        if rest.first() != Some(&b'"') {
             return None;
         }
-        self.i = j + 1;
-        self.s.get(start..j)
+        let end = start + (text.len() - rest.len());
+        self.i = end + 1;
+        self.s.get(start..end)
     }
 
     /// An object key and its colon.
@@ -186,6 +195,25 @@ impl<'de> Scan<'de> {
         }
         self.i += 1;
         Some(k)
+    }
+
+    /// Which of `keys` (each with its quotes and colon, as `"type":`) comes next: the text
+    /// compared as it is, else the key read and compared; `None` for any other key.
+    #[inline]
+    fn slot(&mut self, keys: &[&[u8]]) -> Option<u8> {
+        self.ws();
+        let rest = self.b.get(self.i..)?;
+        for (n, k) in keys.iter().enumerate() {
+            if rest.starts_with(k) {
+                self.i += k.len();
+                return u8::try_from(n).ok();
+            }
+        }
+        let key = self.key()?.as_bytes();
+        let n = keys
+            .iter()
+            .position(|k| k.get(1..k.len().saturating_sub(2)) == Some(key))?;
+        u8::try_from(n).ok()
     }
 
     /// A number (module docs).
@@ -345,6 +373,7 @@ impl<'de> Scan<'de> {
     fn material(
         &mut self,
         r: &mut Reader<'_>,
+        n: &mut NodeState<'de>,
         mut m: MaterialState<'de>,
         group: u32,
     ) -> Option<()> {
@@ -360,7 +389,7 @@ impl<'de> Scan<'de> {
                     "nodes" => {
                         m.has_nodes = true;
                         let pointer = P::Key(&P::Root(&m.pointer), key).render();
-                        self.nodes(r, &mut m, &pointer, group)?;
+                        self.nodes(r, n, &mut m, &pointer, group)?;
                     }
                     "terminals" => {
                         let j = self.value(0)?;
@@ -393,6 +422,7 @@ impl<'de> Scan<'de> {
     fn nodes(
         &mut self,
         r: &mut Reader<'_>,
+        n: &mut NodeState<'de>,
         m: &mut MaterialState<'de>,
         pointer: &str,
         group: u32,
@@ -400,7 +430,6 @@ impl<'de> Scan<'de> {
         if self.open(b'{', b'}')? {
             return Some(());
         }
-        let mut n = NodeState::default();
         loop {
             let name = self.key()?;
             if m.by_name.contains_key(name) {
@@ -409,9 +438,9 @@ impl<'de> Scan<'de> {
             let nodes = P::Root(pointer);
             let pointer = P::Key(&nodes, name);
             n.reset();
-            self.node(r, &mut n)?;
+            self.node(r, n)?;
             r.at(group, MAT_NODES);
-            match r.close_node(name, &mut n, RequestKind::Pattern, &pointer) {
+            match r.close_node(name, n, RequestKind::Pattern, &pointer) {
                 Ok((node, conns)) => {
                     let id = m.nodes.len() as u32;
                     m.nodes.push(node);
@@ -436,14 +465,12 @@ impl<'de> Scan<'de> {
         }
         let mut seen = FewKeys::default();
         loop {
-            let key = self.key()?;
-            let slot = match key {
-                "nodeTypeId" => 0,
-                "parameters" => 1,
-                "inputConnections" => 2,
-                _ => return None,
-            };
-            if !seen.insert(Some(slot), key) {
+            let slot = self.slot(&[
+                b"\"nodeTypeId\":",
+                b"\"parameters\":",
+                b"\"inputConnections\":",
+            ])?;
+            if !seen.insert(Some(slot), "") {
                 return None;
             }
             match slot {
@@ -480,13 +507,8 @@ impl<'de> Scan<'de> {
             let mut decl = None;
             let mut value = None;
             loop {
-                let key = self.key()?;
-                let slot = match key {
-                    "type" => 0,
-                    "value" => 1,
-                    _ => return None,
-                };
-                if !seen.insert(Some(slot), key) {
+                let slot = self.slot(&[b"\"type\":", b"\"value\":"])?;
+                if !seen.insert(Some(slot), "") {
                     return None;
                 }
                 if slot == 0 {
@@ -503,7 +525,11 @@ impl<'de> Scan<'de> {
                     break;
                 }
             }
-            let read = r.canonical(name, ty, decl, value, &P::Key(&base, name));
+            // A typed value that converted is what `canonical` keeps; it decides the rest.
+            let read = match (ty, decl, value) {
+                (Some(_), Some(decl), Some(ValueRead::Typed(Ok(value)))) => Ok((value, decl)),
+                (ty, decl, value) => r.canonical(name, ty, decl, value, &P::Key(&base, name)),
+            };
             if read.is_err() {
                 return None;
             }
@@ -574,11 +600,9 @@ impl<'de> Scan<'de> {
         }
         let (mut node, mut output) = (None, None);
         loop {
-            let key = self.key()?;
-            let slot = match key {
-                "upstreamNode" => &mut node,
-                "upstreamOutputName" => &mut output,
-                _ => return None,
+            let slot = match self.slot(&[b"\"upstreamNode\":", b"\"upstreamOutputName\":"])? {
+                0 => &mut node,
+                _ => &mut output,
             };
             if slot.is_some() {
                 return None;

@@ -557,4 +557,19 @@ fn the_pieces_scanner_reads_what_serde_json_reads() {
             }
         }
     }
+    // A material longer than the text a piece's scanner reads past the piece's end (it is
+    // read by serde_json instead), with a non-ASCII value.
+    let long = format!(
+        "\"parameters\": {{\"note\": {{\"type\": \"string\", \"value\": \"{}\u{e9}\"}}, ",
+        "x".repeat(200_000)
+    );
+    let changed = material.replacen(params, &long, 1);
+    assert!(json_scans_material(&changed));
+    let doc = format!("{}{changed}{}", &scene[..open], &scene[close..]);
+    let serial = read_outcome(doc.as_bytes(), &reg, &Default::default(), None);
+    for piece in [1, 3000, 100_000] {
+        let pieces = read_outcome(doc.as_bytes(), &reg, &Default::default(), Some(piece));
+        assert!(serial == pieces, "long material, pieces of {piece}");
+        assert!(json_reads_in_pieces(doc.as_bytes(), &reg, piece));
+    }
 }
