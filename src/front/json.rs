@@ -30,9 +30,10 @@
 //! follow the nodes, as in the order the JSON writer uses).
 //!
 //! With the `parallel` feature, an input of 1 MiB or more is read in pieces of materials on
-//! rayon's pool and assembled in document order on the calling thread (`pieces`); whatever
-//! that path cannot settle exactly as above goes to the one-thread reading, so the network,
-//! the diagnostics and the errors are the same either way.
+//! rayon's pool and assembled in document order on the calling thread (`pieces`), each
+//! material by a byte scanner making the visitors' calls (`scan`) unless it needs serde_json;
+//! whatever that path cannot settle exactly as above goes to the one-thread reading, so the
+//! network, the diagnostics and the errors are the same either way.
 //!
 //! Choices where the spec is silent:
 //!
@@ -48,6 +49,8 @@
 
 #[cfg(feature = "parallel")]
 mod pieces;
+#[cfg(feature = "parallel")]
+mod scan;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
@@ -1571,6 +1574,20 @@ fn json_reads_in_pieces(bytes: &[u8], types: &dyn ParamTypes, piece: usize) -> b
     pieces::read(bytes, &Arc::from("t.json"), types, piece.max(1)).is_some()
 }
 
+/// Whether the scanner of the pieces settles `material`, a material's value alone, without
+/// serde_json (tests: the writer's layout takes the scanner, what it does not read exactly as
+/// serde_json does leaves it).
+#[cfg(feature = "testkit")]
+#[cfg_attr(feature = "testkit", visibility::make(pub))]
+fn json_scans_material(material: &str) -> bool {
+    let mut r = Reader::new(Arc::from("t.json"), None, None);
+    scan::read_material(&mut r, &mut NodeState::default(), "m", material, 0, 1).is_some_and(|end| {
+        material[end..]
+            .trim_start_matches([' ', '\t', '\n', '\r'])
+            .is_empty()
+    })
+}
+
 /// The end of a read whose text is valid JSON: the findings in the order of the checks, not
 /// of the document (a material's terminals are checked before its nodes, the version before
 /// the materials; module docs), warnings up to the first error, then the limits.
@@ -1800,11 +1817,16 @@ impl<'t> Reader<'t> {
     }
 
     fn loc(&self, pointer: &str) -> Location {
+        self.loc_owned(pointer.to_string())
+    }
+
+    /// [`Reader::loc`] of a pointer already rendered.
+    fn loc_owned(&self, pointer: String) -> Location {
         Location {
             file: self.file.clone(),
             line: 0,
             column: 0,
-            pointer: Some(pointer.to_string()),
+            pointer: Some(pointer),
         }
     }
 
@@ -1913,29 +1935,34 @@ impl<'t> Reader<'t> {
         self.at(group, MAT_TERMINALS);
         let root = P::Root(&pointer);
         let tpointer = P::Key(&root, "terminals");
-        let mut terms: Vec<(&str, Conn)> = Vec::new();
-        for (t, c) in m.terminals.as_ref().map_or(&[][..], |j| match j {
+        let members = m.terminals.as_ref().map_or(&[][..], |j| match j {
             J::Obj(members) => members.as_slice(),
             _ => &[],
-        }) {
+        });
+        let mut terms: Vec<(&str, Conn)> = Vec::with_capacity(members.len());
+        for (t, c) in members {
             match self.connection(c, &P::Key(&tpointer, t)) {
                 Ok(conn) => terms.push((&**t, conn)),
                 Err(e) => self.fail(e),
             }
         }
-        // A node's kind comes from the first terminal naming it.
+        // A node's kind comes from the first terminal naming it (the earlier ones scanned
+        // while they are few).
         let mut named: FxHashSet<&str> = Default::default();
-        let mut kinds = Vec::new();
-        for (t, c) in &terms {
-            if named.insert(&c.node)
-                && let Some(&Some(id)) = m.by_name.get(&*c.node)
-            {
+        let mut kinds = Vec::with_capacity(terms.len());
+        for (i, (t, c)) in terms.iter().enumerate() {
+            let first = if terms.len() <= SeenKeys::SCAN {
+                !terms[..i].iter().any(|(_, d)| d.node == c.node)
+            } else {
+                named.insert(&c.node)
+            };
+            if first && let Some(&Some(id)) = m.by_name.get(&*c.node) {
                 kinds.push((id, RequestKind::from_terminal_name(t)));
             }
         }
         self.at(group, MAT_BIND);
         let nodes = P::Key(&root, "nodes");
-        let mut links = Vec::new();
+        let mut links = Vec::with_capacity(m.pending.iter().map(|(_, _, c)| c.len()).sum());
         for (id, name, conns) in &m.pending {
             let node = P::Key(&nodes, name);
             let inputs = P::Key(&node, "inputConnections");
@@ -1956,7 +1983,7 @@ impl<'t> Reader<'t> {
                 (t.to_string(), link)
             })
             .collect();
-        let location = Some(self.loc(&pointer));
+        let location = Some(self.loc_owned(pointer));
         let out = MaterialOut {
             nodes: m.nodes,
             kinds,
@@ -2082,7 +2109,7 @@ impl<'t> Reader<'t> {
         let Some(shader) = n.shader.take() else {
             return Err(self.error("JS002", &pointer.render(), "node without `nodeTypeId`"));
         };
-        let mut params: Vec<Param> = Vec::with_capacity(n.names.len());
+        let mut params: Vec<Param> = Vec::with_capacity(n.names.len() + n.inputs.len());
         for (&pname, typed) in n.names.iter().zip(n.values.drain(..)) {
             let Some((value, decl)) = typed else { continue };
             params.push(Param::from_shared(
@@ -2105,7 +2132,7 @@ impl<'t> Reader<'t> {
         }
         let mut node = Node::new_raw(name, &shader, kind);
         node.set_raw_params(params);
-        node.set_origin(Some(self.loc(&pointer.render())), None);
+        node.set_origin(Some(self.loc_owned(pointer.render())), None);
         Ok((node, conns))
     }
 

@@ -9,9 +9,10 @@
 //! a JSON string). A piece starts at the first occurrence of the pattern after its target
 //! offset and reads materials until it passes the start of the next piece: the calling
 //! thread checks that it ended exactly there, so a guess that was not a boundary is found
-//! out, never trusted. Each material's value is read alone, as the text up to the next
-//! occurrence of the pattern (a complete JSON value there, or the guess was wrong and the
-//! value's end is found by matching brackets).
+//! out, never trusted. Each material is read by the byte scanner of `scan`, which finds its
+//! end, when it settles it; else its value is read alone by serde_json, as the text up to the
+//! next occurrence of the pattern (a complete JSON value there, or the guess was wrong and
+//! the value's end is found by matching brackets).
 //!
 //! Anything this path does not settle the way the one-thread reader does (a syntax error, a
 //! duplicate key, a name with escapes, text on one line, a misplaced guess, deeply nested
@@ -22,7 +23,7 @@
 //! Materials with shorthand values need the declared types, which the pool's threads do not
 //! get (`ParamTypes` is not `Sync`): the calling thread reads those again.
 
-use super::{DocSeed, Found, MaterialOut, Order, Reader, read_material};
+use super::{DocSeed, Found, MaterialOut, NodeState, Order, Reader, read_material, scan};
 use crate::network::{Network, ParamTypes};
 use memchr::memmem;
 use rustc_hash::FxHashSet;
@@ -35,6 +36,10 @@ use std::sync::mpsc::channel;
 /// Bytes per piece, about: some forty materials of the bench scene, so that handing a piece
 /// to the pool costs little against reading it.
 pub(super) const PIECE_BYTES: usize = 256 * 1024;
+
+/// Bytes past a piece's nominal end that its scanner may read: a few materials of the bench
+/// scene, more than the one that crosses the end.
+const SCAN_MARGIN: usize = 64 * 1024;
 
 /// Value trees nested deeper than this within a material send the document to the
 /// one-thread reader: serde_json's nesting limit counts the levels above the material too.
@@ -241,7 +246,16 @@ fn read_piece(
 ) -> Option<PieceRead> {
     let b = text;
     let mut r = Reader::new(file.clone(), None, None);
+    let mut n = NodeState::default();
     let mut materials = Vec::new();
+    // The text the scanner reads, checked to be UTF-8 once: from the piece's start to a
+    // margin past `stop`, up to the first byte that is not (a material reaching past it is
+    // read as below).
+    let limit = b.len().min(stop.saturating_add(SCAN_MARGIN));
+    let region = match std::str::from_utf8(&b[start..limit]) {
+        Ok(region) => region,
+        Err(e) => utf8(&b[start..start + e.valid_up_to()]).unwrap_or_default(),
+    };
     let mut pos = start;
     loop {
         let k = skip_ws(b, pos + 1);
@@ -258,14 +272,20 @@ fn read_piece(
         }
         let group = materials.len() as u32 + 1;
         let (found, done) = (r.found.len(), r.done.len());
-        let mut end = None;
-        if let Some(q) = memmem::find(&b[v..], pattern).map(|k| v + k) {
-            let read = utf8(&b[v..q]).map(|value| read_material(&mut r, name_text, value, group));
-            if matches!(read, Some(Ok(()))) {
-                end = Some(q);
-            } else {
-                r.found.truncate(found);
-                r.done.truncate(done);
+        let mut end = scan::read_material(&mut r, &mut n, name_text, region, v - start, group)
+            .map(|end| start + end);
+        if end.is_none() {
+            r.found.truncate(found);
+            r.done.truncate(done);
+            if let Some(q) = memmem::find(&b[v..], pattern).map(|k| v + k) {
+                let read =
+                    utf8(&b[v..q]).map(|value| read_material(&mut r, name_text, value, group));
+                if matches!(read, Some(Ok(()))) {
+                    end = Some(q);
+                } else {
+                    r.found.truncate(found);
+                    r.done.truncate(done);
+                }
             }
         }
         let end = match end {

@@ -400,3 +400,176 @@ fn reading_in_pieces_is_the_one_thread_reading() {
     }
     assert!(pieced > 20, "{pieced}");
 }
+
+/// The scanner of the pieces settles a material of the writer's layout and the forms it reads
+/// exactly as serde_json does (numbers within its exact range, strings without escapes, any
+/// whitespace, a value before its type), and leaves everything else to serde_json (escapes,
+/// control characters, numbers it cannot read the same way, keys and shapes the format does
+/// not define, duplicate keys, findings of a parameter, syntax errors): either way the pieces
+/// give what one thread gives.
+#[test]
+fn the_pieces_scanner_reads_what_serde_json_reads() {
+    let reg = vstructc::registry::Registry::embedded();
+    let scene = scene_json(12, &reg);
+    let at = material_at(&scene, 0.5);
+    let open = at + scene[at..].find('{').unwrap();
+    let close = open + scene[open..].find("\n    }").unwrap() + 6;
+    let material = &scene[open..close];
+    assert!(json_scans_material(material), "{material}");
+    let float = "\"value\": 0.5\n";
+    let int = "\"value\": 1\n";
+    let params = "\"parameters\": {";
+    let cases: &[(&str, &str, bool)] = &[
+        // Numbers the scanner reads as serde_json does.
+        (float, "\"value\": 5e-1\n", true),
+        (float, "\"value\": 0.05E1\n", true),
+        (float, "\"value\": 0.3000000000000000444\n", false),
+        (float, "\"value\": 0.30000000000000004\n", false),
+        (float, "\"value\": 0.3000000000000001\n", true),
+        (float, "\"value\": 9007199254740993\n", true),
+        (float, "\"value\": 9007199254740993.0\n", false),
+        (float, "\"value\": 12345678901234567890\n", false),
+        (float, "\"value\": 1e-22\n", true),
+        (float, "\"value\": 1e-23\n", false),
+        (float, "\"value\": 3e22\n", true),
+        (float, "\"value\": 1e400\n", false),
+        (float, "\"value\": -0\n", true),
+        (float, "\"value\": -0.0\n", true),
+        (float, "\"value\": -1.25e+2\n", true),
+        (float, "\"value\": 1e39\n", false),
+        (int, "\"value\": 1.0\n", true),
+        (int, "\"value\": -0\n", true),
+        (int, "\"value\": -7\n", true),
+        (int, "\"value\": -9223372036854775808\n", false),
+        (int, "\"value\": 2147483648\n", false),
+        (int, "\"value\": 2.5\n", false),
+        // Not numbers: syntax errors.
+        (float, "\"value\": 01\n", false),
+        (float, "\"value\": 1.\n", false),
+        (float, "\"value\": .5\n", false),
+        (float, "\"value\": -\n", false),
+        (float, "\"value\": +1\n", false),
+        (float, "\"value\": 1e\n", false),
+        (float, "\"value\": 1e+\n", false),
+        (float, "\"value\": 1.5.5\n", false),
+        (float, "\"value\": NaN\n", false),
+        // Strings.
+        ("\"PxrLayer\"", "\"PxrLay\u{e9}r\"", true),
+        ("\"PxrLayer\"", "\"Pxr\\u004cayer\"", false),
+        ("\"PxrLayer\"", "\"Pxr\\\"Layer\"", false),
+        ("\"PxrLayer\"", "\"Pxr\tLayer\"", false),
+        ("\"nodeTypeId\"", "\"node\\u0054ypeId\"", false),
+        // Layout and shapes.
+        ("\n", "\r\n\t ", true),
+        (
+            "\"type\": \"float\",\n              \"value\": 0.5\n",
+            "\"value\": 0.5, \"type\": \"float\"\n",
+            true,
+        ),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"bool\", \"value\": true}, \"ns\": {\"type\": \"int[]\", \"value\": [1, -2, 3.0]}, \"t\": {\"type\": \"string\", \"value\": \"a b\"},",
+            true,
+        ),
+        ("\"primvars\": []", "\"primvars\": [\"st\", \"P\"]", true),
+        ("\"primvars\": []", "\"primvars\": [\"st\", 1]", true),
+        ("\"primvars\": []", "\"primvars\": 7", true),
+        ("\"nodes\"", "\"terminals\": {}, \"nodes\"", false),
+        ("\"nodes\"", "\"doc\": {}, \"nodes\"", false),
+        ("\"nodeTypeId\": ", "\"doc\": 1, \"nodeTypeId\": ", false),
+        ("\"nodeTypeId\": \"PxrLayer\"", "\"nodeTypeId\": 5", false),
+        ("\"nodeTypeId\": \"PxrLayer\",", "", true),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"bool\", \"value\": tru}, ",
+            false,
+        ),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"bool\", \"value\": 1}, ",
+            false,
+        ),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"vstruct\", \"value\": 1}, ",
+            false,
+        ),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": 3, \"value\": 1}, ",
+            false,
+        ),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"int\"}, ",
+            false,
+        ),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"int\", \"value\": 1, \"doc\": 0}, ",
+            false,
+        ),
+        (params, "\"parameters\": {\"flag\": 1, ", false),
+        (
+            params,
+            "\"parameters\": {\"flag\": {\"type\": \"float[2]\", \"value\": [1, 2, 3]}, ",
+            false,
+        ),
+        (
+            params,
+            "\"parameters\": {\"diffuseGain\": {\"type\": \"int\", \"value\": 1}, ",
+            false,
+        ),
+        (
+            "\"upstreamOutputName\"",
+            "\"doc\": 1, \"upstreamOutputName\"",
+            false,
+        ),
+        ("\"upstreamNode\": \"", "\"upstreamNode\": \"ghost", true),
+        (
+            "\"upstreamNode\": \"",
+            "\"upstreamNode\": 4, \"x\": \"",
+            false,
+        ),
+        ("\"upstreamOutputName\": \"", "\"upstreamNode\": \"", false),
+        ("[\n", "{\"a\": [\n", false),
+        ("\"nodes\": {", "\"nodes\": [], \"x\": {", false),
+    ];
+    let few_nodes = vstructc::limits::Limits {
+        nodes: 30,
+        ..Default::default()
+    };
+    for &(what, with, scans) in cases {
+        let Some(k) = material.find(what) else {
+            panic!("{what:?} not in {material}");
+        };
+        let changed = format!("{}{with}{}", &material[..k], &material[k + what.len()..]);
+        assert_eq!(json_scans_material(&changed), scans, "{what:?} -> {with:?}");
+        let doc = format!("{}{changed}{}", &scene[..open], &scene[close..]);
+        for limits in [&vstructc::limits::Limits::default(), &few_nodes] {
+            let serial = read_outcome(doc.as_bytes(), &reg, limits, None);
+            for piece in [1, 3000] {
+                let pieces = read_outcome(doc.as_bytes(), &reg, limits, Some(piece));
+                assert!(
+                    serial == pieces,
+                    "{what:?} -> {with:?}, pieces of {piece}:\n{serial}\n---\n{pieces}"
+                );
+            }
+        }
+    }
+    // A material longer than the text a piece's scanner reads past the piece's end (it is
+    // read by serde_json instead), with a non-ASCII value.
+    let long = format!(
+        "\"parameters\": {{\"note\": {{\"type\": \"string\", \"value\": \"{}\u{e9}\"}}, ",
+        "x".repeat(200_000)
+    );
+    let changed = material.replacen(params, &long, 1);
+    assert!(json_scans_material(&changed));
+    let doc = format!("{}{changed}{}", &scene[..open], &scene[close..]);
+    let serial = read_outcome(doc.as_bytes(), &reg, &Default::default(), None);
+    for piece in [1, 3000, 100_000] {
+        let pieces = read_outcome(doc.as_bytes(), &reg, &Default::default(), Some(piece));
+        assert!(serial == pieces, "long material, pieces of {piece}");
+        assert!(json_reads_in_pieces(doc.as_bytes(), &reg, piece));
+    }
+}
