@@ -85,11 +85,13 @@ fn pool_can_help() -> bool {
     rayon::current_num_threads() > 1 && rayon::current_thread_index().is_none()
 }
 
-/// Items `0..count` made by `make` in pieces of `piece` consecutive items on rayon's pool,
-/// and handed to `take` on the calling thread in order as they arrive, so that the calling
-/// thread uses each item while the pool makes the next ones. Each thread of the pool takes
-/// the next piece; a piece that arrives early waits for the ones before it. When `take`
-/// panics, the pool stops after the pieces it is making.
+/// Items `0..count` made by `make` in pieces of `piece` consecutive items, and handed to
+/// `take` on the calling thread in order, so that the calling thread uses each item while
+/// rayon's pool makes the next ones. All but one of the pool's threads take the next piece
+/// in turn; the calling thread, when the piece it wants next is not there yet, makes the
+/// next piece nobody has taken itself (so that the two kinds of work share the cores)
+/// before it waits. A piece made early waits for the ones before it. When `take` panics,
+/// the pool stops after the pieces it is making.
 #[cfg(all(feature = "parallel", feature = "usd"))]
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
 fn make_in_order<T: Send>(
@@ -99,21 +101,21 @@ fn make_in_order<T: Send>(
     mut take: impl FnMut(T),
 ) {
     use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::mpsc::TryRecvError;
     let piece = piece.max(1);
     let pieces = count.div_ceil(piece);
     let next = AtomicUsize::new(0);
+    let make_piece =
+        |i: usize| -> Vec<T> { (i * piece..count.min((i + 1) * piece)).map(&make).collect() };
     let (tx, rx) = std::sync::mpsc::channel::<(usize, Vec<T>)>();
     rayon::in_place_scope(|scope| {
-        for _ in 0..rayon::current_num_threads().min(pieces) {
-            let (tx, next, make) = (tx.clone(), &next, &make);
+        let helpers = rayon::current_num_threads().saturating_sub(1).max(1);
+        for _ in 0..helpers.min(pieces) {
+            let (tx, next, make_piece) = (tx.clone(), &next, &make_piece);
             scope.spawn(move |_| {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= pieces {
-                        return;
-                    }
-                    let items = (i * piece..count.min((i + 1) * piece)).map(make).collect();
-                    if tx.send((i, items)).is_err() {
+                    if i >= pieces || tx.send((i, make_piece(i))).is_err() {
                         return;
                     }
                 }
@@ -122,15 +124,32 @@ fn make_in_order<T: Send>(
         drop(tx);
         let mut early: Vec<Option<Vec<T>>> = Vec::new();
         let mut want = 0;
-        for (i, items) in &rx {
+        while want < pieces {
+            if let Some(items) = early.get_mut(want).and_then(Option::take) {
+                items.into_iter().for_each(&mut take);
+                want += 1;
+                continue;
+            }
+            let arrived = match rx.try_recv() {
+                Ok(arrived) => Some(arrived),
+                Err(TryRecvError::Empty | TryRecvError::Disconnected) => {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i < pieces {
+                        Some((i, make_piece(i)))
+                    } else {
+                        rx.recv().ok()
+                    }
+                }
+            };
+            let Some((i, items)) = arrived else {
+                // Every helper has stopped and the wanted piece never came: cannot happen
+                // while each piece is made once, but never wait for nothing.
+                break;
+            };
             if i >= early.len() {
                 early.resize_with(i + 1, || None);
             }
             early[i] = Some(items);
-            while let Some(items) = early.get_mut(want).and_then(Option::take) {
-                items.into_iter().for_each(&mut take);
-                want += 1;
-            }
         }
     });
 }

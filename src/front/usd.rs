@@ -324,6 +324,7 @@ impl<'a> Reader<'a> {
         match self.flat {
             Some(data) => {
                 let names = tokens_of(data.try_field(path, "propertyChildren"));
+                let names: Vec<&str> = names.iter().map(|t| t.as_str()).collect();
                 distinct_inputs(&names)
                     .filter_map(|(name, input)| {
                         let path = property_path(path, name)?;
@@ -729,7 +730,9 @@ impl<'a> ShaderRead<'a> {
         }
         let inputs = &mut read.inputs;
         let walked = catch_unwind(AssertUnwindSafe(|| {
-            for (attr, input, at) in source.shader_inputs(prim, index) {
+            let listed = source.shader_inputs(prim, index);
+            inputs.reserve_exact(listed.len());
+            for (attr, input, at) in listed {
                 if let Some(fields) = source.input_fields(&attr, at) {
                     inputs.push((attr, Sym::new(&input), fields));
                 }
@@ -1140,11 +1143,11 @@ fn tokens_of(field: FieldRead<'_>) -> Vec<openusd::tf::Token> {
 
 /// The `inputs:` properties among `names`, each input once (its first), in order: the
 /// property's name and the input's.
-fn distinct_inputs(names: &[openusd::tf::Token]) -> impl Iterator<Item = (&str, &str)> {
+fn distinct_inputs<'n>(names: &[&'n str]) -> impl Iterator<Item = (&'n str, &'n str)> {
     let mut seen = rustc_hash::FxHashSet::default();
-    names.iter().filter_map(move |n| {
-        let input = n.as_str().strip_prefix("inputs:")?;
-        seen.insert(input).then_some((n.as_str(), input))
+    names.iter().filter_map(move |&n| {
+        let input = n.strip_prefix("inputs:")?;
+        seen.insert(input).then_some((n, input))
     })
 }
 
@@ -1549,6 +1552,13 @@ impl CrateLayer {
         if at == 0 {
             return Some(Vec::new());
         }
+        let (pos, count) = self.token_array_span(at)?;
+        self.token_indices(pos, count)
+    }
+
+    /// Where the token indices of the array of tokens at `at` (not 0) start, and how many
+    /// there are (see [`CrateLayer::token_array`]).
+    fn token_array_span(&self, at: usize) -> Option<(usize, usize)> {
         let mut pos = at;
         if !self.v05 {
             pos = pos.checked_add(4)?;
@@ -1562,7 +1572,34 @@ impl CrateLayer {
             pos += 4;
             u32::from_le_bytes(b.try_into().ok()?) as usize
         };
-        self.token_indices(pos, count)
+        Some((pos, count))
+    }
+
+    /// The texts of the tokens of field `field` when [`CrateLayer::own_value`] decodes it
+    /// as a list of tokens (an array of tokens or a token vector), borrowed from the file's
+    /// tokens; nothing for anything else (then the field is read as a value).
+    fn own_token_texts(&self, field: usize) -> Option<Vec<&str>> {
+        let rep = Rep(self.fields.get(field)?.1);
+        if rep.is_compressed() {
+            return None;
+        }
+        let at = usize::try_from(rep.payload()).ok()?;
+        let (pos, count) = match (rep.ty(), rep.is_array(), rep.is_inlined()) {
+            (CRATE_TOKEN, true, false) if at == 0 => return Some(Vec::new()),
+            (CRATE_TOKEN, true, false) => self.token_array_span(at)?,
+            (CRATE_TOKEN_VECTOR, false, false) => (at.checked_add(8)?, le_size(&self.bytes, at)?),
+            _ => return None,
+        };
+        let items = self
+            .bytes
+            .get(pos..pos.checked_add(count.checked_mul(4)?)?)?;
+        items
+            .chunks_exact(4)
+            .map(|c| {
+                let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
+                self.tokens.get(i).map(|t| t.as_str())
+            })
+            .collect()
     }
 
     /// The `count` tokens whose 32-bit indices start at byte `at`; nothing when any lies
@@ -1772,8 +1809,20 @@ impl CrateLayer {
         let (Some((_, start)), Some(path)) = (self.spec_of(prim), self.paths.get(prim)) else {
             return Vec::new();
         };
-        let names = tokens_of(self.field_in(start, self.prim_fields[2], path, "propertyChildren"));
-        let mut out = Vec::new();
+        // The property names, borrowed from the file's tokens when decoded here.
+        let field = self.prim_fields[2]
+            .and_then(|token| self.set_fields(start).find(|&(_, t)| t == token))
+            .map(|(i, _)| i);
+        let read;
+        let names: Vec<&str> = match field.and_then(|i| self.own_token_texts(i)) {
+            Some(names) => names,
+            None => {
+                read =
+                    tokens_of(self.field_in(start, self.prim_fields[2], path, "propertyChildren"));
+                read.iter().map(|t| t.as_str()).collect()
+            }
+        };
+        let mut out = Vec::with_capacity(names.len());
         let mut hint = None;
         for (name, input) in distinct_inputs(&names) {
             let Some(index) = self.child_named(prim, name, true, hint) else {
