@@ -259,6 +259,11 @@ impl CrateTables {
         Some((out, end))
     }
 
+    /// Where the compressed block at `at` (its compressed size, then the data) ends.
+    fn block_end(bytes: &[u8], at: usize) -> Option<usize> {
+        at.checked_add(8)?.checked_add(le_size(bytes, at)?)
+    }
+
     /// `count` 32-bit integers coded as USD codes them (a common value; two bits a value
     /// saying whether it is that common value or a delta of 8, 16 or 32 bits; the deltas)
     /// in the compressed block at `at`, and where the block ends.
@@ -324,9 +329,21 @@ impl CrateTables {
     ) -> Option<(Vec<sdf::Path>, Option<PathTree>)> {
         let count = le_size(bytes, at)?;
         let entries = le_size(bytes, at + 8)?;
-        let (index, at) = Self::ints(bytes, at + 16, entries)?;
-        let (element, at) = Self::ints(bytes, at, entries)?;
-        let (jump, _) = Self::ints(bytes, at, entries)?;
+        // The three integer tables, each a compressed block after its size, decoded side
+        // by side (a thread of the pool that is done with the other tables joins in).
+        let at_index = at.checked_add(16)?;
+        let at_element = Self::block_end(bytes, at_index)?;
+        let at_jump = Self::block_end(bytes, at_element)?;
+        let (index, (element, jump)) = crate::both(
+            || Self::ints(bytes, at_index, entries),
+            || {
+                crate::both(
+                    || Self::ints(bytes, at_element, entries),
+                    || Self::ints(bytes, at_jump, entries),
+                )
+            },
+        );
+        let ((index, _), (element, _), (jump, _)) = (index?, element?, jump?);
         if count != entries {
             return None;
         }
