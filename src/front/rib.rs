@@ -669,6 +669,8 @@ type SharedParam = (Sym, Arc<Decl>, Arc<Value>);
 struct Remembered<T> {
     owner: usize,
     text: Box<[u8]>,
+    /// Its [`remembered_hash`], kept for the table's growth.
+    hash: u64,
     shared: T,
 }
 
@@ -704,17 +706,23 @@ fn recall<'t, T>(
         .map(|e| &e.shared)
 }
 
-/// Remember `shared` for `owner` and `text` (not remembered yet).
-fn remember<T>(table: &mut HashTable<Remembered<T>>, owner: usize, text: &[u8], shared: T) {
-    let hash = remembered_hash(owner, text_hash(text));
+/// Remember `shared` for `owner` and `text` (of hash `hash`, [`text_hash`]; not
+/// remembered yet).
+fn remember<T>(
+    table: &mut HashTable<Remembered<T>>,
+    owner: usize,
+    text: &[u8],
+    hash: u64,
+    shared: T,
+) {
+    let hash = remembered_hash(owner, hash);
     let entry = Remembered {
         owner,
         text: Box::from(text),
+        hash,
         shared,
     };
-    table.insert_unique(hash, entry, |e| {
-        remembered_hash(e.owner, text_hash(&e.text))
-    });
+    table.insert_unique(hash, entry, |e| e.hash);
 }
 
 /// At most this many distinct values are remembered for sharing while a file is read.
@@ -1218,7 +1226,7 @@ impl<'a> Assembler<'a, '_> {
         let value = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
         // Remembered only when reading it again would report nothing (the declaration and
         // the value read cleanly, and a `reference` with numbers is RB014 each time).
-        if let Some((whole, _)) = whole.filter(|_| {
+        if let Some((whole, hash)) = whole.filter(|_| {
             remembered
                 && !decl.reference
                 && diags.len() == before
@@ -1227,7 +1235,7 @@ impl<'a> Assembler<'a, '_> {
         }) {
             self.shared_values += 1;
             let shared = (name, decl.clone(), value.clone());
-            remember(&mut self.params, owner, whole, shared);
+            remember(&mut self.params, owner, whole, hash, shared);
         }
         params.push(Param::from_shared(
             name,
@@ -1273,7 +1281,8 @@ impl<'a> Assembler<'a, '_> {
     ) -> Result<(Sym, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
         let owner = shared_shader.as_ptr() as usize;
-        if let Some((name, decl)) = recall(&self.decls, owner, raw, text_hash(raw)) {
+        let hash = text_hash(raw);
+        if let Some((name, decl)) = recall(&self.decls, owner, raw, hash) {
             return Ok((*name, decl.clone(), true));
         }
         let shader: &str = shared_shader;
@@ -1314,7 +1323,7 @@ impl<'a> Assembler<'a, '_> {
         if diags.len() != before {
             return Ok((name, decl, false));
         }
-        remember(&mut self.decls, owner, raw, (name, decl.clone()));
+        remember(&mut self.decls, owner, raw, hash, (name, decl.clone()));
         Ok((name, decl, true))
     }
 

@@ -292,10 +292,8 @@ impl<'a> Reader<'a> {
     /// What the reader reads of attribute `path`, or nothing when the layer read alone
     /// has no attribute there. Through the stage, the type name and the default value are
     /// looked up only for an attribute without connections, the only one that uses them.
-    fn attr_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
-        if let (Some(layer), Some(index)) = (self.indexed, index) {
-            return layer.attribute_at(index);
-        }
+    /// (A crate file walked by index is read through its own [`ShaderSource`].)
+    fn attr_fields(&self, path: &sdf::Path) -> Option<AttrFields> {
         if let Some(data) = self.flat {
             return data.attribute(path);
         }
@@ -317,10 +315,7 @@ impl<'a> Reader<'a> {
     /// The `inputs:` attributes of prim `path` in composed order: each one's path and
     /// input name (read alone, every property so named: [`Reader::attr_fields`] leaves out
     /// those that are not attributes).
-    fn inputs(&self, path: &sdf::Path, index: Option<usize>) -> Vec<InputAt<'a>> {
-        if let (Some(layer), Some(index)) = (self.indexed, index) {
-            return layer.inputs_at(index);
-        }
+    fn inputs(&self, path: &sdf::Path) -> Vec<InputAt<'a>> {
         match self.flat {
             Some(data) => {
                 let names = tokens_of(data.try_field(path, "propertyChildren"));
@@ -347,12 +342,8 @@ impl<'a> Reader<'a> {
     }
 
     /// A token or string attribute's default value.
-    fn text_attr(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
-        let value = match (self.indexed, index) {
-            (Some(layer), Some(index)) => layer.property_default(index, name),
-            _ => self.default_value(&property_path(prim, name)?),
-        };
-        text_of(value)
+    fn text_attr(&self, prim: &sdf::Path, name: &str) -> Option<String> {
+        text_of(self.default_value(&property_path(prim, name)?))
     }
 
     /// The node type of shader `path` from its texts read before ([`ShaderRead`]): its
@@ -655,15 +646,16 @@ trait ShaderSource<'a> {
     fn input_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields>;
 }
 
+/// Any layer or stage but a crate file walked by index: found by path.
 impl<'a> ShaderSource<'a> for Reader<'a> {
-    fn shader_text(&self, prim: &sdf::Path, index: Option<usize>, name: &str) -> Option<String> {
-        self.text_attr(prim, index, name)
+    fn shader_text(&self, prim: &sdf::Path, _: Option<usize>, name: &str) -> Option<String> {
+        self.text_attr(prim, name)
     }
-    fn shader_inputs(&self, prim: &sdf::Path, index: Option<usize>) -> Vec<InputAt<'a>> {
-        Reader::inputs(self, prim, index)
+    fn shader_inputs(&self, prim: &sdf::Path, _: Option<usize>) -> Vec<InputAt<'a>> {
+        self.inputs(prim)
     }
-    fn input_fields(&self, path: &sdf::Path, index: Option<usize>) -> Option<AttrFields> {
-        self.attr_fields(path, index)
+    fn input_fields(&self, path: &sdf::Path, _: Option<usize>) -> Option<AttrFields> {
+        self.attr_fields(path)
     }
 }
 
@@ -683,17 +675,8 @@ impl<'a> ShaderSource<'a> for &'a CrateLayer {
 
 /// A panic of the USD library caught while reading, raised again where the reading in
 /// order reaches it (so that what was reported before it is what the one-by-one reading
-/// reports), or nothing.
-struct Stop(Option<Box<dyn std::any::Any + Send>>);
-
-impl Stop {
-    /// Raises the panic again, if there was one.
-    fn raise(self) {
-        if let Some(payload) = self.0 {
-            std::panic::resume_unwind(payload);
-        }
-    }
-}
+/// reports).
+type Panic = Box<dyn std::any::Any + Send>;
 
 /// What is read of a shader prim before its node is built: its `info:implementationSource`
 /// and (when that is none or `id`) its `info:id`, then its `inputs:` attributes that are
@@ -701,11 +684,12 @@ impl Stop {
 /// library, kept to be raised where the walk in order reaches it. Being pure reads, these
 /// can be read for many shaders at once ([`read_shaders`]).
 struct ShaderRead<'a> {
-    texts: Result<(Option<String>, Option<String>), Box<dyn std::any::Any + Send>>,
+    texts: Result<(Option<String>, Option<String>), Panic>,
     /// Each input's attribute path, name (made a symbol here, off the thread that builds
     /// the network) and fields.
     inputs: Vec<(Cow<'a, sdf::Path>, Sym, AttrFields)>,
-    stop: Stop,
+    /// The panic that stopped the reading of the inputs, if one did.
+    stop: Option<Panic>,
 }
 
 impl<'a> ShaderRead<'a> {
@@ -723,7 +707,7 @@ impl<'a> ShaderRead<'a> {
         let mut read = ShaderRead {
             texts,
             inputs: Vec::new(),
-            stop: Stop(None),
+            stop: None,
         };
         if read.texts.is_err() {
             return read;
@@ -738,24 +722,30 @@ impl<'a> ShaderRead<'a> {
                 }
             }
         }));
-        read.stop = Stop(walked.err());
+        read.stop = walked.err();
         read
     }
 }
 
 /// Shaders `shaders`, each read ([`ShaderRead`]) and handed to `take` in order. A crate
-/// file walked by index (`layer`) is read on rayon's pool when it can help (feature
-/// `parallel`), in pieces of consecutive shaders, while the calling thread takes the ones
-/// read; anything else is read on the calling thread through the reader.
+/// file walked by index is read through its own [`ShaderSource`], on rayon's pool when it
+/// can help (feature `parallel`), in pieces of consecutive shaders, while the calling
+/// thread takes the ones read; anything else is read on the calling thread through the
+/// reader.
 fn read_shaders<'a>(
     r: &mut Reader<'a>,
     shaders: &[(sdf::Path, Option<usize>)],
     mut take: impl FnMut(&mut Reader<'a>, usize, ShaderRead<'a>),
 ) {
+    let Some(layer) = r.indexed else {
+        for (n, (p, index)) in shaders.iter().enumerate() {
+            let read = ShaderRead::of(&*r, p, *index);
+            take(r, n, read);
+        }
+        return;
+    };
     #[cfg(feature = "parallel")]
-    if let Some(layer) = r.indexed
-        && crate::pool_can_help()
-    {
+    if crate::pool_can_help() {
         let mut n = 0;
         crate::make_in_order(
             shaders.len(),
@@ -769,8 +759,7 @@ fn read_shaders<'a>(
         return;
     }
     for (n, (p, index)) in shaders.iter().enumerate() {
-        let read = ShaderRead::of(&*r, p, *index);
-        take(r, n, read);
+        take(r, n, ShaderRead::of(&layer, p, *index));
     }
 }
 
@@ -2396,7 +2385,9 @@ fn read_stage(
             }
         };
         let (params, links) = r.read_inputs(read.inputs, Sym::new(&shader));
-        read.stop.raise();
+        if let Some(panic) = read.stop {
+            std::panic::resume_unwind(panic);
+        }
         let mut node = Node::new_raw(&path, &shader, kind);
         node.set_raw_params(params);
         let id = r.net.insert_node(node);
