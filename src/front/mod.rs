@@ -128,13 +128,14 @@ pub struct ReadOptions {
 }
 
 /// Read a network in `format` from `bytes` (named `name` in diagnostics): the RIB, JSON or
-/// USD reader, with the parameter types of `types` (a [`crate::registry::Registry`]).
-/// Reader warnings go to `diags`; an error stops the read.
+/// USD reader, with the parameter types of `types` (a [`crate::registry::Registry`]; `Sync`,
+/// as the RIB reader may ask it from two threads). Reader warnings go to `diags`; an error
+/// stops the read.
 pub fn read_network(
     name: &str,
     bytes: &[u8],
     format: NetFormat,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     options: &ReadOptions,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {

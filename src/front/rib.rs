@@ -9,6 +9,7 @@
 //! scene costs about one copy of its shading requests. An input from 1 MiB on is read on two
 //! threads when the `parallel` feature is on and rayon may use more than one: a second thread
 //! tokenizes the requests while the calling thread builds the network from them in file order,
+//! and the parameters' declarations and values are read by whichever of the two has time,
 //! with the same network, diagnostics and errors as on one thread.
 //!
 //! Choices where the spec is silent (documented here, tested in `tests/front/rib_reader.rs`):
@@ -30,22 +31,22 @@
 
 // The tokenizer: public under `testkit` for its unit tests.
 testkit_mods!(lexer);
+mod params;
 #[cfg(feature = "parallel")]
 mod pipeline;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
 use crate::limits::{Limit, Limits};
 use crate::network::{
-    Decl, Link, Links, Material, MaterialNodes, Memo, Network, Node, NodeId, NodeSource, Param,
-    ParamAt, ParamTypes, RequestKind, SourceParam, Sym, Terminal,
+    Link, Links, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamAt,
+    ParamTypes, RequestKind, SourceParam, Sym, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
-use hashbrown::HashTable;
 use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
-use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
+use params::{MAX_SHARED_VALUES, ParamReader, Read, ReadParam, text_hash};
+use rustc_hash::{FxHashMap, FxHashSet};
 use smallvec::SmallVec;
 use std::borrow::Cow;
-use std::hash::Hasher;
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -86,9 +87,10 @@ const CLASSES: &[&str] = &[
 /// Read a RIB file into a network.
 ///
 /// `path` names the input in diagnostics. `types` supplies declared types for decls without
-/// an inline type (RB012/RB006), the RB016 type check and the RB019 unknown-shader check.
-/// Warnings and infos go to `diags`; the first error stops reading and is returned (nothing is
-/// written for a file with errors).
+/// an inline type (RB012/RB006), the RB016 type check and the RB019 unknown-shader check;
+/// it is `Sync` because a large input's parameters are read on two threads. Warnings and
+/// infos go to `diags`; the first error stops reading and is returned (nothing is written
+/// for a file with errors).
 ///
 /// Materials: one per `Bxdf` (named by its `__materialid`, else its handle), `Displace`,
 /// `Light` and `LightFilter` node version (named by handle), with the matching terminal and the
@@ -118,7 +120,7 @@ const CLASSES: &[&str] = &[
 pub fn parse_rib(
     bytes: &[u8],
     path: &str,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     options: &RibOptions,
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
@@ -129,7 +131,7 @@ pub fn parse_rib(
 fn parse_rib_path(
     bytes: &[u8],
     path: &str,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     options: &RibOptions,
     diags: &mut Diagnostics,
     read_path: ReadPath,
@@ -147,21 +149,16 @@ fn parse_rib_path(
         .at(Location::new(file, 1, 1))
         .into());
     }
-    // The reader asks about the type of every parameter of every node.
-    let types = Memo::new(types);
     let mut net = Network::new();
     net.reserve_nodes(node_estimate(bytes.len(), &options.limits));
     let mut asm = Assembler {
         src: bytes,
-        types: &types,
+        types,
         net,
-        decls: HashTable::new(),
-        params: HashTable::new(),
-        shared_values: 0,
         outputs: FxHashMap::default(),
         known: FxHashMap::default(),
     };
-    read_requests(bytes, &file, options, &mut asm, diags, read_path)?;
+    read_requests(bytes, &file, options, types, &mut asm, diags, read_path)?;
     let mut net = asm.net;
     net.check_limits(&options.limits)?;
     add_materials(&mut net);
@@ -195,6 +192,7 @@ fn read_requests(
     bytes: &[u8],
     file: &Arc<str>,
     options: &RibOptions,
+    types: &(dyn ParamTypes + Sync),
     asm: &mut Assembler<'_, '_>,
     diags: &mut Diagnostics,
     path: ReadPath,
@@ -205,14 +203,15 @@ fn read_requests(
             ReadPath::Auto
                 if bytes.len() >= PIPELINE_MIN_BYTES && rayon::current_num_threads() > 1 =>
             {
-                Some(pipeline::MAX_BATCH_REQUESTS)
+                Some((pipeline::MAX_BATCH_REQUESTS, pipeline::Reading::WhenBehind))
             }
             #[cfg(feature = "testkit")]
-            ReadPath::Pipelined(n) => Some(n.max(1)),
+            ReadPath::Pipelined(n) => Some((n.max(1), pipeline::Reading::Alternate)),
             _ => None,
         };
-        if let Some(batch) = batch {
-            if let Some(result) = pipeline::read(bytes, file, options, asm, diags, batch) {
+        if let Some((batch, reading)) = batch {
+            let read = pipeline::read(bytes, file, options, types, asm, diags, batch, reading);
+            if let Some(result) = read {
                 return result;
             }
         }
@@ -220,9 +219,11 @@ fn read_requests(
     #[cfg(not(feature = "parallel"))]
     let _ = path;
     let mut scanner = Scanner::new(bytes, file.clone(), options.strict);
-    // One argument buffer and one occurrence buffer for every request: their room is reused.
+    let mut reader = ParamReader::new(bytes, file.clone(), types);
+    // One buffer of each for every request: their room is reused.
     let mut args = Args::default();
     let mut occurrences = Vec::new();
+    let mut reads = Vec::new();
     loop {
         args.pieces.clear();
         args.items.clear();
@@ -238,6 +239,7 @@ fn read_requests(
             &args.pieces,
             &mut occurrences,
         );
+        reader.read_request(&split, &args.pieces, &args.items, &occurrences, &mut reads);
         asm.shading_request(
             &scanner.lx,
             kind,
@@ -246,6 +248,7 @@ fn read_requests(
             &args.items,
             split,
             &occurrences,
+            reads.drain(..),
             diags,
         )?;
         asm.check_nodes(&scanner.lx, &kw, &options.limits)?;
@@ -259,7 +262,7 @@ fn read_requests(
 fn parse_rib_with(
     bytes: &[u8],
     path: &str,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     options: &RibOptions,
     diags: &mut Diagnostics,
     batch: Option<usize>,
@@ -633,20 +636,6 @@ struct Assembler<'a, 't> {
     src: &'a [u8],
     types: &'t dyn ParamTypes,
     net: Network,
-    /// Declarations read before, per shader and decl token (as written): a scene repeats
-    /// the same few declarations on thousands of nodes, and their parameters share one name
-    /// and one [`Decl`]. Only declarations that were read without a diagnostic are kept, so
-    /// a hit reports nothing, exactly as reading them again would. One table keyed by the
-    /// address of the network's shared shader id and the token's bytes: one hash and one
-    /// comparison of bytes per parameter.
-    decls: HashTable<Remembered<SharedDecl>>,
-    /// Parameters with a short value read before without a diagnostic, per shader (the
-    /// address of its shared id) and text from the decl string to the end of the value: a
-    /// scene repeats the same parameters on thousands of nodes, and such a parameter is read
-    /// with one hash and one comparison of bytes.
-    params: HashTable<Remembered<SharedParam>>,
-    /// How many parameters `params` holds (it stops growing at [`MAX_SHARED_VALUES`]).
-    shared_values: usize,
     /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
     /// a look-up here takes no lock.
     outputs: FxHashMap<Box<str>, Sym>,
@@ -655,81 +644,6 @@ struct Assembler<'a, 't> {
     /// look up than its name.
     known: FxHashMap<usize, bool>,
 }
-
-/// A parameter name and declaration shared by the parameters that repeat a decl token.
-type SharedDecl = (Sym, Arc<Decl>);
-
-/// A parameter name, declaration and value shared by the parameters that repeat a decl and
-/// value text.
-type SharedParam = (Sym, Arc<Decl>, Arc<Value>);
-
-/// An entry of [`Assembler::decls`] or [`Assembler::params`]: the address of the shared
-/// shader id it belongs to (alive until the file is read), the text as written, and what
-/// was read from it.
-struct Remembered<T> {
-    owner: usize,
-    text: Box<[u8]>,
-    /// Its [`remembered_hash`], kept for the table's growth.
-    hash: u64,
-    shared: T,
-}
-
-/// The hash of a text alone: the part of a [`Remembered`] entry's hash that needs no owner,
-/// computed for each parameter occurrence on the tokenizer's thread ([`Occurrence::text`]).
-fn text_hash(text: &[u8]) -> u64 {
-    let mut h = FxHasher::default();
-    h.write(text);
-    h.finish()
-}
-
-/// The hash of an owner's address and a text (given by its [`text_hash`]), for
-/// [`Remembered`] entries.
-fn remembered_hash(owner: usize, text_hash: u64) -> u64 {
-    let mut h = FxHasher::default();
-    h.write_usize(owner);
-    h.write_u64(text_hash);
-    h.finish()
-}
-
-/// The entry of `table` for `owner` and `text` (of hash `hash`, [`text_hash`]), if
-/// remembered.
-fn recall<'t, T>(
-    table: &'t HashTable<Remembered<T>>,
-    owner: usize,
-    text: &[u8],
-    hash: u64,
-) -> Option<&'t T> {
-    table
-        .find(remembered_hash(owner, hash), |e| {
-            e.owner == owner && *e.text == *text
-        })
-        .map(|e| &e.shared)
-}
-
-/// Remember `shared` for `owner` and `text` (of hash `hash`, [`text_hash`]; not
-/// remembered yet).
-fn remember<T>(
-    table: &mut HashTable<Remembered<T>>,
-    owner: usize,
-    text: &[u8],
-    hash: u64,
-    shared: T,
-) {
-    let hash = remembered_hash(owner, hash);
-    let entry = Remembered {
-        owner,
-        text: Box::from(text),
-        hash,
-        shared,
-    };
-    table.insert_unique(hash, entry, |e| e.hash);
-}
-
-/// At most this many distinct values are remembered for sharing while a file is read.
-const MAX_SHARED_VALUES: usize = 1 << 16;
-
-/// Values written in at most this many bytes are remembered for sharing.
-const MAX_SHARED_VALUE_BYTES: usize = 48;
 
 /// Parameters written (decl string to end of value) in at most this many bytes are
 /// remembered for sharing.
@@ -764,19 +678,6 @@ fn index_u32(i: usize) -> u32 {
 fn in_request(start: usize, range: Range<usize>) -> Option<Range<u32>> {
     let at = |b: usize| u32::try_from(b.checked_sub(start)?).ok();
     Some(at(range.start)?..at(range.end)?)
-}
-
-/// A decl and its value as found in a request, before interpretation.
-struct RawParam<'p> {
-    decl_tok: Token,
-    location: At<'p>,
-    value: &'p Piece,
-    /// The request's array elements ([`Args::items`]).
-    arena: &'p [Token],
-    /// The index of this occurrence in the request ([`NodeSource::items`]).
-    origin: u32,
-    /// [`Occurrence::text`].
-    text: Option<(Range<usize>, u64)>,
 }
 
 /// A parameter occurrence of a split request ([`Split::params`]).
@@ -971,7 +872,8 @@ fn split_into<'a>(
 
 impl<'a> Assembler<'a, '_> {
     /// Reads the shading request of keyword `kw`, arguments `pieces` (array elements in
-    /// `arena`) and parts `split` (parameter occurrences in `occurrences`) into the network.
+    /// `arena`) and parts `split` (parameter occurrences in `occurrences`, read as `reads`)
+    /// into the network.
     #[allow(clippy::too_many_arguments)]
     fn shading_request(
         &mut self,
@@ -982,6 +884,7 @@ impl<'a> Assembler<'a, '_> {
         arena: &[Token],
         split: Split<'_>,
         occurrences: &[Occurrence],
+        reads: impl Iterator<Item = Read>,
         diags: &mut Diagnostics,
     ) -> Result<(), Error> {
         let Split {
@@ -1000,52 +903,29 @@ impl<'a> Assembler<'a, '_> {
                 return Err(e);
             }
         }
-        // The network's copy: its address keys the declarations read for this shader.
+        // The network's copy (its address keys [`Assembler::known`]).
         let shader = self.net.shared_shader(&shader);
-        // The parameters remembered before this request, their shared parts cloned one
-        // after the other: each clone is an atomic increment, which waits for every store
-        // before it, and between two parameters' stores it was most of a parameter's time.
-        // (Entries are never changed or removed, so what this finds is what reading the
-        // occurrences in turn would find.)
-        let owner = shader.as_ptr() as usize;
-        // (Filled in place: collected, the list was copied once more.)
-        let mut recalled: SmallVec<[Option<SharedParam>; 16]> = SmallVec::new();
-        recalled.extend(occurrences.iter().map(|o| {
-            let (whole, hash) = o.text.as_ref()?;
-            let text = self.src.get(whole.clone())?;
-            let (name, decl, value) = recall(&self.params, owner, text, *hash)?;
-            Some((*name, decl.clone(), value.clone()))
-        }));
-        // One parameter per occurrence, built in place; the rare later duplicates are taken
-        // out once the request is read.
         let mut params: Vec<Param> = Vec::with_capacity(occurrences.len());
-        for (origin, (o, recalled)) in occurrences.iter().zip(recalled).enumerate() {
-            let at = ParamAt::LineColumn(o.decl_tok.line, o.decl_tok.col);
-            if let Some((name, decl, value)) = recalled {
-                let origin = Some(origin as u32);
-                params.push(Param::from_shared(
-                    name,
-                    Some(value),
-                    Some(decl),
-                    at,
-                    origin,
-                ));
-                continue;
-            }
+        for (origin, (o, read)) in occurrences.iter().zip(reads).enumerate() {
+            diags.extend(read.diags);
+            let (name, decl) = match read.param {
+                ReadParam::Param(param) => {
+                    params.push(param);
+                    continue;
+                }
+                ReadParam::Failed(e) => return Err(e),
+                ReadParam::Reference { name, decl } => (name, decl),
+            };
             let location = At {
                 file: lx.file(),
                 line: o.decl_tok.line,
                 column: o.decl_tok.col,
             };
-            let raw = RawParam {
-                decl_tok: o.decl_tok,
-                location,
-                value: &pieces[o.value],
-                arena,
-                origin: origin as u32,
-                text: o.text.clone(),
-            };
-            self.read_param(&shader, raw, &mut params, diags)?;
+            let toks = value_tokens(&pieces[o.value], arena);
+            let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
+            let at = ParamAt::LineColumn(location.line, location.column);
+            let param = Param::from_shared(name, None, Some(decl), at, Some(origin as u32));
+            params.push(param.with_source_links(links));
         }
         if let Some(e) = error {
             return Err(e);
@@ -1168,85 +1048,6 @@ impl<'a> Assembler<'a, '_> {
         self.net.add_source_edges(id);
     }
 
-    /// Reads one parameter into `params` (built in place there: a parameter returned
-    /// through memory was read back before its stores had landed).
-    fn read_param(
-        &mut self,
-        shader: &Arc<str>,
-        raw: RawParam<'_>,
-        params: &mut Vec<Param>,
-        diags: &mut Diagnostics,
-    ) -> Result<(), Error> {
-        let RawParam {
-            decl_tok,
-            location,
-            value,
-            arena,
-            origin,
-            text,
-        } = raw;
-        let at = ParamAt::LineColumn(location.line, location.column);
-        // The whole parameter as written, when it may have been read before (an earlier
-        // occurrence of this request may have remembered it).
-        let owner = shader.as_ptr() as usize;
-        let whole = text.and_then(|(whole, hash)| Some((self.src.get(whole)?, hash)));
-        if let Some((name, decl, value)) =
-            whole.and_then(|(w, hash)| recall(&self.params, owner, w, hash))
-        {
-            let param = Param::from_shared(
-                *name,
-                Some(value.clone()),
-                Some(decl.clone()),
-                at,
-                Some(origin),
-            );
-            params.push(param);
-            return Ok(());
-        }
-        let (name, decl, remembered) = self.declaration(shader, &decl_tok, &location, diags)?;
-        let toks = value_tokens(value, arena);
-        if decl.reference && toks.iter().all(|t| t.kind == TokKind::Str) {
-            let links = self.read_links(&name, &location, &decl.ty, toks, diags)?;
-            let param = Param::from_shared(name, None, Some(decl), at, Some(origin));
-            params.push(param.with_source_links(links));
-            return Ok(());
-        }
-        if decl.reference {
-            diags.push(
-                Diagnostic::warning(
-                    "RB014",
-                    format!("`reference` parameter `{name}` has numbers instead of `handle:output` strings; kept as a value"),
-                )
-                .at(location.loc()),
-            );
-        }
-        let text = &self.src[value.range()];
-        let elems = self.elems(toks);
-        let before = diags.len();
-        let value = Arc::new(convert_value(&decl.ty, &elems, &name, &location, diags));
-        // Remembered only when reading it again would report nothing (the declaration and
-        // the value read cleanly, and a `reference` with numbers is RB014 each time).
-        if let Some((whole, hash)) = whole.filter(|_| {
-            remembered
-                && !decl.reference
-                && diags.len() == before
-                && text.len() <= MAX_SHARED_VALUE_BYTES
-                && self.shared_values < MAX_SHARED_VALUES
-        }) {
-            self.shared_values += 1;
-            let shared = (name, decl.clone(), value.clone());
-            remember(&mut self.params, owner, whole, hash, shared);
-        }
-        params.push(Param::from_shared(
-            name,
-            Some(value),
-            Some(decl),
-            at,
-            Some(origin),
-        ));
-        Ok(())
-    }
-
     /// Whether the definitions know `shared_shader`, the network's shared id (see
     /// [`Assembler::known`]).
     fn shader_known(&mut self, shared_shader: &Arc<str>) -> bool {
@@ -1267,194 +1068,6 @@ impl<'a> Assembler<'a, '_> {
             self.outputs.insert(Box::from(name), shared);
         }
         shared
-    }
-
-    /// The name and declaration of a parameter from its decl token, and whether they are
-    /// remembered: per shader and token text, when reading them reported nothing (see
-    /// [`Assembler::decls`]).
-    fn declaration(
-        &mut self,
-        shared_shader: &Arc<str>,
-        decl_tok: &Token,
-        location: &At<'_>,
-        diags: &mut Diagnostics,
-    ) -> Result<(Sym, Arc<Decl>, bool), Error> {
-        let raw = &self.src[decl_tok.start..decl_tok.end];
-        let owner = shared_shader.as_ptr() as usize;
-        let hash = text_hash(raw);
-        if let Some((name, decl)) = recall(&self.decls, owner, raw, hash) {
-            return Ok((*name, decl.clone(), true));
-        }
-        let shader: &str = shared_shader;
-        let before = diags.len();
-        let decl_text = decode_string(self.src, decl_tok);
-        let Some(words) = split_decl(&decl_text) else {
-            return Err(Diagnostic::error("RB006", "empty parameter declaration")
-                .at(location.loc())
-                .into());
-        };
-        let name = Sym::new(words.name);
-        if !words.extra.is_empty() {
-            diags.push(
-                Diagnostic::warning(
-                    "RB013",
-                    format!(
-                        "unknown word(s) `{}` in the declaration of `{name}`",
-                        words.extra.join(" ")
-                    ),
-                )
-                .at(location.loc()),
-            );
-        }
-        let (ty, inline_type) = self.decl_type(shader, &words, location, diags)?;
-        let class = words.class.map(str::to_string);
-        let reference = words.reference;
-        let decl = Decl {
-            text: decl_text,
-            class,
-            reference,
-            ty,
-            inline_type,
-        };
-        if inline_type {
-            self.check_definition_type(shader, &name, &decl, location, diags);
-        }
-        let decl = Arc::new(decl);
-        if diags.len() != before {
-            return Ok((name, decl, false));
-        }
-        remember(&mut self.decls, owner, raw, hash, (name, decl.clone()));
-        Ok((name, decl, true))
-    }
-
-    /// The parameter type: inline, or from the definition (RB012), or RB006.
-    fn decl_type(
-        &self,
-        shader: &str,
-        words: &DeclWords<'_>,
-        location: &At<'_>,
-        diags: &mut Diagnostics,
-    ) -> Result<(Type, bool), Error> {
-        let array = match words.array {
-            None => None,
-            Some(n) => match n.parse::<usize>() {
-                Ok(n) => Some(n),
-                Err(_) => {
-                    let word = format!("{}[{n}]", words.type_word.unwrap_or(""));
-                    diags.push(
-                        Diagnostic::warning(
-                            "RB013",
-                            format!("unknown type `{word}` of `{}`", words.name),
-                        )
-                        .at(location.loc()),
-                    );
-                    return Ok((Type::scalar(BaseType::Unknown(word)), true));
-                }
-            },
-        };
-        let Some(word) = words.type_word else {
-            let Some(mut ty) = self.types.input_type(shader, words.name) else {
-                return Err(Diagnostic::error(
-                    "RB006",
-                    format!(
-                        "parameter `{}` has no type and `{shader}` does not declare it",
-                        words.name
-                    ),
-                )
-                .at(location.loc())
-                .into());
-            };
-            diags.push(
-                Diagnostic::warning(
-                    "RB012",
-                    format!(
-                        "parameter `{}` has no inline type; using `{ty}` from `{shader}`",
-                        words.name
-                    ),
-                )
-                .at(location.loc()),
-            );
-            if let (Some(n), ArraySpec::None) = (array, ty.array) {
-                ty.array = ArraySpec::Fixed(n);
-            }
-            return Ok((ty, false));
-        };
-        let Some(mut ty) = rib_base_type(word) else {
-            diags.push(
-                Diagnostic::warning(
-                    "RB013",
-                    format!("unknown type `{word}` of `{}`", words.name),
-                )
-                .at(location.loc()),
-            );
-            return Ok((Type::scalar(BaseType::Unknown(word.to_string())), true));
-        };
-        if let Some(n) = array {
-            if ty.is_array() {
-                let word = format!("{word}[{n}]");
-                diags.push(
-                    Diagnostic::warning(
-                        "RB013",
-                        format!("unknown type `{word}` of `{}`", words.name),
-                    )
-                    .at(location.loc()),
-                );
-                return Ok((Type::scalar(BaseType::Unknown(word)), true));
-            }
-            ty.array = ArraySpec::Fixed(n);
-        }
-        Ok((ty, true))
-    }
-
-    /// RB016: the inline type differs from the definition's (not on input heads).
-    fn check_definition_type(
-        &self,
-        shader: &str,
-        name: &str,
-        decl: &Decl,
-        location: &At<'_>,
-        diags: &mut Diagnostics,
-    ) {
-        if !self.types.has_definitions()
-            || matches!(decl.ty.base, BaseType::Unknown(_))
-            || self.types.is_input_head(shader, name)
-        {
-            return;
-        }
-        let Some(def) = self.types.input_type(shader, name) else {
-            return;
-        };
-        if !types_compatible(&decl.ty, &def) {
-            let what = if decl.reference {
-                "connection"
-            } else {
-                "value"
-            };
-            diags.push(
-                Diagnostic::warning(
-                    "RB016",
-                    format!(
-                        "{what} `{name}` is declared `{}` but `{shader}` declares it `{def}`",
-                        decl.ty
-                    ),
-                )
-                .at(location.loc()),
-            );
-        }
-    }
-
-    /// The elements of a value's tokens.
-    fn elems(&self, toks: &[Token]) -> Elems<'a> {
-        let src: &'a [u8] = self.src;
-        toks.iter()
-            .map(|t| {
-                if t.kind == TokKind::Str {
-                    Elem::Str(decode_str(src, t))
-                } else {
-                    Elem::Num(std::str::from_utf8(&src[t.start..t.end]).unwrap_or("0"))
-                }
-            })
-            .collect()
     }
 
     /// Connections of a `reference` parameter: one `handle:output` string per element, split

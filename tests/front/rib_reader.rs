@@ -31,7 +31,10 @@ fn data(name: &str) -> Vec<u8> {
     std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-fn parse_with(src: &[u8], types: &dyn ParamTypes) -> (Result<Network, Error>, Diagnostics) {
+fn parse_with(
+    src: &[u8],
+    types: &(dyn ParamTypes + Sync),
+) -> (Result<Network, Error>, Diagnostics) {
     let mut d = Diagnostics::new();
     let r = parse_rib(src, "t.rib", types, &RibOptions::default(), &mut d);
     (r, d)
@@ -139,7 +142,7 @@ const CASES: &[(&str, &str, Severity, u32, u32, bool)] = &[
 fn every_rb_code_with_position() {
     let table = defs();
     for &(file, code, severity, line, column, with_defs) in CASES {
-        let types: &dyn ParamTypes = if with_defs { &table } else { &NoDefinitions };
+        let types: &(dyn ParamTypes + Sync) = if with_defs { &table } else { &NoDefinitions };
         let (r, d) = parse_with(&data(file), types);
         let diag = match (&r, severity) {
             (Err(e), Severity::Error) => e.diagnostic().unwrap().clone(),
@@ -162,6 +165,24 @@ fn every_rb_code_with_position() {
             "{file}: {diag}"
         );
     }
+}
+
+/// Each parameter's findings come in its turn, and a connection's (RB018) after its
+/// declaration's (RB013): the order the parameters are written in.
+#[test]
+fn a_parameters_findings_come_in_its_turn() {
+    let src = concat!(
+        "Pattern \"PxrFractal\" \"e\" \"bogus float a\" [1]",
+        " \"odd reference float b\" [\"nowhere:out\"] \"extra int c\" [2]\n",
+    );
+    let (r, d) = parse_with(src.as_bytes(), &NoDefinitions);
+    assert!(r.is_ok(), "{r:?}");
+    assert_eq!(codes(&d), ["RB013", "RB013", "RB018", "RB013"], "{d:?}");
+    let columns: Vec<_> = d
+        .iter()
+        .map(|x| x.location.as_ref().map(|l| l.column))
+        .collect();
+    assert_eq!(columns, [Some(26), Some(46), Some(46), Some(86)]);
 }
 
 #[test]

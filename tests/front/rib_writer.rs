@@ -36,7 +36,7 @@ fn defs() -> Table {
         )
 }
 
-fn read(src: &str, types: &dyn ParamTypes) -> Network {
+fn read(src: &str, types: &(dyn ParamTypes + Sync)) -> Network {
     let mut d = Diagnostics::new();
     parse_rib(
         src.as_bytes(),

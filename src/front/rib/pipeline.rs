@@ -10,12 +10,21 @@
 //! batch; the assembler stops at its own first error (the batches still in the channel are
 //! dropped, and the tokenizer stops at its next send). Emptied batches go back to the
 //! tokenizer, so their room is reused.
+//!
+//! A batch's parameters are read ([`ParamReader`]) by whichever thread has time: the
+//! tokenizer reads them before sending the batch when the assembler is behind (batches
+//! wait in the channel), the assembler otherwise: the thread that would wait does that work
+//! instead, and both stay busy.
 
-use super::{Args, Assembler, Occurrence, Piece, RibOptions, Scanner, Split, Token, split_request};
+use super::{
+    Args, Assembler, Occurrence, ParamReader, Piece, Read, RibOptions, Scanner, Split, Token,
+    split_request,
+};
 use crate::diag::{Diagnostic, Diagnostics, Error};
-use crate::network::RequestKind;
+use crate::network::{ParamTypes, RequestKind};
 use std::ops::Range;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, Sender, SyncSender, channel, sync_channel};
 
 /// Shading requests per batch at most (the bench scene's take about 60 kB of tokens).
@@ -28,6 +37,33 @@ const MAX_BATCH_TOKENS: usize = 16 * 1024;
 /// Batches filled ahead of the assembler at most.
 const IN_FLIGHT: usize = 4;
 
+/// With this many batches waiting for the assembler, the tokenizer reads the parameters of
+/// the next one itself ([`Reading::WhenBehind`]).
+const BEHIND: usize = 2;
+
+/// Which thread reads a batch's parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Reading {
+    /// The tokenizer when [`BEHIND`] batches wait, the assembler otherwise.
+    WhenBehind,
+    /// The tokenizer every other batch (tests: both threads read, whatever their speed).
+    #[cfg(feature = "testkit")]
+    Alternate,
+}
+
+impl Reading {
+    /// Whether the tokenizer reads the parameters of its batch number `sent` (from 0), with
+    /// `waiting` batches waiting for the assembler.
+    #[cfg_attr(not(feature = "testkit"), allow(unused_variables))]
+    fn by_tokenizer(self, sent: usize, waiting: usize) -> bool {
+        match self {
+            Reading::WhenBehind => waiting >= BEHIND,
+            #[cfg(feature = "testkit")]
+            Reading::Alternate => sent % 2 == 1,
+        }
+    }
+}
+
 /// One shading request of a batch.
 struct Request<'a> {
     kind: RequestKind,
@@ -39,6 +75,8 @@ struct Request<'a> {
     /// How many of the batch's diagnostics were reported before the request was assembled
     /// (while reading it or earlier).
     diags: usize,
+    /// How many of the batch's [`Batch::reads`] are its own, once they are read.
+    reads: usize,
 }
 
 /// Consecutive shading requests, their arguments, and what ended the input if it ended.
@@ -49,30 +87,54 @@ struct Batch<'a> {
     occurrences: Vec<Occurrence>,
     requests: Vec<Request<'a>>,
     diags: Vec<Diagnostic>,
+    /// The parameter occurrences of its requests as read, in order, once `read` is set.
+    reads: Vec<Read>,
+    /// Whether its parameters were read (by the tokenizer).
+    read: bool,
     /// The end of the input (`Ok`) or the tokenizer's error, after the requests.
     end: Option<Result<(), Error>>,
 }
 
 /// Reads the requests of `bytes` into `asm` on two threads, in batches of at most `batch`
 /// requests. `None` when no thread could be started (nothing was read then).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn read(
     bytes: &[u8],
     file: &Arc<str>,
     options: &RibOptions,
+    types: &(dyn ParamTypes + Sync),
     asm: &mut Assembler<'_, '_>,
     diags: &mut Diagnostics,
     batch: usize,
+    reading: Reading,
 ) -> Option<Result<(), Error>> {
     let (full_tx, full_rx) = sync_channel::<Batch<'_>>(IN_FLIGHT);
     let (free_tx, free_rx) = channel::<Batch<'_>>();
     let strict = options.strict;
+    let waiting = AtomicUsize::new(0);
     std::thread::scope(|s| {
         let scanner = Scanner::new(bytes, file.clone(), strict);
+        let tokenizer_file = file.clone();
+        let waiting = &waiting;
         let tokenizer = std::thread::Builder::new()
             .name("rib-tokenizer".into())
-            .spawn_scoped(s, move || tokenize(scanner, batch, &full_tx, &free_rx))
+            .spawn_scoped(s, move || {
+                // Built here: what it remembers is this thread's alone.
+                let reader = ParamReader::new(bytes, tokenizer_file, types);
+                let tokenizer = Tokenizer {
+                    scanner,
+                    reader,
+                    max_requests: batch,
+                    reading,
+                    waiting,
+                };
+                tokenizer.run(&full_tx, &free_rx)
+            })
             .ok()?;
-        let result = assemble(bytes, file, options, asm, diags, full_rx, &free_tx);
+        let reader = ParamReader::new(bytes, file.clone(), types);
+        let result = assemble(
+            reader, file, options, asm, diags, full_rx, &free_tx, waiting,
+        );
         if let Err(panic) = tokenizer.join() {
             std::panic::resume_unwind(panic);
         }
@@ -80,19 +142,40 @@ pub(super) fn read(
     })
 }
 
-/// The tokenizer's thread: fills batches until the end of the input or an error, or until
-/// the assembler stops.
-fn tokenize<'a>(
-    mut scanner: Scanner<'a>,
+/// The tokenizer's thread and what it reads with.
+struct Tokenizer<'a, 't, 'w> {
+    scanner: Scanner<'a>,
+    reader: ParamReader<'a, 't>,
     max_requests: usize,
-    full: &SyncSender<Batch<'a>>,
-    free: &Receiver<Batch<'a>>,
-) {
-    loop {
-        let mut batch = free.try_recv().unwrap_or_default();
+    reading: Reading,
+    /// Batches sent and not yet taken by the assembler.
+    waiting: &'w AtomicUsize,
+}
+
+impl<'a> Tokenizer<'a, '_, '_> {
+    /// Fills batches until the end of the input or an error, or until the assembler stops.
+    fn run(mut self, full: &SyncSender<Batch<'a>>, free: &Receiver<Batch<'a>>) {
+        for sent in 0usize.. {
+            let mut batch = free.try_recv().unwrap_or_default();
+            self.fill(&mut batch);
+            let waiting = self.waiting.load(Ordering::Relaxed);
+            if self.reading.by_tokenizer(sent, waiting) {
+                read_batch(&mut self.reader, &mut batch);
+            }
+            let last = batch.end.is_some();
+            self.waiting.fetch_add(1, Ordering::Relaxed);
+            if full.send(batch).is_err() || last {
+                return;
+            }
+        }
+    }
+
+    /// Fills `batch` with requests up to its bounds, the end of the input or an error.
+    fn fill(&mut self, batch: &mut Batch<'a>) {
+        let scanner = &mut self.scanner;
         let mut diags = Diagnostics::new();
         while batch.end.is_none()
-            && batch.requests.len() < max_requests
+            && batch.requests.len() < self.max_requests
             && batch.args.pieces.len() + batch.args.items.len() < MAX_BATCH_TOKENS
         {
             let from = batch.args.pieces.len();
@@ -113,6 +196,7 @@ fn tokenize<'a>(
                         split,
                         pieces,
                         diags: diags.len(),
+                        reads: 0,
                     });
                 }
                 Ok(None) => batch.end = Some(Ok(())),
@@ -120,29 +204,46 @@ fn tokenize<'a>(
             }
         }
         batch.diags = diags.into_vec();
-        let last = batch.end.is_some();
-        if full.send(batch).is_err() || last {
-            return;
-        }
     }
+}
+
+/// Reads the parameters of every request of `batch` with `reader`.
+fn read_batch(reader: &mut ParamReader<'_, '_>, batch: &mut Batch<'_>) {
+    for r in &mut batch.requests {
+        r.reads = reader.read_request(
+            &r.split,
+            &batch.args.pieces[r.pieces.clone()],
+            &batch.args.items,
+            &batch.occurrences,
+            &mut batch.reads,
+        );
+    }
+    batch.read = true;
 }
 
 /// The calling thread: assembles the requests of each batch in turn, pushing the
 /// tokenizer's diagnostics where the one-thread reader does.
+#[allow(clippy::too_many_arguments)]
 fn assemble<'a>(
-    bytes: &'a [u8],
+    mut reader: ParamReader<'a, '_>,
     file: &Arc<str>,
     options: &RibOptions,
     asm: &mut Assembler<'_, '_>,
     diags: &mut Diagnostics,
     full: Receiver<Batch<'a>>,
     free: &Sender<Batch<'a>>,
+    waiting: &AtomicUsize,
 ) -> Result<(), Error> {
     // Only for positions: the tokens were read by the tokenizer's own.
-    let positions = Scanner::new(bytes, file.clone(), options.strict).lx;
+    let positions = Scanner::new(asm.src, file.clone(), options.strict).lx;
     for mut batch in full {
+        waiting.fetch_sub(1, Ordering::Relaxed);
+        if !batch.read {
+            read_batch(&mut reader, &mut batch);
+        }
         let mut lexed = std::mem::take(&mut batch.diags).into_iter();
         let mut pushed = 0;
+        let mut reads = batch.reads.drain(..);
         for r in batch.requests.drain(..) {
             diags.extend(lexed.by_ref().take(r.diags - pushed));
             pushed = r.diags;
@@ -155,10 +256,12 @@ fn assemble<'a>(
                 &batch.args.items,
                 r.split,
                 &batch.occurrences,
+                reads.by_ref().take(r.reads),
                 diags,
             )?;
             asm.check_nodes(&positions, &r.keyword, &options.limits)?;
         }
+        drop(reads);
         diags.extend(lexed);
         if let Some(end) = batch.end.take() {
             return end;
@@ -166,6 +269,7 @@ fn assemble<'a>(
         batch.args.pieces.clear();
         batch.args.items.clear();
         batch.occurrences.clear();
+        batch.read = false;
         // The tokenizer may have stopped already: then the batch is dropped.
         let _ = free.send(batch);
     }

@@ -195,8 +195,8 @@ fn read_outcome(src: &[u8], options: &RibOptions, batch: Option<usize>) -> Strin
 
 /// A scene of `materials` layered materials with findings of every stage of the reader
 /// between them: the tokenizer's (RB011), the pass-through requests' (RB020), the
-/// declarations' and values' (RB013, RB014), the request's (RB015) and the handles' (RB017),
-/// and comments inside and between requests.
+/// declarations' and values' (RB013, RB014), the connections' (RB018), the request's (RB015)
+/// and the handles' (RB017), and comments inside and between requests.
 fn scene_with_findings(materials: usize) -> String {
     let scene = vstructc::network::testgen::layered_scene(materials);
     let mut out = String::new();
@@ -211,6 +211,10 @@ fn scene_with_findings(materials: usize) -> String {
             ),
             41 => out.push_str("Pattern \"PxrFractal\" \"d\" \"float a\" [1] \"float a\" [2]\n"),
             53 => out.push_str("# a comment between requests\nSphere 1 -1 1 360\n"),
+            // The parameters' findings (RB013) on both sides of a connection's (RB018).
+            71 => out.push_str(
+                "Pattern \"PxrFractal\" \"e\" \"bogus float a\" [1] \"reference float b\" [\"nowhere:out\"] \"odd int c\" [2]\n",
+            ),
             _ => {}
         }
     }
@@ -219,7 +223,9 @@ fn scene_with_findings(materials: usize) -> String {
 
 /// The reader pipelined on two threads, in batches of any size, gives what it gives on one:
 /// the same network, the same diagnostics in the same order with the same positions, the
-/// same error (the tokenizer's or the assembler's, wherever it falls among the batches).
+/// same error (the tokenizer's, a parameter's or the assembler's, wherever it falls among
+/// the batches). Here the tokenizer reads the parameters of every other batch and the
+/// assembler those of the rest, so both threads' parameter reading is compared.
 #[test]
 fn pipelined_reading_is_the_one_thread_reading() {
     let mut inputs: Vec<(String, Vec<u8>)> = Vec::new();
@@ -242,6 +248,14 @@ fn pipelined_reading_is_the_one_thread_reading() {
     let mut middle = scene.clone();
     middle.insert_str(cut + 1, "Pattern \"PxrFractal\"\n");
     inputs.push(("middle RB004".into(), middle.into_bytes()));
+    // A parameter's error (RB006: no type, and the shader does not declare it) in the
+    // middle, after findings of the same request.
+    let mut middle = scene.clone();
+    middle.insert_str(
+        cut + 1,
+        "Pattern \"PxrFractal\" \"f\" \"bogus float a\" [1] \"undeclared\" [1]\n",
+    );
+    inputs.push(("middle RB006".into(), middle.into_bytes()));
     let strict = RibOptions {
         strict: true,
         ..RibOptions::default()
