@@ -36,7 +36,7 @@ mod params;
 mod pipeline;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-use crate::limits::{Limit, Limits};
+use crate::limits::{Limit, LimitExceeded, Limits};
 use crate::network::{
     Link, Links, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamAt,
     ParamTypes, RequestKind, SourceParam, Sym, Terminal,
@@ -157,10 +157,19 @@ fn parse_rib_path(
         net,
         outputs: FxHashMap::default(),
         known: FxHashMap::default(),
+        limits: options.limits,
+        over_limit: None,
     };
     read_requests(bytes, &file, options, types, &mut asm, diags, read_path)?;
     let mut net = asm.net;
-    net.check_limits(&options.limits)?;
+    // What `Network::check_limits` finds, without another walk over the network: the nodes
+    // were counted while reading, and each node was checked as it was added.
+    options
+        .limits
+        .check(Limit::Nodes, net.node_count() as u64)?;
+    if let Some(e) = asm.over_limit {
+        return Err(e.into());
+    }
     add_materials(&mut net);
     Ok(net)
 }
@@ -643,6 +652,10 @@ struct Assembler<'a, 't> {
     /// the file is read): asked once per request, and a shader's address is quicker to
     /// look up than its name.
     known: FxHashMap<usize, bool>,
+    limits: Limits,
+    /// The first node, in order, beyond a bound on its parameters or an input's
+    /// connections: reported once the whole file is read, as a check of the network would.
+    over_limit: Option<LimitExceeded>,
 }
 
 /// Parameters written (decl string to end of value) in at most this many bytes are
@@ -1046,6 +1059,10 @@ impl<'a> Assembler<'a, '_> {
         node.set_origin(Some(location), Some(source));
         let id = self.net.insert_node(node);
         self.net.add_source_edges(id);
+        if self.over_limit.is_none() {
+            // Checked while its parameters are still in the cache.
+            self.over_limit = self.net.check_node_limits(id, &self.limits).err();
+        }
     }
 
     /// Whether the definitions know `shared_shader`, the network's shared id (see

@@ -97,6 +97,34 @@ fn the_rib_reader_applies_every_network_bound() {
     assert_eq!(e.value, text.len() as u64);
 }
 
+/// A node beyond a bound is reported once the whole file is read, as a check of the network
+/// reports it: of two such nodes the first, and an error later in the file instead (reading
+/// stops there).
+#[test]
+fn the_rib_reader_reports_the_first_node_beyond_a_bound_once_read() {
+    let limits = Limits {
+        params_per_node: 1,
+        ..Limits::default()
+    };
+    let two = concat!(
+        "Pattern \"P\" \"a\"\n",
+        "Pattern \"P\" \"b\" \"float x\" [1] \"float y\" [2]\n",
+        "Pattern \"P\" \"c\" \"float x\" [1] \"float y\" [2] \"float z\" [3]\n",
+    );
+    let e = exceeded(read_rib(two, limits));
+    assert_eq!((e.limit, e.value), (Limit::ParamsPerNode, 2));
+    assert_eq!(e.location.as_ref().map(|l| l.line), Some(2));
+    let net = read_rib(two, Limits::default()).unwrap();
+    assert_eq!(
+        net.check_limits(&limits).map_err(|e| (e.value, e.location)),
+        Err((2, e.location))
+    );
+    match read_rib(&format!("{two}]\n"), limits) {
+        Err(Error::Input(d)) => assert_eq!(d.code.as_str(), "RB004"),
+        other => panic!("expected the later RB004, got {other:?}"),
+    }
+}
+
 #[test]
 fn the_json_reader_applies_the_network_bounds() {
     let text = r#"{ "vstructcNetwork": 1, "materials": { "M": {
