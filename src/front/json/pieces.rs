@@ -41,6 +41,21 @@ pub(super) const PIECE_BYTES: usize = 256 * 1024;
 /// scene, more than the one that crosses the end.
 const SCAN_MARGIN: usize = 64 * 1024;
 
+/// Bytes of JSON per node assumed when room for the nodes is reserved: a node of the bench
+/// scene takes about 1 KB as the writer lays it out, and a terser file outgrows the room
+/// only by a doubling or two.
+const BYTES_PER_NODE: usize = 512;
+
+/// Nodes reserved at most before reading (about 64 MB of address space, touched only as
+/// nodes fill it).
+const MAX_RESERVED_NODES: usize = 1 << 18;
+
+/// How many nodes to reserve room for before reading `len` bytes in pieces: adding nodes
+/// to full tables copied every node again at each doubling.
+fn node_estimate(len: usize) -> usize {
+    (len / BYTES_PER_NODE).min(MAX_RESERVED_NODES)
+}
+
 /// Value trees nested deeper than this within a material send the document to the
 /// one-thread reader: serde_json's nesting limit counts the levels above the material too.
 const MAX_DEPTH: u32 = 64;
@@ -98,9 +113,11 @@ pub(super) fn read(
         .copied()
         .chain(std::iter::once(usize::MAX))
         .collect();
+    let mut net = Network::new();
+    net.reserve_nodes(node_estimate(text.len()));
     let mut asm = Assembler {
         text,
-        net: Network::new(),
+        net,
         found: Vec::new(),
         main: Reader::new(file.clone(), Some(types), None),
         names: FxHashSet::default(),
