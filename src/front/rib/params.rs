@@ -10,6 +10,7 @@
 //! (an occurrence read before without a diagnostic is read again identically), and the
 //! diagnostics of each occurrence travel with it ([`Read::diags`]).
 
+use super::lexer::{TokKind, Token, decode_str, decode_string};
 use super::{
     At, DeclWords, Elem, Elems, Occurrence, Piece, Split, convert_value, rib_base_type, split_decl,
     types_compatible, value_tokens,
@@ -22,8 +23,6 @@ use rustc_hash::{FxHashMap, FxHasher};
 use smallvec::SmallVec;
 use std::hash::Hasher;
 use std::sync::Arc;
-
-use super::lexer::{TokKind, Token, decode_str, decode_string};
 
 /// At most this many distinct values are remembered for sharing while a file is read.
 pub(super) const MAX_SHARED_VALUES: usize = 1 << 16;
@@ -45,7 +44,9 @@ pub(super) enum ReadParam {
 /// One parameter occurrence as read, with the diagnostics reading it reported (most have
 /// none, and an empty list costs no allocation).
 pub(super) struct Read {
+    /// What was read.
     pub param: ReadParam,
+    /// What reading it reported, in order.
     pub diags: Vec<Diagnostic>,
 }
 
@@ -391,14 +392,7 @@ impl<'a> Tables<'a, '_> {
                 Ok(n) => Some(n),
                 Err(_) => {
                     let word = format!("{}[{n}]", words.type_word.unwrap_or(""));
-                    diags.push(
-                        Diagnostic::warning(
-                            "RB013",
-                            format!("unknown type `{word}` of `{}`", words.name),
-                        )
-                        .at(location.loc()),
-                    );
-                    return Ok((Type::scalar(BaseType::Unknown(word)), true));
+                    return Ok(unknown_type(word, words.name, location, diags));
                 }
             },
         };
@@ -430,26 +424,12 @@ impl<'a> Tables<'a, '_> {
             return Ok((ty, false));
         };
         let Some(mut ty) = rib_base_type(word) else {
-            diags.push(
-                Diagnostic::warning(
-                    "RB013",
-                    format!("unknown type `{word}` of `{}`", words.name),
-                )
-                .at(location.loc()),
-            );
-            return Ok((Type::scalar(BaseType::Unknown(word.to_string())), true));
+            return Ok(unknown_type(word.to_string(), words.name, location, diags));
         };
         if let Some(n) = array {
             if ty.is_array() {
                 let word = format!("{word}[{n}]");
-                diags.push(
-                    Diagnostic::warning(
-                        "RB013",
-                        format!("unknown type `{word}` of `{}`", words.name),
-                    )
-                    .at(location.loc()),
-                );
-                return Ok((Type::scalar(BaseType::Unknown(word)), true));
+                return Ok(unknown_type(word, words.name, location, diags));
             }
             ty.array = ArraySpec::Fixed(n);
         }
@@ -506,4 +486,19 @@ impl<'a> Tables<'a, '_> {
             })
             .collect()
     }
+}
+
+/// RB013 for the type `word` of parameter `name`, which RIB does not know: the parameter
+/// keeps it as written (an inline type).
+fn unknown_type(
+    word: String,
+    name: &str,
+    location: &At<'_>,
+    diags: &mut Diagnostics,
+) -> (Type, bool) {
+    diags.push(
+        Diagnostic::warning("RB013", format!("unknown type `{word}` of `{name}`"))
+            .at(location.loc()),
+    );
+    (Type::scalar(BaseType::Unknown(word)), true)
 }
