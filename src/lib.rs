@@ -122,6 +122,9 @@ fn make_in_order<T: Send>(
             });
         }
         drop(tx);
+        // Owned here, so that a panic of `take` drops it before the scope waits for the
+        // helpers: their next send fails and they stop.
+        let rx = rx;
         let mut early: Vec<Option<Vec<T>>> = Vec::new();
         let mut want = 0;
         while want < pieces {

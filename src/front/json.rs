@@ -781,7 +781,7 @@ struct NodeState<'de> {
     found: Vec<(u8, usize, Found)>,
 }
 
-impl NodeState<'_> {
+impl<'de> NodeState<'de> {
     /// Ready for the next node (keeping the buffers).
     fn reset(&mut self) {
         self.shader = None;
@@ -822,6 +822,23 @@ impl NodeState<'_> {
             }
         }
         fresh
+    }
+
+    /// A key's first sighting among the node's `inputConnections`: its index, with no
+    /// connections yet (none if a duplicate).
+    fn add_input(&mut self, input: Cow<'de, str>) -> Option<usize> {
+        let fresh = if self.inputs.len() < SeenKeys::SCAN {
+            !self.inputs.iter().any(|(k, _)| *k == input)
+        } else {
+            if self.input_names.is_empty() {
+                self.input_names = self.inputs.iter().map(|(k, _)| k.clone()).collect();
+            }
+            self.input_names.insert(input.clone())
+        };
+        fresh.then(|| {
+            self.inputs.push((input, Vec::new()));
+            self.inputs.len() - 1
+        })
     }
 
     /// The index of the parameter `name`, if `parameters` gives it.
@@ -1054,19 +1071,9 @@ impl<'de> Visitor<'de> for InputsSeed<'_, '_, '_, 'de, '_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, n, pointer) = (self.r, self.n, self.pointer);
         while let Some(input) = map.next_key_seed(Key)? {
-            let fresh = if n.inputs.len() < SeenKeys::SCAN {
-                !n.inputs.iter().any(|(k, _)| *k == input)
-            } else {
-                if n.input_names.is_empty() {
-                    n.input_names = n.inputs.iter().map(|(k, _)| k.clone()).collect();
-                }
-                n.input_names.insert(input.clone())
-            };
-            if !fresh {
+            let Some(index) = n.add_input(input.clone()) else {
                 return Err(r.ctx.duplicate_key(&input));
-            }
-            let index = n.inputs.len();
-            n.inputs.push((input.clone(), Vec::new()));
+            };
             let p = P::Key(pointer, &input);
             let read = map.next_value_seed(ConnsSeed {
                 r: &mut *r,
@@ -1948,15 +1955,12 @@ impl<'t> Reader<'t> {
         }
         // A node's kind comes from the first terminal naming it (the earlier ones scanned
         // while they are few).
-        let mut named: FxHashSet<&str> = Default::default();
+        let mut named = SeenKeys::default();
         let mut kinds = Vec::with_capacity(terms.len());
-        for (i, (t, c)) in terms.iter().enumerate() {
-            let first = if terms.len() <= SeenKeys::SCAN {
-                !terms[..i].iter().any(|(_, d)| d.node == c.node)
-            } else {
-                named.insert(&c.node)
-            };
-            if first && let Some(&Some(id)) = m.by_name.get(&*c.node) {
+        for (t, c) in &terms {
+            if named.insert(Cow::Borrowed(&c.node))
+                && let Some(&Some(id)) = m.by_name.get(&*c.node)
+            {
                 kinds.push((id, RequestKind::from_terminal_name(t)));
             }
         }

@@ -150,7 +150,7 @@ fn parse_rib_path(
         .into());
     }
     let mut net = Network::new();
-    net.reserve_nodes(node_estimate(bytes.len(), &options.limits));
+    net.reserve_for_input(bytes.len(), BYTES_PER_NODE, options.limits.nodes);
     let mut asm = Assembler {
         src: bytes,
         types,
@@ -363,15 +363,6 @@ impl<'a> Scanner<'a> {
 /// networks rarely outgrows the estimate, and one that is mostly geometry reserves address
 /// space it never touches.
 const BYTES_PER_NODE: usize = 256;
-
-/// Nodes reserved at most before reading (about 64 MB of address space).
-const MAX_RESERVED_NODES: usize = 1 << 18;
-
-/// How many nodes to reserve room for before reading `len` bytes.
-fn node_estimate(len: usize, limits: &Limits) -> usize {
-    let cap = usize::try_from(limits.nodes).unwrap_or(usize::MAX);
-    (len / BYTES_PER_NODE).min(MAX_RESERVED_NODES).min(cap)
-}
 
 fn describe(t: &Token) -> &'static str {
     match t.kind {

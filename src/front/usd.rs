@@ -593,7 +593,7 @@ impl<'a> Reader<'a> {
 /// `openusd`'s `Path::split_property` splits it; the usual `/…/prim.name` (no variant
 /// selection, target or second dot in its last element) is split here without copying.
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
-pub(crate) fn split_property(path: &sdf::Path) -> Option<(std::borrow::Cow<'_, str>, &str)> {
+pub(crate) fn split_property(path: &sdf::Path) -> Option<(Cow<'_, str>, &str)> {
     let text = path.as_str();
     let bytes = text.as_bytes();
     let slash = bytes.iter().rposition(|&b| b == b'/');
@@ -616,10 +616,10 @@ pub(crate) fn split_property(path: &sdf::Path) -> Option<(std::borrow::Cow<'_, s
                     .all(|c| c.is_alphanumeric() || c == '_' || c == ':')
             };
         let prim = &text[..slash + 1 + dot];
-        return named.then_some((std::borrow::Cow::Borrowed(prim), property));
+        return named.then_some((Cow::Borrowed(prim), property));
     }
     let (prim, property) = path.split_property()?;
-    Some((std::borrow::Cow::Owned(prim.as_str().to_string()), property))
+    Some((Cow::Owned(prim.as_str().to_string()), property))
 }
 
 /// A token or string value as text; nothing for another value, none or an error.
@@ -1461,11 +1461,9 @@ impl CrateLayer {
                 .tokens
                 .get(rep.low() as usize)
                 .map(|t| sdf::Value::Token(t.clone())),
-            (CRATE_TOKEN, true, false) => self.token_array(at).map(sdf::Value::TokenVec),
-            (CRATE_TOKEN_VECTOR, false, false) => {
-                let count = le_size(&self.bytes, at)?;
-                self.token_indices(at.checked_add(8)?, count)
-                    .map(sdf::Value::TokenVec)
+            (CRATE_TOKEN, true, false) | (CRATE_TOKEN_VECTOR, false, false) => {
+                let tokens = self.token_list(rep)?.map(|t| t.cloned());
+                tokens.collect::<Option<_>>().map(sdf::Value::TokenVec)
             }
             (CRATE_STRING, false, true) => {
                 let token = self.strings.get(rep.low() as usize)?;
@@ -1534,19 +1532,32 @@ impl CrateLayer {
         Some(op)
     }
 
-    /// The array of tokens stored at `at`: its header (before 0.5.0 a 32-bit shape, then
-    /// the count, 32-bit before 0.7.0, else 64-bit) and one 32-bit token index per element;
-    /// nothing when any of it lies outside the file or names no token.
-    fn token_array(&self, at: usize) -> Option<Vec<openusd::tf::Token>> {
-        if at == 0 {
-            return Some(Vec::new());
-        }
-        let (pos, count) = self.token_array_span(at)?;
-        self.token_indices(pos, count)
+    /// The tokens of a list of tokens at `rep`, an array of tokens (its header: before
+    /// 0.5.0 a 32-bit shape, then the count, 32-bit before 0.7.0, else 64-bit) or a token
+    /// vector (a 64-bit count), each from its 32-bit index (none for an index that names no
+    /// token); nothing for another value or when the indices lie outside the file.
+    fn token_list(
+        &self,
+        rep: Rep,
+    ) -> Option<impl Iterator<Item = Option<&openusd::tf::Token>> + '_> {
+        let at = usize::try_from(rep.payload()).ok()?;
+        let (pos, count) = match (rep.ty(), rep.is_array(), rep.is_inlined()) {
+            (CRATE_TOKEN, true, false) if at == 0 => (0, 0),
+            (CRATE_TOKEN, true, false) => self.token_array_span(at)?,
+            (CRATE_TOKEN_VECTOR, false, false) => (at.checked_add(8)?, le_size(&self.bytes, at)?),
+            _ => return None,
+        };
+        let items = self
+            .bytes
+            .get(pos..pos.checked_add(count.checked_mul(4)?)?)?;
+        Some(items.chunks_exact(4).map(|c| {
+            let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
+            self.tokens.get(i)
+        }))
     }
 
     /// Where the token indices of the array of tokens at `at` (not 0) start, and how many
-    /// there are (see [`CrateLayer::token_array`]).
+    /// there are (see [`CrateLayer::token_list`]).
     fn token_array_span(&self, at: usize) -> Option<(usize, usize)> {
         let mut pos = at;
         if !self.v05 {
@@ -1565,43 +1576,15 @@ impl CrateLayer {
     }
 
     /// The texts of the tokens of field `field` when [`CrateLayer::own_value`] decodes it
-    /// as a list of tokens (an array of tokens or a token vector), borrowed from the file's
-    /// tokens; nothing for anything else (then the field is read as a value).
+    /// as a list of tokens, borrowed from the file's tokens; nothing for anything else
+    /// (then the field is read as a value).
     fn own_token_texts(&self, field: usize) -> Option<Vec<&str>> {
         let rep = Rep(self.fields.get(field)?.1);
         if rep.is_compressed() {
             return None;
         }
-        let at = usize::try_from(rep.payload()).ok()?;
-        let (pos, count) = match (rep.ty(), rep.is_array(), rep.is_inlined()) {
-            (CRATE_TOKEN, true, false) if at == 0 => return Some(Vec::new()),
-            (CRATE_TOKEN, true, false) => self.token_array_span(at)?,
-            (CRATE_TOKEN_VECTOR, false, false) => (at.checked_add(8)?, le_size(&self.bytes, at)?),
-            _ => return None,
-        };
-        let items = self
-            .bytes
-            .get(pos..pos.checked_add(count.checked_mul(4)?)?)?;
-        items
-            .chunks_exact(4)
-            .map(|c| {
-                let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
-                self.tokens.get(i).map(|t| t.as_str())
-            })
-            .collect()
-    }
-
-    /// The `count` tokens whose 32-bit indices start at byte `at`; nothing when any lies
-    /// outside the file or names no token.
-    fn token_indices(&self, at: usize, count: usize) -> Option<Vec<openusd::tf::Token>> {
-        let items = self.bytes.get(at..at.checked_add(count.checked_mul(4)?)?)?;
-        items
-            .chunks_exact(4)
-            .map(|c| {
-                let i = u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize;
-                self.tokens.get(i).cloned()
-            })
-            .collect()
+        let texts = self.token_list(rep)?.map(|t| t.map(|t| t.as_str()));
+        texts.collect()
     }
 
     /// The value of field `field` (the field `name` of the spec at `path`): decoded here,
@@ -1664,13 +1647,18 @@ impl CrateLayer {
         path: &sdf::Path,
         name: &str,
     ) -> FieldRead<'static> {
-        let Some(token) = token else {
-            return Ok(None);
-        };
-        match self.set_fields(start).find(|&(_, t)| t == token) {
-            Some((i, _)) => self.read_field(i, path, name),
+        match self.field_index(start, token) {
+            Some(i) => self.read_field(i, path, name),
             None => Ok(None),
         }
+    }
+
+    /// The index of the first field of the field set at `start` named by token `token`.
+    fn field_index(&self, start: usize, token: Option<usize>) -> Option<usize> {
+        let token = token?;
+        self.set_fields(start)
+            .find(|&(_, t)| t == token)
+            .map(|(i, _)| i)
     }
 
     /// What the reader reads of the attribute spec at `path` whose field set starts at
@@ -1799,15 +1787,14 @@ impl CrateLayer {
             return Vec::new();
         };
         // The property names, borrowed from the file's tokens when decoded here.
-        let field = self.prim_fields[2]
-            .and_then(|token| self.set_fields(start).find(|&(_, t)| t == token))
-            .map(|(i, _)| i);
+        let field = self.field_index(start, self.prim_fields[2]);
         let read;
         let names: Vec<&str> = match field.and_then(|i| self.own_token_texts(i)) {
             Some(names) => names,
             None => {
-                read =
-                    tokens_of(self.field_in(start, self.prim_fields[2], path, "propertyChildren"));
+                let value =
+                    field.map_or(Ok(None), |i| self.read_field(i, path, "propertyChildren"));
+                read = tokens_of(value);
                 read.iter().map(|t| t.as_str()).collect()
             }
         };

@@ -1086,6 +1086,10 @@ pub struct Material {
     pub location: Option<Location>,
 }
 
+/// Nodes reserved at most before an input is read ([`Network::reserve_for_input`]; about
+/// 64 MB of address space).
+const MAX_RESERVED_NODES: usize = 1 << 18;
+
 /// A shader network: nodes and connections on a petgraph [`StableDiGraph`], plus materials.
 ///
 /// Nodes are never removed, so [`NodeId`]s stay valid. Methods taking a `NodeId` panic if it
@@ -1212,11 +1216,17 @@ impl Network {
         }
     }
 
-    /// Room for `nodes` more nodes and as many edges (crate-internal: readers that can
-    /// estimate them). The tables then fill in place: growing them by doubling copied every
-    /// node several times and touched twice the memory. Room that stays unused is address
-    /// space, not memory, until something is written there.
-    pub(crate) fn reserve_nodes(&mut self, nodes: usize) {
+    /// Room for the nodes of an input of `len` bytes whose nodes take about
+    /// `bytes_per_node` bytes each, and as many edges, for at most `max_nodes` nodes and
+    /// [`MAX_RESERVED_NODES`] (crate-internal: readers). The tables then fill in place:
+    /// growing them by doubling copied every node several times and touched twice the
+    /// memory. Room that stays unused is address space, not memory, until something is
+    /// written there.
+    pub(crate) fn reserve_for_input(&mut self, len: usize, bytes_per_node: usize, max_nodes: u64) {
+        let cap = usize::try_from(max_nodes).unwrap_or(usize::MAX);
+        let nodes = (len / bytes_per_node.max(1))
+            .min(MAX_RESERVED_NODES)
+            .min(cap);
         self.graph.reserve_nodes(nodes);
         self.graph.reserve_edges(nodes);
     }

@@ -46,16 +46,6 @@ const SCAN_MARGIN: usize = 64 * 1024;
 /// only by a doubling or two.
 const BYTES_PER_NODE: usize = 512;
 
-/// Nodes reserved at most before reading (about 64 MB of address space, touched only as
-/// nodes fill it).
-const MAX_RESERVED_NODES: usize = 1 << 18;
-
-/// How many nodes to reserve room for before reading `len` bytes in pieces: adding nodes
-/// to full tables copied every node again at each doubling.
-fn node_estimate(len: usize) -> usize {
-    (len / BYTES_PER_NODE).min(MAX_RESERVED_NODES)
-}
-
 /// Value trees nested deeper than this within a material send the document to the
 /// one-thread reader: serde_json's nesting limit counts the levels above the material too.
 const MAX_DEPTH: u32 = 64;
@@ -114,7 +104,7 @@ pub(super) fn read(
         .chain(std::iter::once(usize::MAX))
         .collect();
     let mut net = Network::new();
-    net.reserve_nodes(node_estimate(text.len()));
+    net.reserve_for_input(text.len(), BYTES_PER_NODE, u64::MAX);
     let mut asm = Assembler {
         text,
         net,

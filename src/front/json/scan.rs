@@ -476,7 +476,7 @@ impl<'de> Scan<'de> {
             match slot {
                 0 => n.shader = Some(Cow::Borrowed(self.string()?)),
                 1 => self.parameters(r, n)?,
-                _ => self.inputs(r, n)?,
+                _ => self.inputs(n)?,
             }
             if !self.next(b'}')? {
                 return Some(());
@@ -559,34 +559,21 @@ impl<'de> Scan<'de> {
 
     /// A node's `inputConnections`, as `InputsSeed`, `ConnsSeed` and `ConnSeed` read them
     /// (connections with their two keys only).
-    fn inputs(&mut self, r: &mut Reader<'_>, n: &mut NodeState<'de>) -> Option<()> {
-        let _ = r;
+    fn inputs(&mut self, n: &mut NodeState<'de>) -> Option<()> {
         if self.open(b'{', b'}')? {
             return Some(());
         }
         loop {
-            let input = self.key()?;
-            let fresh = if n.inputs.len() < SeenKeys::SCAN {
-                !n.inputs.iter().any(|(k, _)| k == input)
-            } else {
-                if n.input_names.is_empty() {
-                    n.input_names = n.inputs.iter().map(|(k, _)| k.clone()).collect();
-                }
-                n.input_names.insert(Cow::Borrowed(input))
-            };
-            if !fresh {
-                return None;
-            }
-            let mut conns = Vec::new();
+            let index = n.add_input(Cow::Borrowed(self.key()?))?;
             if !self.open(b'[', b']')? {
                 loop {
-                    conns.push(self.connection()?);
+                    let conn = self.connection()?;
+                    n.inputs[index].1.push(conn);
                     if !self.next(b']')? {
                         break;
                     }
                 }
             }
-            n.inputs.push((Cow::Borrowed(input), conns));
             if !self.next(b'}')? {
                 return Some(());
             }

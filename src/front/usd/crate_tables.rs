@@ -243,10 +243,8 @@ impl CrateTables {
     /// zero and one LZ4 block) decompressed into at most `max` bytes, and where the block
     /// ends.
     fn compressed(bytes: &[u8], at: usize, max: usize) -> Option<(Vec<u8>, usize)> {
-        let size = le_size(bytes, at)?;
-        let start = at.checked_add(8)?;
-        let end = start.checked_add(size)?;
-        let block = bytes.get(start..end)?;
+        let end = Self::block_end(bytes, at)?;
+        let block = bytes.get(at.checked_add(8)?..end)?;
         let (&chunks, block) = block.split_first()?;
         if chunks != 0 {
             return None;

@@ -26,14 +26,22 @@ fn items_made_on_the_pool_are_taken_in_order() {
     }
 }
 
-/// A panic while taking an item reaches the caller, and the pool stops.
+/// A panic while taking an item reaches the caller, and the pool stops after the pieces it
+/// is making (each item takes a while, so making all of them would take far longer than
+/// reaching the panic).
 #[test]
 fn a_panic_while_taking_reaches_the_caller() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let made = AtomicUsize::new(0);
     let caught = std::panic::catch_unwind(|| {
         make_in_order(
             10_000,
             8,
-            |i| i,
+            |i| {
+                made.fetch_add(1, Ordering::Relaxed);
+                std::hint::black_box((0..20_000).map(std::hint::black_box).count());
+                i
+            },
             |i| {
                 if i == 100 {
                     std::panic::panic_any("stop");
@@ -43,4 +51,6 @@ fn a_panic_while_taking_reaches_the_caller() {
     });
     let payload = caught.expect_err("the panic reaches the caller");
     assert_eq!(payload.downcast_ref::<&str>(), Some(&"stop"));
+    let made = made.load(Ordering::Relaxed);
+    assert!(made < 5_000, "{made} items made after the panic");
 }
