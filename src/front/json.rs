@@ -53,6 +53,8 @@ mod pieces;
 mod scan;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+#[cfg(feature = "parallel")]
+use crate::front::remembered::Remembered;
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes,
@@ -758,8 +760,9 @@ const NODE_SHADER: u8 = 1;
 const NODE_PARAMS: u8 = 2;
 const NODE_INPUTS: u8 = 3;
 
-/// A parameter value read and typed, with its declaration.
-type Typed = (Value, Arc<Decl>);
+/// A parameter value read and typed, with its declaration (both may be shared with other
+/// parameters).
+type Typed = (Arc<Value>, Arc<Decl>);
 
 /// One node while its members stream in. Its findings are kept with their stage (and the
 /// parameter's index) and reported when the node closes, in the order of the checks, up to
@@ -1586,12 +1589,12 @@ fn json_reads_in_pieces(bytes: &[u8], types: &dyn ParamTypes, piece: usize) -> b
 /// serde_json does leaves it).
 #[cfg(feature = "testkit")]
 #[cfg_attr(feature = "testkit", visibility::make(pub))]
-fn json_scans_material(material: &str) -> bool {
+fn json_scans_material(material: &[u8]) -> bool {
     let mut r = Reader::new(Arc::from("t.json"), None, None);
     scan::read_material(&mut r, &mut NodeState::default(), "m", material, 0, 1).is_some_and(|end| {
         material[end..]
-            .trim_start_matches([' ', '\t', '\n', '\r'])
-            .is_empty()
+            .iter()
+            .all(|c| matches!(c, b' ' | b'\t' | b'\n' | b'\r'))
     })
 }
 
@@ -1775,9 +1778,8 @@ struct Reader<'t> {
     done: Vec<MaterialOut>,
     /// A shorthand value was met while `types` is `None`.
     needs_types: bool,
-    /// The names this reader interned: the process-wide table takes a lock per look-up,
-    /// which the threads reading pieces would contend for.
-    syms: hashbrown::HashTable<Sym>,
+    /// What it remembers of what it read.
+    memo: Memo,
     /// The key path, for the pointer of a duplicate key.
     ctx: Ctx,
     found: Vec<(Order, Found)>,
@@ -1785,12 +1787,26 @@ struct Reader<'t> {
     order: Order,
     /// Materials read so far.
     materials: u32,
+}
+
+/// What a [`Reader`] remembers of what it read; a thread of the pool keeps it from one piece
+/// to the next (`pieces`).
+#[derive(Default)]
+struct Memo {
+    /// The names it interned: the process-wide table takes a lock per look-up, which the
+    /// threads reading pieces would contend for.
+    syms: hashbrown::HashTable<Sym>,
     /// One declaration per type string of the canonical form, shared by its parameters: the
     /// first [`FEW_DECLS`] found by a scan (a document uses a few), the others by a map.
     few_decls: Vec<Arc<Decl>>,
     inline_decls: FxHashMap<Box<str>, Arc<Decl>>,
     /// One declaration per declared type of the shorthand form, shared likewise.
     declared_decls: FxHashMap<Type, Arc<Decl>>,
+    /// Parameters of the canonical form that the pieces' scanner read without a finding, by
+    /// their text from the name's quote to the closing brace: their name, declaration and
+    /// value are shared by the parameters that repeat the text.
+    #[cfg(feature = "parallel")]
+    params: Remembered<(Sym, Typed)>,
 }
 
 impl<'t> Reader<'t> {
@@ -1801,25 +1817,22 @@ impl<'t> Reader<'t> {
             net,
             done: Vec::new(),
             needs_types: false,
-            syms: hashbrown::HashTable::new(),
+            memo: Memo::default(),
             ctx: Ctx::default(),
             found: Vec::new(),
             order: Order::default(),
             materials: 0,
-            few_decls: Vec::new(),
-            inline_decls: Default::default(),
-            declared_decls: Default::default(),
         }
     }
 
     /// The interned `name`.
     fn sym(&mut self, name: &str) -> Sym {
         let hash = name_hash(name);
-        if let Some(&sym) = self.syms.find(hash, |s| s.as_str() == name) {
+        if let Some(&sym) = self.memo.syms.find(hash, |s| s.as_str() == name) {
             return sym;
         }
         let sym = Sym::with_hash(name, hash);
-        self.syms.insert_unique(hash, sym, |s| s.name_hash());
+        self.memo.syms.insert_unique(hash, sym, |s| s.name_hash());
         sym
     }
 
@@ -2118,7 +2131,7 @@ impl<'t> Reader<'t> {
             let Some((value, decl)) = typed else { continue };
             params.push(Param::from_shared(
                 pname,
-                Some(Arc::new(value)),
+                Some(value),
                 Some(decl),
                 ParamAt::JsonParameter,
                 None,
@@ -2177,16 +2190,16 @@ impl<'t> Reader<'t> {
                 format!("value of `{name}` does not match its type `{text}`: {why}"),
             )
         })?;
-        Ok((value, decl))
+        Ok((Arc::new(value), decl))
     }
 
     /// The declaration shared by the parameters whose `type` is `text` (`None` if `text` is
     /// not a type).
     fn inline_decl(&mut self, text: &str) -> Option<Arc<Decl>> {
-        if let Some(decl) = self.few_decls.iter().find(|d| d.text == text) {
+        if let Some(decl) = self.memo.few_decls.iter().find(|d| d.text == text) {
             return Some(decl.clone());
         }
-        if let Some(decl) = self.inline_decls.get(text) {
+        if let Some(decl) = self.memo.inline_decls.get(text) {
             return Some(decl.clone());
         }
         let decl = Arc::new(Decl {
@@ -2196,10 +2209,10 @@ impl<'t> Reader<'t> {
             ty: parse_type(text)?,
             inline_type: true,
         });
-        if self.few_decls.len() < FEW_DECLS {
-            self.few_decls.push(decl.clone());
+        if self.memo.few_decls.len() < FEW_DECLS {
+            self.memo.few_decls.push(decl.clone());
         } else {
-            self.inline_decls.insert(Box::from(text), decl.clone());
+            self.memo.inline_decls.insert(Box::from(text), decl.clone());
         }
         Some(decl)
     }
@@ -2224,7 +2237,7 @@ impl<'t> Reader<'t> {
                 format!("value of `{name}` does not match its declared type `{t}`: {why}"),
             )
         })?;
-        let decl = match self.declared_decls.get(&t) {
+        let decl = match self.memo.declared_decls.get(&t) {
             Some(decl) => decl.clone(),
             None => {
                 let decl = Arc::new(Decl {
@@ -2234,11 +2247,11 @@ impl<'t> Reader<'t> {
                     ty: t.clone(),
                     inline_type: false,
                 });
-                self.declared_decls.insert(t, decl.clone());
+                self.memo.declared_decls.insert(t, decl.clone());
                 decl
             }
         };
-        Ok((value, decl))
+        Ok((Arc::new(value), decl))
     }
 }
 

@@ -5,6 +5,7 @@
 pub mod args;
 pub mod json;
 pub mod oso;
+mod remembered;
 pub mod rib;
 pub mod source;
 #[cfg(feature = "usd")]

@@ -36,6 +36,7 @@ mod params;
 mod pipeline;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
+use crate::front::remembered::{MAX_REMEMBERED_PARAMS, text_hash};
 use crate::limits::{Limit, LimitExceeded, Limits};
 use crate::network::{
     Link, Links, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamAt,
@@ -43,7 +44,7 @@ use crate::network::{
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use lexer::{Lexer, TokKind, Token, decode_str, decode_string};
-use params::{MAX_SHARED_VALUES, ParamReader, Read, ReadParam, text_hash};
+use params::{ParamReader, Read, ReadParam};
 use rustc_hash::{FxHashMap, FxHashSet};
 use smallvec::SmallVec;
 use std::borrow::Cow;
@@ -636,7 +637,7 @@ struct Assembler<'a, 't> {
     src: &'a [u8],
     types: &'t dyn ParamTypes,
     net: Network,
-    /// Output names of connections read so far (at most [`MAX_SHARED_VALUES`]), interned:
+    /// Output names of connections read so far (at most [`MAX_REMEMBERED_PARAMS`]), interned:
     /// a look-up here takes no lock.
     outputs: FxHashMap<Box<str>, Sym>,
     /// Whether the definitions know a shader, per address of its shared id (alive until
@@ -1072,7 +1073,7 @@ impl<'a> Assembler<'a, '_> {
             return shared;
         }
         let shared = Sym::new(name);
-        if self.outputs.len() < MAX_SHARED_VALUES {
+        if self.outputs.len() < MAX_REMEMBERED_PARAMS {
             self.outputs.insert(Box::from(name), shared);
         }
         shared

@@ -23,7 +23,7 @@
 //! Materials with shorthand values need the declared types, which the pool's threads do not
 //! get (`ParamTypes` is not `Sync`): the calling thread reads those again.
 
-use super::{DocSeed, Found, MaterialOut, NodeState, Order, Reader, read_material, scan};
+use super::{DocSeed, Found, MaterialOut, Memo, NodeState, Order, Reader, read_material, scan};
 use crate::network::{Network, ParamTypes};
 use memchr::memmem;
 use rustc_hash::FxHashSet;
@@ -36,10 +36,6 @@ use std::sync::mpsc::channel;
 /// Bytes per piece, about: some forty materials of the bench scene, so that handing a piece
 /// to the pool costs little against reading it.
 pub(super) const PIECE_BYTES: usize = 256 * 1024;
-
-/// Bytes past a piece's nominal end that its scanner may read: a few materials of the bench
-/// scene, more than the one that crosses the end.
-const SCAN_MARGIN: usize = 64 * 1024;
 
 /// Bytes of JSON per node assumed when room for the nodes is reserved: a node of the bench
 /// scene takes about 1 KB as the writer lays it out, and a terser file outgrows the room
@@ -80,7 +76,8 @@ struct PieceRead {
 
 /// Reads `text` in pieces of about `piece` bytes: the network and the findings (unsorted),
 /// or `None` when the document must be read on one thread (module docs). The text is checked
-/// to be UTF-8 piece by piece, on the threads that read it.
+/// to be UTF-8 as the threads read it: the scanner checks each string it reads, and the rest
+/// is ASCII it matched or text given to serde_json as `str`.
 pub(super) fn read(
     text: &[u8],
     file: &Arc<str>,
@@ -127,12 +124,13 @@ pub(super) fn read(
             let (tx, next, stop, starts, stops) = (tx.clone(), &next, &stop, &starts, &stops);
             let pattern = &pattern;
             scope.spawn(move |_| {
+                let mut memo = Memo::default();
                 while !stop.load(Ordering::Relaxed) {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(&start) = starts.get(i) else {
                         return;
                     };
-                    let read = read_piece(text, file, start, stops[i], pattern);
+                    let read = read_piece(text, file, start, stops[i], pattern, &mut memo);
                     if tx.send((i, read)).is_err() {
                         return;
                     }
@@ -243,26 +241,34 @@ impl Assembler<'_, '_> {
 
 /// Reads the materials from `start` (the `{` of `materials` or a `,` before a material) until
 /// the `,` at or after `stop`, or the end of `materials`. `None` when the text there is not
-/// what the one-thread reader would accept the same way.
+/// what the one-thread reader would accept the same way. `memo`: what the thread's readers
+/// remember, kept from one piece to the next.
 fn read_piece(
     text: &[u8],
     file: &Arc<str>,
     start: usize,
     stop: usize,
     pattern: &[u8],
+    memo: &mut Memo,
+) -> Option<PieceRead> {
+    let mut r = Reader::new(file.clone(), None, None);
+    r.memo = std::mem::take(memo);
+    let read = read_materials(&mut r, text, start, stop, pattern);
+    *memo = std::mem::take(&mut r.memo);
+    read
+}
+
+/// [`read_piece`] with the piece's reader.
+fn read_materials(
+    r: &mut Reader<'_>,
+    text: &[u8],
+    start: usize,
+    stop: usize,
+    pattern: &[u8],
 ) -> Option<PieceRead> {
     let b = text;
-    let mut r = Reader::new(file.clone(), None, None);
     let mut n = NodeState::default();
     let mut materials = Vec::new();
-    // The text the scanner reads, checked to be UTF-8 once: from the piece's start to a
-    // margin past `stop`, up to the first byte that is not (a material reaching past it is
-    // read as below).
-    let limit = b.len().min(stop.saturating_add(SCAN_MARGIN));
-    let region = match std::str::from_utf8(&b[start..limit]) {
-        Ok(region) => region,
-        Err(e) => utf8(&b[start..start + e.valid_up_to()]).unwrap_or_default(),
-    };
     let mut pos = start;
     loop {
         let k = skip_ws(b, pos + 1);
@@ -279,14 +285,12 @@ fn read_piece(
         }
         let group = materials.len() as u32 + 1;
         let (found, done) = (r.found.len(), r.done.len());
-        let mut end = scan::read_material(&mut r, &mut n, name_text, region, v - start, group)
-            .map(|end| start + end);
+        let mut end = scan::read_material(r, &mut n, name_text, b, v, group);
         if end.is_none() {
             r.found.truncate(found);
             r.done.truncate(done);
             if let Some(q) = memmem::find(&b[v..], pattern).map(|k| v + k) {
-                let read =
-                    utf8(&b[v..q]).map(|value| read_material(&mut r, name_text, value, group));
+                let read = utf8(&b[v..q]).map(|value| read_material(r, name_text, value, group));
                 if matches!(read, Some(Ok(()))) {
                     end = Some(q);
                 } else {
@@ -299,7 +303,7 @@ fn read_piece(
             Some(end) => end,
             None => {
                 let end = value_end(b, v)?;
-                read_material(&mut r, name_text, utf8(&b[v..end])?, group).ok()?;
+                read_material(r, name_text, utf8(&b[v..end])?, group).ok()?;
                 end
             }
         };
@@ -327,7 +331,7 @@ fn read_piece(
         return Some(PieceRead {
             start,
             materials,
-            found: r.found,
+            found: std::mem::take(&mut r.found),
             end: pos,
             closed,
         });

@@ -11,13 +11,27 @@
 //! with a fraction or an exponent is read only when its digits fit in 2^53 and its decimal
 //! exponent is within ±22, where one exact product or quotient of two exact doubles is the
 //! correctly rounded value, which serde_json gives too (with or without `float_roundtrip`).
+//!
+//! Parameters read again: a parameter read without a finding whose text (from its name's
+//! quote to the closing brace of its `{ "type", "value" }`) holds no other `}` is remembered
+//! with its name, declaration and value. A later parameter whose text up to its first `}` is
+//! the same bytes is the same member (the bytes decide what a member is), so it is taken from
+//! memory with one hash and one comparison, sharing the value; its name is still checked
+//! against the node's other parameters. A scene repeats the same parameters on thousands of
+//! nodes.
 
 use super::{
     Conn, FewKeys, J, MAT_KEYS, MAT_NODES, MaterialState, NodeState, Num, P, Reader, SeenKeys,
-    ValueRead, to_value, to_value_seq,
+    Typed, ValueRead, to_value, to_value_seq,
 };
-use crate::network::RequestKind;
+use crate::front::remembered::{MAX_REMEMBERED_PARAMS, text_hash};
+use crate::network::{RequestKind, Sym};
 use std::borrow::Cow;
+use std::sync::Arc;
+
+/// Parameters written in at most this many bytes (from the name's quote to the closing
+/// brace) are remembered.
+const MAX_PARAM_TEXT: usize = 256;
 
 /// Value trees nested deeper than this (within `terminals`, a value, …) go to serde_json.
 const MAX_NEST: u32 = 24;
@@ -32,13 +46,14 @@ fn zero_bytes(v: u64) -> u64 {
     v.wrapping_sub(ONES) & !v & HIGHS
 }
 
-/// Flags the bytes of `x` that end a plain string: `"`, `\\` and control characters (the
-/// lowest flag is the first such byte).
+/// Flags the bytes of `x` that end a plain ASCII string: `"`, `\\`, control characters
+/// and bytes beyond ASCII (the lowest flag is the first such byte).
 #[inline]
 fn special(x: u64) -> u64 {
     zero_bytes(x ^ (ONES * u64::from(b'"')))
         | zero_bytes(x ^ (ONES * u64::from(b'\\')))
         | (x.wrapping_sub(ONES * 0x20) & !x & HIGHS)
+        | (x & HIGHS)
 }
 
 /// `rest` past its leading spaces, eight bytes at a time.
@@ -69,11 +84,16 @@ const POW10: [f64; 23] = [
 /// as [`super::read_material`] does with the value alone: the position after the value, or
 /// `None` when serde_json must read it (module docs). `n` is scratch room for one node, kept
 /// from one material to the next.
+///
+/// `text` need not be UTF-8: every byte the scanner settles is either ASCII it matched
+/// (whitespace, punctuation, a number, a literal) or inside a string, which it checks, so a
+/// material it reads is valid UTF-8. Checking the strings as they are read touches the text
+/// once, where a check of the whole text first read it twice.
 pub(super) fn read_material<'de>(
     r: &mut Reader<'_>,
     n: &mut NodeState<'de>,
     name: &str,
-    text: &'de str,
+    text: &'de [u8],
     at: usize,
     group: u32,
 ) -> Option<usize> {
@@ -81,18 +101,13 @@ pub(super) fn read_material<'de>(
     r.needs_types = false;
     r.ctx.depth.set(0);
     r.ctx.deepest.set(0);
-    let mut s = Scan {
-        s: text,
-        b: text.as_bytes(),
-        i: at,
-    };
+    let mut s = Scan { b: text, i: at };
     s.material(r, n, MaterialState::new(name), group)?;
     Some(s.i)
 }
 
 /// The text and the position in it.
 struct Scan<'de> {
-    s: &'de str,
     b: &'de [u8],
     i: usize,
 }
@@ -173,17 +188,33 @@ impl<'de> Scan<'de> {
             rest = tail;
         }
         while let [c, tail @ ..] = rest {
-            if *c < 0x20 || *c == b'"' || *c == b'\\' {
+            if *c < 0x20 || *c >= 0x80 || *c == b'"' || *c == b'\\' {
                 break;
             }
             rest = tail;
         }
-        if rest.first() != Some(&b'"') {
-            return None;
+        let ascii = rest.first() == Some(&b'"');
+        if !ascii {
+            // Past the bytes beyond ASCII, if that is what stopped it.
+            while let [c, tail @ ..] = rest {
+                if *c < 0x20 || *c == b'"' || *c == b'\\' {
+                    break;
+                }
+                rest = tail;
+            }
+            if rest.first() != Some(&b'"') {
+                return None;
+            }
         }
         let end = start + (text.len() - rest.len());
         self.i = end + 1;
-        self.s.get(start..end)
+        let inner = &self.b[start..end];
+        if ascii {
+            // SAFETY: the loops above stopped at the first byte beyond ASCII, and found none
+            // before the closing quote: ASCII bytes are valid UTF-8.
+            return Some(unsafe { std::str::from_utf8_unchecked(inner) });
+        }
+        std::str::from_utf8(inner).ok()
     }
 
     /// An object key and its colon.
@@ -490,54 +521,90 @@ impl<'de> Scan<'de> {
         if self.open(b'{', b'}')? {
             return Some(());
         }
-        // Pointers are rendered only for a finding, which sends the material to serde_json
-        // before it is kept: an empty base is enough here.
-        let base = P::Root("");
         loop {
-            let name = self.key()?;
-            if !n.add_parameter(r.sym(name)) {
-                return None;
-            }
-            let index = n.names.len() - 1;
-            if self.open(b'{', b'}')? {
-                return None;
-            }
-            let mut seen = FewKeys::default();
-            let mut ty = None;
-            let mut decl = None;
-            let mut value = None;
-            loop {
-                let slot = self.slot(&[b"\"type\":", b"\"value\":"])?;
-                if !seen.insert(Some(slot), "") {
-                    return None;
+            self.ws();
+            match self.recall_parameter(r) {
+                Some((name, typed)) => {
+                    if !n.add_parameter(name) {
+                        return None;
+                    }
+                    n.settle(n.names.len() - 1, Ok(typed));
                 }
-                if slot == 0 {
-                    let s = self.string()?;
-                    decl = r.inline_decl(s);
-                    ty = Some(s);
-                } else {
-                    value = Some(match &decl {
-                        Some(d) => ValueRead::Typed(self.typed(&d.ty)?),
-                        None => ValueRead::Tree(self.value(0)?),
-                    });
-                }
-                if !self.next(b'}')? {
-                    break;
-                }
+                None => self.parameter(r, n)?,
             }
-            // A typed value that converted is what `canonical` keeps; it decides the rest.
-            let read = match (ty, decl, value) {
-                (Some(_), Some(decl), Some(ValueRead::Typed(Ok(value)))) => Ok((value, decl)),
-                (ty, decl, value) => r.canonical(name, ty, decl, value, &P::Key(&base, name)),
-            };
-            if read.is_err() {
-                return None;
-            }
-            n.settle(index, read);
             if !self.next(b'}')? {
                 return Some(());
             }
         }
+    }
+
+    /// The parameter here, if its text up to the first `}` is one read before (module docs).
+    #[inline]
+    fn recall_parameter(&mut self, r: &Reader<'_>) -> Option<(Sym, Typed)> {
+        let rest = self.b.get(self.i..)?;
+        let window = rest.get(..MAX_PARAM_TEXT).unwrap_or(rest);
+        let text = &rest[..=memchr::memchr(b'}', window)?];
+        let (name, (value, decl)) = r.memo.params.recall(0, text, text_hash(text))?;
+        self.i += text.len();
+        Some((*name, (value.clone(), decl.clone())))
+    }
+
+    /// One parameter in the canonical form, as `ParamSeed` reads it; remembered if its text
+    /// ends at its first `}` (module docs).
+    fn parameter(&mut self, r: &mut Reader<'_>, n: &mut NodeState<'de>) -> Option<()> {
+        let at = self.i;
+        let name = self.key()?;
+        let sym = r.sym(name);
+        if !n.add_parameter(sym) {
+            return None;
+        }
+        let index = n.names.len() - 1;
+        if self.open(b'{', b'}')? {
+            return None;
+        }
+        let mut seen = FewKeys::default();
+        let mut ty = None;
+        let mut decl = None;
+        let mut value = None;
+        loop {
+            let slot = self.slot(&[b"\"type\":", b"\"value\":"])?;
+            if !seen.insert(Some(slot), "") {
+                return None;
+            }
+            if slot == 0 {
+                let s = self.string()?;
+                decl = r.inline_decl(s);
+                ty = Some(s);
+            } else {
+                value = Some(match &decl {
+                    Some(d) => ValueRead::Typed(self.typed(&d.ty)?),
+                    None => ValueRead::Tree(self.value(0)?),
+                });
+            }
+            if !self.next(b'}')? {
+                break;
+            }
+        }
+        // A typed value that converted is what `canonical` keeps; it decides the rest.
+        // Pointers are rendered only for a finding, which sends the material to serde_json
+        // before it is kept: an empty base is enough here.
+        let read = match (ty, decl, value) {
+            (Some(_), Some(decl), Some(ValueRead::Typed(Ok(value)))) => (Arc::new(value), decl),
+            (ty, decl, value) => {
+                let pointer = P::Key(&P::Root(""), name);
+                r.canonical(name, ty, decl, value, &pointer).ok()?
+            }
+        };
+        let text = &self.b[at..self.i];
+        if text.len() <= MAX_PARAM_TEXT
+            && memchr::memchr(b'}', text) == Some(text.len() - 1)
+            && r.memo.params.len() < MAX_REMEMBERED_PARAMS
+        {
+            let remembered = (sym, (read.0.clone(), read.1.clone()));
+            r.memo.params.remember(0, text, text_hash(text), remembered);
+        }
+        n.settle(index, Ok(read));
+        Some(())
     }
 
     /// A value of type `t`, as `TypedSeed` converts it.

@@ -16,16 +16,12 @@ use super::{
     types_compatible, value_tokens,
 };
 use crate::diag::{Diagnostic, Diagnostics, Error};
+use crate::front::remembered::{MAX_REMEMBERED_PARAMS, Remembered, text_hash};
 use crate::network::{Decl, Memo, Param, ParamAt, ParamTypes, Sym};
 use crate::types::{ArraySpec, BaseType, Type, Value};
-use hashbrown::HashTable;
-use rustc_hash::{FxHashMap, FxHasher};
+use rustc_hash::FxHashMap;
 use smallvec::SmallVec;
-use std::hash::Hasher;
 use std::sync::Arc;
-
-/// At most this many distinct values are remembered for sharing while a file is read.
-pub(super) const MAX_SHARED_VALUES: usize = 1 << 16;
 
 /// Values written in at most this many bytes are remembered for sharing.
 const MAX_SHARED_VALUE_BYTES: usize = 48;
@@ -57,68 +53,6 @@ type SharedDecl = (Sym, Arc<Decl>);
 /// value text.
 type SharedParam = (Sym, Arc<Decl>, Arc<Value>);
 
-/// An entry of [`Tables::decls`] or [`Tables::params`]: the shader it belongs to
-/// ([`Tables::shader_id`]), the text as written, and what was read from it.
-struct Remembered<T> {
-    shader: usize,
-    text: Box<[u8]>,
-    /// Its [`remembered_hash`], kept for the table's growth.
-    hash: u64,
-    shared: T,
-}
-
-/// The hash of a text alone: the part of a [`Remembered`] entry's hash that needs no
-/// shader, computed for each parameter occurrence on the tokenizer's thread
-/// ([`Occurrence::text`]).
-pub(super) fn text_hash(text: &[u8]) -> u64 {
-    let mut h = FxHasher::default();
-    h.write(text);
-    h.finish()
-}
-
-/// The hash of a shader id and a text (given by its [`text_hash`]), for [`Remembered`]
-/// entries.
-fn remembered_hash(shader: usize, text_hash: u64) -> u64 {
-    let mut h = FxHasher::default();
-    h.write_usize(shader);
-    h.write_u64(text_hash);
-    h.finish()
-}
-
-/// The entry of `table` for `shader` and `text` (of hash `hash`, [`text_hash`]), if
-/// remembered.
-fn recall<'t, T>(
-    table: &'t HashTable<Remembered<T>>,
-    shader: usize,
-    text: &[u8],
-    hash: u64,
-) -> Option<&'t T> {
-    table
-        .find(remembered_hash(shader, hash), |e| {
-            e.shader == shader && *e.text == *text
-        })
-        .map(|e| &e.shared)
-}
-
-/// Remember `shared` for `shader` and `text` (of hash `hash`, [`text_hash`]; not
-/// remembered yet).
-fn remember<T>(
-    table: &mut HashTable<Remembered<T>>,
-    shader: usize,
-    text: &[u8],
-    hash: u64,
-    shared: T,
-) {
-    let hash = remembered_hash(shader, hash);
-    let entry = Remembered {
-        shader,
-        text: Box::from(text),
-        hash,
-        shared,
-    };
-    table.insert_unique(hash, entry, |e| e.hash);
-}
-
 /// Reads parameter occurrences into parameters, remembering what it read: a scene repeats
 /// the same declarations and parameters on thousands of nodes.
 pub(super) struct ParamReader<'a, 't> {
@@ -136,13 +70,11 @@ struct Tables<'a, 't> {
     /// Declarations read before, per shader and decl token (as written): their parameters
     /// share one name and one [`Decl`]. Only declarations read without a diagnostic are
     /// kept, so a hit reports nothing, exactly as reading them again would.
-    decls: HashTable<Remembered<SharedDecl>>,
+    decls: Remembered<SharedDecl>,
     /// Parameters with a short value read before without a diagnostic, per shader and text
     /// from the decl string to the end of the value: such a parameter is read again with one
     /// hash and one comparison of bytes.
-    params: HashTable<Remembered<SharedParam>>,
-    /// How many parameters `params` holds (it stops growing at [`MAX_SHARED_VALUES`]).
-    shared_values: usize,
+    params: Remembered<SharedParam>,
 }
 
 /// A parameter occurrence with what [`Tables::read_param`] needs of its request.
@@ -163,9 +95,8 @@ impl<'a, 't> ParamReader<'a, 't> {
             src,
             types: Memo::new(types),
             shaders: FxHashMap::default(),
-            decls: HashTable::new(),
-            params: HashTable::new(),
-            shared_values: 0,
+            decls: Remembered::default(),
+            params: Remembered::default(),
         };
         ParamReader { file, tables }
     }
@@ -196,7 +127,7 @@ impl<'a, 't> ParamReader<'a, 't> {
         recalled.extend(occurrences.iter().map(|o| {
             let (whole, hash) = o.text.as_ref()?;
             let text = tables.src.get(whole.clone())?;
-            let (name, decl, value) = recall(&tables.params, shader, text, *hash)?;
+            let (name, decl, value) = tables.params.recall(shader, text, *hash)?;
             Some((*name, decl.clone(), value.clone()))
         }));
         out.reserve(occurrences.len());
@@ -274,7 +205,7 @@ impl<'a> Tables<'a, '_> {
             .clone()
             .and_then(|(whole, hash)| Some((src.get(whole)?, hash)));
         if let Some((name, decl, value)) =
-            whole.and_then(|(w, hash)| recall(&self.params, shader, w, hash))
+            whole.and_then(|(w, hash)| self.params.recall(shader, w, hash))
         {
             let param = Param::from_shared(
                 *name,
@@ -311,11 +242,10 @@ impl<'a> Tables<'a, '_> {
                 && !decl.reference
                 && diags.len() == before
                 && text.len() <= MAX_SHARED_VALUE_BYTES
-                && self.shared_values < MAX_SHARED_VALUES
+                && self.params.len() < MAX_REMEMBERED_PARAMS
         }) {
-            self.shared_values += 1;
             let shared = (name, decl.clone(), value.clone());
-            remember(&mut self.params, shader, whole, hash, shared);
+            self.params.remember(shader, whole, hash, shared);
         }
         let param = Param::from_shared(name, Some(value), Some(decl), at, Some(origin));
         Ok(ReadParam::Param(param))
@@ -334,7 +264,7 @@ impl<'a> Tables<'a, '_> {
     ) -> Result<(Sym, Arc<Decl>, bool), Error> {
         let raw = &self.src[decl_tok.start..decl_tok.end];
         let hash = text_hash(raw);
-        if let Some((name, decl)) = recall(&self.decls, shader_id, raw, hash) {
+        if let Some((name, decl)) = self.decls.recall(shader_id, raw, hash) {
             return Ok((*name, decl.clone(), true));
         }
         let before = diags.len();
@@ -374,7 +304,8 @@ impl<'a> Tables<'a, '_> {
         if diags.len() != before {
             return Ok((name, decl, false));
         }
-        remember(&mut self.decls, shader_id, raw, hash, (name, decl.clone()));
+        self.decls
+            .remember(shader_id, raw, hash, (name, decl.clone()));
         Ok((name, decl, true))
     }
 

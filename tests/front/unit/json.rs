@@ -415,7 +415,7 @@ fn the_pieces_scanner_reads_what_serde_json_reads() {
     let open = at + scene[at..].find('{').unwrap();
     let close = open + scene[open..].find("\n    }").unwrap() + 6;
     let material = &scene[open..close];
-    assert!(json_scans_material(material), "{material}");
+    assert!(json_scans_material(material.as_bytes()), "{material}");
     let float = "\"value\": 0.5\n";
     let int = "\"value\": 1\n";
     let params = "\"parameters\": {";
@@ -544,7 +544,11 @@ fn the_pieces_scanner_reads_what_serde_json_reads() {
             panic!("{what:?} not in {material}");
         };
         let changed = format!("{}{with}{}", &material[..k], &material[k + what.len()..]);
-        assert_eq!(json_scans_material(&changed), scans, "{what:?} -> {with:?}");
+        assert_eq!(
+            json_scans_material(changed.as_bytes()),
+            scans,
+            "{what:?} -> {with:?}"
+        );
         let doc = format!("{}{changed}{}", &scene[..open], &scene[close..]);
         for limits in [&vstructc::limits::Limits::default(), &few_nodes] {
             let serial = read_outcome(doc.as_bytes(), &reg, limits, None);
@@ -557,14 +561,66 @@ fn the_pieces_scanner_reads_what_serde_json_reads() {
             }
         }
     }
-    // A material longer than the text a piece's scanner reads past the piece's end (it is
-    // read by serde_json instead), with a non-ASCII value.
+    // Parameters whose text repeats, which the scanner reads again from memory: in every
+    // node, with a `}` inside a string (its text up to the first `}` is not a parameter, so
+    // it is never remembered), a remembered parameter given twice in a node (JS002), and
+    // the same parameter in another layout.
+    let gain = "\"gain\": {\"type\": \"float\", \"value\": 0.5}";
+    for (extra, error) in [
+        (
+            format!("\"note\": {{\"type\": \"string\", \"value\": \"a}}b\"}}, {gain}"),
+            false,
+        ),
+        (format!("{gain}, {gain}"), true),
+        (
+            format!("{gain} , \"gain2\": {{ \"type\":\"float\", \"value\" :0.5}}"),
+            false,
+        ),
+    ] {
+        let doc = scene.replace(
+            "\"parameters\": {\n",
+            &format!("\"parameters\": {{{extra},\n"),
+        );
+        assert!(doc.matches(&extra).count() > 20);
+        let serial = read_outcome(doc.as_bytes(), &reg, &Default::default(), None);
+        assert_eq!(serial.contains("JS002"), error, "{extra}: {serial}");
+        for piece in [1, 3000, 1 << 20] {
+            let pieces = read_outcome(doc.as_bytes(), &reg, &Default::default(), Some(piece));
+            assert!(serial == pieces, "{extra}, pieces of {piece}");
+        }
+        assert_eq!(json_reads_in_pieces(doc.as_bytes(), &reg, 3000), !error);
+    }
+    // Bytes beyond ASCII in a string, at any place of its eight-byte steps: valid UTF-8 is
+    // read by the scanner, anything else is left to serde_json (which reports it).
+    let shader = "\"PxrLayer\"";
+    for (with, scans) in [
+        ("\"\u{1F600}PxrLayer\"".as_bytes(), true),
+        ("\"PxrLayer\u{e9}\"".as_bytes(), true),
+        ("\"PxrLa\u{20ac}yer\u{10FFFF}\"".as_bytes(), true),
+        (b"\"Pxr\xffLayer\"", false),
+        (b"\"PxrLayer\xc3\"", false),
+        (b"\"Pxr\xe9\xe9\xe9\xe9\xe9\xe9\xe9\xe9\xe9Layer\"", false),
+        (b"\"PxrLayer\xed\xa0\x80\"", false),
+        (b"\"\xc3\xa9\x01\"", false),
+    ] {
+        let k = material.find(shader).unwrap();
+        let mut changed = material.as_bytes()[..k].to_vec();
+        changed.extend_from_slice(with);
+        changed.extend_from_slice(&material.as_bytes()[k + shader.len()..]);
+        assert_eq!(json_scans_material(&changed), scans, "{with:?}");
+        assert_eq!(
+            std::str::from_utf8(with).is_ok() && !with.contains(&1),
+            scans
+        );
+    }
+    // A material much longer than a piece, with a non-ASCII value: the scanner reads on
+    // past the piece's end.
     let long = format!(
         "\"parameters\": {{\"note\": {{\"type\": \"string\", \"value\": \"{}\u{e9}\"}}, ",
         "x".repeat(200_000)
     );
     let changed = material.replacen(params, &long, 1);
-    assert!(json_scans_material(&changed));
+    assert!(json_scans_material(changed.as_bytes()));
     let doc = format!("{}{changed}{}", &scene[..open], &scene[close..]);
     let serial = read_outcome(doc.as_bytes(), &reg, &Default::default(), None);
     for piece in [1, 3000, 100_000] {
