@@ -572,12 +572,12 @@ impl Writer<'_> {
         };
         let mut lines = Lines::new(indent, self.scratch.take());
         self.header(node, &mut lines.body);
-        for item in &src.items {
-            for c in src.leading_comments(item) {
+        for (k, item) in src.items.iter().enumerate() {
+            for c in src.leading_comments(k) {
                 lines.pending.push(self.bytes(c)?);
             }
             let param = item.param().and_then(|k| node.all_params().get(k as usize));
-            let trailing = match src.trailing_comment(item) {
+            let trailing = match src.trailing_comment(k) {
                 Some(c) => Some(self.bytes(c)?),
                 None => None,
             };

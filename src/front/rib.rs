@@ -846,20 +846,15 @@ fn split_into<'a>(
             .at(lx.tok_loc(kw))
             .into());
         };
-        let mut item = SourceParam::new(origin, decl, value_at);
-        let mut trailing = false;
+        let mut item = SourceParam::new(origin, decl, value_at, index_u32(split.pending));
         if let Some(Piece::Comment(c)) = pieces.get(i) {
             if c.line == value_piece.end_line() {
                 comments.push(c.start..c.end);
-                trailing = true;
+                item.set_trailing();
                 split.end = c.end;
                 i += 1;
             }
         }
-        item.set_comments(
-            index_u32(split.pending)..index_u32(comments.len()),
-            trailing,
-        );
         split.pending = comments.len();
         split.items.push(item);
         let whole = decl_tok.start..value_range.end;

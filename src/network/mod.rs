@@ -60,7 +60,7 @@ use crate::types::{Type, Value};
 use hashbrown::HashTable;
 use petgraph::stable_graph::{EdgeIndex, NodeIndex, StableDiGraph};
 use petgraph::visit::EdgeRef;
-use rustc_hash::{FxBuildHasher, FxHashMap, FxHashSet};
+use rustc_hash::{FxBuildHasher, FxHashSet};
 use smallvec::SmallVec;
 use std::fmt;
 use std::hash::BuildHasher;
@@ -601,17 +601,21 @@ pub struct NodeSource {
 }
 
 impl NodeSource {
-    /// The comments between the previous parameter occurrence and `item` (or inside `item`,
-    /// between decl and value).
-    pub fn leading_comments(&self, item: &SourceParam) -> &[Range<usize>] {
-        let all = self.of(item);
-        &all[..all.len() - usize::from(item.trailing)]
+    /// The comments between the previous parameter occurrence and occurrence `index` of
+    /// [`NodeSource::items`] (or inside it, between decl and value); none for an index out
+    /// of range.
+    pub fn leading_comments(&self, index: usize) -> &[Range<usize>] {
+        let all = self.comments_of(index);
+        let trailing = self.items.get(index).is_some_and(SourceParam::trailing);
+        &all[..all.len() - usize::from(trailing && !all.is_empty())]
     }
 
-    /// The comment on the same line as the end of `item`'s value, if any.
-    pub fn trailing_comment(&self, item: &SourceParam) -> Option<&Range<usize>> {
-        if item.trailing {
-            self.of(item).last()
+    /// The comment on the same line as the end of the value of occurrence `index` of
+    /// [`NodeSource::items`], if any.
+    pub fn trailing_comment(&self, index: usize) -> Option<&Range<usize>> {
+        let trailing = self.items.get(index).is_some_and(SourceParam::trailing);
+        if trailing {
+            self.comments_of(index).last()
         } else {
             None
         }
@@ -632,9 +636,18 @@ impl NodeSource {
         self.span.start + r.start as usize..self.span.start + r.end as usize
     }
 
-    fn of(&self, item: &SourceParam) -> &[Range<usize>] {
+    /// The comments of occurrence `index`: from where its own start to where the next
+    /// occurrence's start (the last one's: to the end of the list).
+    fn comments_of(&self, index: usize) -> &[Range<usize>] {
+        let Some(item) = self.items.get(index) else {
+            return &[];
+        };
+        let end = self
+            .items
+            .get(index + 1)
+            .map_or(self.comments.len(), |next| next.comments as usize);
         self.comments
-            .get(item.comments.start as usize..item.comments.end as usize)
+            .get(item.comments as usize..end)
             .unwrap_or(&[])
     }
 }
@@ -642,55 +655,66 @@ impl NodeSource {
 /// One parameter occurrence inside a RIB request: which parameter it defines and where its
 /// decl, value and comments are ([`NodeSource::decl`], [`NodeSource::value`],
 /// [`NodeSource::leading_comments`], [`NodeSource::trailing_comment`]). A scene holds one per
-/// parameter read, so its byte ranges are 32-bit offsets from the start of the request's
-/// span (a request is at most 4 GiB long).
+/// parameter read, so it is kept to 24 bytes: its byte ranges are 32-bit offsets from the
+/// start of the request's span (a request is at most 4 GiB long), and its comments are given
+/// by where they start alone (the occurrences' comments follow each other in
+/// [`NodeSource::comments`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SourceParam {
-    /// Index into [`Node::all_params`], or [`NO_PARAM`].
+    /// Index into [`Node::all_params`], or [`NO_PARAM`]; [`TRAILING`] set if the last of its
+    /// comments is on the same line as the end of the value. (An index is below 2^31: each
+    /// occurrence takes several bytes of a request of at most 4 GiB.)
     param: u32,
     /// The decl string token, relative to [`NodeSource::span`]'s start.
     decl: Range<u32>,
     /// The value, relative to [`NodeSource::span`]'s start.
     value: Range<u32>,
-    /// This occurrence's comments in [`NodeSource::comments`]: the leading ones, then the
-    /// trailing one when `trailing` is set.
-    comments: Range<u32>,
-    /// True if the last of `comments` is on the same line as the end of the value.
-    trailing: bool,
+    /// Where this occurrence's comments start in [`NodeSource::comments`]: the leading ones,
+    /// then the trailing one when [`TRAILING`] is set; they end where the next occurrence's
+    /// start.
+    comments: u32,
 }
 
 /// [`SourceParam::param`] of an occurrence that defines no parameter.
-const NO_PARAM: u32 = u32::MAX;
+const NO_PARAM: u32 = !TRAILING;
+
+/// The flag of [`SourceParam::param`] for a trailing comment.
+const TRAILING: u32 = 1 << 31;
 
 impl SourceParam {
     /// An occurrence defining parameter `param`, its decl and value given relative to the
-    /// start of the request's span, with no comments.
-    pub(crate) fn new(param: u32, decl: Range<u32>, value: Range<u32>) -> Self {
+    /// start of the request's span, with its comments from `comments` in
+    /// [`NodeSource::comments`].
+    pub(crate) fn new(param: u32, decl: Range<u32>, value: Range<u32>, comments: u32) -> Self {
+        debug_assert!(param < NO_PARAM, "occurrence index {param}");
         SourceParam {
-            param,
+            param: param & NO_PARAM,
             decl,
             value,
-            comments: 0..0,
-            trailing: false,
+            comments,
         }
     }
 
     /// Index into [`Node::all_params`] of the parameter this occurrence defines; `None` when
     /// a later duplicate replaced it (RB015).
     pub fn param(&self) -> Option<u32> {
-        (self.param != NO_PARAM).then_some(self.param)
+        let param = self.param & NO_PARAM;
+        (param != NO_PARAM).then_some(param)
     }
 
     /// Sets the parameter this occurrence defines (`None`: replaced by a later duplicate).
     pub(crate) fn set_param(&mut self, param: Option<u32>) {
-        self.param = param.unwrap_or(NO_PARAM);
+        self.param = (self.param & TRAILING) | (param.unwrap_or(NO_PARAM) & NO_PARAM);
     }
 
-    /// Sets this occurrence's comments in [`NodeSource::comments`]; `trailing` when the last
-    /// of them is on the same line as the end of the value.
-    pub(crate) fn set_comments(&mut self, comments: Range<u32>, trailing: bool) {
-        self.comments = comments;
-        self.trailing = trailing;
+    /// Marks the last of this occurrence's comments as on the same line as the end of the
+    /// value.
+    pub(crate) fn set_trailing(&mut self) {
+        self.param |= TRAILING;
+    }
+
+    fn trailing(&self) -> bool {
+        self.param & TRAILING != 0
     }
 }
 
@@ -1086,6 +1110,11 @@ pub struct Material {
     pub location: Option<Location>,
 }
 
+/// The hash of a node handle in [`Network`]'s table of handles.
+fn handle_hash(handle: &str) -> u64 {
+    FxBuildHasher.hash_one(handle)
+}
+
 /// Nodes reserved at most before an input is read ([`Network::reserve_for_input`]; about
 /// 64 MB of address space).
 const MAX_RESERVED_NODES: usize = 1 << 18;
@@ -1097,8 +1126,10 @@ const MAX_RESERVED_NODES: usize = 1 << 18;
 #[derive(Debug, Clone, Default)]
 pub struct Network {
     graph: StableDiGraph<Node, Edge>,
-    /// Every version of each handle, oldest first (usually one, kept inline).
-    handles: FxHashMap<Box<str>, SmallVec<[NodeId; 1]>>,
+    /// Every version of each handle, oldest first (usually one, kept inline), by the
+    /// [`handle_hash`] of the handle. The handle itself is read from the first version's node
+    /// (nodes are never removed): a scene's handles are not stored a second time.
+    handles: HashTable<SmallVec<[NodeId; 1]>>,
     /// The shader ids of the nodes, each stored once.
     shaders: FxHashSet<Arc<str>>,
     materials: Vec<Material>,
@@ -1199,7 +1230,12 @@ impl Network {
             }
         }
         // One look-up of the handle.
-        match self.handles.get_mut(node.handle()) {
+        let hash = handle_hash(node.handle());
+        let graph = &self.graph;
+        let versions = self
+            .handles
+            .find_mut(hash, |v| graph[v[0]].handle() == node.handle());
+        match versions {
             Some(versions) => {
                 set_version(&mut node, versions.len());
                 let id = self.graph.add_node(node);
@@ -1208,9 +1244,12 @@ impl Network {
             }
             None => {
                 set_version(&mut node, 0);
-                let key: Box<str> = Box::from(node.handle());
                 let id = self.graph.add_node(node);
-                self.handles.insert(key, smallvec::smallvec![id]);
+                let graph = &self.graph;
+                self.handles
+                    .insert_unique(hash, smallvec::smallvec![id], |v| {
+                        handle_hash(graph[v[0]].handle())
+                    });
                 id
             }
         }
@@ -1276,7 +1315,9 @@ impl Network {
 
     /// Every version of `handle`, oldest first.
     pub fn versions(&self, handle: &str) -> &[NodeId] {
-        self.handles.get(handle).map_or(&[], |v| v.as_slice())
+        self.handles
+            .find(handle_hash(handle), |v| self.graph[v[0]].handle() == handle)
+            .map_or(&[], |v| v.as_slice())
     }
 
     /// The node with key `handle#k`.

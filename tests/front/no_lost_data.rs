@@ -62,9 +62,9 @@ fn inside_comments(bytes: &[u8], net: &Network) -> Vec<Vec<Vec<u8>>> {
         .into_iter()
         .map(|s| {
             let mut ranges: Vec<Range<usize>> = s.end_comments.clone();
-            for item in &s.items {
-                ranges.extend(s.leading_comments(item).iter().cloned());
-                ranges.extend(s.trailing_comment(item).cloned());
+            for k in 0..s.items.len() {
+                ranges.extend(s.leading_comments(k).iter().cloned());
+                ranges.extend(s.trailing_comment(k).cloned());
             }
             ranges.iter().map(|r| bytes[r.clone()].to_vec()).collect()
         })

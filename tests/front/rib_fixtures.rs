@@ -289,7 +289,7 @@ fn hand_edited_network_versions_and_quotes() {
     let ior = src
         .items
         .iter()
-        .find(|it| {
+        .position(|it| {
             it.param()
                 .is_some_and(|k| net[solid].all_params()[k as usize].name() == "specularIor")
         })

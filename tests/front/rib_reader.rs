@@ -594,13 +594,10 @@ WorldBegin
     let s = net[tex].source().unwrap();
     let text = |r: &std::ops::Range<usize>| &src[r.clone()];
     assert_eq!(s.items.len(), 2);
-    let lead: Vec<&str> = s.leading_comments(&s.items[0]).iter().map(text).collect();
+    let lead: Vec<&str> = s.leading_comments(0).iter().map(text).collect();
     assert_eq!(lead, ["# header comment", "# before filename"]);
-    assert_eq!(
-        s.trailing_comment(&s.items[0]).map(text),
-        Some("# after filename")
-    );
-    let lead: Vec<&str> = s.leading_comments(&s.items[1]).iter().map(text).collect();
+    assert_eq!(s.trailing_comment(0).map(text), Some("# after filename"));
+    let lead: Vec<&str> = s.leading_comments(1).iter().map(text).collect();
     assert_eq!(lead, ["#\"int invertT\" [0]"]);
     // The span ends with the last value: the comment after it is passed through.
     assert!(text(&s.span).ends_with("\"int linearize\" [1]"));

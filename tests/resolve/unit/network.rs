@@ -226,7 +226,7 @@ fn params_and_links_stay_compact() {
     assert_eq!(std::mem::size_of::<Sym>(), 8);
     // One per parameter occurrence read from RIB.
     assert!(
-        std::mem::size_of::<SourceParam>() <= 32,
+        std::mem::size_of::<SourceParam>() <= 24,
         "{}",
         std::mem::size_of::<SourceParam>()
     );
