@@ -600,7 +600,7 @@ impl Writer<'_> {
                 t.extend_from_slice(c);
             }
         }
-        for c in &src.end_comments {
+        for c in src.end_comments() {
             lines.pending.push(self.bytes(c)?);
         }
         for p in self.added_params(node) {

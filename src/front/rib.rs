@@ -976,20 +976,15 @@ impl<'a> Assembler<'a, '_> {
         }
         // Comments after the last parameter lie outside the span (they are passed through);
         // only comments inside the header of a request without parameters remain.
-        let mut end_comments = comments.split_off(pending);
-        end_comments.retain(|c| c.end <= end);
+        let after: Vec<Range<usize>> = comments.drain(pending..).filter(|c| c.end <= end).collect();
+        comments.extend(after);
         self.add_node(
             kind,
             &handle,
             shader,
             location,
             params,
-            NodeSource {
-                span: kw.start..end,
-                items,
-                comments,
-                end_comments,
-            },
+            NodeSource::new(kw.start..end, items, comments, pending),
             &shadowed,
         );
         Ok(())

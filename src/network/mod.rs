@@ -591,16 +591,40 @@ pub struct NodeSource {
     pub span: Range<usize>,
     /// Every parameter occurrence in source order (duplicates included).
     pub items: Vec<SourceParam>,
-    /// The comments of the parameter occurrences, in source order, each from `#` to the end
-    /// of its line (newline excluded); an occurrence's own are given by
-    /// [`NodeSource::leading_comments`] and [`NodeSource::trailing_comment`]. One list per
-    /// request: most parameters have none.
+    /// The comments inside the span, in source order, each from `#` to the end of its line
+    /// (newline excluded): the parameter occurrences' (an occurrence's own are given by
+    /// [`NodeSource::leading_comments`] and [`NodeSource::trailing_comment`]), then those
+    /// that precede no parameter ([`NodeSource::end_comments`]). One list per request: most
+    /// requests have none.
     pub comments: Vec<Range<usize>>,
-    /// Comments inside the span that precede no parameter (a request without parameters).
-    pub end_comments: Vec<Range<usize>>,
+    /// Where the comments that precede no parameter start in `comments` (one list rather
+    /// than two keeps a node of a large scene sixteen bytes smaller).
+    end_start: u32,
 }
 
 impl NodeSource {
+    /// A request's source: its span, its parameter occurrences, and its comments, those from
+    /// `end_start` on preceding no parameter (crate-internal: the RIB reader).
+    pub(crate) fn new(
+        span: Range<usize>,
+        items: Vec<SourceParam>,
+        comments: Vec<Range<usize>>,
+        end_start: usize,
+    ) -> Self {
+        NodeSource {
+            span,
+            items,
+            comments,
+            end_start: u32::try_from(end_start).unwrap_or(u32::MAX),
+        }
+    }
+
+    /// The comments inside the span that precede no parameter (a request without
+    /// parameters).
+    pub fn end_comments(&self) -> &[Range<usize>] {
+        self.comments.get(self.end_start as usize..).unwrap_or(&[])
+    }
+
     /// The comments between the previous parameter occurrence and occurrence `index` of
     /// [`NodeSource::items`] (or inside it, between decl and value); none for an index out
     /// of range.
@@ -645,7 +669,7 @@ impl NodeSource {
         let end = self
             .items
             .get(index + 1)
-            .map_or(self.comments.len(), |next| next.comments as usize);
+            .map_or(self.end_start, |next| next.comments) as usize;
         self.comments
             .get(item.comments as usize..end)
             .unwrap_or(&[])
@@ -671,7 +695,7 @@ pub struct SourceParam {
     value: Range<u32>,
     /// Where this occurrence's comments start in [`NodeSource::comments`]: the leading ones,
     /// then the trailing one when [`TRAILING`] is set; they end where the next occurrence's
-    /// start.
+    /// start (the last occurrence's: where the comments preceding no parameter start).
     comments: u32,
 }
 

@@ -61,7 +61,7 @@ fn inside_comments(bytes: &[u8], net: &Network) -> Vec<Vec<Vec<u8>>> {
     nodes
         .into_iter()
         .map(|s| {
-            let mut ranges: Vec<Range<usize>> = s.end_comments.clone();
+            let mut ranges: Vec<Range<usize>> = s.end_comments().to_vec();
             for k in 0..s.items.len() {
                 ranges.extend(s.leading_comments(k).iter().cloned());
                 ranges.extend(s.trailing_comment(k).cloned());

@@ -601,7 +601,7 @@ WorldBegin
     assert_eq!(lead, ["#\"int invertT\" [0]"]);
     // The span ends with the last value: the comment after it is passed through.
     assert!(text(&s.span).ends_with("\"int linearize\" [1]"));
-    assert!(s.end_comments.is_empty());
+    assert!(s.end_comments().is_empty());
 }
 
 #[test]

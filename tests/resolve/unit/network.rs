@@ -230,6 +230,12 @@ fn params_and_links_stay_compact() {
         "{}",
         std::mem::size_of::<SourceParam>()
     );
+    // One per node read from RIB.
+    assert!(
+        std::mem::size_of::<NodeSource>() <= 72,
+        "{}",
+        std::mem::size_of::<NodeSource>()
+    );
 }
 
 /// Interned names: one copy per name, equal names are the same symbol, and the order is

@@ -27,22 +27,42 @@ fn items_made_on_the_pool_are_taken_in_order() {
 }
 
 /// A panic while taking an item reaches the caller, and the pool stops after the pieces it
-/// is making (each item takes a while, so making all of them would take far longer than
-/// reaching the panic).
+/// is making. Counted from the unwinding on: before it, the pool may have made every item
+/// (while the calling thread waits for a core, or its panic hook prints a backtrace); after
+/// it, only the pieces in the making may be finished (each item takes a while, so making the
+/// rest would take far longer than the caller's unwinding).
 #[test]
 fn a_panic_while_taking_reaches_the_caller() {
     use std::sync::atomic::{AtomicUsize, Ordering};
+    /// Notes how many items were made when it is dropped by an unwinding.
+    struct AtUnwinding<'a> {
+        made: &'a AtomicUsize,
+        at: &'a AtomicUsize,
+    }
+    impl Drop for AtUnwinding<'_> {
+        fn drop(&mut self) {
+            if std::thread::panicking() {
+                self.at
+                    .store(self.made.load(Ordering::SeqCst), Ordering::SeqCst);
+            }
+        }
+    }
     let made = AtomicUsize::new(0);
+    let at_unwinding = AtomicUsize::new(usize::MAX);
     let caught = std::panic::catch_unwind(|| {
         make_in_order(
             10_000,
             8,
             |i| {
-                made.fetch_add(1, Ordering::Relaxed);
+                made.fetch_add(1, Ordering::SeqCst);
                 std::hint::black_box((0..20_000).map(std::hint::black_box).count());
                 i
             },
             |i| {
+                let _mark = AtUnwinding {
+                    made: &made,
+                    at: &at_unwinding,
+                };
                 if i == 100 {
                     std::panic::panic_any("stop");
                 }
@@ -51,6 +71,8 @@ fn a_panic_while_taking_reaches_the_caller() {
     });
     let payload = caught.expect_err("the panic reaches the caller");
     assert_eq!(payload.downcast_ref::<&str>(), Some(&"stop"));
-    let made = made.load(Ordering::Relaxed);
-    assert!(made < 5_000, "{made} items made after the panic");
+    let at = at_unwinding.load(Ordering::SeqCst);
+    assert!(at <= 10_000, "the unwinding was not noted");
+    let after = made.load(Ordering::SeqCst) - at;
+    assert!(after < 1_000, "{after} items made after the panic");
 }
