@@ -1150,10 +1150,11 @@ const MAX_RESERVED_NODES: usize = 1 << 18;
 #[derive(Debug, Clone, Default)]
 pub struct Network {
     graph: StableDiGraph<Node, Edge>,
-    /// Every version of each handle, oldest first (usually one, kept inline), by the
-    /// [`handle_hash`] of the handle. The handle itself is read from the first version's node
-    /// (nodes are never removed): a scene's handles are not stored a second time.
-    handles: HashTable<SmallVec<[NodeId; 1]>>,
+    /// Every version of each handle, oldest first (usually one, kept inline), with the
+    /// [`handle_hash`] of the handle (the table grows without reading a node). The handle
+    /// itself is read from the first version's node (nodes are never removed): a scene's
+    /// handles are not stored a second time.
+    handles: HashTable<(u64, SmallVec<[NodeId; 1]>)>,
     /// The shader ids of the nodes, each stored once.
     shaders: FxHashSet<Arc<str>>,
     materials: Vec<Material>,
@@ -1256,11 +1257,11 @@ impl Network {
         // One look-up of the handle.
         let hash = handle_hash(node.handle());
         let graph = &self.graph;
-        let versions = self
-            .handles
-            .find_mut(hash, |v| graph[v[0]].handle() == node.handle());
+        let versions = self.handles.find_mut(hash, |(h, v)| {
+            *h == hash && graph[v[0]].handle() == node.handle()
+        });
         match versions {
-            Some(versions) => {
+            Some((_, versions)) => {
                 set_version(&mut node, versions.len());
                 let id = self.graph.add_node(node);
                 versions.push(id);
@@ -1269,11 +1270,8 @@ impl Network {
             None => {
                 set_version(&mut node, 0);
                 let id = self.graph.add_node(node);
-                let graph = &self.graph;
                 self.handles
-                    .insert_unique(hash, smallvec::smallvec![id], |v| {
-                        handle_hash(graph[v[0]].handle())
-                    });
+                    .insert_unique(hash, (hash, smallvec::smallvec![id]), |(h, _)| *h);
                 id
             }
         }
@@ -1339,9 +1337,12 @@ impl Network {
 
     /// Every version of `handle`, oldest first.
     pub fn versions(&self, handle: &str) -> &[NodeId] {
+        let hash = handle_hash(handle);
         self.handles
-            .find(handle_hash(handle), |v| self.graph[v[0]].handle() == handle)
-            .map_or(&[], |v| v.as_slice())
+            .find(hash, |(h, v)| {
+                *h == hash && self.graph[v[0]].handle() == handle
+            })
+            .map_or(&[], |(_, v)| v.as_slice())
     }
 
     /// The node with key `handle#k`.
