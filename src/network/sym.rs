@@ -7,9 +7,12 @@
 //!
 //! The table is process-wide and never shrinks: a name, once read, stays for the life of
 //! the process. Names are a bounded vocabulary (the parameters and outputs of the shader
-//! types in use), unlike handles or values, which are never interned.
+//! types in use), unlike handles or values, which are never interned. Each thread keeps the
+//! names it met in a table of its own, looked up without the process-wide table's lock: the
+//! threads of a parallel reader would otherwise take turns at it for every name.
 
 use hashbrown::HashTable;
+use std::cell::RefCell;
 use std::cmp::Ordering;
 use std::fmt;
 use std::hash::{Hash, Hasher};
@@ -30,6 +33,15 @@ pub struct Sym(&'static SymData);
 static TABLE: LazyLock<Mutex<HashTable<&'static SymData>>> =
     LazyLock::new(|| Mutex::new(HashTable::new()));
 
+/// At most this many names are kept in a thread's own table (a bound on its memory for a
+/// file of distinct names; the names beyond are found in the process-wide table).
+const MAX_SEEN: usize = 1 << 16;
+
+thread_local! {
+    /// The names this thread interned or found, by hash.
+    static SEEN: RefCell<HashTable<&'static SymData>> = const { RefCell::new(HashTable::new()) };
+}
+
 impl Sym {
     /// The one `Sym` of `name` (interned on first use).
     pub fn new(name: &str) -> Sym {
@@ -38,6 +50,20 @@ impl Sym {
 
     /// [`Sym::new`] with the name's [`name_hash`](super::name_hash) already known.
     pub fn with_hash(name: &str, hash: u64) -> Sym {
+        SEEN.with_borrow_mut(|seen| {
+            if let Some(&data) = seen.find(hash, |d| &*d.text == name) {
+                return Sym(data);
+            }
+            let sym = Sym::intern(name, hash);
+            if seen.len() < MAX_SEEN {
+                seen.insert_unique(hash, sym.0, |d| d.hash);
+            }
+            sym
+        })
+    }
+
+    /// The `Sym` of `name` from the process-wide table (interned on first use).
+    fn intern(name: &str, hash: u64) -> Sym {
         // A poisoned lock leaves a consistent table (insertion is the only change).
         let mut table = TABLE.lock().unwrap_or_else(PoisonError::into_inner);
         if let Some(&data) = table.find(hash, |d| &*d.text == name) {

@@ -238,6 +238,44 @@ fn params_and_links_stay_compact() {
     );
 }
 
+/// Every thread keeps the names it met, and they are the process's one copy: names interned
+/// first on other threads (each of them first, on several at once) are the same symbols on
+/// this one, before and after it met them itself.
+#[test]
+fn names_are_one_copy_across_threads() {
+    let names: Vec<String> = (0..64).map(|i| format!("threadName{i}")).collect();
+    let met_here = Sym::new(&names[0]);
+    let interned: Vec<Vec<Sym>> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..4)
+            .map(|t| {
+                let names = &names;
+                scope.spawn(move || {
+                    // Each thread walks the names from another place, so that each name is
+                    // interned first by some thread.
+                    let mut syms = vec![None; names.len()];
+                    for k in 0..names.len() {
+                        let i = (k + t * 16) % names.len();
+                        syms[i] = Some(Sym::new(&names[i]));
+                    }
+                    syms.into_iter().map(Option::unwrap).collect()
+                })
+            })
+            .collect();
+        workers.into_iter().map(|w| w.join().unwrap()).collect()
+    });
+    for (i, name) in names.iter().enumerate() {
+        let here = Sym::new(name);
+        assert_eq!(here.as_str(), name);
+        for syms in &interned {
+            assert!(std::ptr::eq(syms[i].as_str(), here.as_str()), "{name}");
+        }
+    }
+    assert!(std::ptr::eq(
+        met_here.as_str(),
+        Sym::new(&names[0]).as_str()
+    ));
+}
+
 /// Interned names: one copy per name, equal names are the same symbol, and the order is
 /// the names' byte-wise order.
 #[test]
