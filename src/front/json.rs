@@ -1793,8 +1793,8 @@ struct Reader<'t> {
 /// to the next (`pieces`).
 #[derive(Default)]
 struct Memo {
-    /// The names it interned: the process-wide table takes a lock per look-up, which the
-    /// threads reading pieces would contend for.
+    /// The names it interned, looked up here before the thread's table of names
+    /// ([`Sym::with_hash`]).
     syms: hashbrown::HashTable<Sym>,
     /// One declaration per type string of the canonical form, shared by its parameters: the
     /// first [`FEW_DECLS`] found by a scan (a document uses a few), the others by a map.
