@@ -1448,6 +1448,36 @@ impl CrateLayer {
             .map(|&(_, ty, start)| (ty, start))
     }
 
+    /// The token of field `field` when it is an inlined token (as `typeName` is), without
+    /// the 160-byte value [`CrateLayer::own_value`] would build and move.
+    fn own_token(&self, field: usize) -> Option<openusd::tf::Token> {
+        let rep = Rep(self.fields.get(field)?.1);
+        let inlined = (
+            rep.ty(),
+            rep.is_array(),
+            rep.is_inlined(),
+            rep.is_compressed(),
+        ) == (CRATE_TOKEN, false, true, false);
+        inlined.then(|| self.tokens.get(rep.low() as usize).cloned())?
+    }
+
+    /// The targets of field `field` when it is a path list operation decoded here (as
+    /// `connectionPaths` is), without the value [`CrateLayer::own_value`] would build.
+    fn own_targets(&self, field: usize) -> Option<Vec<sdf::Path>> {
+        let rep = Rep(self.fields.get(field)?.1);
+        if (
+            rep.ty(),
+            rep.is_array(),
+            rep.is_inlined(),
+            rep.is_compressed(),
+        ) != (CRATE_PATH_LIST_OP, false, false, false)
+        {
+            return None;
+        }
+        let at = usize::try_from(rep.payload()).ok()?;
+        Some(self.path_list_op(at)?.compose_over(&[]))
+    }
+
     /// The value of field `field` when it is of a type decoded here (see [`CrateLayer`])
     /// and laid out as writers lay it out; nothing for any other, which `openusd` decodes.
     fn own_value(&self, field: usize) -> Option<sdf::Value> {
@@ -1684,10 +1714,14 @@ impl CrateLayer {
                 None => Ok(None),
             }
         };
+        // The usual type name and targets straight from the file; any other form through a
+        // value, as every other field.
+        let type_name = found[0].and_then(|i| self.own_token(i));
+        let targets = found[2].and_then(|i| self.own_targets(i));
         AttrFields {
-            type_name: type_name_of(read(0)),
+            type_name: type_name.unwrap_or_else(|| type_name_of(read(0))),
             default: default_of(read(1)),
-            targets: targets_of(read(2)),
+            targets: targets.unwrap_or_else(|| targets_of(read(2))),
             samples: samples_of(read(3)),
         }
     }
