@@ -58,7 +58,7 @@ use crate::front::remembered::Remembered;
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes,
-    RequestKind, Sym, Terminal, name_hash,
+    RequestKind, Sym, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -983,7 +983,7 @@ impl<'de> Visitor<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, n, pointer) = (self.r, self.n, self.pointer);
         while let Some(name) = map.next_key_seed(Key)? {
-            if !n.add_parameter(r.sym(&name)) {
+            if !n.add_parameter(Sym::new(&name)) {
                 return Err(r.ctx.duplicate_key(&name));
             }
             let p = P::Key(pointer, &name);
@@ -1793,9 +1793,6 @@ struct Reader<'t> {
 /// to the next (`pieces`).
 #[derive(Default)]
 struct Memo {
-    /// The names it interned, looked up here before the thread's table of names
-    /// ([`Sym::with_hash`]).
-    syms: hashbrown::HashTable<Sym>,
     /// One declaration per type string of the canonical form, shared by its parameters: the
     /// first [`FEW_DECLS`] found by a scan (a document uses a few), the others by a map.
     few_decls: Vec<Arc<Decl>>,
@@ -1823,17 +1820,6 @@ impl<'t> Reader<'t> {
             order: Order::default(),
             materials: 0,
         }
-    }
-
-    /// The interned `name`.
-    fn sym(&mut self, name: &str) -> Sym {
-        let hash = name_hash(name);
-        if let Some(&sym) = self.memo.syms.find(hash, |s| s.as_str() == name) {
-            return sym;
-        }
-        let sym = Sym::with_hash(name, hash);
-        self.memo.syms.insert_unique(hash, sym, |s| s.name_hash());
-        sym
     }
 
     fn loc(&self, pointer: &str) -> Location {
@@ -2037,7 +2023,7 @@ impl<'t> Reader<'t> {
     /// Bind a connection to a node of the material, or keep it dangling (JS010).
     fn bind(&mut self, c: &Conn, pointer: &P, by_name: &NodesByName, material: &str) -> LocalLink {
         match by_name.get(&*c.node) {
-            Some(&Some(id)) => LocalLink::Node(id, c.output.as_deref().map(|o| self.sym(o))),
+            Some(&Some(id)) => LocalLink::Node(id, c.output.as_deref().map(Sym::new)),
             _ => {
                 let d = Diagnostic::warning(
                     "JS010",
@@ -2140,7 +2126,7 @@ impl<'t> Reader<'t> {
         // Inputs name parameters given above, or add their own.
         let mut conns: NodeConns<'de> = Vec::with_capacity(n.inputs.len());
         for (input, list) in std::mem::take(&mut n.inputs) {
-            let sym = self.sym(&input);
+            let sym = Sym::new(&input);
             let k = n.parameter_index(sym).unwrap_or_else(|| {
                 params.push(Param::from_shared(sym, None, None, ParamAt::Unknown, None));
                 params.len() - 1

@@ -10,9 +10,9 @@ use hashbrown::HashTable;
 use rustc_hash::FxHasher;
 use std::hash::Hasher;
 
-/// At most this many distinct parameters (or names) are remembered by one of a reader's
-/// tables while a file is read: an entry keeps its text, and a file of distinct values must
-/// not make a reader keep a copy of it.
+/// At most this many distinct parameters are remembered by one of a reader's tables while
+/// a file is read: an entry keeps its text, and a file of distinct values must not make a
+/// reader keep a copy of it.
 pub(crate) const MAX_REMEMBERED_PARAMS: usize = 1 << 16;
 
 /// The hash of a text alone: the part of an entry's hash that needs no key (the RIB reader

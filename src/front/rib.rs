@@ -36,7 +36,7 @@ mod params;
 mod pipeline;
 
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-use crate::front::remembered::{MAX_REMEMBERED_PARAMS, text_hash};
+use crate::front::remembered::text_hash;
 use crate::limits::{Limit, LimitExceeded, Limits};
 use crate::network::{
     Link, Links, Material, MaterialNodes, Network, Node, NodeId, NodeSource, Param, ParamAt,
@@ -156,7 +156,6 @@ fn parse_rib_path(
         src: bytes,
         types,
         net,
-        outputs: FxHashMap::default(),
         known: FxHashMap::default(),
         limits: options.limits,
         over_limit: None,
@@ -637,9 +636,6 @@ struct Assembler<'a, 't> {
     src: &'a [u8],
     types: &'t dyn ParamTypes,
     net: Network,
-    /// Output names of connections read so far (at most [`MAX_REMEMBERED_PARAMS`]), interned:
-    /// a look-up here takes no lock.
-    outputs: FxHashMap<Box<str>, Sym>,
     /// Whether the definitions know a shader, per address of its shared id (alive until
     /// the file is read): asked once per request, and a shader's address is quicker to
     /// look up than its name.
@@ -975,9 +971,9 @@ impl<'a> Assembler<'a, '_> {
             );
         }
         // Comments after the last parameter lie outside the span (they are passed through);
-        // only comments inside the header of a request without parameters remain.
-        let after: Vec<Range<usize>> = comments.drain(pending..).filter(|c| c.end <= end).collect();
-        comments.extend(after);
+        // only comments inside the header of a request without parameters remain. (The
+        // occurrences' own all end inside the span, which ends at or after their values.)
+        comments.retain(|c| c.end <= end);
         self.add_node(
             kind,
             &handle,
@@ -1057,18 +1053,6 @@ impl<'a> Assembler<'a, '_> {
             .or_insert_with(|| types.shader_known(shared_shader))
     }
 
-    /// The interned output name `name` (see [`Assembler::outputs`]).
-    fn output_name(&mut self, name: &str) -> Sym {
-        if let Some(&shared) = self.outputs.get(name) {
-            return shared;
-        }
-        let shared = Sym::new(name);
-        if self.outputs.len() < MAX_REMEMBERED_PARAMS {
-            self.outputs.insert(Box::from(name), shared);
-        }
-        shared
-    }
-
     /// Connections of a `reference` parameter: one `handle:output` string per element, split
     /// at the last `:`, bound to the latest version of the handle defined so far.
     fn read_links(
@@ -1113,7 +1097,7 @@ impl<'a> Assembler<'a, '_> {
                 Some(k) => (&s[..k], Some(&s[k + 1..])),
                 None => (&*s, None),
             };
-            let output = output.map(|o| self.output_name(o));
+            let output = output.map(Sym::new);
             match self.net.find(handle) {
                 Some(id) => links.push(Link::node_sym(id, output)),
                 None => {

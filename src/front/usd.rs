@@ -1448,45 +1448,42 @@ impl CrateLayer {
             .map(|&(_, ty, start)| (ty, start))
     }
 
+    /// The value representation of field `field` when it may be decoded here: any but a
+    /// compressed one (`openusd` decodes those).
+    fn own_rep(&self, field: usize) -> Option<Rep> {
+        let rep = Rep(self.fields.get(field)?.1);
+        (!rep.is_compressed()).then_some(rep)
+    }
+
     /// The token of field `field` when it is an inlined token (as `typeName` is), without
     /// the 160-byte value [`CrateLayer::own_value`] would build and move.
     fn own_token(&self, field: usize) -> Option<openusd::tf::Token> {
-        let rep = Rep(self.fields.get(field)?.1);
-        let inlined = (
-            rep.ty(),
-            rep.is_array(),
-            rep.is_inlined(),
-            rep.is_compressed(),
-        ) == (CRATE_TOKEN, false, true, false);
-        inlined.then(|| self.tokens.get(rep.low() as usize).cloned())?
+        let rep = self.own_rep(field)?;
+        match rep.layout() {
+            (CRATE_TOKEN, false, true) => self.tokens.get(rep.low() as usize).cloned(),
+            _ => None,
+        }
     }
 
     /// The targets of field `field` when it is a path list operation decoded here (as
     /// `connectionPaths` is), without the value [`CrateLayer::own_value`] would build.
     fn own_targets(&self, field: usize) -> Option<Vec<sdf::Path>> {
-        let rep = Rep(self.fields.get(field)?.1);
-        if (
-            rep.ty(),
-            rep.is_array(),
-            rep.is_inlined(),
-            rep.is_compressed(),
-        ) != (CRATE_PATH_LIST_OP, false, false, false)
-        {
-            return None;
+        let rep = self.own_rep(field)?;
+        match rep.layout() {
+            (CRATE_PATH_LIST_OP, false, false) => {
+                let at = usize::try_from(rep.payload()).ok()?;
+                Some(self.path_list_op(at)?.compose_over(&[]))
+            }
+            _ => None,
         }
-        let at = usize::try_from(rep.payload()).ok()?;
-        Some(self.path_list_op(at)?.compose_over(&[]))
     }
 
     /// The value of field `field` when it is of a type decoded here (see [`CrateLayer`])
     /// and laid out as writers lay it out; nothing for any other, which `openusd` decodes.
     fn own_value(&self, field: usize) -> Option<sdf::Value> {
-        let rep = Rep(self.fields.get(field)?.1);
-        if rep.is_compressed() {
-            return None;
-        }
+        let rep = self.own_rep(field)?;
         let at = usize::try_from(rep.payload()).ok()?;
-        match (rep.ty(), rep.is_array(), rep.is_inlined()) {
+        match rep.layout() {
             (CRATE_TOKEN, false, true) => self
                 .tokens
                 .get(rep.low() as usize)
@@ -1571,7 +1568,7 @@ impl CrateLayer {
         rep: Rep,
     ) -> Option<impl Iterator<Item = Option<&openusd::tf::Token>> + '_> {
         let at = usize::try_from(rep.payload()).ok()?;
-        let (pos, count) = match (rep.ty(), rep.is_array(), rep.is_inlined()) {
+        let (pos, count) = match rep.layout() {
             (CRATE_TOKEN, true, false) if at == 0 => (0, 0),
             (CRATE_TOKEN, true, false) => self.token_array_span(at)?,
             (CRATE_TOKEN_VECTOR, false, false) => (at.checked_add(8)?, le_size(&self.bytes, at)?),
@@ -1609,11 +1606,8 @@ impl CrateLayer {
     /// as a list of tokens, borrowed from the file's tokens; nothing for anything else
     /// (then the field is read as a value).
     fn own_token_texts(&self, field: usize) -> Option<Vec<&str>> {
-        let rep = Rep(self.fields.get(field)?.1);
-        if rep.is_compressed() {
-            return None;
-        }
-        let texts = self.token_list(rep)?.map(|t| t.map(|t| t.as_str()));
+        let texts = self.token_list(self.own_rep(field)?)?;
+        let texts = texts.map(|t| t.map(|t| t.as_str()));
         texts.collect()
     }
 

@@ -554,7 +554,7 @@ impl<'de> Scan<'de> {
     fn parameter(&mut self, r: &mut Reader<'_>, n: &mut NodeState<'de>) -> Option<()> {
         let at = self.i;
         let name = self.key()?;
-        let sym = r.sym(name);
+        let sym = Sym::new(name);
         if !n.add_parameter(sym) {
             return None;
         }

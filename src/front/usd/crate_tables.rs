@@ -497,4 +497,9 @@ impl Rep {
     pub(super) fn low(self) -> u32 {
         (self.0 & 0xffff_ffff) as u32
     }
+    /// Its type, whether it is an array and whether it is inlined: what decides how an
+    /// uncompressed value is decoded.
+    pub(super) fn layout(self) -> (u64, bool, bool) {
+        (self.ty(), self.is_array(), self.is_inlined())
+    }
 }
