@@ -504,11 +504,11 @@ fn dependency_order(net: &Network, nodes: &[NodeId]) -> Vec<NodeId> {
     let mut downstream: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
     for (i, &n) in nodes.iter().enumerate() {
         for u in net.upstream_nodes(n) {
-            if let Some(&j) = pos.get(&u) {
-                if j != i {
-                    indegree[i] += 1;
-                    downstream[j].push(i);
-                }
+            if let Some(&j) = pos.get(&u)
+                && j != i
+            {
+                indegree[i] += 1;
+                downstream[j].push(i);
             }
         }
     }
@@ -642,15 +642,15 @@ impl Writer<'_> {
         for p in node.params() {
             self.fresh_param_text(node, p, lines.begin())?;
         }
-        if node.kind() == RequestKind::Bxdf && node.material_id().is_none() {
-            if let Some(name) = self.material_name_of(id) {
-                if name != node.handle() {
-                    let t = lines.begin();
-                    t.extend_from_slice(b"\"string __materialid\" [");
-                    push_quoted(t, name);
-                    t.push(b']');
-                }
-            }
+        if node.kind() == RequestKind::Bxdf
+            && node.material_id().is_none()
+            && let Some(name) = self.material_name_of(id)
+            && name != node.handle()
+        {
+            let t = lines.begin();
+            t.extend_from_slice(b"\"string __materialid\" [");
+            push_quoted(t, name);
+            t.push(b']');
         }
         self.scratch.replace(lines.finish(out)?);
         Ok(())

@@ -1674,7 +1674,7 @@ fn array_default(ty: &Type, text: &str, issues: &mut Issues) -> Option<Value> {
     let (nums, ints) = numbers(base, &tokens, issues);
     let count = tokens.len();
     let k = count / c;
-    if count % c != 0 {
+    if !count.is_multiple_of(c) {
         issues.add(
             Severity::Warning,
             format!("default `{text}` has {count} values, not a multiple of {c}; the partial element is dropped"),

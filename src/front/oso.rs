@@ -988,7 +988,7 @@ impl Reader<'_> {
             ArraySpec::None => comps,
             // Saturating: a declared length near usize::MAX must not overflow (it simply never matches).
             ArraySpec::Fixed(n) => comps.saturating_mul(n),
-            ArraySpec::Dynamic if count % comps == 0 => count,
+            ArraySpec::Dynamic if count.is_multiple_of(comps) => count,
             ArraySpec::Dynamic => count.next_multiple_of(comps),
         };
         let pos = sym.values.first().map_or(sym.name_pos, |t| t.pos);

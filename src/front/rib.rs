@@ -486,16 +486,14 @@ fn read_args(
             (TokKind::Open, None) => {
                 // The usual array in one pass; anything else token by token.
                 let first = args.items.len();
-                if keep {
-                    if let Some(close) = lx.flat_array(&mut args.items) {
-                        let items = first..args.items.len();
-                        args.pieces.push(Piece::Array {
-                            open: tok,
-                            items,
-                            close,
-                        });
-                        continue;
-                    }
+                if keep && let Some(close) = lx.flat_array(&mut args.items) {
+                    let items = first..args.items.len();
+                    args.pieces.push(Piece::Array {
+                        open: tok,
+                        items,
+                        close,
+                    });
+                    continue;
                 }
                 array = Some((tok, first, None));
             }
@@ -514,15 +512,15 @@ fn read_args(
                 );
             }
             (TokKind::Close, Some(_)) => {
-                if let Some((open, first, _)) = array.take() {
-                    if keep {
-                        let items = first..args.items.len();
-                        args.pieces.push(Piece::Array {
-                            open,
-                            items,
-                            close: tok,
-                        });
-                    }
+                if let Some((open, first, _)) = array.take()
+                    && keep
+                {
+                    let items = first..args.items.len();
+                    args.pieces.push(Piece::Array {
+                        open,
+                        items,
+                        close: tok,
+                    });
                 }
             }
         }
@@ -580,22 +578,25 @@ fn split_decl(text: &str) -> Option<DeclWords<'_>> {
         name,
         ..DeclWords::default()
     };
-    if let Some(last) = words.peek() {
-        if last.len() >= 2 && last.starts_with('[') && last.ends_with(']') {
-            d.array = Some(&last[1..last.len() - 1]);
-            words.next();
-        }
+    if let Some(last) = words.peek()
+        && last.len() >= 2
+        && last.starts_with('[')
+        && last.ends_with(']')
+    {
+        d.array = Some(&last[1..last.len() - 1]);
+        words.next();
     }
-    if let Some(&last) = words.peek() {
-        if last != "reference" && !CLASSES.contains(&last) {
-            words.next();
-            match (d.array, last.find('[')) {
-                (None, Some(open)) if open > 0 && last.ends_with(']') => {
-                    d.type_word = Some(&last[..open]);
-                    d.array = Some(&last[open + 1..last.len() - 1]);
-                }
-                _ => d.type_word = Some(last),
+    if let Some(&last) = words.peek()
+        && last != "reference"
+        && !CLASSES.contains(&last)
+    {
+        words.next();
+        match (d.array, last.find('[')) {
+            (None, Some(open)) if open > 0 && last.ends_with(']') => {
+                d.type_word = Some(&last[..open]);
+                d.array = Some(&last[open + 1..last.len() - 1]);
             }
+            _ => d.type_word = Some(last),
         }
     }
     for w in words {
@@ -843,13 +844,13 @@ fn split_into<'a>(
             .into());
         };
         let mut item = SourceParam::new(origin, decl, value_at, index_u32(split.pending));
-        if let Some(Piece::Comment(c)) = pieces.get(i) {
-            if c.line == value_piece.end_line() {
-                comments.push(c.start..c.end);
-                item.set_trailing();
-                split.end = c.end;
-                i += 1;
-            }
+        if let Some(Piece::Comment(c)) = pieces.get(i)
+            && c.line == value_piece.end_line()
+        {
+            comments.push(c.start..c.end);
+            item.set_trailing();
+            split.end = c.end;
+            i += 1;
         }
         split.pending = comments.len();
         split.items.push(item);
@@ -894,10 +895,10 @@ impl<'a> Assembler<'a, '_> {
             error,
         } = split;
         let occurrences = &occurrences[occurrences_at];
-        if occurrences.is_empty() {
-            if let Some(e) = error {
-                return Err(e);
-            }
+        if occurrences.is_empty()
+            && let Some(e) = error
+        {
+            return Err(e);
         }
         // The network's copy (its address keys [`Assembler::known`]).
         let shader = self.net.shared_shader(&shader);

@@ -235,11 +235,10 @@ pub(super) fn optimize_with(
     // 4. Unused input slots.
     let mut used_slots = vec![false; b.inputs.len()];
     for op in &program.ops {
-        if op.code == OpCode::Input {
-            if let Some(u) = used_slots.get_mut(op.args[0] as usize) {
+        if op.code == OpCode::Input
+            && let Some(u) = used_slots.get_mut(op.args[0] as usize) {
                 *u = true;
             }
-        }
     }
     let mut slot_index = HashMap::default();
     let mut inputs = Vec::new();

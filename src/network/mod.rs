@@ -1866,10 +1866,10 @@ impl Network {
             // Walk inputs in parameter source order so the result is deterministic.
             for p in &self.graph[n].params {
                 for link in p.links.iter() {
-                    if let Some(u) = link.upstream_node() {
-                        if seen.insert(u) {
-                            queue.push_back(u);
-                        }
+                    if let Some(u) = link.upstream_node()
+                        && seen.insert(u)
+                    {
+                        queue.push_back(u);
                     }
                 }
             }

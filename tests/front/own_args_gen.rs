@@ -620,10 +620,10 @@ fn surface_page(name: &str) -> &'static str {
             if prefix.is_empty() {
                 return page;
             }
-            if let Some(rest) = name.strip_prefix(prefix) {
-                if rest.is_empty() || rest.starts_with(|c: char| c.is_ascii_uppercase()) {
-                    return page;
-                }
+            if let Some(rest) = name.strip_prefix(prefix)
+                && (rest.is_empty() || rest.starts_with(|c: char| c.is_ascii_uppercase()))
+            {
+                return page;
             }
         }
     }
@@ -653,11 +653,11 @@ const LABEL_PREFIXES: &[&str] = &[
 fn label(name: &str) -> String {
     let mut base = name;
     for prefix in LABEL_PREFIXES {
-        if let Some(rest) = name.strip_prefix(prefix) {
-            if rest.starts_with(|c: char| c.is_ascii_uppercase()) {
-                base = rest;
-                break;
-            }
+        if let Some(rest) = name.strip_prefix(prefix)
+            && rest.starts_with(|c: char| c.is_ascii_uppercase())
+        {
+            base = rest;
+            break;
         }
     }
     let mut words = String::new();

@@ -293,7 +293,7 @@ fn exr_keeps_every_value_and_writes_nothing_on_a_short_or_long_image() {
     ];
     let (w, h) = (specials.len(), 37); // 37 rows: two full blocks of 16 and a short one
     let value = |x: usize, y: usize, c: usize| {
-        if y % 2 == 0 {
+        if y.is_multiple_of(2) {
             specials[(x + c) % specials.len()]
         } else {
             (y * 1000 + x * 10 + c) as f32 / 7.0

@@ -166,10 +166,10 @@ fn check(lobe: &Lobe, v: Vec3, l: Vec3, u: [f32; 3]) -> Result<(), String> {
     if !ok(a.reflect) || !ok(a.transmit) || !ok(a.transmit_energy) {
         return Err(format!("albedo {a:?}"));
     }
-    if let Some(s) = p.sample(u) {
-        if !(ok(s.weight) && s.pdf > 0.0 && s.pdf.is_finite() && s.l.is_finite()) {
-            return Err(format!("sample {s:?}"));
-        }
+    if let Some(s) = p.sample(u)
+        && !(ok(s.weight) && s.pdf > 0.0 && s.pdf.is_finite() && s.l.is_finite())
+    {
+        return Err(format!("sample {s:?}"));
     }
     Ok(())
 }

@@ -217,10 +217,10 @@ pub fn textured_ir() -> MaterialIr {
 pub fn point(rng: &mut Rng, i: usize) -> ShadingPoint<'static> {
     let f = Frame::new(rng.sphere(), rng.sphere());
     let mut v = rng.sphere();
-    if (v.dot(f.z) < 0.0) != (i % 3 == 0) {
+    if (v.dot(f.z) < 0.0) != i.is_multiple_of(3) {
         v = -v;
     }
-    if i % 5 == 0 {
+    if i.is_multiple_of(5) {
         // Nearly in the tangent plane, on the side chosen above.
         let side = v.dot(f.z).signum();
         v = (f.x + f.z * (side * 1e-3)).normalize();

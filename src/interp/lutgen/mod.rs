@@ -191,12 +191,12 @@ pub fn dielectric_moments(mu: f64, alpha: f64, eta: f64) -> [f64; 3] {
             if lr.z > 0.0 {
                 acc[0] += f / ((1.0 + lambda_v + ref64::ggx_lambda(alpha, lr)) * g1v);
             }
-            if let Some(lt) = ref64::refract(v, h, eta) {
-                if lt.z < 0.0 {
-                    let w = inv_eta2 / ((1.0 + lambda_v + ref64::ggx_lambda(alpha, lt)) * g1v);
-                    acc[1] += (wq - f) * w;
-                    acc[2] += wq * w;
-                }
+            if let Some(lt) = ref64::refract(v, h, eta)
+                && lt.z < 0.0
+            {
+                let w = inv_eta2 / ((1.0 + lambda_v + ref64::ggx_lambda(alpha, lt)) * g1v);
+                acc[1] += (wq - f) * w;
+                acc[2] += wq * w;
             }
         }
     }

@@ -198,22 +198,21 @@ pub fn run(args: &RenderArgs, common: &CommonOptions) -> ExitCode {
     if let Err(msg) = check_input_names(&materials, &args.source.inputs) {
         return usage(msg);
     }
-    if let Some(name) = aov {
-        if !materials
+    if let Some(name) = aov
+        && !materials
             .iter()
             .any(|c| find_leaf(&c.material, name).is_some())
-        {
-            let mut known: Vec<String> = materials
-                .iter()
-                .flat_map(|c| c.material.leaves().iter().map(|l| l.leaf.label.clone()))
-                .collect();
-            known.sort();
-            known.dedup();
-            return usage(format!(
-                "--aov lobe:{name}: no lobe with this label, kind or node id (lobes: {})",
-                known.join(", ")
-            ));
-        }
+    {
+        let mut known: Vec<String> = materials
+            .iter()
+            .flat_map(|c| c.material.leaves().iter().map(|l| l.leaf.label.clone()))
+            .collect();
+        known.sort();
+        known.dedup();
+        return usage(format!(
+            "--aov lobe:{name}: no lobe with this label, kind or node id (lobes: {})",
+            known.join(", ")
+        ));
     }
     let base = PreviewOptions {
         size: args.size,

@@ -161,13 +161,12 @@ fn aniso_dielectric_ratios(
             one += wr;
             acc[0] += wr * f;
         }
-        if want[1] || want[2] {
-            if let Some(lt) = refract(v, h, eta).filter(|l| l.z < 0.0) {
+        if (want[1] || want[2])
+            && let Some(lt) = refract(v, h, eta).filter(|l| l.z < 0.0) {
                 let wt = w * inv_eta2 * g2_over_g1(masking, lambda_v, ggx.lambda(lt));
                 acc[1] += wt * (1.0 - f);
                 acc[2] += wt;
             }
-        }
     });
     let inv = if one > 0.0 { 1.0 / one } else { 0.0 };
     let mut k = 0;
