@@ -5,7 +5,7 @@
 //! * `ref10/native_eval`: the ten leaves called directly (concrete types, no dispatch, fixed
 //!   weights), same L, including the world → local transform; compiled with AVX2 where the
 //!   interpreter's scalar entry points run their AVX2 versions (`simd::SCALAR_LEVEL`), so
-//!   the limit uses the same instructions as what it limits (from session 16);
+//!   the limit uses the same instructions as what it limits;
 //! * `ref10/interp_eval_paired`: `interp_eval` with a `native_eval` pass run between every
 //!   two timed passes; after the row it prints both evals' mean over the same passes and
 //!   the interpreter's overhead (the figure for the budget: the separate rows run a minute
@@ -13,14 +13,12 @@
 //! * `ref10/interp_prepare_eval` vs `ref10/native_prepare_eval`: prepare + one eval per
 //!   (V, L) pair (4096 pairs; ref10 is uniform, so `prepare_into` runs its fused form); the
 //!   native prepare prepares the ten leaves, their view-independent parts bound once as the
-//!   interpreter binds its constant leaves (before S13 it prepared them unbound, which
-//!   redid each conductor's F82 fit and the table lookups at every point and roughly
-//!   doubled its time), and scales the weights from the layer tops' albedos, as the spec's
-//!   hand-inlined anchor does (§6.2; before S17 its weights were fixed); its selection
-//!   probabilities stay fixed;
+//!   interpreter binds its constant leaves (so neither redoes a conductor's F82 fit or the
+//!   table look-ups at every point), and scales the weights from the layer tops' albedos, as
+//!   the spec's hand-inlined anchor does (§6.2); its selection probabilities stay fixed;
 //! * `ref10/interp_prepare_eval_paired`: `interp_prepare_eval` with a `native_prepare_eval`
 //!   pass between every two timed passes, printing both means over the same passes and
-//!   their ratio (from session 16);
+//!   their ratio;
 //! * `ref10/batch16_prepare_lanes`: the lane-parallel prepare of 16 points
 //!   (`Material::prepare_batch_eval_into`, what the batched preview runs), ns per point;
 //! * `ref10/batch16_eval`: `PreparedBatch::<16>::eval`, 16 points × 256 light directions;

@@ -1,9 +1,9 @@
-//! Resolution throughput on a generated scene of layered materials (issue 4 targets: resolve
+//! Resolution throughput on a generated scene of layered materials (targets: resolve
 //! 10,000 materials ≤ 300 ms single-threaded; doubling the scene ≤ 2.2× the time).
 //!
 //! `scene/*` is wall-clock time (`parse`, `parse_json` and `write` also as MB/s of the text read
 //! or written; the readers' rows leave the dropping of the network out); `scene/parse_json`
-//! reads the same network from its JSON form (issue 33: ≤ 1.5× `scene/parse`). `scene_cpu/resolve` is the same resolution measured as the
+//! reads the same network from its JSON form (target: ≤ 1.5× `scene/parse`). `scene_cpu/resolve` is the same resolution measured as the
 //! thread's CPU time (ns): resolution is single-threaded, and on the shared development
 //! machine wall-clock time mostly measures the other processes. `scene_cpu/parse` is the RIB
 //! reader's CPU time on the calling thread, for the same reason: with the `parallel` feature a

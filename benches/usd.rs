@@ -1,4 +1,4 @@
-//! USD input against RIB input (issue 32 target: a 1,000-material `.usdc` reads and resolves
+//! USD input against RIB input (target: a 1,000-material `.usdc` reads and resolves
 //! in ≤ 2× the time of the same network in RIB).
 //!
 //! `usd/rib/1000` reads and resolves the generated layered scene from RIB; `usd/usdc/1000`

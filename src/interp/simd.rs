@@ -48,8 +48,8 @@ impl Level {
 
 /// The level the scalar entry points run at ([`crate::interp::Material::prepare_into`],
 /// [`crate::interp::Prepared::eval`] and their kin) when the CPU has it. AVX2, not AVX-512:
-/// on the development host the AVX2 version ran ref10's prepare + one eval in 370 ns, the
-/// baseline in 405 ns and the AVX-512 version in 461 ns.
+/// for one point at a time the AVX-512 build was the slowest of the three (its wider
+/// registers buy nothing there, and its start-up costs are paid per call).
 pub const SCALAR_LEVEL: Level = Level::Avx2;
 
 /// The widest [`Level`] this CPU supports, asked once and then read from a static (the

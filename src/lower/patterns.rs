@@ -1,4 +1,4 @@
-//! The small pattern set fused into the parameter program (issue 5, scope 4): constant, mix,
+//! The small pattern set fused into the parameter program: constant, mix,
 //! remap, clamp, checker, value noise and a uv manifold. Their definitions are
 //! `args/vsConstant.args` … `args/vsUvManifold.args`; every pattern has the outputs
 //! `resultRGB` (color) and `resultF` (float, the first channel), the manifold `result`

@@ -1,4 +1,4 @@
-//! Determinism (issue 7): `resolve` gives byte-identical output (stdout and stderr) across
+//! Determinism: `resolve` gives byte-identical output (stdout and stderr) across
 //! runs and across rayon thread counts, in RIB and JSON; so do the stages after it, `compile`
 //! (IR and lobe listings) and `render` (the preview image, rendered in parallel by rows).
 

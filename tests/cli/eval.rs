@@ -1,4 +1,4 @@
-//! `vstructc eval` (issue 6 item 5): per-lobe weights and values and the total, as a text
+//! `vstructc eval`: per-lobe weights and values and the total, as a text
 //! table (snapshot, reviewed by hand) and as JSON (checked against the library).
 
 use std::path::PathBuf;

@@ -1,4 +1,4 @@
-//! Preview images through the CLI (closures.md §1.6, §5.9; issue 6 "Preview"): every
+//! Preview images through the CLI (closures.md §1.6, §5.9): every
 //! example renders to a valid PNG with plausible content, furnace renders of conserving
 //! materials equal the background, the PFM layout, contact sheets, AOVs, determinism, and
 //! the exit statuses of bad invocations.

@@ -1,4 +1,4 @@
-//! No lost data (issue 7): resolving a full scene RIB keeps every byte outside the shading-node
+//! No lost data: resolving a full scene RIB keeps every byte outside the shading-node
 //! requests (every non-network request, comment and value) and every comment inside them.
 //!
 //! Method: read both the input and `vstructc resolve`'s output with the RIB reader, cut each

@@ -1,5 +1,5 @@
 //! A large scene RIB (mostly geometry, one shading network) is resolved without holding several
-//! copies of it in memory (issue 7 scope 3): the reader keeps one copy of the input, and the
+//! copies of it in memory: the reader keeps one copy of the input, and the
 //! writer streams the untouched parts from it into the output file.
 //!
 //! The default run uses a 64 MB scene (fast enough for CI) and only checks that the output is
