@@ -4,7 +4,8 @@
 //!
 //! `cargo bench --bench scale`. The pipeline is the one `vstructc resolve` runs (registry with
 //! the shape's definition, RIB read, resolution, RIB write); the shapes and their sizes are
-//! those of the issue, divided by 4 to keep the bench short.
+//! those of the issue, divided by 4 to keep the bench short. `scale_info` reads the `.args`
+//! shapes at full size as `vstructc info` does.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -43,9 +44,9 @@ fn pipeline(scene: &ShapeScene) -> Vec<u8> {
 fn size(shape: Shape) -> usize {
     match shape {
         Shape::SharedLayer | Shape::SharedMixer => 1250,
-        Shape::FanIn | Shape::ArgsParams => 2500,
+        Shape::FanIn | Shape::ArgsParams | Shape::ArgsParamsOneLine => 2500,
         Shape::RedefinedBxdf => 625,
-        Shape::ArgsHeads => 1250,
+        Shape::ArgsHeads | Shape::ArgsHeadsOneLine => 1250,
     }
 }
 
@@ -76,5 +77,36 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// What `vstructc info` asks of the library for the shape's definition: the file read into
+/// a registry, its definition and its vstruct tables (the printing is the command's).
+fn info(scene: &ShapeScene) -> usize {
+    let (id, text) = scene.args.as_ref().expect("an .args shape");
+    let mut registry = Registry::embedded();
+    registry.add_args_text(id, text).expect("generated .args");
+    let def = registry.definition(id).expect("defined");
+    let tables = registry.tables(id).expect("tables");
+    black_box(&tables);
+    def.inputs.len()
+}
+
+/// The `.args` shapes at the issue's sizes for `info`: 100,000 parameters and 20,000 heads
+/// with a member each, each file on one line and as one declaration per line.
+fn bench_info(c: &mut Criterion) {
+    let mut group = c.benchmark_group("scale_info");
+    group.sample_size(10);
+    for (shape, n) in [
+        (Shape::ArgsParams, 100_000),
+        (Shape::ArgsParamsOneLine, 100_000),
+        (Shape::ArgsHeads, 20_000),
+        (Shape::ArgsHeadsOneLine, 20_000),
+    ] {
+        let scene = shape.scene(n);
+        group.bench_with_input(BenchmarkId::new(shape.name(), n), &scene, |b, s| {
+            b.iter(|| info(s))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_info);
 criterion_main!(benches);

@@ -6,7 +6,8 @@
 //!
 //! SHAPE is `layered` (the bench scene of N materials), `chain` (a pattern chain of N nodes)
 //! or one of the scaling shapes (`shared_layer`, `shared_mixer`, `fan_in`, `redefined_bxdf`,
-//! `args_params`, `args_heads`). Writes `DIR/scene.rib`, and for the `.args` shapes the
+//! `args_params`, `args_heads`, `args_params_one_line`,
+//! `args_heads_one_line`). Writes `DIR/scene.rib`, and for the `.args` shapes the
 //! definition next to it (pass `--args DIR` to `vstructc`). For `layered` it also
 //! writes `DIR/scene.json`, the same network in the JSON form (for the JSON reader's figures).
 

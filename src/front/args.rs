@@ -181,13 +181,29 @@ fn needs_normalisation(value: &str) -> bool {
 /// Byte offsets of line starts, for fast offset → line:column mapping.
 struct LineIndex {
     starts: Vec<usize>,
+    /// `blocks[k]`: the characters before byte `k * COLUMN_BLOCK`. Built the first time a
+    /// column lies more than one block into its line, so that a file written on one line
+    /// (generated `.args` often are) costs a bounded count per position, not a count from
+    /// the line's start.
+    blocks: std::cell::OnceCell<Vec<usize>>,
+}
+
+/// Bytes per entry of [`LineIndex::blocks`].
+const COLUMN_BLOCK: usize = 1024;
+
+/// The characters that start in `bytes` (every byte but UTF-8 continuation bytes).
+fn char_starts(bytes: &[u8]) -> usize {
+    bytes.iter().filter(|&&b| (b as i8) >= -0x40).count()
 }
 
 impl LineIndex {
     fn new(text: &str) -> Self {
         let mut starts = vec![0];
         starts.extend(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1));
-        LineIndex { starts }
+        LineIndex {
+            starts,
+            blocks: std::cell::OnceCell::new(),
+        }
     }
 
     /// 1-based (line, column) of `offset`; columns count characters.
@@ -198,8 +214,29 @@ impl LineIndex {
         }
         let line = self.starts.partition_point(|&s| s <= offset);
         let start = self.starts[line - 1];
-        let column = text[start..offset].chars().count() + 1;
-        (line as u32, column as u32)
+        let column = if offset - start <= COLUMN_BLOCK {
+            text[start..offset].chars().count()
+        } else {
+            self.chars_before(text, offset) - self.chars_before(text, start)
+        };
+        (line as u32, column as u32 + 1)
+    }
+
+    /// The characters before the byte `offset` (a character boundary) of `text`.
+    fn chars_before(&self, text: &str, offset: usize) -> usize {
+        let bytes = text.as_bytes();
+        let blocks = self.blocks.get_or_init(|| {
+            let mut before = 0;
+            let mut blocks = Vec::with_capacity(bytes.len() / COLUMN_BLOCK + 1);
+            for chunk in bytes.chunks(COLUMN_BLOCK) {
+                blocks.push(before);
+                before += char_starts(chunk);
+            }
+            blocks.push(before);
+            blocks
+        });
+        let block = offset / COLUMN_BLOCK;
+        blocks[block] + char_starts(&bytes[block * COLUMN_BLOCK..offset])
     }
 }
 

@@ -98,6 +98,12 @@ pub enum Shape {
     /// An `.args` definition with `n` input heads and `n` output heads, and one node
     /// connecting every input head to another's output head.
     ArgsHeads,
+    /// [`Shape::ArgsParams`] with the `.args` file and the node's parameters each written
+    /// on one line, as generated files often are (positions far into a line).
+    ArgsParamsOneLine,
+    /// [`Shape::ArgsHeads`] with the `.args` file and the node's connections each written
+    /// on one line.
+    ArgsHeadsOneLine,
 }
 
 /// A generated scene: RIB text and, for the `.args` shapes, one extra definition.
@@ -111,13 +117,15 @@ pub struct ShapeScene {
 
 impl Shape {
     /// Every shape.
-    pub const ALL: [Shape; 6] = [
+    pub const ALL: [Shape; 8] = [
         Shape::SharedLayer,
         Shape::SharedMixer,
         Shape::FanIn,
         Shape::RedefinedBxdf,
         Shape::ArgsParams,
         Shape::ArgsHeads,
+        Shape::ArgsParamsOneLine,
+        Shape::ArgsHeadsOneLine,
     ];
 
     /// A short name (bench ids, messages).
@@ -129,6 +137,8 @@ impl Shape {
             Shape::RedefinedBxdf => "redefined_bxdf",
             Shape::ArgsParams => "args_params",
             Shape::ArgsHeads => "args_heads",
+            Shape::ArgsParamsOneLine => "args_params_one_line",
+            Shape::ArgsHeadsOneLine => "args_heads_one_line",
         }
     }
 
@@ -139,6 +149,8 @@ impl Shape {
     /// let s = Shape::SharedMixer.scene(3);
     /// assert_eq!(s.rib.matches("Bxdf \"PxrLayerSurface\"").count(), 3);
     /// assert!(Shape::ArgsHeads.scene(2).args.is_some());
+    /// let one = Shape::ArgsParamsOneLine.scene(3);
+    /// assert_eq!(one.args.unwrap().1.lines().count(), 1);
     /// ```
     pub fn scene(self, n: usize) -> ShapeScene {
         let mut rib = String::with_capacity(n * 160 + 256);
@@ -213,10 +225,38 @@ impl Shape {
                 }
                 args = Some(("Heads".to_string(), text));
             }
+            Shape::ArgsParamsOneLine => return one_line(Shape::ArgsParams.scene(n)),
+            Shape::ArgsHeadsOneLine => return one_line(Shape::ArgsHeads.scene(n)),
         }
         rib.push_str("WorldEnd\n");
         ShapeScene { rib, args }
     }
+}
+
+/// `scene` with its `.args` text on one line and each RIB request on one line: a request's
+/// parameter lines joined by spaces (RIB and XML read the same either way).
+fn one_line(scene: ShapeScene) -> ShapeScene {
+    let mut rib = String::with_capacity(scene.rib.len());
+    for line in scene.rib.lines() {
+        match line.strip_prefix('\t') {
+            Some(param) => {
+                rib.push(' ');
+                rib.push_str(param);
+            }
+            None => {
+                if !rib.is_empty() {
+                    rib.push('\n');
+                }
+                rib.push_str(line);
+            }
+        }
+    }
+    rib.push('\n');
+    let args = scene.args.map(|(id, text)| {
+        let one: Vec<&str> = text.lines().map(str::trim).collect();
+        (id, one.concat())
+    });
+    ShapeScene { rib, args }
 }
 
 fn layer(out: &mut String, handle: &str, t: f32) {

@@ -153,7 +153,7 @@ impl<'a> Checker<'a> {
         let n = &net[node];
         let shader = n.shader();
         let Some(known) = self.known(shader) else {
-            self.unknown_node(shader, node, None);
+            self.unknown_node(shader, node);
             return;
         };
         for p in n.params() {
@@ -167,11 +167,15 @@ impl<'a> Checker<'a> {
                 let up_shader = net[up].shader();
                 match self.known(up_shader) {
                     None => {
+                        // The upstream node is counted when the walk reaches it (every node
+                        // is in `order`); a connection only says whether it feeds a head.
                         let head = known
                             .tables
                             .as_ref()
                             .is_some_and(|t| t.is_input_head(p.name()));
-                        self.unknown_node(up_shader, up, head.then(|| (node, p.name())));
+                        if head {
+                            self.unknown_feeds(up_shader, node, p.name());
+                        }
                     }
                     Some(up_known) => match link.output() {
                         Some(out) if !up_known.declares_output(out) => {
@@ -254,9 +258,8 @@ impl<'a> Checker<'a> {
         self.out.push(d.with_node(n.handle()).with_param(name));
     }
 
-    /// Records `node` of the unknown type `shader` (`feeds`: `None`), or that a node of it
-    /// feeds the input head `feeds`.
-    fn unknown_node(&mut self, shader: &'a str, node: NodeId, feeds: Option<(NodeId, &str)>) {
+    /// The entry of the unknown type `shader`, made on first sight.
+    fn unknown_entry(&mut self, shader: &'a str) -> &mut Unknown {
         let next = self.unknown.len();
         let i = *self.unknown_index.entry(shader).or_insert(next);
         if i == next {
@@ -268,14 +271,21 @@ impl<'a> Checker<'a> {
                 },
             ));
         }
-        let entry = &mut self.unknown[i].1;
-        match feeds {
-            None => entry.nodes.push(node),
-            Some((down, head)) => {
-                if entry.feeds.is_none() {
-                    entry.feeds = Some((down, head.to_string()));
-                }
-            }
+        &mut self.unknown[i].1
+    }
+
+    /// Records `node`, of the unknown type `shader` (once per node: the walk visits each
+    /// node once).
+    fn unknown_node(&mut self, shader: &'a str, node: NodeId) {
+        self.unknown_entry(shader).nodes.push(node);
+    }
+
+    /// Records that a node of the unknown type `shader` feeds the input head `head` of
+    /// `down` (the first such head is reported).
+    fn unknown_feeds(&mut self, shader: &'a str, down: NodeId, head: &str) {
+        let entry = self.unknown_entry(shader);
+        if entry.feeds.is_none() {
+            entry.feeds = Some((down, head.to_string()));
         }
     }
 

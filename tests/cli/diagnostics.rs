@@ -338,3 +338,102 @@ fn usd_mode_over_sublayers_the_input_and_refuses_what_it_cannot_write() {
         assert!(!std::path::Path::new(path).exists(), "{full:?}");
     }
 }
+
+/// A pattern whose vstruct output `set`s a number into the colour member `fuzzColor`: every
+/// `PxrLayerSurface` reading it gets VS013 (a NUMBER is not written to a color input).
+const FUZZ_LAYER: &str = r#"<args format="1.0">
+  <shaderType><tag value="pattern"/></shaderType>
+  <output name="pxrMaterialOut"><tags><tag value="vstruct"/></tags></output>
+  <output name="pxrMaterialOut_fuzzColor" vstructmember="pxrMaterialOut.fuzzColor"
+          vstructConditionalExpr="set 0.5"><tags><tag value="color"/></tags></output>
+</args>
+"#;
+
+/// `materials` materials, each a `FuzzLayer` read by a `PxrLayerSurface`.
+fn fuzz_scene(materials: usize) -> String {
+    use std::fmt::Write as _;
+    let mut rib = String::from("##RenderMan RIB\nversion 3.04\nWorldBegin\n");
+    for m in 0..materials {
+        let _ = write!(
+            rib,
+            "AttributeBegin\n\tPattern \"FuzzLayer\" \"m{m}_fuzz\"\n\
+             \tBxdf \"PxrLayerSurface\" \"m{m}_surface\"\n\
+             \t\t\"reference float inputMaterial\" [\"m{m}_fuzz:pxrMaterialOut\"]\n\
+             \t\t\"string __materialid\" [\"m{m}_SG\"]\nAttributeEnd\n"
+        );
+    }
+    rib.push_str("WorldEnd\n");
+    rib
+}
+
+#[test]
+fn the_same_warning_on_2000_materials_is_one_diagnostic_naming_the_count() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("FuzzLayer.args"), FUZZ_LAYER).unwrap();
+    let scene = dir.path().join("scene.rib");
+    std::fs::write(&scene, fuzz_scene(2000)).unwrap();
+    let (args, scene) = (dir.path().to_str().unwrap(), scene.to_str().unwrap());
+    let out = vstructc(&["--args", args, "compile", scene]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.lines().count() <= 20, "{err}");
+    assert_eq!(err.matches("warning[VS013]").count(), 1, "{err}");
+    assert!(
+        err.contains(
+            "warning[VS013]: <node>.fuzzColor: `set 0.5`: `set` not applied: a NUMBER cannot \
+             be written to a color input (see --ext set-tuples) on 2,000 nodes (m0_surface, \
+             m1_surface, m2_surface, …)\n"
+        ),
+        "{err}"
+    );
+    // One snippet: the first node's.
+    assert_eq!(err.matches(" --> ").count(), 1, "{err}");
+    assert!(
+        err.contains("Bxdf \"PxrLayerSurface\" \"m0_surface\""),
+        "{err}"
+    );
+    assert!(!err.contains("more VS013"), "{err}");
+
+    // JSON keeps one entry per node.
+    let json = vstructc(&["--args", args, "--diag-format", "json", "compile", scene]);
+    let mut nodes: Vec<String> = stderr(&json)
+        .lines()
+        .filter(|l| l.contains("\"VS013\""))
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["node"].as_str().unwrap().to_string()
+        })
+        .collect();
+    assert_eq!(nodes.len(), 2000);
+    nodes.sort();
+    nodes.dedup();
+    assert_eq!(nodes.len(), 2000);
+}
+
+#[test]
+fn the_same_warning_on_two_materials_names_both() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("FuzzLayer.args"), FUZZ_LAYER).unwrap();
+    let scene = dir.path().join("scene.rib");
+    std::fs::write(&scene, fuzz_scene(2)).unwrap();
+    let (args, scene) = (dir.path().to_str().unwrap(), scene.to_str().unwrap());
+    let err = stderr(&vstructc(&["--args", args, "compile", scene]));
+    assert!(
+        err.contains("on 2 nodes (m0_surface, m1_surface)\n"),
+        "{err}"
+    );
+    // One material: its own message, unchanged.
+    std::fs::write(dir.path().join("one.rib"), fuzz_scene(1)).unwrap();
+    let one = dir.path().join("one.rib");
+    let err = stderr(&vstructc(&[
+        "--args",
+        args,
+        "compile",
+        one.to_str().unwrap(),
+    ]));
+    assert!(
+        err.starts_with("warning[VS013]: m0_surface.fuzzColor: `set 0.5`"),
+        "{err}"
+    );
+    assert!(!err.contains("<node>"), "{err}");
+}

@@ -22,3 +22,8 @@ mod unit;
     reason = "the rendering entry points are the binary's; the unit tests reach only the helpers"
 )]
 mod snippet;
+
+/// The binary's grouping of human diagnostics, compiled here for its unit tests
+/// (`unit::group`).
+#[path = "../../src/bin/vstructc/cli/group.rs"]
+mod group;

@@ -297,3 +297,42 @@ proptest! {
         }
     }
 }
+
+/// Positions far into one long line (a generated file written without line breaks) are
+/// counted in characters, with multi-byte characters before them, as on a short line.
+#[test]
+fn positions_on_one_long_line_count_characters() {
+    let mut text = String::from("<args format=\"1.0\">");
+    for i in 0..3000 {
+        // Labels of different lengths in two- and three-byte characters, so that positions
+        // fall at every offset within the reader's blocks of bytes.
+        let label: String = "é€".repeat(i % 7);
+        text.push_str(&format!(
+            "<param name=\"p{i}\" type=\"float\" default=\"0\" label=\"{label}\"/>"
+        ));
+    }
+    text.push_str("</args>");
+    let mut diags = Diagnostics::new();
+    let def = parse_args(text.as_bytes(), "one_line.args", "x", &mut diags).unwrap();
+    assert_eq!(def.inputs.len(), 3000);
+    let (mut from, mut chars) = (0, 0);
+    for (i, p) in def.inputs.iter().enumerate() {
+        let at = from
+            + text[from..]
+                .find(&format!("<param name=\"p{i}\" "))
+                .expect("declared");
+        chars += text[from..at].chars().count();
+        from = at;
+        let loc = &p.location;
+        assert_eq!((loc.line, loc.column), (1, chars as u32 + 1), "p{i}");
+    }
+    // The duplicate's error, after all of them, is at its tag too.
+    let mut diags = Diagnostics::new();
+    let text = text.replace("</args>", "<param name=\"p5\" type=\"float\"/></args>");
+    let err = parse_args(text.as_bytes(), "one_line.args", "x", &mut diags).unwrap_err();
+    let d = err.diagnostic().expect("input error");
+    let at = text.rfind("<param name=\"p5\"").unwrap();
+    let loc = d.location.as_ref().expect("located");
+    assert_eq!(d.code.as_str(), "AR004");
+    assert_eq!(loc.column, text[..at].chars().count() as u32 + 1);
+}

@@ -101,6 +101,32 @@ Pattern "PxrTexture" "tex" "string filename" ["a.tex"]
     insta::assert_snapshot!(shown.join("\n"));
 }
 
+/// A node of an unknown type is named once however many connections read it, and a head it
+/// feeds is still named.
+#[test]
+fn an_unknown_node_read_by_connections_is_counted_once() {
+    let d = rib(r#"Pattern "PxrTexture" "t" "string filename" ["a.tex"]
+Bxdf "PxrSurface" "s" "reference color diffuseColor" ["t:resultRGB"]
+    "reference color specularFaceColor" ["t:resultRGB"]
+Pattern "MyLayer" "ml"
+Pattern "PxrLayerMixer" "mix" "reference vstruct baselayer" ["ml:pxrMaterialOut"]
+    "reference vstruct layer1" ["ml:pxrMaterialOut"]
+"#);
+    let vs020 = messages(&d, "VS020");
+    assert_eq!(vs020.len(), 2, "{d:#?}");
+    let texture = vs020.iter().find(|m| m.contains("PxrTexture")).unwrap();
+    assert!(
+        texture.starts_with("node type `PxrTexture` of t is not"),
+        "{texture}"
+    );
+    let layer = vs020.iter().find(|m| m.contains("MyLayer")).unwrap();
+    assert!(
+        layer.starts_with("node type `MyLayer` of ml is not")
+            && layer.contains("it feeds the head mix.baselayer"),
+        "{layer}"
+    );
+}
+
 #[test]
 fn a_json_network_is_checked_the_same_way() {
     let json = r#"{"vstructcNetwork": 1, "materials": {"ball": {

@@ -108,12 +108,18 @@ pub fn render_human(
 /// Properties grouped by page path, pages in order of first appearance.
 fn group_by_page(props: &[Property]) -> Vec<(Option<&str>, Vec<&Property>)> {
     let mut groups: Vec<(Option<&str>, Vec<&Property>)> = Vec::new();
+    // A definition may put each of its many parameters on a page of its own: find a page's
+    // group by name, not by a scan of the groups.
+    let mut index: std::collections::HashMap<Option<&str>, usize> =
+        std::collections::HashMap::new();
     for p in props {
         let page = p.page.as_deref();
-        match groups.iter_mut().find(|(g, _)| *g == page) {
-            Some((_, v)) => v.push(p),
-            None => groups.push((page, vec![p])),
+        let next = groups.len();
+        let i = *index.entry(page).or_insert(next);
+        if i == next {
+            groups.push((page, Vec::new()));
         }
+        groups[i].1.push(p);
     }
     groups
 }

@@ -25,6 +25,7 @@ pub mod compile;
 pub mod eval;
 pub mod explain;
 pub mod expr;
+pub mod group;
 pub mod info;
 pub mod input;
 pub mod json;
@@ -84,7 +85,8 @@ pub struct CommonOptions {
     pub verbose: bool,
     /// Show at most N diagnostics of each code, then one line counting the rest; 0 shows
     /// all. Default: 20 in human output, no limit in JSON output. Human output shows
-    /// identical diagnostics (same code, place and message) once.
+    /// identical diagnostics (same code, place and message) once, and those of the same
+    /// message shape on different nodes as one naming how many nodes.
     #[arg(long, value_name = "N", global = true)]
     pub max_diagnostics: Option<usize>,
     /// Colour human diagnostics: `auto` when standard error is a terminal and `NO_COLOR` is
@@ -231,27 +233,38 @@ pub fn run(cli: Cli) -> ExitCode {
 /// Print diagnostics to stderr according to the common options and return the exit status
 /// they imply: 1 if any error (or any warning under `--deny-warnings`), else 0.
 ///
-/// Volume control ([`Diagnostics::volume_limited`]): in human output identical diagnostics
-/// are printed once, at most `--max-diagnostics` of one code (default
-/// [`Diagnostics::DEFAULT_MAX_PER_CODE`]) and then one line per code counting the rest, and lines are
-/// bounded ([`vstructc::diag::Diagnostic::MAX_HUMAN_LINE`]); a located diagnostic shows its source line
-/// with a caret ([`snippet::render`]), coloured as `--color` says. JSON output keeps every diagnostic, whole, unless
-/// `--max-diagnostics` is given; its count line is an object `{"code": CODE, "suppressed": N}`.
-/// The exit status counts every diagnostic, shown or not.
-/// Failures to write to stderr are ignored (there is nowhere left to report them).
+/// Volume control: in human output identical diagnostics are printed once
+/// ([`Diagnostics::volume_limited`]), diagnostics of the same message shape on different
+/// nodes as one that names how many nodes and the first few ([`group`]), at most
+/// `--max-diagnostics` of one code (default [`Diagnostics::DEFAULT_MAX_PER_CODE`]) and then
+/// one line per code counting the diagnostics left out, and lines are bounded
+/// ([`vstructc::diag::Diagnostic::MAX_HUMAN_LINE`]); a located diagnostic shows its source
+/// line with a caret ([`snippet::render`]), coloured as `--color` says. JSON output keeps
+/// every diagnostic, whole and one per node, unless `--max-diagnostics` is given; its count
+/// line is an object `{"code": CODE, "suppressed": N}`. The exit status counts every
+/// diagnostic, shown or not. Failures to write to stderr are ignored (there is nowhere left
+/// to report them).
 pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
     let human = common.diag_format == DiagFormat::Human;
-    let limit = match common.max_diagnostics {
-        Some(n) => n,
-        None if human => Diagnostics::DEFAULT_MAX_PER_CODE,
-        None => 0,
-    };
-    let shown = diags.volume_limited(limit, human, |d| {
-        d.severity != Severity::Note || common.verbose
-    });
+    let keep = |d: &vstructc::Diagnostic| d.severity != Severity::Note || common.verbose;
     let mut err = std::io::BufWriter::new(std::io::stderr().lock());
-    let colour = human && common.color.colours_stderr();
-    let _ = print_shown(&mut err, &shown, common.diag_format, colour).and_then(|_| err.flush());
+    let printed = if human {
+        let limit = common
+            .max_diagnostics
+            .unwrap_or(Diagnostics::DEFAULT_MAX_PER_CODE);
+        let distinct = diags.volume_limited(0, true, keep);
+        let (entries, suppressed) = limit_entries(group::group(&distinct.items), limit);
+        print_human(
+            &mut err,
+            &entries,
+            &suppressed,
+            common.color.colours_stderr(),
+        )
+    } else {
+        let shown = diags.volume_limited(common.max_diagnostics.unwrap_or(0), false, keep);
+        print_json(&mut err, &shown)
+    };
+    let _ = printed.and_then(|_| err.flush());
     if diags.has_errors() || (common.deny_warnings && diags.has_warnings()) {
         ExitCode::from(1)
     } else {
@@ -259,28 +272,65 @@ pub fn report(diags: &Diagnostics, common: &CommonOptions) -> ExitCode {
     }
 }
 
-fn print_shown(
+/// At most `limit` entries of each code (0: no limit), and per code (in the order the first
+/// was left out) how many diagnostics the entries left out stand for.
+fn limit_entries(
+    entries: Vec<group::Entry<'_>>,
+    limit: usize,
+) -> (Vec<group::Entry<'_>>, Vec<(&'static str, usize)>) {
+    let mut per_code: std::collections::HashMap<&'static str, usize> =
+        std::collections::HashMap::new();
+    let mut suppressed: Vec<(&'static str, usize)> = Vec::new();
+    let mut index: std::collections::HashMap<&'static str, usize> =
+        std::collections::HashMap::new();
+    let mut shown = Vec::new();
+    for e in entries {
+        let code = e.first.code.as_str();
+        let count = per_code.entry(code).or_insert(0);
+        *count += 1;
+        if limit == 0 || *count <= limit {
+            shown.push(e);
+        } else {
+            let i = *index.entry(code).or_insert_with(|| {
+                suppressed.push((code, 0));
+                suppressed.len() - 1
+            });
+            suppressed[i].1 += e.count();
+        }
+    }
+    (shown, suppressed)
+}
+
+fn print_human(
     out: &mut dyn Write,
-    shown: &Shown<'_>,
-    format: DiagFormat,
+    entries: &[group::Entry<'_>],
+    suppressed: &[(&'static str, usize)],
     colour: bool,
 ) -> std::io::Result<()> {
     let mut sources = snippet::Sources::default();
+    for e in entries {
+        writeln!(
+            out,
+            "{}",
+            snippet::render(&e.diagnostic(), &mut sources, colour)
+        )?;
+    }
+    for (code, n) in suppressed {
+        writeln!(
+            out,
+            "note: {n} more {code} diagnostic{} not shown (--max-diagnostics 0 shows all)",
+            if *n == 1 { "" } else { "s" }
+        )?;
+    }
+    Ok(())
+}
+
+fn print_json(out: &mut dyn Write, shown: &Shown<'_>) -> std::io::Result<()> {
     for d in &shown.items {
-        match format {
-            DiagFormat::Human => writeln!(out, "{}", snippet::render(d, &mut sources, colour))?,
-            DiagFormat::Json => writeln!(out, "{}", d.render_json())?,
-        }
+        writeln!(out, "{}", d.render_json())?;
     }
     for (code, n) in &shown.suppressed {
-        match format {
-            DiagFormat::Human => writeln!(
-                out,
-                "note: {n} more {code} diagnostic{} not shown (--max-diagnostics 0 shows all)",
-                if *n == 1 { "" } else { "s" }
-            )?,
-            DiagFormat::Json => writeln!(out, "{{\"code\":\"{code}\",\"suppressed\":{n}}}")?,
-        }
+        writeln!(out, "{{\"code\":\"{code}\",\"suppressed\":{n}}}")?;
     }
     Ok(())
 }
