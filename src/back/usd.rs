@@ -261,6 +261,9 @@ fn float(out: &mut String, x: f32) {
     out.push_str(&format_f32(saturate_f32(x)));
 }
 
+/// `s` as a usda string Pixar's USD reads back as `s`: quotes, backslashes and line ends
+/// escaped, other control characters as `\xHH` (two digits, so a hex digit after one is
+/// not taken into it).
 fn string(out: &mut String, s: &str) {
     out.push('"');
     for c in s.chars() {
@@ -270,6 +273,9 @@ fn string(out: &mut String, s: &str) {
             '\n' => out.push_str("\\n"),
             '\r' => out.push_str("\\r"),
             '\t' => out.push_str("\\t"),
+            c if c.is_ascii_control() => {
+                let _ = write!(out, "\\x{:02x}", c as u32);
+            }
             c => out.push(c),
         }
     }
@@ -292,11 +298,7 @@ fn scalar(out: &mut String, v: &Value, base: &BaseType) {
             _ => out.push_str(if *b { "true" } else { "false" }),
         },
         Value::Str(s) | Value::Token(s) => string(out, s),
-        Value::Asset(s) => {
-            out.push('@');
-            out.push_str(&s.replace('@', "\\@"));
-            out.push('@');
-        }
+        Value::Asset(s) => asset(out, s),
         Value::Triple(_, f) => float_tuple(out, f),
         Value::HPoint(f) => float_tuple(out, f),
         Value::Matrix(m) => {
@@ -419,9 +421,14 @@ fn node_body(
     let node = &net[id];
     let shader = node.shader();
     let mut body = String::new();
-    body.push_str("uniform token info:id = ");
-    string(&mut body, shader);
-    body.push('\n');
+    // The USD reader names a shader that has no `info:id` after what it has instead
+    // (`(no info:id)`, `(sourceAsset)`): such a node gets no `info:id` back, not the name.
+    let unknown = shader.starts_with('(') && shader.ends_with(')');
+    if !unknown {
+        body.push_str("uniform token info:id = ");
+        string(&mut body, shader);
+        body.push('\n');
+    }
     for p in node.params_by_name() {
         let declared = types.input_type(shader, p.name());
         input_lines(&mut body, declared.as_ref(), p, paths, outputs);
@@ -724,6 +731,15 @@ pub fn write_usd(
             ));
         }
     };
+    if let Some((node, input)) = text_with_nul(net) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "input `{input}` of node `{node}` holds a NUL character, which a crate file \
+                 cannot store (its tokens and strings are NUL-separated): write usda instead"
+            ),
+        ));
+    }
     #[cfg(feature = "usd")]
     {
         let mut text = Vec::new();
@@ -738,6 +754,24 @@ pub fn write_usd(
             format!("`{encoding}` output needs the `usd` feature"),
         ))
     }
+}
+
+/// The node handle and input name of the first text value of `net` that holds a NUL
+/// character, which no crate file can store.
+fn text_with_nul(net: &Network) -> Option<(String, String)> {
+    fn has_nul(v: &Value) -> bool {
+        match v {
+            Value::Str(s) | Value::Token(s) | Value::Asset(s) => s.contains('\0'),
+            Value::Array(_, items) => items.iter().any(has_nul),
+            _ => false,
+        }
+    }
+    net.node_ids().find_map(|id| {
+        let node = &net[id];
+        node.params()
+            .find(|p| p.value().is_some_and(has_nul))
+            .map(|p| (node.handle().to_string(), p.name().to_string()))
+    })
 }
 
 /// [`write_usd`] as `usda` text.
@@ -840,11 +874,19 @@ fn write_usda(
     out.write_all(text.as_bytes())
 }
 
-/// `@path@`: a USD asset path.
+/// `@path@`: a USD asset path, read by Pixar's USD as it stands (no escapes, so a Windows
+/// path keeps its backslashes). A path holding `@` goes between `@@@`, where `\@@@` is
+/// the one escape.
 fn asset(out: &mut String, path: &str) {
-    out.push('@');
-    out.push_str(&path.replace('@', "\\@"));
-    out.push('@');
+    if path.contains('@') {
+        out.push_str("@@@");
+        out.push_str(&path.replace("@@@", "\\@@@"));
+        out.push_str("@@@");
+    } else {
+        out.push('@');
+        out.push_str(path);
+        out.push('@');
+    }
 }
 
 /// Adds to each upstream prim in `outputs` the declarations of the outputs connected to.

@@ -228,7 +228,7 @@ pub(super) const CODES: &[(&str, &str)] = &[
     ),
     (
         "US001",
-        "the USD stage cannot be opened or composed (a layer that is not USD, a malformed layer, an unreadable file); the message gives `openusd`'s reason",
+        "the USD stage cannot be opened or composed (a layer that is not USD, a malformed layer, an unreadable file); the message gives the reason, and for a `.usda` root layer the line and column where reading stops",
     ),
     (
         "US002",

@@ -41,6 +41,7 @@ use std::io::{self, Read};
 use std::sync::Arc;
 
 mod crate_tables;
+mod usda;
 use crate_tables::{
     CRATE_BOOL, CRATE_DOUBLE, CRATE_FLOAT, CRATE_INT, CRATE_PATH_LIST_OP, CRATE_SPECIFIER,
     CRATE_STRING, CRATE_TOKEN, CRATE_TOKEN_VECTOR, CRATE_VEC3F, CrateTables, NO_PATH, PathTree,
@@ -74,7 +75,24 @@ impl MemResolver {
         let mut entry = archive.by_name(inner).map_err(io::Error::other)?;
         let mut out = Vec::new();
         entry.read_to_end(&mut out)?;
-        Ok(out)
+        openusd_form(out)
+    }
+}
+
+/// Layer `bytes` as `openusd` is to read them: usda text in the form in which `openusd`
+/// reads what Pixar's USD reads ([`usda::normalise`]); a crate file as it is. Text Pixar's
+/// USD would not lex is refused here, with the reason, so that `openusd` (which is more
+/// lenient) does not read it.
+fn openusd_form(bytes: Vec<u8>) -> io::Result<Vec<u8>> {
+    if flavour(&bytes) != "usda" {
+        return Ok(bytes);
+    }
+    match usda::normalise(&bytes) {
+        Ok(n) => Ok(match n.text {
+            Cow::Borrowed(_) => bytes,
+            Cow::Owned(text) => text,
+        }),
+        Err(e) => Err(io::Error::other(e.message)),
     }
 }
 
@@ -103,12 +121,16 @@ impl ar::Resolver for MemResolver {
     fn open_asset(&self, resolved: &ar::ResolvedPath) -> io::Result<Box<dyn ar::Asset>> {
         let path = resolved.to_string_lossy();
         if path == self.root {
-            return Ok(Box::new(io::Cursor::new(self.bytes.as_ref().clone())));
+            return Ok(Box::new(io::Cursor::new(openusd_form(
+                self.bytes.as_ref().clone(),
+            )?)));
         }
         if let Some(inner) = self.in_root_package(&path) {
             return Ok(Box::new(io::Cursor::new(self.root_entry(inner)?)));
         }
-        self.inner.open_asset(resolved)
+        let mut bytes = Vec::new();
+        self.inner.open_asset(resolved)?.read_to_end(&mut bytes)?;
+        Ok(Box::new(io::Cursor::new(openusd_form(bytes)?)))
     }
 
     fn get_modification_timestamp(
@@ -625,8 +647,8 @@ pub(crate) fn split_property(path: &sdf::Path) -> Option<(Cow<'_, str>, &str)> {
 /// A token or string value as text; nothing for another value, none or an error.
 fn text_of(value: Result<Option<sdf::Value>, String>) -> Option<String> {
     match value.ok()?? {
-        sdf::Value::Token(t) => Some(t.as_str().to_string()),
-        sdf::Value::String(s) => Some(s),
+        sdf::Value::Token(t) => Some(usda::decoded(t.as_str()).into_owned()),
+        sdf::Value::String(s) => Some(usda::decoded(&s).into_owned()),
         _ => None,
     }
 }
@@ -832,6 +854,7 @@ fn to_value(v: &sdf::Value, declared: Option<&Type>, usd_type: &str) -> Option<V
         }
     };
     let text = |s: &str, usd: BaseType| -> Value {
+        let s = usda::decoded(s);
         match base.unwrap_or(&usd) {
             BaseType::Token => Value::Token(s.to_string()),
             BaseType::Asset => Value::Asset(s.to_string()),
@@ -2043,9 +2066,59 @@ pub(crate) fn read_usda_layer(bytes: &[u8]) -> Result<sdf::LayerData, String> {
         sdf::FileFormat::read(&openusd::usda::UsdaFileFormat, &resolver, &resolved)
     }));
     match read {
-        Ok(Ok(data)) => Ok(data),
+        Ok(Ok(mut data)) => {
+            if usda::normalise(bytes).is_ok_and(|n| n.encoded > 0) {
+                decode_values(data.as_mut());
+            }
+            Ok(data)
+        }
         Ok(Err(e)) => Err(format!("{e:#}")),
         Err(_) => Err("the USD library failed on this layer".to_string()),
+    }
+}
+
+/// Every encoded value of `data` decoded ([`usda::decoded`]): the layer then holds what
+/// its text does, as the crate writer is to write it.
+fn decode_values(data: &mut dyn sdf::AbstractData) {
+    fn text(s: &mut String) -> bool {
+        match usda::decoded(s) {
+            Cow::Owned(v) => {
+                *s = v;
+                true
+            }
+            Cow::Borrowed(_) => false,
+        }
+    }
+    fn token(t: &mut openusd::tf::Token) -> bool {
+        match usda::decoded(t.as_str()) {
+            Cow::Owned(v) => {
+                *t = openusd::tf::Token::from(v.as_str());
+                true
+            }
+            Cow::Borrowed(_) => false,
+        }
+    }
+    for path in data.spec_paths() {
+        for field in data.list_fields(&path).unwrap_or_default() {
+            let Ok(Some(value)) = data.try_field(&path, &field) else {
+                continue;
+            };
+            let mut value = value.into_owned();
+            let changed = match &mut value {
+                sdf::Value::String(s) => text(s),
+                sdf::Value::Token(t) => token(t),
+                sdf::Value::AssetPath(a) => text(&mut a.authored_path),
+                sdf::Value::StringVec(xs) => xs.iter_mut().fold(false, |c, s| text(s) | c),
+                sdf::Value::TokenVec(xs) => xs.iter_mut().fold(false, |c, t| token(t) | c),
+                sdf::Value::AssetPathVec(xs) => xs
+                    .iter_mut()
+                    .fold(false, |c, a| text(&mut a.authored_path) | c),
+                _ => false,
+            };
+            if changed {
+                data.set_field(&path, &field, value);
+            }
+        }
     }
 }
 
@@ -2288,12 +2361,7 @@ fn read_usd(
         .flatten();
     let stage = match flat_layer {
         Some(_) => None,
-        None => Some(open_stage(name, bytes).map_err(|why| {
-            Error::from(
-                Diagnostic::error("US001", format!("cannot open the USD stage: {why}"))
-                    .at(Location::file(file.clone())),
-            )
-        })?),
+        None => Some(open_stage(name, bytes).map_err(|why| cannot_open(&file, bytes, &why))?),
     };
     let (flat, prims, indices) = match &flat_layer {
         Some((data, prims, indices)) => (
@@ -2336,6 +2404,42 @@ fn read_usd(
         data.drop_soon();
     }
     Ok(net)
+}
+
+/// US001 for a stage that does not open for reason `why`: at the place in root layer
+/// `bytes` where the text stops reading, when the root is the usda text at fault.
+fn cannot_open(file: &Arc<str>, bytes: &[u8], why: &str) -> Error {
+    let at = (flavour(bytes) == "usda")
+        .then(|| usda_failure_at(bytes))
+        .flatten()
+        .and_then(|offset| {
+            Some(Location::from_offset(
+                file.clone(),
+                std::str::from_utf8(bytes).ok()?,
+                offset,
+            ))
+        })
+        .unwrap_or_else(|| Location::file(file.clone()));
+    Diagnostic::error("US001", format!("cannot open the USD stage: {why}"))
+        .at(at)
+        .into()
+}
+
+/// The byte offset where usda text `bytes` stops reading, as Pixar's USD lexes it and as
+/// `openusd` parses it; nothing when it reads (the fault is elsewhere).
+fn usda_failure_at(bytes: &[u8]) -> Option<usize> {
+    let normalised = match usda::normalise(bytes) {
+        Ok(n) => n,
+        Err(e) => return Some(e.offset),
+    };
+    let text = std::str::from_utf8(&normalised.text).ok()?;
+    let mut parser = openusd::usda::parser::Parser::new(text);
+    let failed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| parser.parse().is_err()));
+    if !matches!(failed, Ok(true)) {
+        return None;
+    }
+    let place = parser.last_error_highlight()?;
+    Some(normalised.original_offset(usda::offset_of(text, place.line, place.column)))
 }
 
 /// The walk: prims, nodes, materials, inputs, composition errors.

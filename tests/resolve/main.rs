@@ -16,3 +16,4 @@ mod rules;
 mod scale;
 mod unit;
 mod usd;
+mod usd_strings;
