@@ -1,11 +1,12 @@
-//! Scaling shapes (issue targets: the 4N run ≤ 5× the N run): each shape of
+//! Scaling shapes (target: the 4N run ≤ 5× the N run, BENCHMARKS.md): each shape of
 //! `network::testgen::Shape` through read, resolution and write, at sizes N and 4N, with
 //! the measured 4N / N ratio printed after each pair.
 //!
 //! `cargo bench --bench scale`. The pipeline is the one `vstructc resolve` runs (registry with
-//! the shape's definition, RIB read, resolution, RIB write); the shapes and their sizes are
-//! those of the issue, divided by 4 to keep the bench short. `scale_info` reads the `.args`
-//! shapes at full size as `vstructc info` does.
+//! the shape's definition, RIB read, resolution, RIB write), at a quarter of the sizes of the
+//! whole-process figures to keep the bench short. `scale_info` reads the `.args` shapes at
+//! the sizes of their `info` targets (100,000 parameters, 20,000 heads; ≤ 1 s each) as
+//! `vstructc info` does.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -40,7 +41,7 @@ fn pipeline(scene: &ShapeScene) -> Vec<u8> {
     write_rib_to_vec(rib, &net, &registry).expect("written")
 }
 
-/// N for each shape (a quarter of the issue's).
+/// N for each shape (a quarter of the whole-process figure's).
 fn size(shape: Shape) -> usize {
     match shape {
         Shape::SharedLayer | Shape::SharedMixer => 1250,
@@ -89,7 +90,7 @@ fn info(scene: &ShapeScene) -> usize {
     def.inputs.len()
 }
 
-/// The `.args` shapes at the issue's sizes for `info`: 100,000 parameters and 20,000 heads
+/// The `.args` shapes at the sizes of the `info` targets: 100,000 parameters and 20,000 heads
 /// with a member each, each file on one line and as one declaration per line.
 fn bench_info(c: &mut Criterion) {
     let mut group = c.benchmark_group("scale_info");

@@ -168,7 +168,7 @@ fn write_pieces(
     parallel: bool,
 ) -> io::Result<()> {
     #[cfg(feature = "parallel")]
-    if parallel && pieces.len() > 1 && crate::pool_can_help() {
+    if parallel && pieces.len() > 1 && crate::schedule::pool_can_help() {
         return write_pieces_parallel(net, pieces, out);
     }
     let _ = parallel;

@@ -131,7 +131,7 @@ fn write_rib_chunked(
     let plan = Plan::new(source, net, &surfaces);
     let pieces = plan.pieces(chunk_nodes.max(1));
     #[cfg(feature = "parallel")]
-    if parallel && pieces.len() > 1 && crate::pool_can_help() {
+    if parallel && pieces.len() > 1 && crate::schedule::pool_can_help() {
         return plan.write_parallel(types, &pieces, out);
     }
     let _ = parallel;

@@ -514,8 +514,8 @@ impl<'a> Parser<'a> {
 }
 
 impl ParseError {
-    /// After a name, the message mentions only the comparison operators (the common case;
-    /// the wording); `IS`/`IS_NOT` stay in the expected list and get a note.
+    /// After a name, the message mentions only the comparison operators (the common case);
+    /// `IS`/`IS_NOT` stay in the expected list and get a note.
     fn summarise_cmp(mut self) -> Self {
         let cmp = Want::Cmp.message_text();
         self.message = format!("expected {cmp}, found {}", self.found);

@@ -1523,7 +1523,9 @@ fn parse_json_path(
     #[cfg(feature = "parallel")]
     {
         let piece = match read_path {
-            ReadPath::Auto if bytes.len() >= PIECES_MIN_BYTES && crate::pool_can_help() => {
+            ReadPath::Auto
+                if bytes.len() >= PIECES_MIN_BYTES && crate::schedule::pool_can_help() =>
+            {
                 Some(pieces::PIECE_BYTES)
             }
             #[cfg(feature = "testkit")]

@@ -767,9 +767,9 @@ fn read_shaders<'a>(
         return;
     };
     #[cfg(feature = "parallel")]
-    if crate::pool_can_help() {
+    if crate::schedule::pool_can_help() {
         let mut n = 0;
-        crate::make_in_order(
+        crate::schedule::make_in_order(
             shaders.len(),
             SHADERS_PER_PIECE,
             |i| ShaderRead::of(&layer, &shaders[i].0, shaders[i].1),
@@ -1973,7 +1973,7 @@ impl Specs for CrateLayer {
 
     fn drop_soon(self: Box<Self>) {
         #[cfg(feature = "parallel")]
-        if crate::pool_can_help() {
+        if crate::schedule::pool_can_help() {
             rayon::spawn(move || drop(self));
         }
     }

@@ -22,7 +22,7 @@ impl Reg {
     }
 }
 
-/// Shading globals a program may read (the issue's `P, N, u, v, ...`).
+/// Shading globals a program may read (`P, N, u, v, ...`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Global {
     /// Surface position.

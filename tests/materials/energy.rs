@@ -696,7 +696,7 @@ fn glass_seen_from_inside_conserves_energy() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// mia's reflection returns `R` at every angle (curve 1, no diffuse): the cases.
+/// mia's reflection returns `R` at every angle (curve 1, no diffuse): the cases that once failed.
 #[test]
 fn mia_reflection_returns_its_weight_at_every_angle() {
     let mut failures = Vec::new();

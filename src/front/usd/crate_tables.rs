@@ -142,7 +142,7 @@ impl CrateTables {
         };
 
         // The paths (the largest table) are decoded beside the others.
-        let (paths, rest) = crate::both(
+        let (paths, rest) = crate::schedule::both(
             || Self::paths(bytes, section(b"PATHS")?, &tokens),
             || Self::other_tables(bytes, &section, tokens.len()),
         );
@@ -332,10 +332,10 @@ impl CrateTables {
         let at_index = at.checked_add(16)?;
         let at_element = Self::block_end(bytes, at_index)?;
         let at_jump = Self::block_end(bytes, at_element)?;
-        let (index, (element, jump)) = crate::both(
+        let (index, (element, jump)) = crate::schedule::both(
             || Self::ints(bytes, at_index, entries),
             || {
-                crate::both(
+                crate::schedule::both(
                     || Self::ints(bytes, at_element, entries),
                     || Self::ints(bytes, at_jump, entries),
                 )

@@ -1,6 +1,6 @@
 //! The crate's helper that makes items on rayon's pool and hands them over in order.
 
-use vstructc::make_in_order;
+use vstructc::schedule::make_in_order;
 
 /// Every item is taken once, in order, whatever the piece size and however long each item
 /// takes to make.
