@@ -50,6 +50,8 @@ impl Severity {
 }
 
 mod codes;
+// Below `limits`, which re-exports its types: `Error::Limit` needs them here.
+pub(crate) mod limit;
 
 /// A diagnostic's stable code (`VS009`, `AR004`, …): two letters naming the stage and three
 /// digits. [`Code::meaning`] gives its documented meaning. A `Code` compares equal to its text
@@ -709,7 +711,7 @@ pub enum Error {
     Usage(String),
     /// A bound of [`crate::limits::Limits`] was exceeded.
     #[error("{0}")]
-    Limit(Box<crate::limits::LimitExceeded>),
+    Limit(Box<limit::LimitExceeded>),
 }
 
 impl Error {
@@ -741,8 +743,8 @@ impl Error {
     }
 }
 
-impl From<crate::limits::LimitExceeded> for Error {
-    fn from(e: crate::limits::LimitExceeded) -> Self {
+impl From<limit::LimitExceeded> for Error {
+    fn from(e: limit::LimitExceeded) -> Self {
         Error::Limit(Box::new(e))
     }
 }

@@ -20,8 +20,9 @@
 //! assert_eq!((err.value, err.max), (1_001, 1_000));
 //! ```
 
-use crate::diag::{Diagnostic, Location};
-use std::fmt;
+// The names of the bounds and their error are `diag`'s (`Error::Limit` holds one), so that
+// the arrow between the two modules points one way: `limits` uses `diag`.
+pub use crate::diag::limit::{Limit, LimitExceeded};
 
 /// The bounds applied to one run. `Default` gives the documented defaults.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -66,62 +67,6 @@ impl Default for Limits {
     }
 }
 
-/// One of the bounds of [`Limits`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Limit {
-    /// [`Limits::definition_file_bytes`].
-    DefinitionFileBytes,
-    /// [`Limits::network_file_bytes`].
-    NetworkFileBytes,
-    /// [`Limits::nodes`].
-    Nodes,
-    /// [`Limits::connections_per_input`].
-    ConnectionsPerInput,
-    /// [`Limits::params_per_node`].
-    ParamsPerNode,
-    /// [`Limits::expr_terms`].
-    ExprTerms,
-    /// [`Limits::expr_depth`].
-    ExprDepth,
-    /// [`Limits::preview_pixels`].
-    PreviewPixels,
-}
-
-impl Limit {
-    /// The field name in [`Limits`], as messages print it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Limit::DefinitionFileBytes => "definition_file_bytes",
-            Limit::NetworkFileBytes => "network_file_bytes",
-            Limit::Nodes => "nodes",
-            Limit::ConnectionsPerInput => "connections_per_input",
-            Limit::ParamsPerNode => "params_per_node",
-            Limit::ExprTerms => "expr_terms",
-            Limit::ExprDepth => "expr_depth",
-            Limit::PreviewPixels => "preview_pixels",
-        }
-    }
-
-    /// What the limit counts, for messages ("bytes", "nodes", ...).
-    pub fn unit(self) -> &'static str {
-        match self {
-            Limit::DefinitionFileBytes | Limit::NetworkFileBytes => "bytes",
-            Limit::Nodes => "nodes",
-            Limit::ConnectionsPerInput => "connections on one input",
-            Limit::ParamsPerNode => "parameters",
-            Limit::ExprTerms => "terms",
-            Limit::ExprDepth => "levels of parentheses",
-            Limit::PreviewPixels => "pixels",
-        }
-    }
-}
-
-impl fmt::Display for Limit {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 impl Limits {
     /// The maximum for `limit`.
     pub fn max(&self, limit: Limit) -> u64 {
@@ -150,37 +95,6 @@ impl Limits {
                 max,
                 location: None,
             })
-        }
-    }
-}
-
-/// A [`Limits`] bound was exceeded: which one, the value found and the maximum.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{value} {unit} exceed the limit {name} = {max}", unit = limit.unit(), name = limit.name())]
-pub struct LimitExceeded {
-    /// The bound.
-    pub limit: Limit,
-    /// The value found (for streamed input, the count when reading stopped).
-    pub value: u64,
-    /// The bound's maximum.
-    pub max: u64,
-    /// Where the input exceeded it, when known.
-    pub location: Option<Location>,
-}
-
-impl LimitExceeded {
-    /// The same error at `location`.
-    pub fn at(mut self, location: Location) -> Self {
-        self.location = Some(location);
-        self
-    }
-
-    /// The error as a positioned diagnostic (code `LM001`, severity error).
-    pub fn to_diagnostic(&self) -> Diagnostic {
-        let d = Diagnostic::error("LM001", self.to_string());
-        match &self.location {
-            Some(loc) => d.at(loc.clone()),
-            None => d,
         }
     }
 }

@@ -34,7 +34,7 @@ macro_rules! testkit_pub {
 // benches (the cross-path comparisons reach leaves, kernels and SIMD levels directly). A
 // program using the library sees the items re-exported below and `preview`.
 testkit_mods!(
-    batch, frame, fresnel, ggx, leaves, lobe, material, math, simd, soa, tables, vmath,
+    frame, fresnel, ggx, leaves, lobe, material, math, simd, soa, tables, vmath,
 );
 
 // The leaf families under their own names (`interp::ward`, ...).
@@ -51,12 +51,11 @@ pub mod reference;
 #[cfg(feature = "testkit")]
 pub mod verify;
 
-pub use batch::{PreparedBatch, ShadingBatch};
 pub use frame::Frame;
 pub use lobe::Sides;
 pub use material::{
-    ActiveLobe, Albedo, Eval, LeafInfo, Material, PrepareOptions, Prepared, Sample, Scratch,
-    ShadingPoint, TableAlbedo,
+    ActiveLobe, Albedo, Eval, LeafInfo, Material, PrepareOptions, Prepared, PreparedBatch, Sample,
+    Scratch, ShadingBatch, ShadingPoint, TableAlbedo,
 };
 pub use math::Rgb;
 

@@ -31,8 +31,7 @@
 //! sheet's sides are at most [`ContactSheet::MAX_SIDE`] ([`PreviewError`] names the limit and the
 //! value).
 
-use super::batch::{PreparedBatch, ShadingBatch};
-use super::material::{Material, Prepared, Scratch, ShadingPoint};
+use super::material::{Material, Prepared, PreparedBatch, Scratch, ShadingBatch, ShadingPoint};
 use super::math::Rgb;
 use crate::limits::{Limit, LimitExceeded, Limits};
 use crate::raster::font::{GLYPH_H, Label};

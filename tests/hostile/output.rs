@@ -36,6 +36,67 @@ pub(crate) fn vstructc(args: &[&str]) -> Command {
     cmd
 }
 
+/// Runs `vstructc args` in `examples/`'s parent as a user who may not write what root may:
+/// the calling user, or `nobody` when the tests run as root. `None`, with the calling test
+/// recorded as not run and the reason printed, when `nobody` cannot run the binary here.
+///
+/// `nobody` runs copies of the binary and of `examples/chain.rib` in a fresh folder every user
+/// may enter, read and execute (0755), that folder its working directory: the build's own
+/// binary and the repository may sit where only their owner can reach them (a clone in a
+/// 0700 home folder), and `nobody` could then neither start the binary nor read the example.
+fn run_unprivileged(args: &[&str]) -> Option<Ran> {
+    if !is_root() {
+        return Some(run_cmd(&mut vstructc(args)));
+    }
+    let open = |p: &Path, mode: u32| {
+        std::fs::set_permissions(p, std::fs::Permissions::from_mode(mode))
+            .expect("permissions of the copy for nobody")
+    };
+    let copy = folder("nobody");
+    open(copy.path(), 0o755);
+    let exe = copy.path().join("vstructc");
+    std::fs::copy(env!("CARGO_BIN_EXE_vstructc"), &exe).expect("copy of the binary");
+    open(&exe, 0o755);
+    let examples = copy.path().join("examples");
+    std::fs::create_dir(&examples).expect("examples folder of the copy");
+    open(&examples, 0o755);
+    let chain = examples.join("chain.rib");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/chain.rib"),
+        &chain,
+    )
+    .expect("copy of examples/chain.rib");
+    open(&chain, 0o644);
+    let as_nobody = |cmd: &mut Command| {
+        cmd.env("VSTRUCTC_ARGS_PATH", "")
+            .current_dir(copy.path())
+            .uid(NOBODY)
+            .gid(NOBODY);
+    };
+    // Whether `nobody` can start the copy at all (a temporary folder inside a private one,
+    // or a system that refuses the change of user, would stop it).
+    let mut probe = Command::new(&exe);
+    probe.arg("--version");
+    as_nobody(&mut probe);
+    let refused = match probe.stdout(Stdio::null()).stderr(Stdio::null()).status() {
+        Ok(status) if status.success() => None,
+        Ok(status) => Some(format!(
+            "`vstructc --version` as nobody exited with {status}"
+        )),
+        Err(e) => Some(format!("nobody cannot start vstructc: {e}")),
+    };
+    if let Some(why) = refused {
+        let why = format!("{why} (a copy in {})", copy.path().display());
+        eprintln!("NOT RUN: the unprivileged case: {why}");
+        crate::common::not_run(&why);
+        return None;
+    }
+    let mut cmd = Command::new(&exe);
+    cmd.args(args);
+    as_nobody(&mut cmd);
+    Some(run_cmd(&mut cmd))
+}
+
 /// Run `cmd` with no input and piped output, under the watchdog.
 pub(crate) fn run_cmd(cmd: &mut Command) -> Ran {
     let child = cmd
@@ -249,7 +310,7 @@ fn a_private_file_keeps_its_mode_and_owner() {
 /// A read-only file is refused like `>` refuses it: for a user who may not write it, exit 1
 /// with the system's "Permission denied", the file byte-identical and no temporary file.
 /// Root may write it, as with `>`, and its mode stays 0444. (As root, the unprivileged case
-/// runs as `nobody`.)
+/// runs as `nobody`: [`run_unprivileged`].)
 #[test]
 fn a_read_only_file_is_refused_unless_root() {
     let dir = folder("readonly");
@@ -258,20 +319,17 @@ fn a_read_only_file_is_refused_unless_root() {
     std::fs::write(&target, "read only").unwrap();
     std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o444)).unwrap();
 
-    let mut cmd = vstructc(&["resolve", "examples/chain.rib", "-o", s(&target)]);
-    if is_root() {
-        cmd.uid(NOBODY).gid(NOBODY);
+    if let Some(ran) = run_unprivileged(&["resolve", "examples/chain.rib", "-o", s(&target)]) {
+        check("-o read-only file", &ran.out, 1, "error[IO001]");
+        assert!(
+            ran.out.stderr.contains("Permission denied") && ran.out.stderr.contains(s(&target)),
+            "{}",
+            ran.out.stderr
+        );
+        assert_eq!(std::fs::read(&target).unwrap(), b"read only");
+        assert_eq!(mode(&target), 0o444);
+        assert!(temporaries(dir.path()).is_empty());
     }
-    let ran = run_cmd(&mut cmd);
-    check("-o read-only file", &ran.out, 1, "error[IO001]");
-    assert!(
-        ran.out.stderr.contains("Permission denied") && ran.out.stderr.contains(s(&target)),
-        "{}",
-        ran.out.stderr
-    );
-    assert_eq!(std::fs::read(&target).unwrap(), b"read only");
-    assert_eq!(mode(&target), 0o444);
-    assert!(temporaries(dir.path()).is_empty());
 
     if is_root() {
         let ran = resolve_to(&target);
@@ -282,7 +340,8 @@ fn a_read_only_file_is_refused_unless_root() {
 }
 
 /// A writable file in a folder the user may not write cannot be replaced atomically: it is
-/// refused (exit 1, the folder named), not written in place.
+/// refused (exit 1, the folder named), not written in place. (As root, the case runs as
+/// `nobody`: [`run_unprivileged`].)
 #[test]
 fn a_file_in_an_unwritable_folder_is_refused() {
     let dir = folder("lockedfolder");
@@ -293,18 +352,15 @@ fn a_file_in_an_unwritable_folder_is_refused() {
     std::fs::write(&target, "old").unwrap();
     std::fs::set_permissions(&target, std::fs::Permissions::from_mode(0o666)).unwrap();
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
-    let mut cmd = vstructc(&["resolve", "examples/chain.rib", "-o", s(&target)]);
-    if is_root() {
-        cmd.uid(NOBODY).gid(NOBODY);
+    if let Some(ran) = run_unprivileged(&["resolve", "examples/chain.rib", "-o", s(&target)]) {
+        check("-o file in read-only folder", &ran.out, 1, "error[IO001]");
+        assert!(
+            ran.out.stderr.contains("cannot create a temporary file in"),
+            "{}",
+            ran.out.stderr
+        );
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
     }
-    let ran = run_cmd(&mut cmd);
-    check("-o file in read-only folder", &ran.out, 1, "error[IO001]");
-    assert!(
-        ran.out.stderr.contains("cannot create a temporary file in"),
-        "{}",
-        ran.out.stderr
-    );
-    assert_eq!(std::fs::read(&target).unwrap(), b"old");
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
 }
 

@@ -2,82 +2,17 @@
 //! nodes with plain child indices, leaves with compact frame slots, the throughput pass as
 //! straight-line steps, and the plans of the fast prepares).
 
-use super::PrepareOptions;
+use super::form::{CNode, LanePlan, LeafInfo, Material, ThrOp, UniformPlan};
 use super::leaf::leaf_lobe;
-use super::plan::{WeightPlan, compile_weights};
-use super::{lanes, packs, uniform};
+use super::packs::Grouping;
+use super::plan::compile_weights;
+use super::record::PrepareOptions;
 use crate::diag::{Diagnostic, Error};
-use crate::interp::lobe::{BoundLobe, Sides};
+use crate::interp::lobe::Sides;
 use crate::ir::{
-    FrameSlot, Globals, Leaf, MAX_LOBES, MaterialIr, Node, NodeId, OpCode, Reg, RunContext,
-    TintMode,
+    FrameSlot, Globals, MAX_LOBES, MaterialIr, Node, NodeId, OpCode, Reg, RunContext, TintMode,
 };
 use glam::Vec3;
-
-/// A leaf of a compiled material.
-#[derive(Debug, Clone)]
-pub struct LeafInfo {
-    /// The closure node.
-    pub node: NodeId,
-    /// The leaf (kind, registers, tints, IR frame, label).
-    pub leaf: Leaf,
-    /// Compact frame slot (index into the prepared frames).
-    pub(super) frame_slot: u8,
-    /// Layerable.
-    pub(super) layerable: bool,
-    /// The lobe, when every parameter register is a constant (built and bound once at
-    /// compile time).
-    pub(super) const_lobe: Option<BoundLobe>,
-}
-
-#[derive(Debug, Clone, Copy)]
-pub(super) enum CNode {
-    Leaf(u8),
-    Emission(Reg),
-    Transparent(Reg),
-    Layer { top: u32, base: u32, mode: TintMode },
-    Mix { a: u32, b: u32, m: Reg },
-    Add { a: u32, b: u32 },
-    Multiply { f: u32, c: Reg },
-}
-
-/// A [`MaterialIr`] compiled for the interpreter (see the module documentation).
-#[derive(Debug, Clone)]
-pub struct Material {
-    pub(super) ir: MaterialIr,
-    pub(super) nodes: Vec<CNode>,
-    /// Bit `m` set: the node's throughput in mode `m` is read by some layer.
-    pub(super) need: Vec<u8>,
-    /// Where node `i`'s throughput in mode `m` lives in [`Scratch`] (`NO_SLOT`: never read).
-    pub(super) thr_slot: Vec<[u16; 4]>,
-    /// The throughput pass compiled to straight-line steps, bottom-up.
-    pub(super) thr_ops: Vec<ThrOp>,
-    pub(super) leaves: Vec<LeafInfo>,
-    /// The IR frames used by leaves, in compact order.
-    pub(super) frames: Vec<FrameSlot>,
-    /// Their indices in the IR.
-    pub(super) frame_ids: Vec<u32>,
-    /// `(offset, width)` of each input slot in the packed input slice.
-    pub(super) layout: Vec<(usize, usize)>,
-    /// Some frame has its own normal and the program reads `ViewMu`.
-    pub(super) rerun_for_mu: bool,
-    /// The register file when the program reads no input, global or view (computed once).
-    pub(super) const_regs: Option<Vec<Vec3>>,
-    /// The weight pass with every register read folded in, when the registers are
-    /// constant (`const_regs`) and the DAG has few enough paths.
-    pub(super) w_plan: Option<WeightPlan>,
-    /// The lane-parallel prepare's per-leaf data, when the material qualifies
-    /// ([`lanes::LanePlan`]).
-    pub(super) lanes: Option<lanes::LanePlan>,
-    /// The fused scalar prepare's constants, when the material qualifies
-    /// ([`uniform::UniformPlan`]).
-    pub(super) uniform: Option<uniform::UniformPlan>,
-    /// Which lobes `eval` packs together in a prepare where every leaf survives and is
-    /// active; known at compile time when every leaf is a constant (`None` otherwise, and
-    /// the grouping is made per prepare).
-    pub(super) pack_grouping: Option<packs::Grouping>,
-    pub(super) options: PrepareOptions,
-}
 
 pub(super) fn malformed(ir: &MaterialIr, what: String) -> Error {
     Error::Input(Box::new(Diagnostic::error(
@@ -229,8 +164,8 @@ impl Material {
             rerun_for_mu,
             options,
         };
-        m.lanes = lanes::LanePlan::new(&m);
-        m.uniform = uniform::UniformPlan::new(&m);
+        m.lanes = LanePlan::new(&m);
+        m.uniform = UniformPlan::new(&m);
         Ok(m)
     }
 
@@ -333,24 +268,6 @@ pub(super) fn mode_needs(nodes: &[CNode]) -> Vec<u8> {
     need
 }
 
-/// One step of the compiled throughput pass: step `i` writes slot `i` from slots written
-/// before it (bottom-up) and registers.
-#[derive(Debug, Clone, Copy)]
-pub(super) enum ThrOp {
-    /// A leaf's throughput in `mode` (0 for leaves that are not layerable or not prepared).
-    Leaf { leaf: u8, mode: TintMode },
-    /// Emission and transparency pass everything.
-    One,
-    /// `T_top(layer mode) · T_base(m)`.
-    Layer { top: u16, base: u16 },
-    /// `(1 − m) T_a + m T_b`.
-    Mix { a: u16, b: u16, m: Reg },
-    /// `max(T_a + T_b − 1, 0)`.
-    Add { a: u16, b: u16 },
-    /// `sat(1 − c (1 − T_f))`.
-    Multiply { f: u16, c: Reg },
-}
-
 /// Marks a (node, mode) throughput that is never read.
 pub(super) const NO_SLOT: u16 = u16::MAX;
 
@@ -394,11 +311,11 @@ pub(super) fn compile_throughput(nodes: &[CNode], need: &[u8]) -> (Vec<[u16; 4]>
 /// every leaf survives and is active (`None` when some leaf reads a register that is not a
 /// constant: its kernel key may then vary by point). A constant leaf's key does not depend
 /// on the view, so preparing it at the normal gives the key of every active prepare.
-pub(super) fn static_grouping(leaves: &[LeafInfo], sides: Sides) -> Option<packs::Grouping> {
+pub(super) fn static_grouping(leaves: &[LeafInfo], sides: Sides) -> Option<Grouping> {
     let mut keys = [None; MAX_LOBES];
     for (key, info) in keys.iter_mut().zip(leaves) {
         let lobe = info.const_lobe.as_ref()?.prepare(Vec3::Z, sides);
         *key = crate::interp::soa::kernel_key(&lobe.state);
     }
-    Some(packs::Grouping::of_keys(&keys[..leaves.len()]))
+    Some(Grouping::of_keys(&keys[..leaves.len()]))
 }

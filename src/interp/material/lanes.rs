@@ -1,5 +1,6 @@
-//! The lane-parallel prepare of a uniform material (structure-of-arrays batching for
-//! previews).
+//! The batched prepares of [`Material`] over `W` points: the prepare of each lane by the
+//! scalar steps, and the lane-parallel prepare of a uniform material (structure-of-arrays
+//! batching for previews).
 //!
 //! [`Material::prepare_batch_into`] runs the scalar prepare once per lane and then
 //! transposes the per-lane records into the batch's kernels. Most of that work is the
@@ -19,69 +20,96 @@
 //! Every formula is the scalar leaf's, in the same order, so each lane agrees with
 //! [`Material::prepare`] to rounding (`tests/interp/batch_lanes.rs`).
 
-use super::{Material, Target, ThrOp, clean, sat};
-use crate::interp::batch::{PreparedBatch, ShadingBatch};
-use crate::interp::diffuse::{OrenNayar, OrenNayarBound};
+use super::batch::{PreparedBatch, ShadingBatch};
+use super::form::{LanePlan, LeafLanes, Material, Target, ThrOp, clean, sat};
+use super::prepare::Scratch;
+use super::prepared::Prepared;
 use crate::interp::diffuse::soa::lambert_set_views;
 use crate::interp::frame::Frame;
-use crate::interp::ggx::GgxView;
 use crate::interp::leaves::Leaf;
 use crate::interp::lobe::{Aux, Lobe};
-use crate::interp::math::{Rgb, lum};
-use crate::interp::microfacet::{Compensation, Dielectric, DielectricMode, MicrofacetR, RatioGrid};
-use crate::interp::sheen::{SheenCKBound, SheenLTCBound, SheenMasking};
+use crate::interp::math::lum;
+use crate::interp::microfacet::{Compensation, DielectricMode};
+use crate::interp::sheen::SheenMasking;
 use crate::interp::simd::{Level, call_widest, widest_versions};
 use crate::interp::soa::{Kernel, LaneWeights, Vec3x};
-use crate::interp::tables::{LaneCoords, MuCurve};
+use crate::interp::tables::LaneCoords;
 use crate::interp::vmath::{select, select3};
-use crate::interp::ward::{Ward, WardBound};
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, TintMode};
 use glam::Vec3;
 
-/// What the lane-parallel prepare keeps of one leaf: its family's view-independent data
-/// (from the leaf's [`crate::interp::lobe::BoundLobe`]). One per leaf, built at compile
-/// time, so the size difference between variants costs nothing worth boxing for.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug, Clone, Copy)]
-pub(super) enum LeafLanes {
-    /// Lambert (and the subsurface proxy): `ρ` and `ρ/π`.
-    Lambert { rho: Rgb, rho_pi: Rgb },
-    /// Oren–Nayar (any variant).
-    OrenNayar {
-        lobe: OrenNayar,
-        bound: OrenNayarBound,
-    },
-    /// GGX reflection with a conductor Fresnel, no compensation: its albedo is `E1` times
-    /// the exact Fresnel's ratio grid ([`MicrofacetR::ratio_albedo`]).
-    Conductor {
-        lobe: MicrofacetR,
-        ggx_view: GgxView,
-        /// The lobe's baked albedo or Fresnel ratios (`MicrofacetBound::ratios`; every rough
-        /// conductor has them).
-        ratios: RatioGrid,
-    },
-    /// GGX dielectric in mode R without Turquin's factor: `E_R` at the lobe's η.
-    DielectricR {
-        lobe: Dielectric,
-        ggx_view: GgxView,
-        eta: f32,
-        e_r: MuCurve,
-        /// An anisotropic lobe's ratios at η (`DielectricBound::aniso`).
-        aniso: Option<RatioGrid>,
-    },
-    /// Ward (classic or GM).
-    Ward { lobe: Ward, bound: WardBound },
-    /// Conty–Kulla sheen with the MaterialX masking.
-    SheenCK { bound: SheenCKBound },
-    /// LTC sheen (its fits at the lobe's roughness).
-    SheenLTC { bound: SheenLTCBound },
-}
+impl Material {
+    /// Prepare `W` points at once.
+    pub fn prepare_batch<const W: usize>(&self, p: &ShadingBatch<W>) -> PreparedBatch<W> {
+        let mut s = Scratch::default();
+        let lanes: [Prepared; W] = std::array::from_fn(|k| self.prepare_with(&p.lane(k), &mut s));
+        PreparedBatch::from_lanes(lanes)
+    }
 
-/// The per-leaf data of a material that [`Material::prepare_lanes`] can prepare.
-#[derive(Debug, Clone)]
-pub(in crate::interp) struct LanePlan {
-    leaves: Vec<LeafLanes>,
+    /// Prepare `W` points into an existing batch, reusing `scratch` (no heap allocation once
+    /// the scratch is sized).
+    pub fn prepare_batch_into<const W: usize>(
+        &self,
+        p: &ShadingBatch<W>,
+        scratch: &mut Scratch,
+        out: &mut PreparedBatch<W>,
+    ) {
+        for k in 0..W {
+            self.prepare_unpacked_into(&p.lane(k), scratch, &mut out.lanes[k]);
+        }
+        out.transpose();
+    }
+
+    /// Prepare `W` points for [`PreparedBatch::eval`], [`PreparedBatch::albedo`],
+    /// [`PreparedBatch::emission`] and [`PreparedBatch::transparency`] only: what a
+    /// sampling-free renderer such as the material preview needs. A material whose
+    /// registers are all constants, whose leaves share the point's frame and have batched
+    /// kernels is prepared lane-parallel, without per-lane records
+    /// ([`PreparedBatch::lane`] is then `None`); any other material, or a batch with a view
+    /// at or below some lane's horizon, goes through [`Material::prepare_batch_into`]. Both
+    /// ways give the same results to rounding.
+    pub fn prepare_batch_eval_into<const W: usize>(
+        &self,
+        p: &ShadingBatch<W>,
+        scratch: &mut Scratch,
+        out: &mut PreparedBatch<W>,
+    ) {
+        self.prepare_batch_eval_at(Level::Avx512, p, scratch, out);
+    }
+
+    testkit_pub! {
+        /// [`Material::prepare_batch_eval_into`] with the lane-parallel steps compiled for at most
+        /// `level` (module `simd`; every level gives the same bits).
+        fn prepare_batch_eval_at<const W: usize>(
+            &self,
+            level: Level,
+            p: &ShadingBatch<W>,
+            scratch: &mut Scratch,
+            out: &mut PreparedBatch<W>,
+        ) {
+            if !self.prepare_lanes::<W, true>(level, p, out) {
+                self.prepare_batch_into(p, scratch, out);
+            }
+        }
+    }
+
+    testkit_pub! {
+        /// [`Material::prepare_batch_eval_into`] for [`PreparedBatch::eval_f_cos`] and the
+        /// per-lane albedo, emission and transparency alone (the batched material preview): the
+        /// lane-parallel path leaves out step 7's selection probabilities, which only the
+        /// densities read. After that path [`PreparedBatch::eval`]'s pdf is NaN.
+        fn prepare_batch_f_cos_into<const W: usize>(
+            &self,
+            p: &ShadingBatch<W>,
+            scratch: &mut Scratch,
+            out: &mut PreparedBatch<W>,
+        ) {
+            if !self.prepare_lanes::<W, false>(Level::Avx512, p, out) {
+                self.prepare_batch_into(p, scratch, out);
+            }
+        }
+    }
 }
 
 impl LanePlan {

@@ -44,179 +44,44 @@
 //!   [`ShadingPoint::inputs`] takes its fallback.
 //!
 //! # Layout
-//! `compile.rs` checks and flattens the IR into a [`Material`]; `leaf.rs` turns an IR leaf
-//! into its lobe; `plan.rs` compiles the weight pass of a material with constant registers;
-//! `prepare.rs` is the general prepare and its [`Scratch`]; `prepared.rs` is [`Prepared`]
-//! (eval, sample, albedo). The fast paths, same bits as the general prepare: `uniform.rs`
-//! (fused prepare of a uniform material), `lanes.rs` (lane-parallel prepare), `packs.rs`
-//! (same-family lobes evaluated as lanes of one kernel).
-
-use super::lobe::{LobeAlbedo, Sides};
-use super::math::Rgb;
-use crate::ir::MAX_LOBES;
-use glam::{Vec2, Vec3};
+//! The files read top-down, compile → plan → prepare → eval: each imports only files below
+//! it in this list, so no two import each other (`tests/resolve/layers.rs` checks it).
+//! * `compile.rs` checks and flattens the IR into a [`Material`] and builds its plans;
+//! * `plan.rs` compiles the weight pass of a material with constant registers;
+//! * `lanes.rs`, the batched prepares: each lane by the scalar steps, or the lane-parallel
+//!   prepare of a uniform material;
+//! * `batch.rs`, [`ShadingBatch`] and [`PreparedBatch`]: the lanes' records side by side and
+//!   the batched `eval`;
+//! * `prepare.rs`, the general prepare and its [`Scratch`];
+//! * `uniform.rs`, the fused prepare of a uniform material (same bits as the general one);
+//! * `prepared.rs`, [`Prepared`]: eval, sample, albedo;
+//! * `form.rs`, the compiled form: [`Material`]'s data and its plans' (types only, with the
+//!   clamps every pass applies), shared by the compile step and the prepares;
+//! * `packs.rs`, same-family lobes evaluated as lanes of one kernel;
+//! * `leaf.rs`, an IR leaf turned into its lobe;
+//! * `record.rs`, the records every layer passes: [`ShadingPoint`], [`PrepareOptions`],
+//!   [`ActiveLobe`], [`Eval`], [`Sample`], [`Albedo`].
+//!
+//! `Material`'s methods sit in the file of their step, and a step calls only steps below it.
 
 mod compile;
+mod plan;
 mod lanes;
+mod batch;
+mod prepare;
+mod uniform;
+mod prepared;
+mod form;
 // The lobe packs: public under `testkit` for their unit tests.
 testkit_mods!(packs);
 mod leaf;
-mod plan;
-mod prepare;
-mod prepared;
-mod uniform;
+mod record;
 
-use compile::ThrOp;
-pub use compile::{LeafInfo, Material};
+pub use batch::{PreparedBatch, ShadingBatch};
+pub use form::{LeafInfo, Material};
 pub use leaf::TableAlbedo;
-use plan::{Target, WeightPlan};
 pub use prepare::Scratch;
-use prepare::{clean, sat};
-pub use prepared::{ActiveLobe, Prepared};
+pub use prepared::Prepared;
+pub use record::{ActiveLobe, Albedo, Eval, PrepareOptions, Sample, ShadingPoint};
 
 
-/// Default of [`PrepareOptions::drop_threshold`].
-pub(crate) const DEFAULT_DROP_THRESHOLD: f32 = 1e-6;
-
-/// One shading point as the interpreter sees it. Directions are world-space unit
-/// vectors.
-#[derive(Debug, Clone, Copy)]
-pub struct ShadingPoint<'a> {
-    /// Shading normal.
-    pub n: Vec3,
-    /// Surface tangent (the anisotropy direction unless a lobe's frame says otherwise).
-    pub t: Vec3,
-    /// Direction toward the viewer.
-    pub v: Vec3,
-    /// External input slots, packed (see [`Material::input_layout`]); slots beyond the end
-    /// take their fallbacks.
-    pub inputs: &'a [f32],
-    /// Surface position (the program's `P` global).
-    pub p: Vec3,
-    /// Surface parameters (the program's `u`, `v` globals).
-    pub uv: Vec2,
-}
-
-impl<'a> ShadingPoint<'a> {
-    /// A point with normal `n`, tangent `t` and view `v`; no inputs, `P = 0`, `uv = 0`.
-    pub fn new(n: Vec3, t: Vec3, v: Vec3) -> ShadingPoint<'static> {
-        ShadingPoint {
-            n,
-            t,
-            v,
-            inputs: &[],
-            p: Vec3::ZERO,
-            uv: Vec2::ZERO,
-        }
-    }
-
-    /// The same point with these packed inputs.
-    pub fn with_inputs<'b>(self, inputs: &'b [f32]) -> ShadingPoint<'b> {
-        ShadingPoint {
-            n: self.n,
-            t: self.t,
-            v: self.v,
-            inputs,
-            p: self.p,
-            uv: self.uv,
-        }
-    }
-
-    /// The same point with these surface parameters.
-    pub fn with_uv(self, uv: Vec2) -> Self {
-        ShadingPoint { uv, ..self }
-    }
-
-    /// The same point at this position.
-    pub fn with_position(self, p: Vec3) -> Self {
-        ShadingPoint { p, ..self }
-    }
-}
-
-/// Result of [`Prepared::eval`].
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Eval {
-    /// `Σ_k w_k ⊙ f_k(V, L)·|μ_i|` (RGB).
-    pub f_cos: Rgb,
-    /// Mixture density `Σ_k p_k pdf_k(L)` per unit solid angle.
-    pub pdf: f32,
-}
-
-/// Result of [`Prepared::sample`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sample {
-    /// Sampled direction (world space, unit).
-    pub l: Vec3,
-    /// `f_cos / pdf` over the mixture (one-sample balance heuristic); for delta lobes
-    /// `w_k ⊙ R_k / p_k`.
-    pub weight: Rgb,
-    /// Mixture density; for delta lobes the discrete probability of the choice.
-    pub pdf: f32,
-    /// True for a delta direction (specular, straight transmission).
-    pub delta: bool,
-    /// Index of the chosen lobe in [`Prepared::lobes`], or [`Sample::TRANSPARENCY_LOBE`].
-    pub lobe: u8,
-}
-
-impl Sample {
-    /// The lobe index [`Sample::lobe`] reports for straight transmission through
-    /// `Transparent` leaves.
-    pub const TRANSPARENCY_LOBE: u8 = u8::MAX;
-}
-
-/// Directional albedo of a prepared material or lobe, split by hemisphere.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Albedo {
-    /// Reflected part.
-    pub reflect: Rgb,
-    /// Transmitted part as energy (`η'² E_T`): a lossless interface reports
-    /// `reflect + transmit = 1`.
-    pub transmit: Rgb,
-    /// Transmitted part in the radiance convention (what sample weights average to).
-    pub transmit_radiance: Rgb,
-}
-
-impl Albedo {
-    /// `reflect + transmit` (energy).
-    pub fn total(&self) -> Rgb {
-        self.reflect + self.transmit
-    }
-
-    fn scaled(a: &LobeAlbedo, w: Rgb) -> Albedo {
-        Albedo {
-            reflect: w * a.reflect,
-            transmit: w * a.transmit_energy,
-            transmit_radiance: w * a.transmit,
-        }
-    }
-
-    fn add(&mut self, o: &Albedo) {
-        self.reflect += o.reflect;
-        self.transmit += o.transmit;
-        self.transmit_radiance += o.transmit_radiance;
-    }
-}
-
-/// Options of [`Material`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PrepareOptions {
-    /// Drop lobes with `maxc(A_k)` at or below this; 0 disables dropping.
-    pub drop_threshold: f32,
-    /// Whether reflection lobes also respond when seen from below (transmission lobes are
-    /// always two-sided).
-    pub sides: Sides,
-    /// Whether [`Prepared::eval`] runs same-family lobes together, one per SIMD lane (the
-    /// batched path's kernels; equal to the lobe-by-lobe sum to relative 1e-5). Off, every
-    /// lobe is evaluated alone with its scalar leaf.
-    pub pack_lobes: bool,
-}
-
-impl Default for PrepareOptions {
-    fn default() -> Self {
-        PrepareOptions {
-            drop_threshold: DEFAULT_DROP_THRESHOLD,
-            sides: Sides::Front,
-            pack_lobes: true,
-        }
-    }
-}

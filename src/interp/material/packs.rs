@@ -15,9 +15,10 @@
 //! lobes fills several packs. Lobes no kernel covers, and a family's only lobe, are
 //! evaluated alone.
 
-use super::{ActiveLobe, MAX_LOBES};
+use super::record::ActiveLobe;
 use crate::interp::lobe::PreparedLobe;
 use crate::interp::soa::{Acc, KERNEL_KEYS, Kernel, LaneWeights, Vec3x, kernel_key};
+use crate::ir::MAX_LOBES;
 use glam::Vec3;
 
 /// Lobes per pack.
@@ -150,7 +151,7 @@ pub(super) struct EvalPlan {
     packs: [LobePack; MAX_PACKS],
     /// The plan describes the current lobes; when false every lobe is evaluated alone.
     valid: bool,
-    /// The [`super::uniform::UniformPlan::stamp`] of the material whose leaves, all of
+    /// The [`super::form::UniformPlan::stamp`] of the material whose leaves, all of
     /// them, in leaf order and none flipped, the packs' view-independent terms belong to
     /// (see [`EvalPlan::build_stamped`]); 0 when they may belong to anything else.
     stamp: u64,

@@ -1,89 +1,10 @@
 //! The weight pass of a material with constant registers, compiled once into a
 //! [`WeightPlan`] of per-path terms.
 
-use super::compile::{CNode, LeafInfo, Material};
-use super::prepare::{Scratch, clean, sat};
-use super::prepared::Prepared;
-use crate::ir::{MAX_LOBES, Reg};
+use super::form::{CNode, LeafInfo, Target, WTerm, WeightPlan, sat};
+use crate::ir::Reg;
 use glam::Vec3;
 use std::collections::HashMap;
-
-impl Material {
-    /// [`Material::weights`] for constant registers, from the compiled terms of
-    /// [`compile_weights`]: each target's weight is its terms' sum, cleaned once, as the
-    /// general pass does with the sum over a node's parents.
-    pub(super) fn weights_planned(
-        &self,
-        plan: &WeightPlan,
-        s: &mut Scratch,
-        weights: &mut [Vec3; MAX_LOBES],
-        out: &mut Prepared,
-    ) {
-        let thr = &s.thr[..];
-        // Scope products, parents first (scope 0 is the root's 1).
-        let scope = &mut s.scope;
-        scope.clear();
-        scope.push(Vec3::ONE);
-        for &(parent, slot) in &plan.scopes {
-            let w = scope[parent as usize] * thr[slot as usize];
-            scope.push(w);
-        }
-        let acc = &mut s.w;
-        acc.clear();
-        acc.resize(plan.targets.len(), Vec3::ZERO);
-        for t in &plan.terms {
-            acc[t.target as usize] += t.c * scope[t.scope as usize];
-        }
-        for (target, &a) in plan.targets.iter().zip(acc.iter()) {
-            match *target {
-                Target::Leaf { leaf, tint } => weights[leaf as usize] = clean(tint * a),
-                Target::Emission(e) => out.emission += clean(a * e),
-                Target::Transparent(t) => out.transparency += clean(a * t),
-            }
-        }
-    }
-}
-
-/// The weight pass of a material with constant registers, compiled: every
-/// root-to-target path of the closure DAG is one term `c ⊙ Π thr[j]`, where `c` is the
-/// product of the path's constant `mix` and `mul` factors and the `thr[j]` are the
-/// throughputs of the layer tops the path passes under (the only view-dependent part).
-/// Paths share their products through *scopes*: a scope is a sequence of layer tops passed
-/// under, its product is its parent's times one throughput, so every product is one
-/// multiplication whatever the nesting depth.
-#[derive(Debug, Clone)]
-pub(super) struct WeightPlan {
-    pub(super) terms: Vec<WTerm>,
-    /// Scope `i + 1` = scope `parent` × `thr[slot]`; scope 0 is 1. Parents come first.
-    pub(super) scopes: Vec<(u32, u16)>,
-    /// Leaves, emission and transparency nodes, each with its own accumulator.
-    pub(super) targets: Vec<Target>,
-    /// Every leaf weight is finite and non-negative at every point, whatever the albedos
-    /// ([`weights_are_clean`]): [`clean`] of it is the identity, and the fused and
-    /// lane-parallel prepares skip it.
-    pub(super) weights_clean: bool,
-}
-
-/// One path of a [`WeightPlan`]: `c ⊙ scope` added to a target.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct WTerm {
-    pub(super) c: Vec3,
-    /// The path's scope (its product of throughputs).
-    pub(super) scope: u32,
-    /// Index into [`WeightPlan::targets`].
-    pub(super) target: u32,
-}
-
-/// What a [`WeightPlan`] term's weight goes to.
-#[derive(Debug, Clone, Copy)]
-pub(super) enum Target {
-    /// `weights[leaf] = clean(tint ⊙ Σ)`.
-    Leaf { leaf: u8, tint: Vec3 },
-    /// `emission += clean(Σ ⊙ radiance)`.
-    Emission(Vec3),
-    /// `transparency += clean(Σ ⊙ tint)`.
-    Transparent(Vec3),
-}
 
 /// Above this many paths a material keeps the general weight pass (a DAG that shares
 /// nodes can have exponentially many).

@@ -2,10 +2,10 @@
 //! the view terms of the weighted lobes, dropping and selection (the module documentation
 //! of [`super`] lists the steps); its working memory is a [`Scratch`].
 
-use super::compile::{CNode, LeafInfo, Material, ThrOp};
+use super::form::{CNode, LeafInfo, Material, Target, ThrOp, WeightPlan, clean, sat};
 use super::leaf::leaf_lobe;
 use super::prepared::Prepared;
-use super::{Albedo, ShadingPoint};
+use super::record::{Albedo, ShadingPoint};
 use crate::interp::frame::Frame;
 use crate::interp::lobe::{LobeAlbedo, PreparedLobe};
 use crate::interp::simd::{Level, SCALAR_LEVEL, call_widest, widest_versions};
@@ -422,21 +422,38 @@ impl Material {
             }
         }
     }
-}
 
-pub(super) fn sat(v: Vec3) -> Vec3 {
-    v.clamp(Vec3::ZERO, Vec3::ONE)
-}
-
-/// Non-negative and finite (NaN and infinities become 0).
-#[inline]
-pub(super) fn clean(v: Vec3) -> Vec3 {
-    // A bit mask per channel, no branch. `x − x` is 0 exactly for finite x (NaN for ±∞ and
-    // NaN); written as `x < ∞`, LLVM turns the test into integer classification code.
-    #[allow(clippy::eq_op)] // `x − x` is the finiteness test (see above), not a slip
-    let c = |x: f32| {
-        let keep = (x > 0.0) & (x - x == 0.0);
-        f32::from_bits(x.to_bits() & u32::from(keep).wrapping_neg())
-    };
-    Vec3::new(c(v.x), c(v.y), c(v.z))
+    /// [`Material::weights`] for constant registers, from the compiled terms of
+    /// [`compile_weights`](super::plan::compile_weights): each target's weight is its terms'
+    /// sum, cleaned once, as the general pass does with the sum over a node's parents.
+    pub(super) fn weights_planned(
+        &self,
+        plan: &WeightPlan,
+        s: &mut Scratch,
+        weights: &mut [Vec3; MAX_LOBES],
+        out: &mut Prepared,
+    ) {
+        let thr = &s.thr[..];
+        // Scope products, parents first (scope 0 is the root's 1).
+        let scope = &mut s.scope;
+        scope.clear();
+        scope.push(Vec3::ONE);
+        for &(parent, slot) in &plan.scopes {
+            let w = scope[parent as usize] * thr[slot as usize];
+            scope.push(w);
+        }
+        let acc = &mut s.w;
+        acc.clear();
+        acc.resize(plan.targets.len(), Vec3::ZERO);
+        for t in &plan.terms {
+            acc[t.target as usize] += t.c * scope[t.scope as usize];
+        }
+        for (target, &a) in plan.targets.iter().zip(acc.iter()) {
+            match *target {
+                Target::Leaf { leaf, tint } => weights[leaf as usize] = clean(tint * a),
+                Target::Emission(e) => out.emission += clean(a * e),
+                Target::Transparent(t) => out.transparency += clean(a * t),
+            }
+        }
+    }
 }

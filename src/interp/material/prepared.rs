@@ -2,33 +2,14 @@
 //! emission and transparency.
 
 use super::packs;
-use super::{Albedo, Eval, Sample};
+use super::record::{ActiveLobe, Albedo, Eval, Sample};
 use crate::interp::diffuse::Lambert;
 use crate::interp::frame::Frame;
-use crate::interp::lobe::{Lobe, PreparedLobe, Sides};
+use crate::interp::lobe::{Lobe, Sides};
 use crate::interp::math::{Rgb, lum};
 use crate::interp::simd::{Level, SCALAR_LEVEL, call_widest, widest_versions};
 use crate::ir::MAX_LOBES;
 use glam::Vec3;
-
-/// A lobe of a prepared material: the leaf's prepared state with its weight, albedo and
-/// selection probability (the leaf-level
-/// `PreparedLobe` is the `lobe` field).
-#[derive(Debug, Clone, Copy)]
-pub struct ActiveLobe {
-    /// The leaf with its view-only terms, in its own frame.
-    pub lobe: PreparedLobe,
-    /// Weight `w_k` (includes the leaf's tint), summed over all paths.
-    pub weight: Rgb,
-    /// `A_k = w_k ⊙ E_k(μ_o)`.
-    pub albedo: Albedo,
-    /// Selection probability `p_k`.
-    pub prob: f32,
-    /// Index of the frame in the prepared frame list.
-    pub frame: u8,
-    /// Index of the leaf in [`Material::leaves`](super::Material::leaves).
-    pub leaf: u8,
-}
 
 /// A material prepared for one point and view: at most `MAX_LOBES` weighted lobes,
 /// their frames, emission and transparency. Plain data; `eval` and `sample` do not allocate.
@@ -47,10 +28,10 @@ pub struct Prepared {
     pub(super) p_transparency: f32,
     /// Which lobes `eval` runs alone and which in packs.
     pub(super) plan: packs::EvalPlan,
-    /// The [`uniform::UniformPlan::stamp`] of the material whose fused prepare wrote
-    /// `lobes` last with every leaf surviving (lobe `k` is leaf `k`, none flipped); 0 when
-    /// the records may hold anything else. The next fused prepare of that material then
-    /// writes only the records' view-dependent fields.
+    /// The [`UniformPlan::stamp`](super::form::UniformPlan::stamp) of the material whose fused
+    /// prepare wrote `lobes` last with every leaf surviving (lobe `k` is leaf `k`, none
+    /// flipped); 0 when the records may hold anything else. The next fused prepare of that
+    /// material then writes only the records' view-dependent fields.
     pub(super) stamp: u64,
 }
 

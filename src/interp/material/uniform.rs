@@ -4,7 +4,7 @@
 //! [`Material::prepare_general_into`] runs the steps for any material: the program, frames
 //! from registers, leaves prepared only when some layer or weight reads them, a throughput
 //! pass that looks its registers up, and the per-node arrays of a [`super::Scratch`]. For
-//! the materials the lane-parallel prepare covers ([`super::lanes::LanePlan`]: constant
+//! the materials the lane-parallel prepare covers ([`LanePlan`](super::form::LanePlan): constant
 //! registers, a compiled weight plan, one frame, the point's own) most of that is decided
 //! at compile time, and what is left per point is short:
 //!
@@ -23,9 +23,14 @@
 //! Every formula is the general path's, in the same order, so the two agree bit for bit
 //! (`tests/interp/uniform.rs`).
 
-use super::{Albedo, Material, Prepared, ShadingPoint, Target, ThrOp, clean, sat};
+use super::form::{
+    LeafTarget, LightTarget, Material, Target, ThrOp, TreeTerm, UniformLeaf, UniformPlan,
+    UniformThr, WeightPlan, clean, sat,
+};
+use super::prepared::Prepared;
+use super::record::{Albedo, ShadingPoint};
 use crate::interp::frame::Frame;
-use crate::interp::lobe::{BoundLobe, PreparedLobe, RefreshLeaf, Sides};
+use crate::interp::lobe::Sides;
 use crate::ir::algebra::{add_throughput, leaf_throughput, mix_throughput, mul_throughput};
 use crate::ir::{MAX_LOBES, Reg, TintMode};
 use glam::Vec3;
@@ -34,97 +39,6 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Throughput steps, scopes and weight targets a uniform plan may have: the per-point
 /// arrays are fixed, on the stack. A material with more takes the general path.
 const MAX_UNIFORM_SLOTS: usize = 16;
-
-/// One step of the throughput pass with its registers read at compile time (the
-/// [`ThrOp`] it comes from says what each computes).
-#[derive(Debug, Clone, Copy)]
-enum UniformThr {
-    /// A layerable leaf's throughput in `mode`, with its tints.
-    Leaf {
-        leaf: u8,
-        mode: TintMode,
-        tint: Vec3,
-        ttint: Vec3,
-    },
-    /// [`UniformThr::Leaf`] in mode RGB with both tints 1: `sat(1 − E)` (the same bits:
-    /// products with 1 are exact).
-    LeafPlain { leaf: u8 },
-    /// A constant: 0 for a leaf that is not layerable, 1 for emission and transparency.
-    Const(Vec3),
-    /// `T_top · T_base`.
-    Layer { top: u8, base: u8 },
-    /// `(1 − m) T_a + m T_b`, `m` saturated.
-    Mix { a: u8, b: u8, m: Vec3 },
-    /// `max(T_a + T_b − 1, 0)`.
-    Add { a: u8, b: u8 },
-    /// `sat(1 − c (1 − T_f))`, `c` clamped at 0.
-    Multiply { f: u8, c: Vec3 },
-}
-
-/// A leaf of a [`UniformPlan`]: its bound lobe, and the same as its refresh reads it.
-#[derive(Debug, Clone, Copy)]
-struct UniformLeaf {
-    lobe: BoundLobe,
-    refresh: RefreshLeaf,
-}
-
-/// A target's one term in a tree plan (`c ⊙ scope`; `(0, 0)` for a target without a term
-/// or in a plan that is not a tree, where the sum is accumulated by target index).
-#[derive(Debug, Clone, Copy)]
-struct TreeTerm {
-    c: Vec3,
-    scope: u8,
-}
-
-/// A leaf target of a [`UniformPlan`]: the leaf, its tint, its index among the weight
-/// plan's targets and its term.
-#[derive(Debug, Clone, Copy)]
-struct LeafTarget {
-    tint: Vec3,
-    term: TreeTerm,
-    target: u8,
-    leaf: u8,
-}
-
-/// An emission or transparency target of a [`UniformPlan`] (a [`Target`] that is not a
-/// leaf), with its index among the weight plan's targets and its term.
-#[derive(Debug, Clone, Copy)]
-struct LightTarget {
-    kind: Target,
-    term: TreeTerm,
-    target: u8,
-}
-
-/// What [`Material::prepare_uniform_into`] needs beyond the material's weight plan: the
-/// bound leaves, their records' templates, the throughput steps with constants folded in,
-/// and the material's stamp.
-#[derive(Debug, Clone)]
-pub(super) struct UniformPlan {
-    /// Unique per compiled material (clones share it, with their constants): lets a
-    /// [`Prepared`] tell that its records and lobe packs hold this material's
-    /// view-independent fields (`Prepared::stamp`,
-    /// [`super::packs::EvalPlan::build_stamped`]).
-    pub(super) stamp: u64,
-    /// Every leaf's bound constant lobe with what its refresh reads, in leaf order (side by
-    /// side, not inside the larger [`super::LeafInfo`]s).
-    leaves: Vec<UniformLeaf>,
-    /// Every leaf's record at the view straight up: its view-independent fields are those
-    /// of the record at any view above the surface, so a record is this template with
-    /// the view-dependent fields written over ([`RefreshLeaf::refresh_above_into`]).
-    templates: Vec<PreparedLobe>,
-    /// The throughput steps, bottom-up (step `j` writes slot `j`).
-    thr: Vec<UniformThr>,
-    /// True when no weight target has more than one term (a tree: one path to each node):
-    /// each target's sum is then its one product, and the targets carry their terms.
-    tree: bool,
-    /// The leaf targets of the weight plan, in leaf order.
-    leaf_targets: Vec<LeafTarget>,
-    /// The emission and transparency targets, in target order.
-    light_targets: Vec<LightTarget>,
-    /// [`super::WeightPlan::weights_clean`]: [`super::clean`] would return every leaf
-    /// weight unchanged, so it is skipped.
-    weights_clean: bool,
-}
 
 impl UniformPlan {
     /// The plan of `m`, or `None` when it needs the general path: no lane plan (see the
@@ -245,7 +159,7 @@ impl UniformPlan {
 
 /// Each target's one term in target order, or `None` when some target has more than one
 /// (the plan is not a tree, [`UniformPlan::tree`]).
-fn single_terms(w_plan: &super::WeightPlan) -> Option<Vec<TreeTerm>> {
+fn single_terms(w_plan: &WeightPlan) -> Option<Vec<TreeTerm>> {
     let mut single = vec![None; w_plan.targets.len()];
     for t in &w_plan.terms {
         let slot = single.get_mut(t.target as usize)?;

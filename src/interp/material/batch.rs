@@ -7,18 +7,19 @@
 //! dropped in every lane has no slot.
 //!
 //! `eval` is lobe-major: L is transformed into each frame once for all lanes, then each
-//! slot runs its family's SoA kernel ([`super::soa`]: Lambert, Oren–Nayar, GGX conductor,
+//! slot runs its family's SoA kernel ([`crate::interp::soa`]: Lambert, Oren–Nayar, GGX conductor,
 //! GGX dielectric R, Ward, both sheens) over all `W` lanes in straight-line code the
 //! compiler vectorises. Slots whose lanes mix families or use a configuration no kernel
 //! covers (transmission, Kulla–Conty compensation, mia leaves, ...) run the scalar leaf per
 //! lane. Per lane the result equals [`Prepared::eval`] to relative 1e-5 (the kernels use
 //! polynomial `exp`/`pow`/`acos`; everything else is the scalar formula in the same order).
 
-use super::frame::Frame;
-use super::material::{Eval, Material, Prepared, Scratch, ShadingPoint};
-use super::math::Rgb;
-use super::simd::{Level, call_widest, widest_versions};
-use super::soa::{Acc, Kernel, LaneWeights, Vec3x};
+use super::prepared::Prepared;
+use super::record::{Eval, ShadingPoint};
+use crate::interp::frame::Frame;
+use crate::interp::math::Rgb;
+use crate::interp::simd::{Level, call_widest, widest_versions};
+use crate::interp::soa::{Acc, Kernel, LaneWeights, Vec3x};
 use crate::ir::MAX_LOBES;
 use glam::{Vec2, Vec3};
 
@@ -32,7 +33,8 @@ pub struct ShadingBatch<'a, const W: usize> {
     pub t: [Vec3; W],
     /// Directions toward the viewer.
     pub v: [Vec3; W],
-    /// Packed external inputs per lane (see [`Material::input_layout`]).
+    /// Packed external inputs per lane (see
+    /// [`Material::input_layout`](super::Material::input_layout)).
     pub inputs: [&'a [f32]; W],
     /// Surface positions.
     pub p: [Vec3; W],
@@ -144,12 +146,16 @@ pub struct PreparedBatch<const W: usize> {
     pub(super) frame_count: usize,
     /// The scalar preparations, kept for `sample` and inspection per lane (valid only when
     /// `lanes_valid`).
-    lanes: [Prepared; W],
-    /// `lanes` holds this batch's points ([`Material::prepare_batch_into`]), not only the
-    /// kernels ([`Material::prepare_batch_eval_into`]).
+    pub(super) lanes: [Prepared; W],
+    /// `lanes` holds this batch's points
+    /// ([`Material::prepare_batch_into`](super::Material::prepare_batch_into)), not only the
+    /// kernels
+    /// ([`Material::prepare_batch_eval_into`](super::Material::prepare_batch_eval_into)).
     pub(super) lanes_valid: bool,
     /// The slots carry the selection probabilities, so [`PreparedBatch::eval`] has its
-    /// densities (false after [`Material::prepare_batch_f_cos_into`]'s lane-parallel path).
+    /// densities (false after
+    /// [`Material::prepare_batch_f_cos_into`](super::Material::prepare_batch_f_cos_into)'s
+    /// lane-parallel path).
     pub(super) densities: bool,
     /// Per lane: `albedo().total()`, `emission()`, `transparency()` of the lane's
     /// preparation.
@@ -161,92 +167,20 @@ pub struct PreparedBatch<const W: usize> {
     pub(super) work: Vec<Vec3x<W>>,
 }
 
-impl Material {
-    /// Prepare `W` points at once.
-    pub fn prepare_batch<const W: usize>(&self, p: &ShadingBatch<W>) -> PreparedBatch<W> {
-        let mut s = Scratch::default();
-        let lanes: [Prepared; W] = std::array::from_fn(|k| self.prepare_with(&p.lane(k), &mut s));
-        PreparedBatch::from_lanes(lanes)
-    }
-
-    /// Prepare `W` points into an existing batch, reusing `scratch` (no heap allocation once
-    /// the scratch is sized).
-    pub fn prepare_batch_into<const W: usize>(
-        &self,
-        p: &ShadingBatch<W>,
-        scratch: &mut Scratch,
-        out: &mut PreparedBatch<W>,
-    ) {
-        for k in 0..W {
-            self.prepare_unpacked_into(&p.lane(k), scratch, &mut out.lanes[k]);
-        }
-        out.transpose();
-    }
-
-    /// Prepare `W` points for [`PreparedBatch::eval`], [`PreparedBatch::albedo`],
-    /// [`PreparedBatch::emission`] and [`PreparedBatch::transparency`] only: what a
-    /// sampling-free renderer such as the material preview needs. A material whose
-    /// registers are all constants, whose leaves share the point's frame and have batched
-    /// kernels is prepared lane-parallel, without per-lane records
-    /// ([`PreparedBatch::lane`] is then `None`); any other material, or a batch with a view
-    /// at or below some lane's horizon, goes through [`Material::prepare_batch_into`]. Both
-    /// ways give the same results to rounding.
-    pub fn prepare_batch_eval_into<const W: usize>(
-        &self,
-        p: &ShadingBatch<W>,
-        scratch: &mut Scratch,
-        out: &mut PreparedBatch<W>,
-    ) {
-        self.prepare_batch_eval_at(Level::Avx512, p, scratch, out);
-    }
-
-    testkit_pub! {
-        /// [`Material::prepare_batch_eval_into`] with the lane-parallel steps compiled for at most
-        /// `level` (module `simd`; every level gives the same bits).
-        fn prepare_batch_eval_at<const W: usize>(
-            &self,
-            level: Level,
-            p: &ShadingBatch<W>,
-            scratch: &mut Scratch,
-            out: &mut PreparedBatch<W>,
-        ) {
-            if !self.prepare_lanes::<W, true>(level, p, out) {
-                self.prepare_batch_into(p, scratch, out);
-            }
-        }
-    }
-
-    testkit_pub! {
-        /// [`Material::prepare_batch_eval_into`] for [`PreparedBatch::eval_f_cos`] and the
-        /// per-lane albedo, emission and transparency alone (the batched material preview): the
-        /// lane-parallel path leaves out step 7's selection probabilities, which only the
-        /// densities read. After that path [`PreparedBatch::eval`]'s pdf is NaN.
-        fn prepare_batch_f_cos_into<const W: usize>(
-            &self,
-            p: &ShadingBatch<W>,
-            scratch: &mut Scratch,
-            out: &mut PreparedBatch<W>,
-        ) {
-            if !self.prepare_lanes::<W, false>(Level::Avx512, p, out) {
-                self.prepare_batch_into(p, scratch, out);
-            }
-        }
-    }
-}
-
 /// The widest batch whose eval skips kernel slots lit from below in every lane.
 const SKIP_BELOW_MAX_LANES: usize = 4;
 
 impl<const W: usize> PreparedBatch<W> {
     /// An empty batch (every lane without lobes), to be filled by
-    /// [`Material::prepare_batch_into`]. Boxed: a batch of 16 lanes is about 120 KB.
+    /// [`Material::prepare_batch_into`](super::Material::prepare_batch_into). Boxed: a batch of
+    /// 16 lanes is about 120 KB.
     pub fn new_boxed() -> Box<PreparedBatch<W>> {
         Box::new(PreparedBatch::from_lanes(std::array::from_fn(|_| {
             Prepared::empty(Vec3::Z)
         })))
     }
 
-    fn from_lanes(lanes: [Prepared; W]) -> PreparedBatch<W> {
+    pub(super) fn from_lanes(lanes: [Prepared; W]) -> PreparedBatch<W> {
         let empty = Slot {
             index: [0; W],
             lw: LaneWeights {
@@ -277,7 +211,7 @@ impl<const W: usize> PreparedBatch<W> {
 
     /// Rebuild the slots from the per-lane preparations: slot order is leaf order, so lanes
     /// agree on it.
-    fn transpose(&mut self) {
+    pub(super) fn transpose(&mut self) {
         let mut leaf_slot = [u8::MAX; MAX_LOBES];
         let mut leaves: [u8; MAX_LOBES] = [0; MAX_LOBES];
         let mut count = 0;
@@ -453,9 +387,10 @@ impl<const W: usize> PreparedBatch<W> {
             .count()
     }
 
-    /// The scalar preparation of lane `k` (for `sample` and inspection); `None` when the
-    /// batch was prepared lane-parallel by [`Material::prepare_batch_eval_into`] or
-    /// its preview variant.
+    /// The scalar preparation of lane `k` (for `sample` and inspection); `None` when the batch
+    /// was prepared lane-parallel by
+    /// [`Material::prepare_batch_eval_into`](super::Material::prepare_batch_eval_into) or its
+    /// preview variant.
     pub fn lane(&self, k: usize) -> Option<&Prepared> {
         self.lanes_valid.then(|| &self.lanes[k])
     }
