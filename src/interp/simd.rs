@@ -1,5 +1,5 @@
 //! Runtime choice of a vector extension for the batched kernels ([`super::soa`],
-//! [`super::batch`]) and the scalar entry points ([`super::material`]).
+//! `material`'s batch module) and the scalar entry points ([`super::material`]).
 //!
 //! A baseline x86-64 build may only assume SSE2, so the kernels' loops over lanes compile to
 //! 4-wide code. The same source compiled inside a function marked `#[target_feature]` becomes
