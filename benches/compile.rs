@@ -1,5 +1,5 @@
 //! Compile (lower) 10,000 layered materials: 3 PxrLayers → PxrLayerMixer → PxrLayerSurface
-//! each. `network/*`: the generated RIB scene (`network::testgen::layered_scene`), parsed and
+//! each. `network/*`: the generated RIB scene (`vstructc_testkit::testgen::layered_scene`), parsed and
 //! resolved once outside the timing, lowered with the embedded definitions; `graph/*`: the
 //! same shape built directly as a `SimpleGraph` without definitions. Each sequentially and
 //! with rayon across materials.
@@ -21,7 +21,7 @@ const N: usize = 10_000;
 
 fn bench(c: &mut Criterion) {
     let reg = Registry::embedded();
-    let rib = vstructc::network::testgen::layered_scene(N);
+    let rib = vstructc_testkit::testgen::layered_scene(N);
     let mut diags = Diagnostics::new();
     let mut net = parse_rib(
         rib.as_bytes(),

@@ -25,9 +25,9 @@ use vstructc::back::rib::{write_rib, write_rib_to_vec};
 use vstructc::front::json::parse_json;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::network::Network;
-use vstructc::network::testgen::layered_scene;
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
+use vstructc_testkit::testgen::layered_scene;
 
 // The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
 #[global_allocator]

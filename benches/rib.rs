@@ -9,7 +9,8 @@ use vstructc::Diagnostics;
 use vstructc::Value;
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::network::{NoDefinitions, testgen};
+use vstructc::network::NoDefinitions;
+use vstructc_testkit::testgen;
 
 // The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
 #[global_allocator]

@@ -1,5 +1,5 @@
 //! Scaling shapes (target: the 4N run ≤ 5× the N run, BENCHMARKS.md): each shape of
-//! `network::testgen::Shape` through read, resolution and write, at sizes N and 4N, with
+//! `vstructc_testkit::testgen::Shape` through read, resolution and write, at sizes N and 4N, with
 //! the measured 4N / N ratio printed after each pair.
 //!
 //! `cargo bench --bench scale`. The pipeline is the one `vstructc resolve` runs (registry with
@@ -14,9 +14,9 @@ use std::time::{Duration, Instant};
 use vstructc::Diagnostics;
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::network::testgen::{Shape, ShapeScene};
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
+use vstructc_testkit::testgen::{Shape, ShapeScene};
 
 // The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
 #[global_allocator]

@@ -13,9 +13,9 @@ use vstructc::back::usd::{UsdMode, write_usd};
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::front::usd::parse_usd;
 use vstructc::limits::Limits;
-use vstructc::network::testgen::layered_scene;
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
+use vstructc_testkit::testgen::layered_scene;
 
 // The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
 #[global_allocator]

@@ -16,8 +16,8 @@ use std::process::ExitCode;
 use vstructc::Diagnostics;
 use vstructc::back::json::write_json;
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::network::testgen::{self, Shape};
 use vstructc::registry::Registry;
+use vstructc_testkit::testgen::{self, Shape};
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();

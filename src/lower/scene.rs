@@ -1,7 +1,7 @@
 //! A generated scene of layered materials for benchmarks and tests, in resolved form:
 //! per material three PxrLayers → one PxrLayerMixer → one PxrLayerSurface, with the member
 //! connections and the `set` enable values that resolution writes (the shape of
-//! `network::testgen::layered_scene`, built directly as a [`SimpleGraph`]).
+//! `vstructc_testkit::testgen::layered_scene`, built directly as a [`SimpleGraph`]).
 
 use super::SimpleGraph;
 

@@ -44,8 +44,6 @@ mod limits;
 mod links;
 mod param_types;
 mod sym;
-#[cfg(feature = "testkit")]
-pub mod testgen;
 
 pub(crate) use links::Links;
 pub(crate) use param_types::Memo;

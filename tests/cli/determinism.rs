@@ -22,7 +22,7 @@ fn inputs() -> Vec<PathBuf> {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("determinism");
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let scene = dir.join("layered50.rib");
-    std::fs::write(&scene, vstructc::network::testgen::layered_scene(50)).expect("scene");
+    std::fs::write(&scene, vstructc_testkit::testgen::layered_scene(50)).expect("scene");
     files.push(scene);
     files
 }
@@ -103,7 +103,7 @@ fn compile_and_render_are_deterministic_across_thread_counts() {
 /// maps differently, so any dependence on hash-map iteration order shows up here).
 #[test]
 fn stdin_input_is_repeatable() {
-    let text = vstructc::network::testgen::layered_scene(20);
+    let text = vstructc_testkit::testgen::layered_scene(20);
     let once = || {
         let out = Command::new(env!("CARGO_BIN_EXE_vstructc"))
             .args(["resolve", "-"])

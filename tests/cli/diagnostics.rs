@@ -40,7 +40,7 @@ fn no_conditions_on_the_layered_example_is_reported_in_one_diagnostic() {
 fn compiling_the_bench_scene_prints_at_most_20_lines() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("scene.rib");
-    std::fs::write(&scene, vstructc::network::testgen::layered_scene(10_000)).unwrap();
+    std::fs::write(&scene, vstructc_testkit::testgen::layered_scene(10_000)).unwrap();
     let out = vstructc(&["compile", "--emit", "lobes", scene.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let err = stderr(&out);

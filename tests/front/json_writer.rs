@@ -179,9 +179,9 @@ fn golden_fixture_to_json() {
 #[test]
 fn pieces_in_parallel_give_the_document_of_one_pass() {
     use vstructc::back::json::write_json_chunked;
-    use vstructc::network::testgen::layered_scene;
     use vstructc::registry::Registry;
     use vstructc::resolve::{ResolveOptions, resolve};
+    use vstructc_testkit::testgen::layered_scene;
     let reg = Registry::embedded();
     let mut d = Diagnostics::new();
     let text = layered_scene(50);

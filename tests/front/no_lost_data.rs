@@ -166,14 +166,14 @@ fn examples_and_generated_scene_keep_everything_outside_the_network() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("no_lost_data");
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let scene = dir.join("layered30.rib");
-    std::fs::write(&scene, vstructc::network::testgen::layered_scene(30)).expect("scene");
+    std::fs::write(&scene, vstructc_testkit::testgen::layered_scene(30)).expect("scene");
     check_file(&scene);
 }
 
 /// The check itself must notice a change outside the network: drop one pass-through line.
 #[test]
 fn the_outside_comparison_detects_a_dropped_request() {
-    let text = vstructc::network::testgen::layered_scene(2);
+    let text = vstructc_testkit::testgen::layered_scene(2);
     let net = parse(text.as_bytes(), "scene");
     let s = spans(&net);
     let gaps = outside(text.as_bytes(), &s);

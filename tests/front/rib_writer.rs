@@ -285,9 +285,9 @@ fn assert_pieces_agree(source: &[u8], net: &Network, types: &(dyn ParamTypes + S
 
 #[test]
 fn pieces_in_parallel_give_the_bytes_of_one_pass() {
-    use vstructc::network::testgen::layered_scene;
     use vstructc::registry::Registry;
     use vstructc::resolve::{ResolveOptions, resolve};
+    use vstructc_testkit::testgen::layered_scene;
     let reg = Registry::embedded();
     // Long runs of pass-through bytes before the first request and after the last one.
     let geometry =

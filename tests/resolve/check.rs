@@ -210,7 +210,7 @@ fn real_networks_raise_no_false_warnings() {
         let d = run_text(example, &text, NetFormat::Rib, &registry);
         assert_eq!(d.count("VS024") + d.count("VS020"), 0, "{example}: {d:#?}");
     }
-    let scene = vstructc::network::testgen::layered_scene(20);
+    let scene = vstructc_testkit::testgen::layered_scene(20);
     let d = run_text("scene.rib", &scene, NetFormat::Rib, &registry);
     assert_eq!(d.count("VS024") + d.count("VS020"), 0, "{d:#?}");
 

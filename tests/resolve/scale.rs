@@ -1,4 +1,4 @@
-//! Linear scaling guard: every shape of `network::testgen::Shape` goes through the whole
+//! Linear scaling guard: every shape of `vstructc_testkit::testgen::Shape` goes through the whole
 //! pipeline (registry, RIB read, resolution, RIB and JSON write, JSON read, RIB write of the
 //! JSON network) at size `n` and `4n`, and the `4n` run may cost at most 8× the `n` run
 //! (linear work is 4×; a quadratic path is 16×).
@@ -23,9 +23,9 @@ use vstructc::back::json::write_json;
 use vstructc::back::rib::write_rib_to_vec;
 use vstructc::front::json::parse_json;
 use vstructc::front::rib::{RibOptions, parse_rib};
-use vstructc::network::testgen::{Shape, ShapeScene};
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
+use vstructc_testkit::testgen::{Shape, ShapeScene};
 
 struct Counting;
 

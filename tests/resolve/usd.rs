@@ -587,7 +587,7 @@ fn assert_read_alone_as_composed(bytes: &[u8], name: &str, reg: &Registry) {
 /// the RIB examples.
 fn generated_crate_files(reg: &Registry, materials: usize) -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
-    let scene = vstructc::network::testgen::layered_scene(materials).into_bytes();
+    let scene = vstructc_testkit::testgen::layered_scene(materials).into_bytes();
     let mut inputs = vec![("scene.rib".to_string(), scene)];
     for example in ["chain.rib", "layered.rib", "override.rib"] {
         let path = common::repo_dir().join("examples").join(example);

@@ -116,7 +116,7 @@ fn read_outcome(
 
 /// The JSON form of the layered scene of `materials` materials, as the writer lays it out.
 fn scene_json(materials: usize, reg: &vstructc::registry::Registry) -> String {
-    let rib = vstructc::network::testgen::layered_scene(materials);
+    let rib = vstructc_testkit::testgen::layered_scene(materials);
     let mut d = Diagnostics::new();
     let options = vstructc::front::rib::RibOptions::default();
     let net =

@@ -255,7 +255,7 @@ fn streaming_writes_what_the_tree_wrote() {
         write_json_tree(&Network::new())
     );
     let reg = Registry::embedded();
-    let rib = vstructc::network::testgen::layered_scene(3);
+    let rib = vstructc_testkit::testgen::layered_scene(3);
     let mut diags = vstructc::Diagnostics::new();
     let mut net = parse_rib(
         rib.as_bytes(),

@@ -198,7 +198,7 @@ fn read_outcome(src: &[u8], options: &RibOptions, batch: Option<usize>) -> Strin
 /// declarations' and values' (RB013, RB014), the connections' (RB018), the request's (RB015)
 /// and the handles' (RB017), and comments inside and between requests.
 fn scene_with_findings(materials: usize) -> String {
-    let scene = vstructc::network::testgen::layered_scene(materials);
+    let scene = vstructc_testkit::testgen::layered_scene(materials);
     let mut out = String::new();
     for (i, line) in scene.lines().enumerate() {
         out.push_str(line);

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 /// Values vary with the material index so no two materials are identical.
 ///
 /// ```
-/// let rib = vstructc::network::testgen::layered_scene(2);
+/// let rib = vstructc_testkit::testgen::layered_scene(2);
 /// assert_eq!(rib.matches("Pattern \"PxrLayer\"").count(), 6);
 /// assert_eq!(rib.matches("Bxdf \"PxrLayerSurface\"").count(), 2);
 /// ```
@@ -145,7 +145,7 @@ impl Shape {
     /// The scene of size `n`.
     ///
     /// ```
-    /// use vstructc::network::testgen::Shape;
+    /// use vstructc_testkit::testgen::Shape;
     /// let s = Shape::SharedMixer.scene(3);
     /// assert_eq!(s.rib.matches("Bxdf \"PxrLayerSurface\"").count(), 3);
     /// assert!(Shape::ArgsHeads.scene(2).args.is_some());
@@ -291,7 +291,7 @@ fn surface(out: &mut String, handle: &str, mixer: &str) {
 /// A RIB chain of `n` pattern nodes, each reading the previous one's output.
 ///
 /// ```
-/// let rib = vstructc::network::testgen::pattern_chain(3);
+/// let rib = vstructc_testkit::testgen::pattern_chain(3);
 /// assert_eq!(rib.matches("Pattern ").count(), 3);
 /// ```
 pub fn pattern_chain(n: usize) -> String {
