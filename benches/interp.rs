@@ -63,13 +63,13 @@ use vstructc::interp::microfacet::{
     DielectricBound, MicrofacetBound, PreparedDielectric, PreparedMicrofacetR,
 };
 use vstructc::interp::preview::{PreviewOptions, render_ball};
-use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA, ref10_ir};
 use vstructc::interp::sheen::{PreparedSheenCK, PreparedSheenLTC, SheenCKBound, SheenLTCBound};
 use vstructc::interp::simd::{Level, SCALAR_LEVEL, level};
 use vstructc::interp::ward::{PreparedWard, WardBound};
 use vstructc::interp::*;
 use vstructc::ir::TintMode;
 use vstructc::ir::algebra::{leaf_throughput, mul_throughput};
+use vstructc_testkit::reference::{GOLD_ETA, GOLD_KAPPA, ref10_ir};
 
 #[path = "common/pairs.rs"]
 mod pairs;

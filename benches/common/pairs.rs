@@ -2,7 +2,7 @@
 
 use vstructc::glam::Vec3;
 use vstructc::interp::Frame;
-use vstructc::interp::verify::Rng;
+use vstructc_testkit::verify::Rng;
 
 /// How many (frame, V, L) triples a bench pass evaluates.
 pub const PAIRS: usize = 4096;

@@ -5,9 +5,9 @@
 
 use glam::Vec3;
 use std::alloc::{GlobalAlloc, Layout, System};
-use vstructc::interp::reference::ref10_ir;
-use vstructc::interp::verify::Rng;
 use vstructc::interp::{Material, Scratch, ShadingPoint};
+use vstructc_testkit::reference::ref10_ir;
+use vstructc_testkit::verify::Rng;
 
 struct Counting;
 

@@ -11,9 +11,9 @@ use crate::uniform_materials;
 use glam::Vec3;
 use lanes::assert_lanes_match;
 use uniform_materials::{assorted_ir, coated_ir, negative_ir, shared_ir, textured_ir};
-use vstructc::interp::reference::ref10_ir;
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::reference::ref10_ir;
+use vstructc_testkit::verify::Rng;
 
 const W: usize = 16;
 

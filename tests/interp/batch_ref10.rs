@@ -8,9 +8,9 @@
 use crate::lanes;
 use glam::Vec3;
 use lanes::{assert_lanes_match, random_frames_and_views};
-use vstructc::interp::reference::ref10_ir;
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::reference::ref10_ir;
+use vstructc_testkit::verify::Rng;
 
 const W: usize = 16;
 

@@ -5,10 +5,10 @@
 
 use glam::Vec3;
 use vstructc::interp::preview::{PreviewOptions, render_ball};
-use vstructc::interp::reference::{lambert, mul, ref10_ir};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{IrBuilder, RecipeId};
+use vstructc_testkit::reference::{lambert, mul, ref10_ir};
+use vstructc_testkit::verify::Rng;
 
 const W: usize = 16;
 

@@ -14,8 +14,8 @@
 
 use glam::Vec3;
 use vstructc::interp::tables::{self, MuCurve, TableId};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::verify::Rng;
 
 /// Relative agreement (floor 0.1) of a bound and a plain anisotropic lobe's Fresnel-weighted
 /// albedo (measured 1.4e-2).

@@ -2,8 +2,8 @@
 //! path, at the tolerance of spec closures.md §1.5 (relative 1e-5, floor 1e-6).
 
 use glam::Vec3;
-use vstructc::interp::verify::Rng;
 use vstructc::interp::{Eval, Frame, Prepared};
+use vstructc_testkit::verify::Rng;
 
 /// `W` random frames and views; every fourth lane (`k % 4 == 0`) sees its surface from below
 /// (one-sided lobes masked, two-sided ones flipped), the others from above.

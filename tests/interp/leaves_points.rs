@@ -9,8 +9,8 @@ use leaves_ref::*;
 use proptest::prelude::*;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
 use vstructc::interp::fresnel::{self, Fresnel};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::verify::Rng;
 
 fn lambert() -> Lobe {
     Lobe::Lambert(Lambert { rho: Vec3::ONE })

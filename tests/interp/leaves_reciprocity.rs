@@ -4,10 +4,10 @@
 
 use glam::Vec3;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
-use vstructc::interp::reference;
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{IrBuilder, RecipeId, TintMode};
+use vstructc_testkit::reference;
+use vstructc_testkit::verify::Rng;
 
 fn upper(rng: &mut Rng) -> Vec3 {
     let d = rng.sphere();

@@ -8,8 +8,8 @@
 
 use glam::Vec3;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::verify::Rng;
 
 const PAIRS: usize = 3_000;
 

@@ -7,7 +7,7 @@
 
 use vstructc::interp::lutgen::{self, GENERATOR_VERSION};
 use vstructc::interp::tables::{self, N, TableId};
-use vstructc::interp::verify::Rng;
+use vstructc_testkit::verify::Rng;
 
 #[test]
 fn blobs_decode_with_expected_headers() {

@@ -8,10 +8,10 @@
 use crate::uniform_materials;
 use glam::Vec3;
 use uniform_materials::{assorted_ir, coated_ir, point, shared_ir, stacked_ir, textured_ir};
-use vstructc::interp::reference::ref10_ir;
 use vstructc::interp::simd::{Level, level};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::reference::ref10_ir;
+use vstructc_testkit::verify::Rng;
 
 /// The levels this CPU can run, narrowest first.
 fn levels() -> Vec<Level> {

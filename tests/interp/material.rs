@@ -8,8 +8,6 @@
 use glam::{Vec2, Vec3};
 use vstructc::diag::{Diagnostics, Error};
 use vstructc::interp::material::PrepareOptions;
-use vstructc::interp::reference::{self, dielectric_r, lambert, mul, ref10_ir};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
     Cl, DielectricMode, FrameSlot, Fresnel, IrBuilder, Leaf, LeafKind, Masking, MaterialIr, Node,
@@ -17,6 +15,8 @@ use vstructc::ir::{
 };
 use vstructc::lower::{NoDefinitions, SimpleGraph, lower_node};
 use vstructc::types::{BaseType, Type, Value};
+use vstructc_testkit::reference::{self, dielectric_r, lambert, mul, ref10_ir};
+use vstructc_testkit::verify::Rng;
 
 const MUS: [f32; 5] = [0.05, 0.2, 0.5, 0.8, 1.0];
 

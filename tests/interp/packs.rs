@@ -7,13 +7,13 @@
 //! own, lobes seen from below (flipped frames), and lobes no kernel covers.
 
 use glam::Vec3;
-use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA, ref10_ir};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
     Cl, FrameSlot, IrBuilder, Leaf, LeafKind, MaterialIr, RecipeId, TintMode, WardVariant,
 };
 use vstructc::types::{BaseType, Type, Value};
+use vstructc_testkit::reference::{self, GOLD_ETA, GOLD_KAPPA, ref10_ir};
+use vstructc_testkit::verify::Rng;
 
 /// Relative 1e-5 of the larger magnitude, with a floor of 1e-6.
 fn close(a: f32, b: f32) -> bool {

@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 use vstructc::interp::soa::{DielectricRBatch, Vec3x};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
+use vstructc_testkit::verify::Rng;
 
 const W: usize = 16;
 

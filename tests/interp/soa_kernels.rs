@@ -7,12 +7,12 @@
 use crate::lanes;
 use glam::Vec3;
 use lanes::{assert_lanes_match, random_frames_and_views};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::{
     Cl, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, Reg, SheenMasking, WardVariant,
 };
 use vstructc::types::{BaseType, Type, Value};
+use vstructc_testkit::verify::Rng;
 
 const W: usize = 16;
 
@@ -111,7 +111,7 @@ fn conductor_leaf(b: &mut IrBuilder, masking: Masking) -> Cl {
 fn dielectric_r_leaf(b: &mut IrBuilder) -> Cl {
     let (ax, ay, eta) = (float_in(b, "ax"), float_in(b, "ay"), float_in(b, "eta"));
     let tint = color_in(b, "tint");
-    reference::dielectric_r_of(b, [ax, ay, eta], tint, "specular")
+    vstructc_testkit::reference::dielectric_r_of(b, [ax, ay, eta], tint, "specular")
 }
 
 /// V and L nearly opposite and both near the horizon: `|V + L|²` is tiny, and its powers in
@@ -292,7 +292,7 @@ fn sheen_kernels_equal_scalar() {
 
 #[test]
 fn ref10_runs_every_slot_through_a_kernel() {
-    let m = Material::new(&vstructc::interp::reference::ref10_ir()).expect("compiles");
+    let m = Material::new(&vstructc_testkit::reference::ref10_ir()).expect("compiles");
     let batch = ShadingBatch::<W>::new([Vec3::Z; W], [Vec3::X; W], [Vec3::ONE.normalize(); W]);
     let pb = m.prepare_batch(&batch);
     assert_eq!(pb.slot_count(), 10);

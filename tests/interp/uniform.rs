@@ -12,10 +12,10 @@ use glam::Vec3;
 use uniform_materials::{
     assorted_ir, coated_ir, negative_ir, point, shared_ir, stacked_ir, textured_ir,
 };
-use vstructc::interp::reference::ref10_ir;
-use vstructc::interp::verify::Rng;
 use vstructc::interp::*;
 use vstructc::ir::MaterialIr;
+use vstructc_testkit::reference::ref10_ir;
+use vstructc_testkit::verify::Rng;
 
 fn cases() -> [(&'static str, MaterialIr); 6] {
     [
@@ -210,8 +210,8 @@ fn packs_refreshed_in_place_equal_packs_filled_afresh() {
 /// grazing ones, so a drop threshold of 0.05 drops it at grazing views only (the others
 /// stay above 0.07), and the grey Lambert's record then moves into its slot.
 fn droppy_ir() -> MaterialIr {
-    use vstructc::interp::reference::{dielectric_r_of, lambert, mul};
     use vstructc::ir::{IrBuilder, RecipeId, TintMode};
+    use vstructc_testkit::reference::{dielectric_r_of, lambert, mul};
     let mut b = IrBuilder::new();
     let (ax, ay, eta, one) = (
         b.prog.constf(0.2),

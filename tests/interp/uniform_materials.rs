@@ -4,10 +4,10 @@
 //! prepare; and the random shading points those tests prepare.
 
 use glam::Vec3;
-use vstructc::interp::reference::{self, GOLD_ETA, GOLD_KAPPA};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::{Frame, ShadingPoint};
 use vstructc::ir::{IrBuilder, Leaf, LeafKind, MaterialIr, RecipeId, TintMode, WardVariant};
+use vstructc_testkit::reference::{self, GOLD_ETA, GOLD_KAPPA};
+use vstructc_testkit::verify::Rng;
 
 /// Every kernel family and tint mode, `mix` and `mul`, emission and transparency:
 /// `add(layer[Gray](sheenCK, mix(layer[Luminance](0.3 ward, QON),

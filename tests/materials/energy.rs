@@ -14,7 +14,6 @@ use glam::Vec3;
 use std::f32::consts::{PI, TAU};
 use vstructc::diag::Diagnostics;
 use vstructc::interp::preview::{PreviewOptions, render_ball};
-use vstructc::interp::verify::Rng;
 use vstructc::interp::{
     Burley, Compensation, Dielectric, DielectricMode, Fresnel, Ggx, Lambert, Lobe, Masking,
     Material, MiaDiffuse, MiaHighlight3, MicrofacetR, OrenNayar, OrenNayarVariant, Prepared,
@@ -22,6 +21,7 @@ use vstructc::interp::{
 };
 use vstructc::lower::{SimpleGraph, lower_node};
 use vstructc::registry::Registry;
+use vstructc_testkit::verify::Rng;
 
 // ------------------------------------------------------------------------------ helpers
 

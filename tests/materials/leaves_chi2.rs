@@ -11,9 +11,9 @@
 
 use glam::Vec3;
 use vstructc::interp::diffuse::{Burley, Lambert, MiaDiffuse, OrenNayar, OrenNayarVariant};
-use vstructc::interp::reference::{GOLD_ETA, GOLD_KAPPA};
-use vstructc::interp::verify::{Chi2Config, Rng, chi2_test, sidak};
 use vstructc::interp::*;
+use vstructc_testkit::reference::{GOLD_ETA, GOLD_KAPPA};
+use vstructc_testkit::verify::{Chi2Config, Rng, chi2_test, sidak};
 
 /// §5.5's samples and runs per configuration, pinned here whatever the harness's default.
 const SAMPLES: usize = 1_000_000;
@@ -572,7 +572,7 @@ fn harness_rejects_wrong_pdfs() {
 
 #[test]
 fn chi2_distribution_values() {
-    use vstructc::interp::verify::{chi2_sf, gamma_p, ln_gamma};
+    use vstructc_testkit::verify::{chi2_sf, gamma_p, ln_gamma};
     // Critical values from standard χ² tables.
     for (x, dof, p) in [
         (3.841459, 1.0, 0.05),
@@ -683,7 +683,7 @@ fn energy_check_monte_carlo() {
 
 #[test]
 fn cells_are_found_as_inverse_trigonometry_finds_them() {
-    use vstructc::interp::verify::CellGrid;
+    use vstructc_testkit::verify::CellGrid;
     let cfg = cfg();
     let grid = CellGrid::new(&cfg);
     let by_angles = |d: Vec3| {

@@ -430,7 +430,7 @@ fn golden_dielectric_fresnel_averages() {
 /// the concentrated LTC densities that a cosine grid misses).
 fn hemisphere_integral(g: impl Fn(Vec3) -> f64) -> f64 {
     use std::f64::consts::PI;
-    use vstructc::interp::verify::adaptive_simpson_2d;
+    use vstructc_testkit::verify::adaptive_simpson_2d;
     let (nt, np) = (20, 40);
     let (dt, dp) = (0.5 * PI / nt as f64, 2.0 * PI / np as f64);
     let f = |t: f64, p: f64| {

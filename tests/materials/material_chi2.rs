@@ -12,10 +12,10 @@
 use crate::common;
 
 use glam::Vec3;
-use vstructc::interp::reference::ref10_ir;
-use vstructc::interp::verify::{Chi2Config, Rng, chi2_test, sidak};
 use vstructc::interp::{Material, ShadingPoint};
 use vstructc::ir::MaterialIr;
+use vstructc_testkit::reference::ref10_ir;
+use vstructc_testkit::verify::{Chi2Config, Rng, chi2_test, sidak};
 
 const VIEWS: usize = 5;
 

@@ -2,11 +2,14 @@
 //! `ref10` and a few small configurations used by tests, benches and
 //! examples.
 
-use crate::ir::{
-    Cl, DielectricMode, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, Reg,
-    SheenMasking, TintMode, WardVariant,
+use vstructc::glam::Vec3;
+
+/// A closure under construction (the builder's: `None` is the empty closure).
+type Cl = Option<vstructc::ir::NodeId>;
+use vstructc::ir::{
+    DielectricMode, Fresnel, IrBuilder, LeafKind, Masking, MaterialIr, RecipeId, Reg, SheenMasking,
+    TintMode, WardVariant,
 };
-use glam::Vec3;
 
 /// Gold's complex index at the Rec.709 primaries (η, κ), as used by the leaf benches.
 pub const GOLD_ETA: Vec3 = Vec3::new(0.183, 0.421, 1.373);

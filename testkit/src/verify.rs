@@ -6,9 +6,9 @@
 //!
 //! Public so that the interpreter's material-level tests reuse it.
 
-use glam::Vec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use vstructc::glam::Vec3;
 
 /// SplitMix64: a small, fast, seedable generator for tests and benchmarks.
 #[derive(Debug, Clone)]
