@@ -7,8 +7,8 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
-use vstructc::interp::lutgen::{self, GENERATOR_VERSION, Group};
 use vstructc::interp::tables::{self, TableId};
+use vstructc_testkit::lutgen::{self, GENERATOR_VERSION, Group};
 
 fn main() {
     let mut out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/interp/tables");

@@ -14,8 +14,8 @@
 //! prepares of uniform materials, lobe packs, structure-of-arrays kernels, run-time choice of
 //! SIMD level) compute the same bits as the general prepare and are chosen internally.
 //! (With the `testkit` feature the internal modules are public for the crate's tests and
-//! benches: leaves, tables, kernels and the `lutgen` table generator; the reference
-//! materials and the statistical harness are in the `vstructc-testkit` crate.)
+//! benches: leaves, tables and kernels; the reference materials, the statistical harness
+//! and the table generator are in the `vstructc-testkit` crate.)
 
 /// An associated function that is `pub` under the `testkit` feature (the crate's tests and
 /// benches compare the internal paths it opens) and `pub(crate)` otherwise.
@@ -43,8 +43,6 @@ pub use leaves::{diffuse, emission, microfacet, sheen, ward};
 #[cfg(not(feature = "testkit"))]
 use leaves::{diffuse, emission, microfacet, sheen, ward};
 
-#[cfg(feature = "testkit")]
-pub mod lutgen;
 pub mod preview;
 
 pub use frame::Frame;

@@ -1,7 +1,7 @@
 //! Albedo tables: identities, on-disk format, loading and lookups.
 //!
 //! Every table is a committed little-endian f32 blob under `src/interp/tables/`, written by
-//! the `lutgen` example (module `interp::lutgen`, feature `testkit`) and embedded with `include_bytes!`. A blob
+//! the `lutgen` example (module `lutgen` of the `vstructc-testkit` crate) and embedded with `include_bytes!`. A blob
 //! starts with a 96-byte header recording the generator version and parameters:
 //!
 //! | offset | size | content |

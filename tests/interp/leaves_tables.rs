@@ -5,8 +5,8 @@
 //! anisotropic tables' azimuth interpolation goes through its nodes, and the symmetry it
 //! relies on holds in the tables.
 
-use vstructc::interp::lutgen::{self, GENERATOR_VERSION};
 use vstructc::interp::tables::{self, N, TableId};
+use vstructc_testkit::lutgen::{self, GENERATOR_VERSION};
 use vstructc_testkit::verify::Rng;
 
 #[test]

@@ -16,10 +16,10 @@
 
 pub mod ref64;
 
-use crate::interp::tables::{N, TableId};
-use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use vstructc::glam::DVec3;
+use vstructc::interp::tables::{N, TableId};
 
 /// Generator version written into every blob header; bump it when a formula changes.
 pub const GENERATOR_VERSION: u32 = 1;

@@ -1,8 +1,8 @@
 //! f64 formulas used by the table generator: GGX, exact dielectric
 //! Fresnel, Ward, Conty–Kulla sheen and Oren–Nayar, all isotropic and in the local frame.
 
-use glam::DVec3;
 use std::f64::consts::PI;
+use vstructc::glam::DVec3;
 
 /// GGX NDF, isotropic.
 pub fn ggx_d(alpha: f64, h: DVec3) -> f64 {
