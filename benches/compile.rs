@@ -9,9 +9,10 @@ use std::hint::black_box;
 use vstructc::Diagnostics;
 use vstructc::front::rib::{RibOptions, parse_rib};
 use vstructc::lower::network::terminals;
-use vstructc::lower::{NoDefinitions, lower_many, scene::layered_scene};
+use vstructc::lower::{NoDefinitions, lower_many};
 use vstructc::registry::Registry;
 use vstructc::resolve::{ResolveOptions, resolve};
+use vstructc_testkit::scene::layered_scene;
 
 // The same allocator as the `vstructc` binary, so the numbers are what the CLI sees.
 #[global_allocator]

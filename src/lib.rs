@@ -22,8 +22,8 @@
 //! [`raster`] the image type the preview renderer and the image writers share.
 //!
 //! Features: `cli` (default; the `vstructc` binary's dependencies), `png` (PNG encoding of
-//! previews, on with `cli`), `parallel` (default; rayon), `testkit` (test and benchmark
-//! support, not a stable API). A crate embedding vstructc can turn the defaults off:
+//! previews, on with `cli`), `parallel` (default; rayon), `testkit` (the internals the
+//! tests and benchmarks reach, made public; not a stable API). A crate embedding vstructc can turn the defaults off:
 //! `vstructc = { version = "0.1", default-features = false }`.
 //!
 //! Problems are reported as [`diag::Diagnostic`]s with stable codes and positions; conditions

@@ -14,8 +14,6 @@
 //! without definition).
 
 pub mod network;
-#[cfg(feature = "testkit")]
-pub mod scene;
 
 // One module per material model. The recipes are internals: public only to the crate's own
 // tests (feature `testkit`), which check their built-in defaults against the shipped `.args`.

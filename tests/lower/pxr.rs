@@ -419,7 +419,8 @@ fn patterns_are_fused_into_the_program() {
 /// The generated benchmark scene lowers completely, sequentially and in parallel alike.
 #[test]
 fn generated_scene_lowers_in_parallel_like_sequentially() {
-    use vstructc::lower::{lower_many, scene::layered_scene};
+    use vstructc::lower::lower_many;
+    use vstructc_testkit::scene::layered_scene;
     let (g, t) = layered_scene(40);
     let a = lower_many(&g, &NoDefinitions, &t, false);
     let b = lower_many(&g, &NoDefinitions, &t, true);

@@ -1,9 +1,9 @@
 //! A generated scene of layered materials for benchmarks and tests, in resolved form:
 //! per material three PxrLayers → one PxrLayerMixer → one PxrLayerSurface, with the member
 //! connections and the `set` enable values that resolution writes (the shape of
-//! `vstructc_testkit::testgen::layered_scene`, built directly as a [`SimpleGraph`]).
+//! `testgen::layered_scene`, built directly as a `SimpleGraph`).
 
-use super::SimpleGraph;
+use vstructc::lower::SimpleGraph;
 
 const MEMBERS: [&str; 12] = [
     "diffuseGain",
