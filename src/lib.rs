@@ -23,8 +23,8 @@
 //!
 //! Features: `cli` (default; the `vstructc` binary's dependencies), `png` (PNG encoding of
 //! previews, on with `cli`), `parallel` (default; rayon), `testkit` (the internals the
-//! tests and benchmarks reach, made public; not a stable API). A crate embedding vstructc can turn the defaults off:
-//! `vstructc = { version = "0.1", default-features = false }`.
+//! tests and benchmarks reach, made public; not a stable API). A crate embedding vstructc
+//! can turn the defaults off: `vstructc = { version = "0.1", default-features = false }`.
 //!
 //! Problems are reported as [`diag::Diagnostic`]s with stable codes and positions; conditions
 //! that stop processing are [`diag::Error`]s.
