@@ -11,8 +11,14 @@
 //! `type` came first is converted as it is read) and its connections build each node as it
 //! comes; a material's nodes and connections enter the network when the material closes
 //! (`MaterialOut`). Only a material's `terminals` and `primvars`, a value read before its
-//! `type` and unknown members are held as small trees. Keys and strings borrow from the text unless they
-//! hold escapes, and a JSON Pointer is composed only when a diagnostic needs one.
+//! `type` and unknown members are held as small trees. Keys and strings borrow from the text
+//! unless they hold escapes, and a JSON Pointer is composed only when a diagnostic needs one.
+//! A scene repeats its parameters: a parameter's value is taken as text (a `RawValue`) and,
+//! when the same name and text were read before without a finding, its declaration and value
+//! are shared and not read again; parameters with the same value share one block. Where
+//! reading a value alone could differ from reading it in the document (an error of
+//! serde_json, whose position must be the document's, or a deep tree), the document is read
+//! again without remembering.
 //! Duplicate object keys are an error (JS002): the visitors see every key (serde_json's own
 //! maps keep only the last). Diagnostics carry a JSON Pointer (RFC 6901); syntax errors (JS001)
 //! and duplicate keys also carry line and column.
@@ -29,11 +35,13 @@
 //! node's own keys (a `nodeTypeId` that is not a string), not when it comes after. A node's kind is set when its material's terminals are read (they may
 //! follow the nodes, as in the order the JSON writer uses).
 //!
-//! With the `parallel` feature, an input of 1 MiB or more is read in pieces of materials on
-//! rayon's pool and assembled in document order on the calling thread (`pieces`), each
-//! material by a byte scanner making the visitors' calls (`scan`) unless it needs serde_json;
-//! whatever that path cannot settle exactly as above goes to the one-thread reading, so the
-//! network, the diagnostics and the errors are the same either way.
+//! With the `parallel` feature, an input of 1 MiB or more is read with its materials on
+//! rayon's pool (`read_on_pool`): the document is read with each material's value taken
+//! unread (a `RawValue`), the pool's threads read the materials in batches with the same
+//! visitors, and the materials enter the network in document order. Any error of serde_json
+//! (a syntax error, a duplicate key) or a deep tree sends the document to the reading on the
+//! calling thread, which reports it with its line and column, so the network, the diagnostics
+//! and the errors are the same either way.
 //!
 //! Choices where the spec is silent:
 //!
@@ -47,26 +55,24 @@
 //! * A node's request kind comes from the terminals naming it (`surface`/`volume` → `Bxdf`,
 //!   `displacement` → `Displace`, `light`, `lightFilter`); other nodes are `Pattern`s.
 
-#[cfg(feature = "parallel")]
-mod pieces;
-#[cfg(feature = "parallel")]
-mod scan;
-
 use crate::diag::{Diagnostic, Diagnostics, Error, Location};
-#[cfg(feature = "parallel")]
-use crate::front::remembered::Remembered;
+use crate::front::remembered::{MAX_REMEMBERED_PARAMS, Remembered, text_hash};
 use crate::limits::{Limit, Limits};
 use crate::network::{
     Decl, Link, Material, MaterialNodes, Network, Node, NodeId, Param, ParamAt, ParamTypes,
     RequestKind, Sym, Terminal,
 };
 use crate::types::{ArraySpec, BaseType, Type, Value};
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
 use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
+use serde_json::value::RawValue;
 use std::borrow::Cow;
 use std::cell::{Cell, RefCell};
 use std::fmt;
+use std::hash::Hasher;
 use std::sync::Arc;
+#[cfg(feature = "parallel")]
+use std::sync::Mutex;
 
 /// A JSON number as read.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,7 +136,7 @@ struct Ctx {
     duplicate: RefCell<Option<Vec<String>>>,
     /// How deep the value trees being read are nested now, and at most (a material read on
     /// its own must stay well within serde_json's nesting limit, which it meets shallower
-    /// than within the document).
+    /// within the document).
     depth: Cell<u32>,
     deepest: Cell<u32>,
 }
@@ -426,8 +432,8 @@ macro_rules! seed_reads_any {
 
 seed_reads_any!(
     Seed<'_>,
-    DocSeed<'_, '_>,
-    MaterialsSeed<'_, '_>,
+    DocSeed<'_, '_, '_, 'de>,
+    MaterialsSeed<'_, '_, '_, 'de>,
     MaterialSeed<'_, '_, 'de>,
     NodesSeed<'_, '_, '_, 'de>,
     NodeSeed<'_, '_, '_, 'de, '_>,
@@ -482,9 +488,16 @@ macro_rules! needs_object {
 }
 
 /// The document object.
-struct DocSeed<'r, 't>(&'r mut Reader<'t>);
+struct DocSeed<'r, 't, 's, 'de>(&'r mut Reader<'t>, Option<&'s mut dyn Split<'de>>);
 
-impl DocSeed<'_, '_> {
+/// Takes each material's value, unread, in place of the readers of [`MaterialSeed`] (the
+/// materials are then read on rayon's pool).
+trait Split<'de> {
+    /// The `group`-th material (1 for the first), its name and the text of its value.
+    fn material(&mut self, group: u32, name: Cow<'de, str>, value: &'de str);
+}
+
+impl DocSeed<'_, '_, '_, '_> {
     fn ctx(&self) -> &Ctx {
         &self.0.ctx
     }
@@ -499,11 +512,11 @@ impl DocSeed<'_, '_> {
     }
 }
 
-impl<'de> Visitor<'de> for DocSeed<'_, '_> {
+impl<'de> Visitor<'de> for DocSeed<'_, '_, '_, 'de> {
     type Value = ();
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
-        let r = self.0;
+        let (r, mut split) = (self.0, self.1);
         let mut seen = SeenKeys::default();
         let mut version = None;
         let mut has_materials = false;
@@ -513,7 +526,7 @@ impl<'de> Visitor<'de> for DocSeed<'_, '_> {
                 "vstructcNetwork" => version = Some(value_tree(&r.ctx, &mut map, &key)?),
                 "materials" => {
                     has_materials = true;
-                    let read = map.next_value_seed(MaterialsSeed(&mut *r));
+                    let read = map.next_value_seed(MaterialsSeed(&mut *r, split.take()));
                     r.ctx.within(|| key.to_string(), read)?;
                 }
                 _ => {
@@ -535,9 +548,9 @@ impl<'de> Visitor<'de> for DocSeed<'_, '_> {
 }
 
 /// The `materials` object: each material is read and closed in turn.
-struct MaterialsSeed<'r, 't>(&'r mut Reader<'t>);
+struct MaterialsSeed<'r, 't, 's, 'de>(&'r mut Reader<'t>, Option<&'s mut dyn Split<'de>>);
 
-impl MaterialsSeed<'_, '_> {
+impl MaterialsSeed<'_, '_, '_, '_> {
     fn ctx(&self) -> &Ctx {
         &self.0.ctx
     }
@@ -552,16 +565,21 @@ impl MaterialsSeed<'_, '_> {
     }
 }
 
-impl<'de> Visitor<'de> for MaterialsSeed<'_, '_> {
+impl<'de> Visitor<'de> for MaterialsSeed<'_, '_, '_, 'de> {
     type Value = ();
     needs_object!();
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
-        let r = self.0;
+        let (r, mut split) = (self.0, self.1);
         let mut seen = SeenKeys::default();
         while let Some(name) = map.next_key_seed(Key)? {
             check_duplicate(&r.ctx, &mut seen, name.clone())?;
             r.materials += 1;
             let group = r.materials;
+            if let Some(split) = split.as_deref_mut() {
+                let value: &'de RawValue = map.next_value()?;
+                split.material(group, name, value.get());
+                continue;
+            }
             let m = MaterialState::new(&name);
             let read = map.next_value_seed(MaterialSeed {
                 r: &mut *r,
@@ -589,32 +607,6 @@ impl MaterialState<'_> {
             name: name.to_string(),
         }
     }
-}
-
-/// Reads the material `name` from `value`, the text of its value alone, as the
-/// `group`-th material (1 for the first): the material goes where `r` sends closed
-/// materials, its findings to `r`'s. An error is serde_json's (its position is within
-/// `value`).
-#[cfg(feature = "parallel")]
-fn read_material(
-    r: &mut Reader<'_>,
-    name: &str,
-    value: &str,
-    group: u32,
-) -> Result<(), serde_json::Error> {
-    r.materials = group;
-    r.needs_types = false;
-    r.ctx.depth.set(0);
-    r.ctx.deepest.set(0);
-    r.ctx.duplicate.borrow_mut().take();
-    let mut de = serde_json::Deserializer::from_str(value);
-    MaterialSeed {
-        r: &mut *r,
-        m: Some(MaterialState::new(name)),
-        group,
-    }
-    .deserialize(&mut de)
-    .and_then(|()| de.end())
 }
 
 /// One material object.
@@ -983,11 +975,25 @@ impl<'de> Visitor<'de> for ParamsSeed<'_, '_, '_, 'de, '_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let (r, n, pointer) = (self.r, self.n, self.pointer);
         while let Some(name) = map.next_key_seed(Key)? {
-            if !n.add_parameter(Sym::new(&name)) {
+            let sym = Sym::new(&name);
+            if !n.add_parameter(sym) {
                 return Err(r.ctx.duplicate_key(&name));
             }
             let p = P::Key(pointer, &name);
             let index = n.names.len() - 1;
+            if r.remember {
+                let value: &'de RawValue = map.next_value()?;
+                let seed = ParamSeed {
+                    r: &mut *r,
+                    n: &mut *n,
+                    index,
+                    name: &name,
+                    pointer: &p,
+                };
+                seed.remembered(sym, value.get())
+                    .map_err(de::Error::custom)?;
+                continue;
+            }
             let read = map.next_value_seed(ParamSeed {
                 r: &mut *r,
                 n: &mut *n,
@@ -1011,6 +1017,45 @@ struct ParamSeed<'r, 't, 'n, 'de, 'p> {
 }
 
 impl<'de> ParamSeed<'_, '_, '_, 'de, '_> {
+    /// The parameter `sym` whose value's text is `text`: what a parameter of that name and
+    /// text gave before if it was read without a finding, else `text` read alone (and
+    /// remembered if it is the canonical form and gave no finding). Reading `text` alone
+    /// fails where reading it in the document may report an error of serde_json or might
+    /// (a deep tree): the document is then read again without remembering.
+    fn remembered(self, sym: Sym, text: &'de str) -> Result<(), &'static str> {
+        let key = sym.as_str().as_ptr() as usize;
+        let hash = text_hash(text.as_bytes());
+        if let Some(typed) = self.r.memo.params.recall(key, text.as_bytes(), hash) {
+            self.n.values[self.index] = Some(typed.clone());
+            return Ok(());
+        }
+        let (r, n, index) = (&mut *self.r, &mut *self.n, self.index);
+        let (found, deferred) = (n.found.len(), n.deferred.len());
+        let mut de = serde_json::Deserializer::from_str(text);
+        let seed = ParamSeed {
+            r: &mut *r,
+            n: &mut *n,
+            index,
+            name: self.name,
+            pointer: self.pointer,
+        };
+        let read = seed.deserialize(&mut de).and_then(|()| de.end());
+        if read.is_err() || r.ctx.deepest.get() > MAX_TREE_DEPTH {
+            return Err("a parameter read alone needs the document");
+        }
+        if text.starts_with('{')
+            && n.found.len() == found
+            && n.deferred.len() == deferred
+            && r.memo.params.len() < MAX_REMEMBERED_PARAMS
+            && let Some(typed) = &n.values[index]
+        {
+            r.memo
+                .params
+                .remember(key, text.as_bytes(), hash, typed.clone());
+        }
+        Ok(())
+    }
+
     /// A shorthand value: typed now if the shader is known, else when the node closes.
     fn bare<E>(self, j: J<'de>) -> Result<(), E> {
         match &self.n.shader {
@@ -1434,8 +1479,8 @@ impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
 /// Read a JSON network.
 ///
 /// `path` names the input in diagnostics; `types` supplies declared types for shorthand
-/// values (JS006 when a parameter is not declared). Warnings go to `diags`; the first error is
-/// returned.
+/// values (JS006 when a parameter is not declared; `Sync`, as the materials of a large input
+/// are read on rayon's pool). Warnings go to `diags`; the first error is returned.
 ///
 /// ```
 /// use vstructc::front::json::parse_json;
@@ -1467,7 +1512,7 @@ impl<'de> Visitor<'de> for ParamSeed<'_, '_, '_, 'de, '_> {
 pub fn parse_json(
     bytes: &[u8],
     path: &str,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     diags: &mut Diagnostics,
 ) -> Result<Network, Error> {
     parse_json_limited(bytes, path, types, &Limits::default(), diags)
@@ -1479,126 +1524,210 @@ pub fn parse_json(
 pub(crate) fn parse_json_limited(
     bytes: &[u8],
     path: &str,
-    types: &dyn ParamTypes,
+    types: &(dyn ParamTypes + Sync),
     limits: &Limits,
     diags: &mut Diagnostics,
-) -> Result<Network, Error> {
-    parse_json_path(bytes, path, types, limits, diags, ReadPath::Auto)
-}
-
-/// How [`parse_json_path`] reads a document.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ReadPath {
-    /// In pieces on rayon's pool ([`pieces`]) when the input is large and more than one
-    /// thread may run; on the calling thread otherwise.
-    Auto,
-    /// On the calling thread.
-    #[cfg(feature = "testkit")]
-    Serial,
-    /// In pieces of about this many bytes whatever the input's size (tests: every piece
-    /// boundary behaves as the text within a piece).
-    #[cfg(feature = "testkit")]
-    Pieces(usize),
-}
-
-/// Inputs from this size on are read in pieces (with the `parallel` feature and more than
-/// one thread): below, handing pieces to the pool costs about what it saves.
-#[cfg(feature = "parallel")]
-const PIECES_MIN_BYTES: usize = 1 << 20;
-
-/// [`parse_json_limited`], read along `read_path`. Every path gives the same network, the
-/// same diagnostics in the same order and the same error.
-fn parse_json_path(
-    bytes: &[u8],
-    path: &str,
-    types: &dyn ParamTypes,
-    limits: &Limits,
-    diags: &mut Diagnostics,
-    read_path: ReadPath,
 ) -> Result<Network, Error> {
     let file: Arc<str> = Arc::from(path);
     limits
         .check(Limit::NetworkFileBytes, bytes.len() as u64)
         .map_err(|e| e.at(Location::file(file.clone())))?;
-    #[cfg(feature = "parallel")]
-    {
-        let piece = match read_path {
-            ReadPath::Auto
-                if bytes.len() >= PIECES_MIN_BYTES && crate::schedule::pool_can_help() =>
-            {
-                Some(pieces::PIECE_BYTES)
-            }
-            #[cfg(feature = "testkit")]
-            ReadPath::Pieces(n) => Some(n.max(1)),
-            _ => None,
-        };
-        if let Some(piece) = piece
-            && let Some(found) = pieces::read(bytes, &file, types, piece)
-        {
-            let (net, found) = found;
-            return report(net, found, limits, diags);
-        }
-    }
-    #[cfg(not(feature = "parallel"))]
-    let _ = read_path;
     // Valid UTF-8 (checked once, in bulk) is read as text, which spares serde_json a check
     // per string; other input goes through the byte reader, which reports where it breaks.
     let text = std::str::from_utf8(bytes).ok();
-    let mut r = Reader::new(file.clone(), Some(types), Some(Network::new()));
-    let read = match text {
-        Some(text) => {
-            let mut de = serde_json::Deserializer::from_str(text);
-            DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end())
-        }
-        None => {
-            let mut de = serde_json::Deserializer::from_slice(bytes);
-            DocSeed(&mut r).deserialize(&mut de).and_then(|()| de.end())
-        }
+    #[cfg(feature = "parallel")]
+    if let Some(text) = text
+        && bytes.len() >= POOL_MIN_BYTES
+        && crate::schedule::pool_can_help()
+        && let Some((net, found)) = read_on_pool(text, &file, types, limits)
+    {
+        return report(net, found, limits, diags);
+    }
+    let read = |remember: bool| {
+        let mut net = Network::new();
+        net.reserve_for_input(bytes.len(), BYTES_PER_NODE, limits.nodes);
+        let mut r = Reader::new(file.clone(), types, Some(net));
+        r.remember = remember;
+        let read = match text {
+            Some(text) => {
+                let mut de = serde_json::Deserializer::from_str(text);
+                DocSeed(&mut r, None)
+                    .deserialize(&mut de)
+                    .and_then(|()| de.end())
+            }
+            None => {
+                let mut de = serde_json::Deserializer::from_slice(bytes);
+                DocSeed(&mut r, None)
+                    .deserialize(&mut de)
+                    .and_then(|()| de.end())
+            }
+        };
+        (read, r)
+    };
+    // Remembering parameters reads some alone: an error is reported as the document gives it.
+    let (read, r) = match read(true) {
+        (Ok(()), r) => (Ok(()), r),
+        (Err(_), _) => read(false),
     };
     if let Err(e) = read {
         return Err(syntax_error(&e, bytes, &file, &r.ctx));
     }
-    let net = r.net.unwrap_or_default();
-    report(net, r.found, limits, diags)
+    report(r.net.unwrap_or_default(), r.found, limits, diags)
 }
 
-/// [`parse_json_limited`] on the calling thread (`piece` `None`) or in pieces of about
-/// `piece` bytes, whatever the input's size: tests compare them.
-#[cfg(feature = "testkit")]
-#[cfg_attr(feature = "testkit", visibility::make(pub))]
-fn parse_json_with(
-    bytes: &[u8],
-    path: &str,
-    types: &dyn ParamTypes,
+/// Inputs from this size on are read on rayon's pool (with the `parallel` feature and more
+/// than one thread): below, handing materials to the pool costs about what it saves.
+#[cfg(feature = "parallel")]
+const POOL_MIN_BYTES: usize = 1 << 20;
+
+/// Materials per task on the pool.
+#[cfg(feature = "parallel")]
+const POOL_BATCH: usize = 64;
+
+/// Value trees nested deeper than this within a material or a parameter read alone send the
+/// document to the reading without either: serde_json's nesting limit counts the levels above
+/// them too, and a value taken unread is not held to it.
+const MAX_TREE_DEPTH: u32 = 64;
+
+/// The materials of one task on the pool: what the network receives and their findings, or
+/// `None` when one of them needs the reading on the calling thread.
+#[cfg(feature = "parallel")]
+type Batch = Option<(Vec<MaterialOut>, Vec<(Order, Found)>)>;
+
+/// Reads `text` with its materials on rayon's pool: one task reads the document, taking each
+/// material's value unread ([`Split`]), and hands the materials in batches to the pool, whose
+/// threads read them with the visitors of the one-thread reading; that task then adds the
+/// batches to the network in document order as they come. `None` when the one-thread reading
+/// must decide: any error of serde_json (its line and column are the whole text's) or a deep
+/// value tree.
+#[cfg(feature = "parallel")]
+fn read_on_pool(
+    text: &str,
+    file: &Arc<str>,
+    types: &(dyn ParamTypes + Sync),
     limits: &Limits,
-    diags: &mut Diagnostics,
-    piece: Option<usize>,
-) -> Result<Network, Error> {
-    let read_path = piece.map_or(ReadPath::Serial, ReadPath::Pieces);
-    parse_json_path(bytes, path, types, limits, diags, read_path)
+) -> Option<(Network, Vec<(Order, Found)>)> {
+    struct Spawner<'a, 's, 'de> {
+        scope: &'a rayon::Scope<'s>,
+        batch: Vec<(u32, Cow<'de, str>, &'de str)>,
+        /// Batches spawned so far.
+        spawned: usize,
+        /// The batches read, by their number.
+        done: &'s Mutex<FxHashMap<usize, Batch>>,
+        memos: &'s Mutex<Vec<Memo>>,
+        file: &'s Arc<str>,
+        types: &'s (dyn ParamTypes + Sync),
+    }
+    impl<'de: 's, 's> Spawner<'_, 's, 'de> {
+        fn flush(&mut self) {
+            let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(POOL_BATCH));
+            if batch.is_empty() {
+                return;
+            }
+            let k = self.spawned;
+            self.spawned += 1;
+            let (done, memos, file, types) = (self.done, self.memos, self.file, self.types);
+            self.scope.spawn(move |_| {
+                let read = read_batch(batch, memos, file, types);
+                lock(done).insert(k, read);
+            });
+        }
+    }
+    impl<'de: 's, 's> Split<'de> for Spawner<'_, 's, 'de> {
+        fn material(&mut self, group: u32, name: Cow<'de, str>, value: &'de str) {
+            self.batch.push((group, name, value));
+            if self.batch.len() == POOL_BATCH {
+                self.flush();
+            }
+        }
+    }
+    let done = Mutex::new(FxHashMap::default());
+    let memos = Mutex::new(Vec::new());
+    let mut doc = Reader::new(file.clone(), types, None);
+    let mut net = Network::new();
+    net.reserve_for_input(text.len(), BYTES_PER_NODE, limits.nodes);
+    let mut found = Vec::new();
+    let read = rayon::scope(|scope| {
+        let mut spawner = Spawner {
+            scope,
+            batch: Vec::with_capacity(POOL_BATCH),
+            spawned: 0,
+            done: &done,
+            memos: &memos,
+            file,
+            types,
+        };
+        let mut de = serde_json::Deserializer::from_str(text);
+        let read = DocSeed(&mut doc, Some(&mut spawner))
+            .deserialize(&mut de)
+            .and_then(|()| de.end());
+        spawner.flush();
+        read.ok()?;
+        // The batches enter the network in order while the pool reads the next ones; this
+        // thread reads one of those while the batch it needs is not there yet.
+        for k in 0..spawner.spawned {
+            let batch = loop {
+                if let Some(batch) = lock(&done).remove(&k) {
+                    break batch;
+                }
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    std::thread::yield_now();
+                }
+            };
+            let (outs, batch_found) = batch?;
+            for out in outs {
+                out.add_to(&mut net);
+            }
+            found.extend(batch_found);
+        }
+        Some(())
+    });
+    read?;
+    doc.found.extend(found);
+    Some((net, doc.found))
 }
 
-/// Whether `bytes` is read in pieces of about `piece` bytes rather than handed to the
-/// one-thread reader (tests: the pieces are really read).
-#[cfg(feature = "testkit")]
-#[cfg_attr(feature = "testkit", visibility::make(pub))]
-fn json_reads_in_pieces(bytes: &[u8], types: &dyn ParamTypes, piece: usize) -> bool {
-    pieces::read(bytes, &Arc::from("t.json"), types, piece.max(1)).is_some()
+/// `mutex`, locked (a panic while it was locked panics the pool's scope anyway).
+#[cfg(feature = "parallel")]
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Whether the scanner of the pieces settles `material`, a material's value alone, without
-/// serde_json (tests: the writer's layout takes the scanner, what it does not read exactly as
-/// serde_json does leaves it).
-#[cfg(feature = "testkit")]
-#[cfg_attr(feature = "testkit", visibility::make(pub))]
-fn json_scans_material(material: &[u8]) -> bool {
-    let mut r = Reader::new(Arc::from("t.json"), None, None);
-    scan::read_material(&mut r, &mut NodeState::default(), "m", material, 0, 1).is_some_and(|end| {
-        material[end..]
-            .iter()
-            .all(|c| matches!(c, b' ' | b'\t' | b'\n' | b'\r'))
-    })
+/// Reads the materials of `batch` (each its group, its name and its value's text) on a
+/// thread of the pool ([`read_on_pool`]).
+#[cfg(feature = "parallel")]
+fn read_batch(
+    batch: Vec<(u32, Cow<'_, str>, &str)>,
+    memos: &Mutex<Vec<Memo>>,
+    file: &Arc<str>,
+    types: &(dyn ParamTypes + Sync),
+) -> Batch {
+    let mut r = Reader::new(file.clone(), types, None);
+    // What an earlier task remembered (as many memos as tasks ever ran at once).
+    r.memo = lock(memos).pop().unwrap_or_default();
+    let read = || {
+        for (group, name, value) in batch {
+            let mut de = serde_json::Deserializer::from_str(value);
+            let m = Some(MaterialState::new(&name));
+            let seed = MaterialSeed {
+                r: &mut r,
+                m,
+                group,
+            };
+            seed.deserialize(&mut de).and_then(|()| de.end()).ok()?;
+        }
+        Some(())
+    };
+    let read = read();
+    lock(memos).push(std::mem::take(&mut r.memo));
+    read?;
+    (r.ctx.deepest.get() <= MAX_TREE_DEPTH).then_some((r.done, r.found))
 }
+
+/// Bytes of JSON per node assumed when room for the nodes is reserved: a node of the bench
+/// scene takes about 1 KB as the writer lays it out, and a terser file outgrows the room only
+/// by a doubling or two.
+const BYTES_PER_NODE: usize = 512;
 
 /// The end of a read whose text is valid JSON: the findings in the order of the checks, not
 /// of the document (a material's terminals are checked before its nodes, the version before
@@ -1737,7 +1866,7 @@ impl LocalLink {
 
 impl MaterialOut {
     /// Inserts the material's nodes, connections and the material into `net`: the same calls
-    /// in the same order whichever thread read it.
+    /// in the same order on the calling thread and on rayon's pool.
     fn add_to(self, net: &mut Network) {
         let ids: Vec<NodeId> = self.nodes.into_iter().map(|n| net.insert_node(n)).collect();
         for (k, kind) in self.kinds {
@@ -1771,15 +1900,13 @@ const FEW_DECLS: usize = 8;
 /// The network being built while serde reads the text.
 struct Reader<'t> {
     file: Arc<str>,
-    /// Declared types for shorthand values; `None` on a thread that reads pieces of the
-    /// materials, which leaves a material with a shorthand value to the calling thread
-    /// (`needs_types`).
-    types: Option<&'t dyn ParamTypes>,
-    /// Where closed materials go: into the network, or (`None`) to `done`.
+    /// Declared types for shorthand values.
+    types: &'t (dyn ParamTypes + Sync),
+    /// Where closed materials go: into the network, or (`None`, on rayon's pool) to `done`.
     net: Option<Network>,
     done: Vec<MaterialOut>,
-    /// A shorthand value was met while `types` is `None`.
-    needs_types: bool,
+    /// Whether parameters are read through [`Memo::params`].
+    remember: bool,
     /// What it remembers of what it read.
     memo: Memo,
     /// The key path, for the pointer of a duplicate key.
@@ -1791,8 +1918,7 @@ struct Reader<'t> {
     materials: u32,
 }
 
-/// What a [`Reader`] remembers of what it read; a thread of the pool keeps it from one piece
-/// to the next (`pieces`).
+/// What a [`Reader`] remembers of what it read.
 #[derive(Default)]
 struct Memo {
     /// One declaration per type string of the canonical form, shared by its parameters: the
@@ -1801,21 +1927,86 @@ struct Memo {
     inline_decls: FxHashMap<Box<str>, Arc<Decl>>,
     /// One declaration per declared type of the shorthand form, shared likewise.
     declared_decls: FxHashMap<Type, Arc<Decl>>,
-    /// Parameters of the canonical form that the pieces' scanner read without a finding, by
-    /// their text from the name's quote to the closing brace: their name, declaration and
-    /// value are shared by the parameters that repeat the text.
-    #[cfg(feature = "parallel")]
-    params: Remembered<(Sym, Typed)>,
+    /// Values read before (arrays aside), one per slot of their hash: parameters with the
+    /// same value, bit for bit, mostly share one block.
+    values: Vec<Option<Arc<Value>>>,
+    /// One copy of each shader id.
+    shaders: FxHashSet<Arc<str>>,
+    /// Parameters of the canonical form read without a finding, under their name, by the
+    /// text of their value: the parameters that repeat both share their declaration and
+    /// value, and skip reading them.
+    params: Remembered<Typed>,
+}
+
+/// Slots of [`Memo::values`].
+const VALUE_SLOTS: usize = 1 << 12;
+
+impl Memo {
+    /// `value` in a block shared with the parameter read last with the same hash, if its
+    /// value is the same.
+    fn share(&mut self, value: Value) -> Arc<Value> {
+        let Some(hash) = value_hash(&value) else {
+            return Arc::new(value);
+        };
+        if self.values.is_empty() {
+            self.values.resize(VALUE_SLOTS, None);
+        }
+        let slot = &mut self.values[(hash >> 52) as usize % VALUE_SLOTS];
+        match slot {
+            Some(shared) if same_bits(shared, &value) => shared.clone(),
+            _ => slot.insert(Arc::new(value)).clone(),
+        }
+    }
+}
+
+/// The hash of a value that is not an array, over its bits (`None` for an array).
+fn value_hash(value: &Value) -> Option<u64> {
+    let words = |v: &[f32]| {
+        v.iter().fold(v.len() as u64, |h, x| {
+            (h ^ u64::from(x.to_bits())).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        })
+    };
+    Some(match value {
+        Value::Int(i) => words(&[f32::from_bits(*i as u32), 0.0]),
+        Value::Float(x) => words(&[*x]),
+        Value::Triple(_, v) => words(v),
+        Value::HPoint(v) => words(v),
+        Value::Matrix(v) => words(v),
+        Value::Bool(b) => words(&[f32::from_bits(u32::from(*b)), 0.0, 0.0, 0.0, 0.0]),
+        Value::Str(s) | Value::Token(s) | Value::Asset(s) => {
+            let mut h = FxHasher::default();
+            h.write(s.as_bytes());
+            h.finish().wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        }
+        Value::Array(..) => return None,
+    })
+}
+
+/// Whether two values are the same bit for bit (`0.0` and `-0.0` differ).
+fn same_bits(a: &Value, b: &Value) -> bool {
+    let bits = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .map(|x| x.to_bits())
+            .eq(b.iter().map(|x| x.to_bits()))
+    };
+    match (a, b) {
+        (Value::Float(x), Value::Float(y)) => x.to_bits() == y.to_bits(),
+        (Value::Triple(s, x), Value::Triple(t, y)) => s == t && bits(x, y),
+        (Value::HPoint(x), Value::HPoint(y)) => bits(x, y),
+        (Value::Matrix(x), Value::Matrix(y)) => bits(x, y),
+        (Value::Array(..), _) => false,
+        _ => a == b,
+    }
 }
 
 impl<'t> Reader<'t> {
-    fn new(file: Arc<str>, types: Option<&'t dyn ParamTypes>, net: Option<Network>) -> Self {
+    fn new(file: Arc<str>, types: &'t (dyn ParamTypes + Sync), net: Option<Network>) -> Self {
         Reader {
             file,
             types,
             net,
             done: Vec::new(),
-            needs_types: false,
+            remember: true,
             memo: Memo::default(),
             ctx: Ctx::default(),
             found: Vec::new(),
@@ -2135,7 +2326,15 @@ impl<'t> Reader<'t> {
             });
             conns.push((k, input, list));
         }
-        let mut node = Node::new_raw(name, &shader, kind);
+        let shader = match self.memo.shaders.get(&*shader) {
+            Some(shared) => shared.clone(),
+            None => {
+                let shared: Arc<str> = Arc::from(&*shader);
+                self.memo.shaders.insert(shared.clone());
+                shared
+            }
+        };
+        let mut node = Node::new_shared(name, shader, kind);
         node.set_raw_params(params);
         node.set_origin(Some(self.loc_owned(pointer.render())), None);
         Ok((node, conns))
@@ -2178,7 +2377,7 @@ impl<'t> Reader<'t> {
                 format!("value of `{name}` does not match its type `{text}`: {why}"),
             )
         })?;
-        Ok((Arc::new(value), decl))
+        Ok((self.memo.share(value), decl))
     }
 
     /// The declaration shared by the parameters whose `type` is `text` (`None` if `text` is
@@ -2207,11 +2406,7 @@ impl<'t> Reader<'t> {
 
     /// A shorthand (bare) parameter value, typed by the shader's definition.
     fn shorthand(&mut self, shader: &str, name: &str, j: &J, pointer: &P) -> Result<Typed, Error> {
-        let Some(types) = self.types else {
-            self.needs_types = true;
-            return Err(self.error("JS006", &pointer.render(), "no declared types here"));
-        };
-        let Some(t) = types.input_type(shader, name) else {
+        let Some(t) = self.types.input_type(shader, name) else {
             return Err(self.error(
                 "JS006",
                 &pointer.render(),
@@ -2239,7 +2434,7 @@ impl<'t> Reader<'t> {
                 decl
             }
         };
-        Ok((Arc::new(value), decl))
+        Ok((self.memo.share(value), decl))
     }
 }
 

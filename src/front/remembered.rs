@@ -1,7 +1,7 @@
 //! What a reader remembers of texts it read before: a scene repeats the same declarations
 //! and parameters on thousands of nodes, and reading one again costs a hash and a comparison
 //! of bytes. The RIB reader remembers per shader (types come from its definition), the JSON
-//! reader's pieces per thread.
+//! reader per parameter name.
 //!
 //! Entries are never changed or removed, and a reader remembers only what reading the text
 //! again would give without a diagnostic, so a hit is exactly what reading would have given.

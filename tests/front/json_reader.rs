@@ -9,7 +9,7 @@ use vstructc::front::json::parse_json;
 use vstructc::network::{Link, MaterialNodes, Network, NoDefinitions, ParamTypes, RequestKind};
 use vstructc::{BaseType, Diagnostics, Error, Severity, Value};
 
-fn read_with(text: &str, types: &dyn ParamTypes) -> (Result<Network, Error>, Diagnostics) {
+fn read_with(text: &str, types: &(dyn ParamTypes + Sync)) -> (Result<Network, Error>, Diagnostics) {
     let mut d = Diagnostics::new();
     let r = parse_json(text.as_bytes(), "n.json", types, &mut d);
     (r, d)
@@ -472,7 +472,7 @@ fn orders(members: &[&str]) -> Vec<String> {
 
 /// The report of `text`: the network as JSON, or the error's code and pointer, and the
 /// warnings' codes and pointers.
-fn report(text: &str, types: &dyn ParamTypes) -> (String, Vec<(String, String)>) {
+fn report(text: &str, types: &(dyn ParamTypes + Sync)) -> (String, Vec<(String, String)>) {
     let (r, d) = read_with(text, types);
     let pointer = |d: &vstructc::Diagnostic| {
         d.location
@@ -547,5 +547,163 @@ fn node_keys_in_any_order_read_alike() {
         let text = doc(&format!(r#""n": {{"nodeTypeId": "S", "parameters": {p}}}"#));
         let (r, w) = report(&text, &types);
         assert!(w.is_empty() && r.contains("\"c\""), "{text}: {r}");
+    }
+}
+
+/// A document of `n` materials, each on four lines, larger than 1 MiB for `n` = 3000 (the
+/// reader then reads its materials on rayon's pool, with the `parallel` feature);
+/// `edit(i, material)` may change the text of material `i`.
+fn large_doc(n: usize, edit: impl Fn(usize, String) -> String) -> String {
+    let mut text = String::from("{\n  \"vstructcNetwork\": 1,\n  \"materials\": {\n");
+    for i in 0..n {
+        let m = format!(
+            "    \"m{i}\": {{\"nodes\": {{\n      \"a\": {{\"nodeTypeId\": \"PxrLayer\", \"parameters\": {{\"g\": {{\"type\": \"float\", \"value\": 0.5}}, \"z\": {{\"type\": \"float\", \"value\": -0.0}}, \"c\": {{\"type\": \"color\", \"value\": [0, 0.5, 1]}}}}}},\n      \"s\": {{\"nodeTypeId\": \"PxrSurface\", \"inputConnections\": {{\"x\": [{{\"upstreamNode\": \"a\", \"upstreamOutputName\": \"resultRGB\"}}]}}}}}},\n      \"terminals\": {{\"surface\": {{\"upstreamNode\": \"s\", \"upstreamOutputName\": \"\"}}}}}}{}\n",
+            if i + 1 < n { "," } else { "" }
+        );
+        text.push_str(&edit(i, m));
+    }
+    text.push_str("  },\n  \"zzz\": 1\n}\n");
+    text
+}
+
+/// The line (1-based) of the first occurrence of `what` in `text`.
+fn line_of(text: &str, what: &str) -> u32 {
+    let k = text.find(what).unwrap();
+    1 + text[..k].matches('\n').count() as u32
+}
+
+#[test]
+fn large_documents_keep_values_diagnostics_and_positions() {
+    let n = 3000;
+    let plain = large_doc(n, |_, m| m);
+    assert!(plain.len() > 1 << 20, "{}", plain.len());
+    let (net, d) = read(&plain);
+    assert_eq!(codes(&d), ["JS011"]);
+    assert_eq!(net.node_count(), 2 * n);
+    assert_eq!(net.materials().len(), n);
+    assert_eq!(net.materials()[n - 1].name, format!("m{}", n - 1));
+    let MaterialNodes::Explicit(ids) = &net.materials()[n - 1].nodes else {
+        panic!("explicit nodes");
+    };
+    let (a, s) = (ids[0], ids[1]);
+    assert_eq!(net.value(a, "g"), Some(&Value::Float(0.5)));
+    let Some(Value::Float(z)) = net.value(a, "z") else {
+        panic!("z");
+    };
+    assert_eq!(z.to_bits(), (-0.0f32).to_bits());
+    assert_eq!(
+        net.value(a, "c"),
+        Some(&Value::Triple(BaseType::Color, [0.0, 0.5, 1.0]))
+    );
+    assert_eq!(net[s].kind(), RequestKind::Bxdf);
+    assert_eq!(net.connections(s, "x")[0].upstream_node(), Some(a));
+
+    // Warnings in document order within the order of the checks: the document's own keys
+    // (after `materials` in the text) first.
+    let warned = large_doc(n, |i, m| match i {
+        10 => m.replacen("{\"nodes\"", "{\"extra\": [1, {\"k\": 2}], \"nodes\"", 1),
+        2500 => m.replacen("\"upstreamNode\": \"a\"", "\"upstreamNode\": \"ghost\"", 1),
+        _ => m,
+    });
+    let (_, d) = read(&warned);
+    let got: Vec<(&str, Option<&str>)> = d
+        .iter()
+        .map(|x| {
+            let pointer = x.location.as_ref().and_then(|l| l.pointer.as_deref());
+            (x.code.as_str(), pointer)
+        })
+        .collect();
+    assert_eq!(
+        got,
+        [
+            ("JS011", Some("/zzz")),
+            ("JS011", Some("/materials/m10/extra")),
+            (
+                "JS010",
+                Some("/materials/m2500/nodes/s/inputConnections/x/0")
+            ),
+        ]
+    );
+
+    // The first error, with the warnings before it.
+    let wrong = large_doc(n, |i, m| match i {
+        10 => m.replacen("{\"nodes\"", "{\"extra\": 1, \"nodes\"", 1),
+        2999 => m.replacen("\"value\": 0.5", "\"value\": \"x\"", 1),
+        _ => m,
+    });
+    let (r, d) = read_with(&wrong, &NoDefinitions);
+    let e = r.unwrap_err();
+    assert_eq!(e.code(), Some("JS004"));
+    let loc = e.diagnostic().unwrap().location.clone().unwrap();
+    assert_eq!(
+        loc.pointer.as_deref(),
+        Some("/materials/m2999/nodes/a/parameters/g/value")
+    );
+    assert_eq!(codes(&d), ["JS011", "JS011"]);
+
+    // A duplicate key and a syntax error late in the text: line and column in the whole text.
+    let dup = large_doc(n, |i, m| {
+        if i == 2000 {
+            m.replacen("\"z\": ", "\"g\": 1, \"z\": ", 1)
+        } else {
+            m
+        }
+    });
+    let (r, _) = read_with(&dup, &NoDefinitions);
+    let e = r.unwrap_err();
+    let loc = e.diagnostic().unwrap().location.clone().unwrap();
+    assert_eq!(e.code(), Some("JS002"));
+    assert_eq!(
+        loc.pointer.as_deref(),
+        Some("/materials/m2000/nodes/a/parameters/g")
+    );
+    assert_eq!(loc.line, line_of(&dup, "\"g\": 1, \"z\""));
+    let column = dup
+        .lines()
+        .nth(loc.line as usize - 1)
+        .unwrap()
+        .find("\"g\": 1")
+        .unwrap();
+    assert_eq!(loc.column as usize, column + "\"g\"".len());
+    let broken = large_doc(n, |i, m| {
+        if i == 2000 {
+            m.replacen(
+                "\"nodeTypeId\": \"PxrSurface\"",
+                "\"nodeTypeId\" \"PxrSurface\"",
+                1,
+            )
+        } else {
+            m
+        }
+    });
+    let (r, _) = read_with(&broken, &NoDefinitions);
+    let e = r.unwrap_err();
+    let loc = e.diagnostic().unwrap().location.clone().unwrap();
+    assert_eq!(e.code(), Some("JS001"));
+    assert_eq!(loc.line, line_of(&broken, "\"nodeTypeId\" \"PxrSurface\""));
+
+    // Nesting within serde_json's limit, which counts the levels above a material.
+    for (levels, ok) in [(100, true), (130, false)] {
+        let deep = large_doc(n, |i, m| {
+            if i == 1500 {
+                let value = format!("{}1{}", "[".repeat(levels), "]".repeat(levels));
+                m.replacen("{\"nodes\"", &format!("{{\"deep\": {value}, \"nodes\""), 1)
+            } else {
+                m
+            }
+        });
+        let (r, d) = read_with(&deep, &NoDefinitions);
+        match r {
+            Ok(_) => {
+                assert!(ok, "{levels}");
+                assert_eq!(codes(&d), ["JS011", "JS011"]);
+            }
+            Err(e) => {
+                assert!(!ok, "{levels}");
+                assert_eq!(e.code(), Some("JS001"));
+                let line = e.diagnostic().unwrap().location.as_ref().unwrap().line;
+                assert_eq!(line, line_of(&deep, "\"deep\""));
+            }
+        }
     }
 }
