@@ -1035,59 +1035,9 @@ fn escape(s: &str) -> Cow<'_, str> {
 }
 
 /// True if `s` holds a byte that [`escape`] changes: a control byte, DEL, `"` or `\\`.
-#[cfg(not(target_arch = "x86_64"))]
 fn needs_escape(s: &[u8]) -> bool {
-    // Every byte without stopping early, which lets the check run on whole vectors.
+    // Every byte without stopping early, which lets the compiler check whole vectors.
     s.iter().fold(false, |found, &b| {
         found | (b < 0x20) | (b == 0x7f) | (b == b'"') | (b == b'\\')
     })
-}
-
-/// [`needs_escape`] with SSE2 (part of every x86-64 processor), sixteen bytes per step:
-/// names are tens of bytes long, and the compiler's own vectors of the byte-by-byte check
-/// cost more than such a name.
-#[cfg(target_arch = "x86_64")]
-fn needs_escape(s: &[u8]) -> bool {
-    // SAFETY: SSE2 is part of the x86-64 baseline: every processor running this code has it.
-    unsafe { needs_escape_sse2(s) }
-}
-
-/// The body of [`needs_escape`] on x86-64.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "sse2")]
-fn needs_escape_sse2(s: &[u8]) -> bool {
-    use std::arch::x86_64::{
-        _mm_cmpeq_epi8, _mm_min_epu8, _mm_movemask_epi8, _mm_or_si128, _mm_set_epi64x,
-        _mm_set1_epi8,
-    };
-    let special = |lo: &[u8], hi: &[u8]| {
-        let half = |h: &[u8]| i64::from_le_bytes([h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7]]);
-        let v = _mm_set_epi64x(half(hi), half(lo));
-        // A byte below 0x20 is its own minimum with 0x1f.
-        let control = _mm_cmpeq_epi8(_mm_min_epu8(v, _mm_set1_epi8(0x1f)), v);
-        let quote = _mm_cmpeq_epi8(v, _mm_set1_epi8(b'"' as i8));
-        let backslash = _mm_cmpeq_epi8(v, _mm_set1_epi8(b'\\' as i8));
-        let del = _mm_cmpeq_epi8(v, _mm_set1_epi8(0x7f));
-        let any = _mm_or_si128(_mm_or_si128(control, del), _mm_or_si128(quote, backslash));
-        _mm_movemask_epi8(any) != 0
-    };
-    let n = s.len();
-    if n < 8 {
-        return s
-            .iter()
-            .any(|&b| b < 0x20 || b == 0x7f || b == b'"' || b == b'\\');
-    }
-    if n < 16 {
-        // The first and the last eight bytes (overlapping): every byte is looked at.
-        return special(&s[..8], &s[n - 8..]);
-    }
-    let mut at = 0;
-    while at + 16 <= n {
-        if special(&s[at..at + 8], &s[at + 8..at + 16]) {
-            return true;
-        }
-        at += 16;
-    }
-    // The last sixteen bytes (overlapping the ones already looked at).
-    at < n && special(&s[n - 16..n - 8], &s[n - 8..])
 }
