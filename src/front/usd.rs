@@ -59,7 +59,11 @@ const MAX_HOPS: usize = 64;
 struct MemResolver {
     inner: ar::DefaultResolver,
     root: String,
-    bytes: Arc<Vec<u8>>,
+    /// The root layer as `openusd` is to read it ([`openusd_form`], done once here however
+    /// often the layer is opened), or why it cannot be.
+    bytes: Result<Vec<u8>, String>,
+    /// How many of the root's values went in encoded ([`usda::decoded`] gives them back).
+    encoded: usize,
 }
 
 impl MemResolver {
@@ -70,31 +74,46 @@ impl MemResolver {
             .strip_suffix(']')
     }
 
+    /// The root layer's bytes as `openusd` is to read them.
+    fn root_bytes(&self) -> io::Result<&[u8]> {
+        self.bytes
+            .as_deref()
+            .map_err(|why| io::Error::other(why.clone()))
+    }
+
     fn root_entry(&self, inner: &str) -> io::Result<Vec<u8>> {
-        let mut archive = zip::ZipArchive::new(io::Cursor::new(self.bytes.as_slice()))
-            .map_err(io::Error::other)?;
+        let mut archive =
+            zip::ZipArchive::new(io::Cursor::new(self.root_bytes()?)).map_err(io::Error::other)?;
         let mut entry = archive.by_name(inner).map_err(io::Error::other)?;
         let mut out = Vec::new();
         entry.read_to_end(&mut out)?;
-        openusd_form(out)
+        layer_form(out)
     }
 }
 
-/// Layer `bytes` as `openusd` is to read them: usda text in the form in which `openusd`
-/// reads what Pixar's USD reads ([`usda::normalise`]); a crate file as it is. Text Pixar's
-/// USD would not lex is refused here, with the reason, so that `openusd` (which is more
-/// lenient) does not read it.
-fn openusd_form(bytes: Vec<u8>) -> io::Result<Vec<u8>> {
+/// Layer `bytes` as `openusd` is to read them, and how many values went in encoded: usda
+/// text in the form in which `openusd` reads what Pixar's USD reads ([`usda::normalise`]);
+/// a crate file or package as it is. Text Pixar's USD would not lex is refused, with the
+/// reason, so that `openusd` (which is more lenient) does not read it.
+fn openusd_form(bytes: Cow<'_, [u8]>) -> Result<(Vec<u8>, usize), String> {
     if flavour(&bytes) != "usda" {
-        return Ok(bytes);
+        return Ok((bytes.into_owned(), 0));
     }
-    match usda::normalise(&bytes) {
-        Ok(n) => Ok(match n.text {
-            Cow::Borrowed(_) => bytes,
-            Cow::Owned(text) => text,
-        }),
-        Err(e) => Err(io::Error::other(e.message)),
-    }
+    let normalised = usda::normalise(&bytes).map_err(|e| e.message)?;
+    let encoded = normalised.encoded;
+    let rewritten = match normalised.text {
+        Cow::Owned(text) => Some(text),
+        Cow::Borrowed(_) => None,
+    };
+    Ok((rewritten.unwrap_or_else(|| bytes.into_owned()), encoded))
+}
+
+/// [`openusd_form`] of a layer other than the root. The reader decodes encoded values as
+/// it takes them; only the writer, which reads back its own root alone, needs their count.
+fn layer_form(bytes: Vec<u8>) -> io::Result<Vec<u8>> {
+    openusd_form(Cow::Owned(bytes))
+        .map(|(bytes, _)| bytes)
+        .map_err(io::Error::other)
 }
 
 impl ar::Resolver for MemResolver {
@@ -122,16 +141,14 @@ impl ar::Resolver for MemResolver {
     fn open_asset(&self, resolved: &ar::ResolvedPath) -> io::Result<Box<dyn ar::Asset>> {
         let path = resolved.to_string_lossy();
         if path == self.root {
-            return Ok(Box::new(io::Cursor::new(openusd_form(
-                self.bytes.as_ref().clone(),
-            )?)));
+            return Ok(Box::new(io::Cursor::new(self.root_bytes()?.to_vec())));
         }
         if let Some(inner) = self.in_root_package(&path) {
             return Ok(Box::new(io::Cursor::new(self.root_entry(inner)?)));
         }
         let mut bytes = Vec::new();
         self.inner.open_asset(resolved)?.read_to_end(&mut bytes)?;
-        Ok(Box::new(io::Cursor::new(openusd_form(bytes)?)))
+        Ok(Box::new(io::Cursor::new(layer_form(bytes)?)))
     }
 
     fn get_modification_timestamp(
@@ -1053,10 +1070,15 @@ fn mem_resolver(name: &str, bytes: &[u8]) -> (MemResolver, String) {
     let root_path = root_name(name, bytes);
     let inner = ar::DefaultResolver::new();
     let root = ar::Resolver::create_identifier(&inner, &root_path, None);
+    let (bytes, encoded) = match openusd_form(Cow::Borrowed(bytes)) {
+        Ok((bytes, encoded)) => (Ok(bytes), encoded),
+        Err(why) => (Err(why), 0),
+    };
     let resolver = MemResolver {
         inner,
         root: root.clone(),
-        bytes: Arc::new(bytes.to_vec()),
+        bytes,
+        encoded,
     };
     (resolver, root)
 }
@@ -1324,7 +1346,7 @@ pub(crate) fn read_usda_layer(bytes: &[u8]) -> Result<sdf::LayerData, String> {
     }));
     match read {
         Ok(Ok(mut data)) => {
-            if usda::normalise(bytes).is_ok_and(|n| n.encoded > 0) {
+            if resolver.encoded > 0 {
                 decode_values(data.as_mut());
             }
             Ok(data)
